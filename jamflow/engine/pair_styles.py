@@ -1,0 +1,47 @@
+"""Choose the LAMMPS pair style that is exact for a packing's potential.
+
+- Spring(alpha=2) with a few discrete diameters: built-in ``harmonic/cut``,
+  E = k (rc - r)^2 with k = eps / (2 sigma_ij^2), rc = sigma_ij, every i-j pair set
+  explicitly (LAMMPS would mix cutoffs geometrically, not additively).
+- Anything else (other alpha, repulsive LJ, continuous polydispersity): jamflow's own
+  plugin styles ``jamflow/spring`` and ``jamflow/rlj`` (per-atom radius), compiled on
+  first use; without a compiler, LAMMPS's ``lepton/sphere`` (exact, ~10x slower).
+"""
+
+from __future__ import annotations
+
+from ..packing import Packing
+from ..potentials import Spring
+
+MAX_DISCRETE_SPECIES = 8
+
+
+def uses_harmonic_cut(packing: Packing) -> bool:
+    pot = packing.potential
+    return isinstance(pot, Spring) and pot.alpha == 2.0 and len(packing.species()[0]) <= MAX_DISCRETE_SPECIES
+
+
+def pair_setup(packing: Packing, lmp=None) -> list[str]:
+    """LAMMPS commands that define the pair interaction for ``packing``."""
+    if uses_harmonic_cut(packing):
+        return harmonic_cut_commands(packing)
+    from .plugin_build import lepton_expression, plugin_library
+
+    pot = packing.potential
+    cutoff = f"{packing.diameters.max():.17g}"
+    library = plugin_library()
+    if library is not None:
+        style = f"jamflow/spring {pot.alpha:.17g} {cutoff}" if isinstance(pot, Spring) else f"jamflow/rlj {cutoff}"
+        return [f"plugin load {library}", f"pair_style {style}", f"pair_coeff * * {pot.epsilon:.17g}"]
+    return [f"pair_style lepton/sphere {cutoff}", f'pair_coeff * * "{lepton_expression(pot)}"']
+
+
+def harmonic_cut_commands(packing: Packing) -> list[str]:
+    values, _ = packing.species()
+    eps = packing.potential.epsilon
+    lines = ["pair_style harmonic/cut"]
+    for a in range(len(values)):
+        for b in range(a, len(values)):
+            sigma = 0.5 * (values[a] + values[b])
+            lines.append(f"pair_coeff {a + 1} {b + 1} {eps / (2 * sigma**2):.17g} {sigma:.17g}")
+    return lines

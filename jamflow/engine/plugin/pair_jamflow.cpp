@@ -1,0 +1,341 @@
+/* jamflow LAMMPS plugin: purely repulsive contact potentials with per-atom diameters.
+
+   Two pair styles for atom_style sphere; the contact distance of each pair is
+   sigma_ij = radius_i + radius_j = (a_i + a_j) / 2 (seed chapter, Fig. 2.1):
+
+     pair_style jamflow/spring ALPHA CUTOFF   pair_coeff * * EPSILON
+         V = eps/alpha (1 - r/sigma_ij)^alpha            for r < sigma_ij   (seed eq. 2.1)
+     pair_style jamflow/rlj CUTOFF            pair_coeff * * EPSILON
+         V = eps [(sigma_ij/r)^12 - 2 (sigma_ij/r)^6 + 1] for r < sigma_ij   (seed eq. 2.2)
+
+   CUTOFF is only the neighbour-list cutoff: it must be at least the largest contact
+   distance (the largest diameter), which init_style() checks. Energy and virial are
+   tallied with ev_tally(), so compute pe / pressure / pair/local work; newton on/off,
+   2D/3D and triclinic boxes need nothing special. Units: LAMMPS "lj" (eps, diameter).
+
+   Numerics: the RLJ energy is evaluated as eps (q6 - 1)^2 with q6 = (sigma/r)^6, which
+   equals eq. 2.2 exactly but avoids the cancellation of q6^2 - 2 q6 + 1 near contact.
+   alpha = 2 and 2.5 avoid pow(); other alpha use std::pow. */
+
+#include "lammpsplugin.h"
+
+#include "atom.h"
+#include "comm.h"
+#include "error.h"
+#include "force.h"
+#include "memory.h"
+#include "neigh_list.h"
+#include "neighbor.h"
+#include "pair.h"
+#include "utils.h"
+
+#include <cmath>
+#include <string>
+
+#ifndef JAMFLOW_LAMMPS_VERSION
+#define JAMFLOW_LAMMPS_VERSION "unknown"
+#endif
+
+namespace LAMMPS_NS {
+
+namespace {
+enum Law { SPRING2 = 0, HERTZ = 1, SPRING_POW = 2, RLJ = 3 };
+}
+
+class PairJamflow : public Pair {
+ public:
+  PairJamflow(LAMMPS *lmp, bool rlj) : Pair(lmp), rlj_style(rlj)
+  {
+    single_enable = 1;
+    restartinfo = 0;
+    writedata = 0;
+  }
+
+  ~PairJamflow() override
+  {
+    if (allocated) {
+      memory->destroy(setflag);
+      memory->destroy(cutsq);
+      memory->destroy(epsilon);
+      memory->destroy(eps_over_alpha);
+    }
+  }
+
+  void settings(int narg, char **arg) override;
+  void coeff(int narg, char **arg) override;
+  void init_style() override;
+  double init_one(int i, int j) override;
+  void compute(int eflag, int vflag) override;
+  double single(int i, int j, int itype, int jtype, double rsq, double factor_coul,
+                double factor_lj, double &fforce) override;
+
+ private:
+  const bool rlj_style;
+  int law = SPRING2;
+  double alpha = 2.0;
+  double cut_global = 0.0;
+  double **epsilon = nullptr;
+  double **eps_over_alpha = nullptr;
+
+  std::string name() const { return rlj_style ? "jamflow/rlj" : "jamflow/spring"; }
+  void allocate();
+  template <int LAW> double pair_law(double rsq, double sigma, int itype, int jtype,
+                                     double &fpair) const;
+  template <int LAW, int EVFLAG, int NEWTON> void eval();
+};
+
+/* ---------------------------------------------------------------------- */
+/* Energy of one overlapping pair (rsq < sigma^2); fpair = -(dV/dr)/r.     */
+
+template <int LAW>
+inline double PairJamflow::pair_law(double rsq, double sigma, int itype, int jtype,
+                                    double &fpair) const
+{
+  const double eps = epsilon[itype][jtype];
+  if (LAW == RLJ) {
+    const double q2 = sigma * sigma / rsq;
+    const double q6 = q2 * q2 * q2;
+    const double excess = q6 - 1.0;
+    fpair = 12.0 * eps * q6 * excess / rsq;
+    return eps * excess * excess;
+  }
+  const double r = std::sqrt(rsq);
+  const double x = 1.0 - r / sigma;    // dimensionless overlap
+  double xpow;                         // x^(alpha - 1)
+  if (LAW == SPRING2)
+    xpow = x;
+  else if (LAW == HERTZ)
+    xpow = x * std::sqrt(x);
+  else
+    xpow = std::pow(x, alpha - 1.0);
+  fpair = eps * xpow / (sigma * r);
+  return eps_over_alpha[itype][jtype] * xpow * x;
+}
+
+/* ---------------------------------------------------------------------- */
+
+template <int LAW, int EVFLAG, int NEWTON> void PairJamflow::eval()
+{
+  double **x = atom->x;
+  double **f = atom->f;
+  const double *radius = atom->radius;
+  const int *type = atom->type;
+  const int nlocal = atom->nlocal;
+  const double *special_lj = force->special_lj;
+
+  const int inum = list->inum;
+  const int *ilist = list->ilist;
+  const int *numneigh = list->numneigh;
+  int **firstneigh = list->firstneigh;
+
+  for (int ii = 0; ii < inum; ii++) {
+    const int i = ilist[ii];
+    const double xi = x[i][0], yi = x[i][1], zi = x[i][2];
+    const double radi = radius[i];
+    const int itype = type[i];
+    const int *jlist = firstneigh[i];
+    const int jnum = numneigh[i];
+    double fxi = 0.0, fyi = 0.0, fzi = 0.0;
+
+    for (int jj = 0; jj < jnum; jj++) {
+      int j = jlist[jj];
+      const double factor_lj = special_lj[sbmask(j)];
+      j &= NEIGHMASK;
+
+      const double delx = xi - x[j][0];
+      const double dely = yi - x[j][1];
+      const double delz = zi - x[j][2];
+      const double rsq = delx * delx + dely * dely + delz * delz;
+      const double sigma = radi + radius[j];
+      if (rsq >= sigma * sigma) continue;
+
+      double fpair;
+      double evdwl = pair_law<LAW>(rsq, sigma, itype, type[j], fpair);
+      fpair *= factor_lj;
+
+      fxi += delx * fpair;
+      fyi += dely * fpair;
+      fzi += delz * fpair;
+      if (NEWTON || j < nlocal) {
+        f[j][0] -= delx * fpair;
+        f[j][1] -= dely * fpair;
+        f[j][2] -= delz * fpair;
+      }
+      if (EVFLAG) {
+        evdwl *= factor_lj;
+        ev_tally(i, j, nlocal, NEWTON, evdwl, 0.0, fpair, delx, dely, delz);
+      }
+    }
+    f[i][0] += fxi;
+    f[i][1] += fyi;
+    f[i][2] += fzi;
+  }
+}
+
+/* ---------------------------------------------------------------------- */
+
+#define JAMFLOW_DISPATCH(LAW)                       \
+  if (evflag) {                                     \
+    if (force->newton_pair) eval<LAW, 1, 1>();      \
+    else eval<LAW, 1, 0>();                         \
+  } else {                                          \
+    if (force->newton_pair) eval<LAW, 0, 1>();      \
+    else eval<LAW, 0, 0>();                         \
+  }
+
+void PairJamflow::compute(int eflag, int vflag)
+{
+  ev_init(eflag, vflag);
+  switch (law) {
+    case SPRING2: JAMFLOW_DISPATCH(SPRING2) break;
+    case HERTZ: JAMFLOW_DISPATCH(HERTZ) break;
+    case SPRING_POW: JAMFLOW_DISPATCH(SPRING_POW) break;
+    default: JAMFLOW_DISPATCH(RLJ) break;
+  }
+  if (vflag_fdotr) virial_fdotr_compute();
+}
+
+#undef JAMFLOW_DISPATCH
+
+/* ---------------------------------------------------------------------- */
+
+double PairJamflow::single(int i, int j, int itype, int jtype, double rsq,
+                           double /*factor_coul*/, double factor_lj, double &fforce)
+{
+  const double sigma = atom->radius[i] + atom->radius[j];
+  fforce = 0.0;
+  if (rsq >= sigma * sigma) return 0.0;
+  double energy;
+  switch (law) {
+    case SPRING2: energy = pair_law<SPRING2>(rsq, sigma, itype, jtype, fforce); break;
+    case HERTZ: energy = pair_law<HERTZ>(rsq, sigma, itype, jtype, fforce); break;
+    case SPRING_POW: energy = pair_law<SPRING_POW>(rsq, sigma, itype, jtype, fforce); break;
+    default: energy = pair_law<RLJ>(rsq, sigma, itype, jtype, fforce); break;
+  }
+  fforce *= factor_lj;
+  return factor_lj * energy;
+}
+
+/* ---------------------------------------------------------------------- */
+
+void PairJamflow::allocate()
+{
+  allocated = 1;
+  const int n = atom->ntypes + 1;
+  memory->create(setflag, n, n, "pair:setflag");
+  for (int i = 1; i < n; i++)
+    for (int j = i; j < n; j++) setflag[i][j] = 0;
+  memory->create(cutsq, n, n, "pair:cutsq");
+  memory->create(epsilon, n, n, "pair:epsilon");
+  memory->create(eps_over_alpha, n, n, "pair:eps_over_alpha");
+}
+
+/* pair_style jamflow/spring ALPHA CUTOFF | pair_style jamflow/rlj CUTOFF */
+
+void PairJamflow::settings(int narg, char **arg)
+{
+  const int expected = rlj_style ? 1 : 2;
+  if (narg != expected)
+    error->all(FLERR, "Illegal pair_style " + name() + " command: expected " +
+                          (rlj_style ? std::string("CUTOFF") : std::string("ALPHA CUTOFF")));
+  if (!rlj_style) {
+    alpha = utils::numeric(FLERR, arg[0], false, lmp);
+    if (!(alpha > 1.0) || !std::isfinite(alpha))
+      error->all(FLERR, "pair_style jamflow/spring: ALPHA must be a finite number > 1");
+    law = (alpha == 2.0) ? SPRING2 : (alpha == 2.5) ? HERTZ : SPRING_POW;
+  } else {
+    law = RLJ;
+  }
+  cut_global = utils::numeric(FLERR, arg[narg - 1], false, lmp);
+  if (!(cut_global > 0.0) || !std::isfinite(cut_global))
+    error->all(FLERR, "pair_style " + name() + ": CUTOFF must be a positive number "
+                      "(use the largest particle diameter)");
+}
+
+/* pair_coeff I J EPSILON */
+
+void PairJamflow::coeff(int narg, char **arg)
+{
+  if (narg != 3)
+    error->all(FLERR, "Incorrect args for pair_coeff of " + name() + ": expected I J EPSILON");
+  if (!allocated) allocate();
+
+  int ilo, ihi, jlo, jhi;
+  utils::bounds(FLERR, arg[0], 1, atom->ntypes, ilo, ihi, error);
+  utils::bounds(FLERR, arg[1], 1, atom->ntypes, jlo, jhi, error);
+  const double eps_one = utils::numeric(FLERR, arg[2], false, lmp);
+  if (!(eps_one > 0.0) || !std::isfinite(eps_one))
+    error->all(FLERR, "pair_coeff for " + name() + ": EPSILON must be a positive number");
+
+  int count = 0;
+  for (int i = ilo; i <= ihi; i++)
+    for (int j = (jlo > i ? jlo : i); j <= jhi; j++) {
+      epsilon[i][j] = eps_one;
+      setflag[i][j] = 1;
+      count++;
+    }
+  if (count == 0) error->all(FLERR, "Incorrect args for pair coefficients");
+}
+
+/* Requires per-atom radii; checks that CUTOFF covers the largest contact distance. */
+
+void PairJamflow::init_style()
+{
+  if (!atom->radius_flag)
+    error->all(FLERR, "Pair style " + name() + " requires atom_style sphere (per-atom radius)");
+  neighbor->add_request(this);
+
+  double rmax_local = 0.0;
+  for (int i = 0; i < atom->nlocal; i++)
+    if (atom->radius[i] > rmax_local) rmax_local = atom->radius[i];
+  double rmax = 0.0;
+  MPI_Allreduce(&rmax_local, &rmax, 1, MPI_DOUBLE, MPI_MAX, world);
+  if (2.0 * rmax > cut_global)
+    error->all(FLERR, "Pair style " + name() + ": CUTOFF " + std::to_string(cut_global) +
+                          " is below the largest diameter " + std::to_string(2.0 * rmax) +
+                          "; pass the largest diameter as CUTOFF");
+}
+
+double PairJamflow::init_one(int i, int j)
+{
+  if (setflag[i][j] == 0) epsilon[i][j] = mix_energy(epsilon[i][i], epsilon[j][j], 1.0, 1.0);
+  epsilon[j][i] = epsilon[i][j];
+  eps_over_alpha[i][j] = eps_over_alpha[j][i] = epsilon[i][j] / alpha;
+  return cut_global;
+}
+
+/* ---------------------------------------------------------------------- */
+
+static Pair *create_spring(LAMMPS *lmp) { return new PairJamflow(lmp, false); }
+static Pair *create_rlj(LAMMPS *lmp) { return new PairJamflow(lmp, true); }
+
+}    // namespace LAMMPS_NS
+
+using namespace LAMMPS_NS;
+
+/* Registers both styles with the LAMMPS instance that loads the library. (LAMMPS keeps
+   one process-wide plugin list and restores loaded plugins into later instances.) */
+
+static void register_style(LAMMPS *lmp, void *handle, lammpsplugin_regfunc reg, const char *name,
+                           const char *info, Pair *(*creator)(LAMMPS *))
+{
+  lammpsplugin_t plugin;
+  plugin.version = JAMFLOW_LAMMPS_VERSION;
+  plugin.style = "pair";
+  plugin.name = name;
+  plugin.info = info;
+  plugin.author = "jamflow";
+  plugin.creator.v1 = (lammpsplugin_factory1 *) creator;
+  plugin.handle = handle;
+  (*reg)(&plugin, lmp);
+}
+
+extern "C" void lammpsplugin_init(void *lmp, void *handle, void *regfunc)
+{
+  auto instance = (LAMMPS *) lmp;
+  auto reg = (lammpsplugin_regfunc) regfunc;
+  register_style(instance, handle, reg, "jamflow/spring",
+                 "jamflow repulsive spring eps/alpha (1 - r/sigma_ij)^alpha", &create_spring);
+  register_style(instance, handle, reg, "jamflow/rlj",
+                 "jamflow repulsive Lennard-Jones with sigma_ij = r_i + r_j", &create_rlj);
+}

@@ -1,0 +1,148 @@
+"""Energy minimisation in LAMMPS with the seed's stopping rules (chapter section 2.1, step 3).
+
+Methods:
+- ``fire``: LAMMPS ``min_style fire`` (FIRE 2.0), ``min_modify norm max``.
+- ``cg``: Polak-Ribiere conjugate gradient, ``min_modify line forcezero`` (the default
+  backtracking line search stalls at forces ~1e-10, see docs/failure-modes.md).
+- ``md``: damped molecular dynamics, ``fix nve`` + ``fix viscous b`` (drag -b v on every
+  particle). This is *not* the pairwise damping of seed eq. 2.3: it also damps rattlers
+  and is not Galilean invariant; both dissipate to the same local minima for large b,
+  and the net momentum of a periodic packing is zero, so the minima found are comparable.
+
+Stopping rules, checked after every ``window`` iterations (LAMMPS runs the window):
+1. ``force``: max force component below ``force_tol`` (default scales with the box side,
+   since round-off in positions of a box of side L limits forces to ~L * 1e-16).
+2. ``energy-below-vmin``: energy per particle below ``v_min`` (seed rule b, V_min = 1e-16),
+   also caught inside a window by ``fix halt``.
+3. ``no-progress``: over a whole window the relative energy decrease was below ``delta``
+   (seed rule a, delta = 1e-16) and the max force did not halve: the round-off floor.
+   Reported as not converged by force; the protocol records it.
+4. ``linesearch``: CG's line search could not move (LAMMPS stopped early).
+5. ``iteration-cap``: ``max_iterations`` reached (not converged).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass
+
+METHODS = ("fire", "cg", "md")
+
+
+@dataclass(frozen=True)
+class MinimizerSettings:
+    """Parameters of one minimisation. Energies per particle in eps; forces in eps/diameter."""
+
+    method: str = "fire"
+    force_tol: float | None = None  # None: 1e-14 * max(1, L / 20), L the longest box side
+    delta: float = 1e-16  # seed's relative energy change threshold
+    v_min: float = 1e-16  # seed's V_min (per particle)
+    max_iterations: int = 500_000
+    window: int = 2000  # iterations per LAMMPS call between rule checks
+    timestep: float = 0.05  # FIRE initial step / MD step, in sqrt(m diameter^2 / eps)
+    damping: float = 0.5  # md only: drag coefficient b, in sqrt(m eps) / diameter
+
+    def __post_init__(self):
+        if self.method not in METHODS:
+            raise ValueError(f"unknown minimizer {self.method!r}; use one of {', '.join(METHODS)}")
+        for name in ("delta", "v_min", "timestep", "damping"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"minimizer {name} must be a finite positive number, got {value}")
+        if self.force_tol is not None and not (math.isfinite(self.force_tol) and self.force_tol > 0):
+            raise ValueError(f"force_tol must be a finite positive number, got {self.force_tol}")
+        if self.max_iterations < 1 or self.window < 1:
+            raise ValueError("max_iterations and window must be positive integers")
+
+    def resolved_force_tol(self, box) -> float:
+        return self.force_tol if self.force_tol is not None else 1e-14 * max(1.0, float(box.lengths.max()) / 20.0)
+
+    def as_dict(self) -> dict:
+        return {f"minimizer_{k}": v for k, v in asdict(self).items()}
+
+
+@dataclass(frozen=True)
+class MinimizeResult:
+    """Outcome of one minimisation; ``converged`` is False for no-progress, linesearch
+    and iteration-cap stops."""
+
+    converged: bool
+    reason: str
+    iterations: int
+    energy_per_particle: float
+    max_force: float
+    seconds: float
+
+
+CONVERGED_REASONS = ("force", "energy-below-vmin")
+
+
+def minimize(engine, settings: MinimizerSettings) -> MinimizeResult:
+    """Minimise the engine's configuration at fixed box; the engine holds the result."""
+    start = time.perf_counter()
+    n = engine.template.n
+    ftol = settings.resolved_force_tol(engine.box)
+    _install(engine, settings, ftol)
+    done, energy_prev, fmax_prev = 0, math.inf, math.inf
+    try:
+        while True:
+            steps = min(settings.window, settings.max_iterations - done)
+            before = engine.lmp.extract_global("ntimestep")
+            _run_window(engine, settings, ftol, steps)
+            ran = engine.lmp.extract_global("ntimestep") - before
+            done += ran
+            energy = float(engine.lmp.get_thermo("pe")) / n
+            fmax = float(engine.lmp.get_thermo("fmax"))
+            reason = _stop_reason(settings, ftol, energy, fmax, energy_prev, fmax_prev, ran, steps, done)
+            if reason:
+                return MinimizeResult(reason in CONVERGED_REASONS, reason, done, energy, fmax,
+                                      time.perf_counter() - start)
+            energy_prev, fmax_prev = energy, fmax
+    finally:
+        _uninstall(engine, settings)
+
+
+def _stop_reason(s, ftol, energy, fmax, energy_prev, fmax_prev, ran, steps, done):
+    if fmax < ftol:
+        return "force"
+    if energy < s.v_min:
+        return "energy-below-vmin"
+    if math.isfinite(energy_prev) and (energy_prev - energy) < s.delta * energy and fmax > 0.5 * fmax_prev:
+        return "no-progress"
+    if s.method == "cg" and ran < steps:
+        return "linesearch"
+    if done >= s.max_iterations:
+        return "iteration-cap"
+    return None
+
+
+def _install(engine, s: MinimizerSettings, ftol: float) -> None:
+    engine.run_commands([
+        f"timestep {s.timestep:.17g}",
+        "variable jf_epp equal pe/atoms",
+        f"fix jf_halt all halt 1 v_jf_epp < {s.v_min:.17g} error continue",
+    ])
+    if s.method == "fire":
+        engine.run_commands(["min_style fire", "min_modify norm max"])
+    elif s.method == "cg":
+        engine.run_commands(["min_style cg", "min_modify norm max line forcezero"])
+    else:
+        engine.run_commands(["velocity all set 0.0 0.0 0.0", "fix jf_nve all nve",
+                             f"fix jf_visc all viscous {s.damping:.17g}"])
+
+
+def _run_window(engine, s: MinimizerSettings, ftol: float, steps: int) -> None:
+    if s.method == "md":
+        engine.command(f"run {steps}")
+    else:
+        engine.command(f"minimize 0.0 {ftol:.17g} {steps} {10 * steps}")
+
+
+def _uninstall(engine, s: MinimizerSettings) -> None:
+    if engine.lmp is None:
+        return
+    fixes = ["jf_halt"] + (["jf_nve", "jf_visc"] if s.method == "md" else [])
+    engine.run_commands([f"unfix {f}" for f in fixes])
+    if s.method == "md":
+        engine.command("velocity all set 0.0 0.0 0.0")
