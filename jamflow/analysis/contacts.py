@@ -1,0 +1,190 @@
+"""Contact network, floaters and the isostatic count (seed chapter section 4.1).
+
+- A pair is in contact iff r_ij < sigma_ij exactly, no tolerance (``overlapping_pairs``,
+  float64 separations). Pairs with |r_ij / sigma_ij - 1| < ``near_tol`` are counted as a
+  diagnostic only: near onset, overlaps are ~1e-8 and such pairs are round-off-sensitive.
+- Floaters are removed iteratively: a particle is a floater if it has fewer than d_f + 1
+  contacts among the remaining particles (d_f = d for disks and spheres), or if its contact
+  directions do not positively span R^d (all contacts in one closed half-space, e.g. three
+  contacts on one side of a disk's equator; seed Figure 2.19). Removing a floater can make
+  its neighbours floaters, so the test is repeated until nothing changes.
+- N' = N - N_f, N_c = contacts among non-floaters, <z> = 2 N_c / N',
+  N_c,iso = N' d - d + 1 (d trivial translations subtracted, one added for phi).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import linprog
+
+from ..packing import Packing
+from ..pairs import candidate_pairs, contact_distances, overlapping_pairs, separations
+
+
+@dataclass(frozen=True)
+class ContactsResult:
+    """Contacts among non-floaters. ``i < j`` index the original packing."""
+
+    i: np.ndarray  # (N_c,) first particle of each contact
+    j: np.ndarray  # (N_c,) second particle
+    floater: np.ndarray  # (N,) bool
+    z: np.ndarray  # (N,) contacts per particle among non-floaters; 0 for floaters
+    dim: int
+    n_overlapping: int  # overlapping pairs before floater removal
+    n_near_contact: int  # pairs with |r/sigma - 1| < near_tol (diagnostic)
+
+    @property
+    def n_floaters(self) -> int:
+        return int(self.floater.sum())
+
+    @property
+    def kept(self) -> np.ndarray:
+        """Indices of the non-floaters, in packing order."""
+        return np.flatnonzero(~self.floater)
+
+    @property
+    def n_kept(self) -> int:
+        """N' = N - N_f."""
+        return int((~self.floater).sum())
+
+    @property
+    def n_contacts(self) -> int:
+        """N_c, contacts among non-floaters."""
+        return len(self.i)
+
+    @property
+    def mean_z(self) -> float:
+        """<z> = 2 N_c / N' (nan without non-floaters)."""
+        return 2.0 * self.n_contacts / self.n_kept if self.n_kept else float("nan")
+
+    @property
+    def isostatic_count(self) -> int:
+        """N_c,iso = N' d - d + 1 (0 without non-floaters)."""
+        return self.n_kept * self.dim - self.dim + 1 if self.n_kept else 0
+
+    @property
+    def excess_contacts(self) -> int:
+        """N_c - N_c,iso: 0 isostatic, > 0 hyperstatic, < 0 hypostatic."""
+        return self.n_contacts - self.isostatic_count
+
+    @property
+    def is_isostatic(self) -> bool:
+        return self.n_kept > 0 and self.excess_contacts == 0
+
+    def z_distribution(self) -> tuple[np.ndarray, np.ndarray]:
+        """(z values, fraction of non-floaters with that z), seed Figure 2.20."""
+        counts = np.bincount(self.z[~self.floater], minlength=1)
+        values = np.arange(len(counts))
+        return values, counts / max(self.n_kept, 1)
+
+
+class Contacts:
+    """Contact network with iterative floater removal.
+
+    ``min_contacts``: a particle with fewer is a floater (default d_f + 1 = d + 1).
+    ``half_space``: also remove particles whose contacts all lie in one half-space.
+    ``near_tol``: relative width of the near-contact diagnostic.
+    """
+
+    def __init__(self, min_contacts: int | None = None, half_space: bool = True, near_tol: float = 1e-12):
+        if min_contacts is not None and (not isinstance(min_contacts, (int, np.integer)) or min_contacts < 0):
+            raise ValueError(f"min_contacts must be a non-negative integer or None (d + 1), got {min_contacts!r}")
+        if not (np.isfinite(near_tol) and near_tol >= 0):
+            raise ValueError(f"near_tol must be a finite number >= 0, got {near_tol!r}")
+        self.min_contacts = min_contacts
+        self.half_space = bool(half_space)
+        self.near_tol = float(near_tol)
+
+    def compute(self, packing: Packing) -> ContactsResult:
+        i, j, dr, r, _ = overlapping_pairs(packing)
+        need = packing.dim + 1 if self.min_contacts is None else int(self.min_contacts)
+        unit = dr / r[:, None]  # points from j to i
+        floater = find_floaters(packing.n, i, j, unit, need, self.half_space)
+        keep = ~floater[i] & ~floater[j]
+        z = np.bincount(i[keep], minlength=packing.n) + np.bincount(j[keep], minlength=packing.n)
+        return ContactsResult(i[keep], j[keep], floater, z, packing.dim, len(i),
+                              near_contact_count(packing, self.near_tol))
+
+
+def find_floaters(n: int, i, j, unit, need: int, half_space: bool = True) -> np.ndarray:
+    """Boolean mask of floaters, removed iteratively (see module docstring).
+
+    ``unit[p]`` is the unit vector from particle j[p] to particle i[p].
+    """
+    floater = np.zeros(n, bool)
+    while True:
+        live = ~floater[i] & ~floater[j]
+        z = np.bincount(i[live], minlength=n) + np.bincount(j[live], minlength=n)
+        bad = ~floater & (z < need)
+        if half_space:
+            candidates = ~floater & ~bad & (z > 0)
+            bad |= candidates & ~spanning_mask(n, i[live], j[live], unit[live], candidates)
+        if not bad.any():
+            return floater
+        floater |= bad
+
+
+def spanning_mask(n: int, i, j, unit, which) -> np.ndarray:
+    """For each particle in ``which``: do its contact directions positively span R^d?"""
+    owner = np.concatenate([i, j])
+    vectors = np.concatenate([-unit, unit])  # from each particle towards its partner
+    out = np.zeros(n, bool)
+    if unit.shape[1] == 2:
+        out[:] = angular_gap_spanning(n, owner, vectors)
+        return out & which
+    order = np.argsort(owner, kind="stable")
+    owner, vectors = owner[order], vectors[order]
+    starts = np.searchsorted(owner, np.arange(n + 1))
+    for p in np.flatnonzero(which):
+        out[p] = positively_spanning(vectors[starts[p]:starts[p + 1]])
+    return out
+
+
+def angular_gap_spanning(n: int, owner, vectors) -> np.ndarray:
+    """2D test: the largest angular gap between a particle's contact directions is < pi."""
+    if len(owner) == 0:
+        return np.zeros(n, bool)
+    angle = np.arctan2(vectors[:, 1], vectors[:, 0])
+    order = np.lexsort((angle, owner))
+    owner, angle = owner[order], angle[order]
+    gap = np.full(len(angle), 2 * np.pi)
+    same = owner[1:] == owner[:-1]
+    gap[:-1][same] = np.diff(angle)[same]
+    last = np.flatnonzero(np.append(~same, True))  # last entry of each particle
+    first = np.flatnonzero(np.insert(~same, 0, True))
+    gap[last] = 2 * np.pi - (angle[last] - angle[first])
+    largest = np.full(n, 2 * np.pi)
+    np.minimum.at(largest, owner, 0.0)
+    np.maximum.at(largest, owner, gap)
+    return largest < np.pi
+
+
+def positively_spanning(vectors: np.ndarray) -> bool:
+    """True iff the vectors (k, d) positively span R^d: they span R^d linearly and some
+    strictly positive combination vanishes (then the origin is interior to their convex
+    hull). Solved as the LP feasibility problem sum_k l_k v_k = 0, l_k >= 1."""
+    vectors = np.asarray(vectors, float)
+    k, d = vectors.shape
+    if k <= d or np.linalg.matrix_rank(vectors) < d:
+        return False
+    res = linprog(np.zeros(k), A_eq=vectors.T, b_eq=np.zeros(d), bounds=[(1.0, None)] * k, method="highs")
+    return res.status == 0
+
+
+def near_contact_count(packing: Packing, near_tol: float) -> int:
+    """Pairs with |r_ij / sigma_ij - 1| < near_tol, on either side of contact."""
+    i, j = candidate_pairs(packing, packing.diameters.max() * (1.0 + near_tol))
+    r = np.linalg.norm(separations(packing, i, j), axis=1)
+    return int(np.sum(np.abs(r / contact_distances(packing, i, j) - 1.0) < near_tol))
+
+
+def remove_floaters(packing: Packing, contacts: ContactsResult) -> Packing:
+    """The packing without its floaters (same box, potential and metadata)."""
+    keep = contacts.kept
+    if len(keep) == 0:
+        raise ValueError("every particle is a floater: the packing is not jammed (no contact network); "
+                         "compress it to jamming first")
+    return Packing(packing.positions[keep], packing.diameters[keep], packing.box, packing.potential,
+                   {**packing.metadata, "floaters_removed": contacts.n_floaters})

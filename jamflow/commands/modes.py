@@ -1,0 +1,128 @@
+"""Mechanical stability of jammed packings (seed sections 3 and 4.1): contacts, floaters,
+the dynamical matrix's spectrum and the stability class of each PACKING.h5, written to the
+sibling results file PACKING.modes.hdf5 (schema jamflow.modes v1; not *.h5, so that a
+glob over packing files does not pick results up); with several files, D(omega)
+and the z_i distribution are averaged and one figure is drawn."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from .. import __version__
+from ..analysis.modes import DensityOfStates, Spectrum, Stability
+from ..io import atomic_path, check_writable, load_packing
+
+SCHEMA, SCHEMA_VERSION = "jamflow.modes", 1
+
+
+def add_arguments(p) -> None:
+    p.add_argument("files", nargs="+", metavar="PACKING.h5", help="packing files (jamflow jam --out)")
+    p.add_argument("--e-min", type=float, default=1e-6, help="zero-mode threshold on eigenvalues (eps/diameter^2)")
+    p.add_argument("--mass", type=float, default=None,
+                   help="M in omega = sqrt(e/M); default N m with m = 1, as the seed defines it")
+    p.add_argument("--method", choices=("auto", "dense", "sparse"), default="auto",
+                   help="eigen-solver: dense (all modes) or sparse shift-invert (lowest modes only)")
+    p.add_argument("--bins", type=int, default=40, help="number of D(omega) bins")
+    p.add_argument("--omega-max", type=float, default=None, help="upper edge of the D(omega) bins")
+    p.add_argument("--figure", default=None,
+                   help="PNG to draw (default: PACKING.modes.png for one file, modes.png beside the first)")
+    p.add_argument("--no-figure", action="store_true", help="do not draw the figure")
+    p.add_argument("--save-vectors", action="store_true", help="also store all eigenvectors")
+
+
+def results_path(packing_path) -> Path:
+    path = Path(packing_path)
+    return path.with_name(path.stem + ".modes.hdf5")
+
+
+def figure_path(args) -> Path:
+    if args.figure:
+        return Path(args.figure)
+    first = Path(args.files[0])
+    return first.with_name(first.stem + ".modes.png") if len(args.files) == 1 else first.with_name("modes.png")
+
+
+def run(args) -> int:
+    spectrum = Spectrum(e_min=args.e_min, mass=args.mass, method=args.method)
+    stability, dos = Stability(spectrum=spectrum), DensityOfStates(args.bins, args.omega_max)
+    packings = [load_packing(f) for f in args.files]  # every input is read before any work
+    outputs = [results_path(f) for f in args.files]
+    for out in outputs + ([] if args.no_figure else [figure_path(args)]):
+        check_writable(out)
+    rows = []
+    for path, packing, out in zip(args.files, packings, outputs):
+        spec = spectrum.compute(packing)
+        stab = stability.compute(packing, spec)
+        save_modes(out, path, spec, stab, vectors=args.save_vectors)
+        rows.append((spec, stab))
+        print(summary_line(path, spec, stab))
+    print(ensemble_summary([s for s, _ in rows]))
+    if not args.no_figure:
+        _draw(args, rows, dos)
+    return 0
+
+
+def _draw(args, rows, dos):
+    from ..analysis.plots_modes import modes_figure
+
+    spectra = [s for s, _ in rows]
+    density = dos.compute(spectra) if all(s.complete for s in spectra) else None
+    out = modes_figure(figure_path(args), spectra, density, [s.dynamical.contacts for s in spectra],
+                       [st for _, st in rows])
+    print(f"figure -> {out}")
+
+
+def summary_line(path, spec, stab) -> str:
+    c = spec.dynamical.contacts
+    return (f"{path}: N' = {c.n_kept} ({c.n_floaters} floaters)  N_c = {c.n_contacts} (iso {c.isostatic_count}, "
+            f"excess {c.excess_contacts:+d})  <z> = {c.mean_z:.4f}  near-contacts {c.n_near_contact}  "
+            f"zero modes {spec.n_zero}  negative {spec.n_negative}  lowest e = {spec.lowest_nonzero:.4e}  "
+            f"-> {stab.label}, Delta V {stab.behaviour}")
+
+
+def ensemble_summary(spectra) -> str:
+    n = len(spectra)
+    iso = sum(s.dynamical.contacts.is_isostatic for s in spectra)
+    exact = sum(s.n_zero == s.dim and s.n_negative == 0 for s in spectra)
+    low = np.array([s.lowest_nonzero for s in spectra])
+    return (f"{n} packing(s): isostatic {iso}/{n}, exactly d zero modes (none negative) {exact}/{n}, "
+            f"lowest nonzero e: mean {np.nanmean(low):.4e}, median {np.nanmedian(low):.4e}, "
+            f"min {np.nanmin(low):.4e}, max {np.nanmax(low):.4e}")
+
+
+def save_modes(out, source, spec, stab, vectors=False) -> Path:
+    """Write one packing's results atomically (schema jamflow.modes v1)."""
+    c = spec.dynamical.contacts
+    attrs = dict(schema=SCHEMA, schema_version=SCHEMA_VERSION, jamflow_version=__version__,
+                 source=str(source), dim=spec.dim, n=spec.dynamical.n_total, n_kept=c.n_kept,
+                 n_floaters=c.n_floaters, n_contacts=c.n_contacts, n_overlapping=c.n_overlapping,
+                 n_near_contact=c.n_near_contact, isostatic_count=c.isostatic_count,
+                 excess_contacts=c.excess_contacts, mean_z=c.mean_z, e_min=spec.e_min, mass=spec.mass,
+                 complete=spec.complete, n_zero=spec.n_zero, n_negative=spec.n_negative,
+                 lowest_nonzero=spec.lowest_nonzero, classification=stab.label, behaviour=stab.behaviour,
+                 power=stab.power, mode_eigenvalue=stab.mode_eigenvalue,
+                 translation_residual=spec.translation_residual)
+    with atomic_path(out) as tmp, h5py.File(tmp, "w") as f:
+        f.attrs.update(attrs)
+        f["floater"], f["z"], f["particles"] = c.floater, c.z, spec.dynamical.particles
+        f["contacts"] = np.column_stack([c.i, c.j])
+        f["eigenvalues"], f["frequencies"] = spec.eigenvalues, spec.frequencies
+        if vectors and spec.eigenvectors is not None:
+            f["eigenvectors"] = spec.eigenvectors
+        g = f.create_group("stability")
+        g["deltas"], g["delta_v_plus"], g["delta_v_minus"], g["mode"] = (
+            stab.deltas, stab.delta_v_plus, stab.delta_v_minus, stab.mode)
+    return Path(out)
+
+
+def read_modes(path) -> dict:
+    """Attributes and datasets of a results file as a flat dict (datasets as arrays)."""
+    with h5py.File(path, "r") as f:
+        if f.attrs.get("schema") != SCHEMA:
+            raise ValueError(f"{path} is not a jamflow modes results file")
+        out = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
+        f.visititems(lambda name, obj: out.__setitem__(name, obj[...]) if isinstance(obj, h5py.Dataset) else None)
+    return out
