@@ -1,0 +1,164 @@
+"""Structure of one packing or an ensemble (seed sections 4.2-4.4): g(r) (partials for
+discrete species), S(k), Q6 global/local, G, the g(r) - 1 envelope length and the q6
+correlation functions with their length. FILES are jamflow HDF5 packings or LAMMPS data /
+dump files (every dump frame counts as one packing); all of them form one ensemble.
+Results go to one HDF5 file (layout in docs/structure.md) and PNG plots."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from .. import __version__
+from ..io import atomic_path, check_writable, load_packing
+from ..analysis.correlations import BondCorrelation, rdf_correlation_length
+from ..analysis.order import BondOrder, first_minimum, translational_order
+from ..analysis.plots_structure import plot_bond_correlations, plot_order, plot_rdf, plot_structure_factor
+from ..analysis.readers import packings_from_lammps
+from ..analysis.structure import MAX_SPECIES, RDF, StructureFactor
+
+FORMATS = ("auto", "jamflow", "data", "dump")
+
+
+def add_arguments(p) -> None:
+    p.add_argument("files", nargs="+", help="packing files: jamflow .h5, LAMMPS data or dump")
+    p.add_argument("--out", default="structure.h5", help="output HDF5 file")
+    p.add_argument("--plots", default=None, help="directory for PNG plots (default: beside --out)")
+    p.add_argument("--format", choices=FORMATS, default="auto", help="input format (auto: HDF5 or by suffix)")
+    p.add_argument("--diameters", default=None,
+                   help="LAMMPS input without a diameter column: TYPE:DIAMETER,... e.g. 1:1.0,2:1.4")
+    p.add_argument("--dim", type=int, choices=(2, 3), default=None, help="LAMMPS input: dimension (default: infer)")
+    p.add_argument("--dr", type=float, default=0.02, help="g(r) bin width, units of <sigma^2>^1/2")
+    p.add_argument("--k-max", type=float, default=20.0, help="largest k, units of 1/<sigma^2>^1/2")
+    p.add_argument("--r-min", type=float, default=None,
+                   help="Q6 neighbour cutoff, units of <sigma^2>^1/2 (default: first minimum of g(r))")
+    p.add_argument("--q6-dr", type=float, default=0.1, help="bin width of the q6 correlation functions")
+
+
+def parse_diameters(text: str | None) -> dict | None:
+    """'1:1.0,2:1.4' -> {'1': 1.0, '2': 1.4}."""
+    if text is None:
+        return None
+    try:
+        pairs = [item.split(":") for item in text.split(",") if item.strip()]
+        mapping = {t.strip(): float(d) for t, d in pairs}
+    except ValueError:
+        raise ValueError(f"--diameters {text!r}: write TYPE:DIAMETER pairs separated by commas, e.g. 1:1.0,2:1.4") from None
+    if not mapping or not all(math.isfinite(v) and v > 0 for v in mapping.values()):
+        raise ValueError(f"--diameters {text!r}: every diameter must be a positive number")
+    return mapping
+
+
+def load_inputs(files, fmt: str, diameters, dim) -> tuple[list, list[str]]:
+    """All packings of all files, with a label (file name, and #frame for dumps) for each."""
+    missing = [f for f in files if not Path(f).is_file()]
+    if missing:
+        raise FileNotFoundError(f"input file(s) not found: {', '.join(missing)}")
+    packings, labels = [], []
+    for name in files:
+        if fmt == "jamflow" or (fmt == "auto" and h5py.is_hdf5(name)):
+            packings.append(load_packing(name))
+            labels.append(Path(name).name)
+            continue
+        frames = packings_from_lammps(name, None if fmt == "auto" else fmt, diameters=diameters, dim=dim)
+        packings += frames
+        labels += [Path(name).name if len(frames) == 1 else f"{Path(name).name}#{k}" for k in range(len(frames))]
+    return packings, labels
+
+
+def _check_numbers(args) -> None:
+    for name in ("dr", "k_max", "q6_dr"):
+        value = getattr(args, name)
+        if not (math.isfinite(value) and value > 0):
+            raise ValueError(f"--{name.replace('_', '-')} must be a positive number, got {value}")
+    if args.r_min is not None and not (math.isfinite(args.r_min) and args.r_min > 0):
+        raise ValueError(f"--r-min must be a positive number, got {args.r_min}")
+
+
+def _discrete(packings) -> bool:
+    species = [np.unique(p.diameters) for p in packings]
+    return len(species[0]) <= MAX_SPECIES and all(np.array_equal(s, species[0]) for s in species)
+
+
+def analyze(packings, labels, args) -> dict:
+    """Every measurement of the command, as plain result objects and arrays."""
+    rdf = RDF(dr=args.dr, partial=_discrete(packings) and len(np.unique(packings[0].diameters)) > 1).compute(packings)
+    r_min = args.r_min if args.r_min is not None else first_minimum(rdf)
+    orders = [BondOrder(r_min=r_min).compute(p) for p in packings]
+    per_g = [translational_order(RDF(dr=args.dr).compute(p), r_min).G for p in packings]
+    table = {
+        "Q6_global": np.array([o.global_order for o in orders]),
+        "Q6_local": np.array([o.local_order for o in orders]),
+        "G": np.array(per_g),
+        "n_isolated": np.array([o.n_isolated for o in orders]),
+        "phi": np.array([p.phi for p in packings]),
+        "n": np.array([p.n for p in packings]),
+    }
+    return dict(rdf=rdf, r_min=float(r_min), table=table, labels=labels,
+                G=translational_order(rdf, r_min), g_fit=rdf_correlation_length(rdf, r_min),
+                sk=StructureFactor(k_max=args.k_max).compute(packings),
+                corr=BondCorrelation(r_min=r_min, dr=args.q6_dr).compute(packings))
+
+
+def write_results(path, res: dict, files) -> None:
+    """HDF5 layout: see docs/structure.md."""
+    rdf, sk, corr = res["rdf"], res["sk"], res["corr"]
+    with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
+        f.attrs.update(schema="jamflow.structure", schema_version=1, jamflow_version=__version__,
+                       n_packings=rdf.n_packings, r_min=res["r_min"], G=res["G"].G,
+                       xi_g=res["g_fit"].xi, xi_q6=corr.fit.xi, inputs="\n".join(map(str, files)))
+        g = f.create_group("rdf")
+        for name in ("edges", "r", "g", "counts", "ideal", "species", "partial", "scales"):
+            g[name] = getattr(rdf, name)
+        s = f.create_group("sk")
+        s.attrs["dk"] = sk.dk
+        for name in ("k", "s", "n_vectors"):
+            s[name] = getattr(sk, name)
+        o = f.create_group("order")
+        o["label"] = np.array(res["labels"], dtype="S")
+        for name, column in res["table"].items():
+            o[name] = column
+        c = f.create_group("q6_correlation")
+        c.attrs.update(baseline=corr.baseline, l=corr.l, r_min=corr.r_min)
+        for name in ("edges", "r", "complex_corr", "magnitude_corr", "complex_stderr", "c", "counts"):
+            c[name] = getattr(corr, name)
+        for key, fit in (("fit_g_envelope", res["g_fit"]), ("fit_q6", corr.fit)):
+            grp = f.create_group(key)
+            grp.attrs.update(xi=fit.xi, xi_stderr=fit.xi_stderr, amplitude=fit.amplitude, reason=fit.reason)
+            grp["r_points"], grp["y_points"] = fit.r_points, fit.y_points
+
+
+def write_plots(directory: Path, stem: str, res: dict) -> list[Path]:
+    title = f"{res['rdf'].n_packings} packing(s)"
+    table = res["table"]
+    return [
+        plot_rdf(res["rdf"], directory / f"{stem}-rdf.png", r_min=res["r_min"], fit=res["g_fit"], title=title),
+        plot_structure_factor(res["sk"], directory / f"{stem}-sk.png", title="S(k)"),
+        plot_bond_correlations(res["corr"], directory / f"{stem}-q6corr.png", title=title),
+        plot_order(res["labels"], {k: table[k] for k in ("Q6_global", "Q6_local", "G")},
+                   directory / f"{stem}-order.png", title=f"r_min = {res['r_min']:.3f}"),
+    ]
+
+
+def run(args) -> int:
+    _check_numbers(args)
+    diameters = parse_diameters(args.diameters)
+    check_writable(args.out)
+    plots = Path(args.plots) if args.plots else Path(args.out).resolve().parent
+    if not plots.is_dir():
+        raise ValueError(f"--plots directory {plots} does not exist; create it first")
+    packings, labels = load_inputs(args.files, args.format, diameters, args.dim)
+    if len({p.dim for p in packings}) != 1:
+        raise ValueError("the input files mix 2D and 3D packings; analyse them separately")
+    res = analyze(packings, labels, args)
+    write_results(args.out, res, args.files)
+    written = write_plots(plots, Path(args.out).stem, res)
+    t = res["table"]
+    print(f"{len(packings)} packing(s): r_min = {res['r_min']:.3f}  Q6 global = {t['Q6_global'].mean():.3f}  "
+          f"Q6 local = {t['Q6_local'].mean():.3f}  G = {res['G'].G:.3g}  first peak g = {res['G'].g_max:.3g}  "
+          f"xi(g) = {res['g_fit'].xi:.3g}  xi(q6) = {res['corr'].fit.xi:.3g}")
+    print(f"-> {args.out}, " + ", ".join(str(p) for p in written))
+    return 0
