@@ -68,7 +68,7 @@ class RepulsiveLJ:
     def energy(self, r, sigma):
         r, sigma = np.asarray(r, float), np.asarray(sigma, float)
         q6 = (sigma / r) ** 6
-        return np.where(r < sigma, self.epsilon * (q6 * q6 - 2.0 * q6 + 1.0), 0.0)
+        return np.where(r < sigma, self.epsilon * (q6 - 1.0) ** 2, 0.0)  # = q^12 - 2 q^6 + 1, no cancellation
 
     def dv_dr(self, r, sigma):
         r, sigma = np.asarray(r, float), np.asarray(sigma, float)

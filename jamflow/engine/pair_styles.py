@@ -25,15 +25,14 @@ def pair_setup(packing: Packing, lmp=None) -> list[str]:
     """LAMMPS commands that define the pair interaction for ``packing``."""
     if uses_harmonic_cut(packing):
         return harmonic_cut_commands(packing)
-    from .plugin_build import lepton_expression, plugin_library
+    from .plugin_build import pair_style_commands, plugin_library
 
-    pot = packing.potential
-    cutoff = f"{packing.diameters.max():.17g}"
     library = plugin_library()
-    if library is not None:
-        style = f"jamflow/spring {pot.alpha:.17g} {cutoff}" if isinstance(pot, Spring) else f"jamflow/rlj {cutoff}"
-        return [f"plugin load {library}", f"pair_style {style}", f"pair_coeff * * {pot.epsilon:.17g}"]
-    return [f"pair_style lepton/sphere {cutoff}", f'pair_coeff * * "{lepton_expression(pot)}"']
+    cutoff = float(packing.diameters.max())
+    lines = pair_style_commands(packing.potential, cutoff, plugin=library is not None)
+    if library is not None and not (lmp is not None and lmp.has_style("pair", "jamflow/spring")):
+        lines.insert(0, f'plugin load "{library}"')
+    return lines
 
 
 def harmonic_cut_commands(packing: Packing) -> list[str]:

@@ -12,16 +12,17 @@ from __future__ import annotations
 import math
 import time
 import warnings
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
 from ..engine.lammps import LammpsEngine
 from ..minimize import MinimizerSettings, MinimizeResult
 from ..packing import DENSEST_PHI, Packing, random_packing
-from ..potentials import Potential, parse_potential
+from ..potentials import Potential, RepulsiveLJ, Spring, parse_potential
 from ..sizes import parse_sizes
 
+DEFAULT_PHI0 = {2: 0.80, 3: 0.55}
 HISTORY_COLUMNS = ("phi", "energy_per_particle", "pressure", "dphi", "iterations", "max_force", "converged")
 
 
@@ -30,7 +31,7 @@ class CompressionSettings:
     """Parameters of the compression protocol (dimensionless packing fractions;
     energies per particle in eps)."""
 
-    phi0: float = 0.80
+    phi0: float | None = None  # None: DEFAULT_PHI0[dim], well below phi_J
     dphi0: float = 1e-4
     v_tol: float = 1e-16
     max_steps: int = 100_000
@@ -39,9 +40,11 @@ class CompressionSettings:
     def __post_init__(self):
         for name in ("phi0", "dphi0", "v_tol"):
             value = getattr(self, name)
+            if name == "phi0" and value is None:
+                continue
             if not (isinstance(value, (int, float)) and math.isfinite(value)):
                 raise ValueError(f"{name} must be a finite number, got {value!r}")
-        if not 0.0 < self.phi0 < 1.0:
+        if self.phi0 is not None and not 0.0 < self.phi0 < 1.0:
             raise ValueError(f"phi0 must lie in (0, 1), got {self.phi0}")
         if not 0.0 < self.dphi0 < 0.1:
             raise ValueError(f"dphi0 must lie in (0, 0.1), got {self.dphi0}; the seed uses 1e-4")
@@ -49,6 +52,9 @@ class CompressionSettings:
             raise ValueError(f"vtol must be positive, got {self.v_tol}; the seed uses 1e-16")
         if self.max_steps < 1:
             raise ValueError("max_steps must be a positive integer")
+
+    def start_phi(self, dim: int) -> float:
+        return DEFAULT_PHI0.get(dim, math.nan) if self.phi0 is None else self.phi0
 
     def as_dict(self) -> dict:
         out = {k: v for k, v in asdict(self).items() if k != "minimizer"}
@@ -100,8 +106,11 @@ def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | 
     (progress bars, writers).
     """
     settings = settings or CompressionSettings()
-    packing = start if start is not None else initial_packing(n, dim, sizes, potential, seed, settings.phi0)
-    return compress(packing, settings, observers=observers, engine_options=engine_options)
+    if start is None:
+        start = initial_packing(n, dim, sizes, potential, seed, settings.start_phi(dim))
+        if isinstance(start.potential, RepulsiveLJ):
+            start = remove_overlaps(start, settings.minimizer)
+    return compress(start, settings, observers=observers, engine_options=engine_options)
 
 
 def initial_packing(n, dim, sizes, potential, seed, phi0) -> Packing:
@@ -121,6 +130,19 @@ def initial_packing(n, dim, sizes, potential, seed, phi0) -> Packing:
         return random_packing(int(n), dim, size_spec, phi0, int(seed), pot)
     except ValueError as err:
         raise ValueError(f"{err} (n = {n} is too small for these sizes)") from None
+
+
+def remove_overlaps(packing: Packing, minimizer: MinimizerSettings) -> Packing:
+    """Relax a random start with the linear spring until V < V_min, so that a potential
+    that diverges at r -> 0 (repulsive LJ) starts without significant overlaps (seed step 1;
+    from a raw random start RLJ forces reach ~1e13 and LAMMPS loses atoms)."""
+    with LammpsEngine(replace(packing, potential=Spring())) as engine:
+        result = engine.minimize(minimizer)
+        relaxed = engine.packing()
+    if result.energy_per_particle >= minimizer.v_min:
+        raise JammingFailed(f"the random start at phi0 = {packing.phi:.4f} does not relax to zero overlap "
+                            f"(V = {result.energy_per_particle:.2e}): phi0 is above jamming; use a lower phi0")
+    return replace(relaxed, potential=packing.potential)
 
 
 def compress(packing: Packing, settings: CompressionSettings, *, observers=(), engine_options=None) -> JamResult:

@@ -1,0 +1,51 @@
+"""Jam N disks (2D) or spheres (3D) at onset by isotropic compression (seed section 2.1)
+and write the packing as HDF5 (schema: jamflow/io.py)."""
+
+from __future__ import annotations
+
+import math
+import time
+
+from ..io import check_writable, save_packing
+from ..minimize import METHODS, MinimizerSettings
+from ..protocols.compression import CompressionSettings, initial_packing, jam
+from ..progress import CompressionProgress
+
+
+def add_arguments(p) -> None:
+    p.add_argument("--dim", type=int, choices=(2, 3), default=2, help="spatial dimension")
+    p.add_argument("--n", type=int, default=64, help="number of particles")
+    p.add_argument("--sizes", default="bi:1.4:0.5",
+                   help="mono | bi:RATIO:FRACTION_SMALL | poly-uniform:WIDTH | poly-normal:WIDTH | poly-lognormal:WIDTH")
+    p.add_argument("--potential", default="spring", help="spring | hertz | spring:ALPHA | rlj")
+    p.add_argument("--minimizer", choices=METHODS, default="fire", help="energy minimiser")
+    p.add_argument("--phi0", type=float, default=None, help="initial packing fraction (default 0.80 in 2D, 0.55 in 3D)")
+    p.add_argument("--dphi0", type=float, default=1e-4, help="initial packing-fraction increment")
+    p.add_argument("--vtol", type=float, default=1e-16, help="energy window V_tol < V < 2 V_tol (per particle)")
+    p.add_argument("--ftol", type=float, default=None, help="max force component tolerance (default scales with box)")
+    p.add_argument("--seed", type=int, default=0, help="random seed of the initial positions and sizes")
+    p.add_argument("--out", default="packing.h5", help="output HDF5 file")
+    p.add_argument("--quiet", action="store_true", help="no progress display")
+
+
+def settings_from_args(args) -> CompressionSettings:
+    for name in ("phi0", "dphi0", "vtol"):
+        value = getattr(args, name)
+        if value is not None and (not math.isfinite(value) or value <= 0):
+            raise ValueError(f"--{name} must be a finite positive number, got {value}")
+    minimizer = MinimizerSettings(method=args.minimizer, force_tol=args.ftol)
+    return CompressionSettings(phi0=args.phi0, dphi0=args.dphi0, v_tol=args.vtol, minimizer=minimizer)
+
+
+def run(args) -> int:
+    settings = settings_from_args(args)
+    check_writable(args.out)
+    start = initial_packing(args.n, args.dim, args.sizes, args.potential, args.seed, settings.start_phi(args.dim))
+    t0 = time.perf_counter()
+    with CompressionProgress(disable=args.quiet) as progress:
+        result = jam(start=start, settings=settings, observers=[progress])
+    save_packing(args.out, result.packing, energy_per_particle=result.energy_per_particle,
+                 pressure_tensor=result.pressure_tensor, protocol=settings.as_dict(),
+                 history=result.history, lammps_version=result.lammps_version)
+    print(f"{result.summary()}  -> {args.out} ({time.perf_counter() - t0:.2f} s)")
+    return 0

@@ -1,0 +1,32 @@
+"""Progress display for protocols (an observer: called once per minimisation)."""
+
+from __future__ import annotations
+
+import math
+
+from tqdm import tqdm
+
+
+class CompressionProgress:
+    """A tqdm bar over minimisations with rate, phi, V and the current increment.
+
+    The total is unknown in advance (the bisection ends when V lands in the window), so
+    the bar's ETA estimates it from the halvings still needed to shrink dphi to ~1e-9.
+    """
+
+    def __init__(self, disable: bool = False):
+        self.bar = tqdm(desc="jam", unit="min", disable=disable, dynamic_ncols=True)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.bar.close()
+
+    def __call__(self, step: dict) -> None:
+        res = step["result"]
+        halvings_left = max(0.0, math.log2(max(step["dphi"], 1e-300) / 1e-9))
+        self.bar.total = max(self.bar.n + 1, int(self.bar.n + 1 + 2 * halvings_left))
+        self.bar.set_postfix_str(f"phi={step['phi']:.9f} V={res.energy_per_particle:.2e} dphi={step['dphi']:.1e}",
+                                 refresh=False)
+        self.bar.update(1)

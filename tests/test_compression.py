@@ -1,0 +1,85 @@
+"""The isotropic compression protocol (seed section 2.1) end to end on small systems."""
+
+import numpy as np
+import pytest
+
+from jamflow import CompressionSettings, MinimizerSettings, jam
+from jamflow.engine.reference import energy_forces_pressure
+
+
+def assert_jammed(res, v_tol=1e-16):
+    assert v_tol < res.energy_per_particle < 2 * v_tol
+    ref = energy_forces_pressure(res.packing)  # independent check of the final state
+    assert ref.energy / res.packing.n == pytest.approx(res.energy_per_particle, rel=1e-6)
+    assert np.max(np.abs(ref.forces)) < 1e-13
+    assert res.pressure > 0
+    assert res.history["phi"][-1] == res.phi_j == pytest.approx(res.packing.phi, rel=1e-14)
+
+
+@pytest.fixture(scope="module")
+def jammed_2d():
+    return jam(n=64, dim=2, sizes="bi:1.4:0.5", seed=11)
+
+
+def test_2d_bidisperse_reaches_window_with_force_balance(jammed_2d):
+    assert_jammed(jammed_2d)
+    # small-N 2D bidisperse onsets lie below the large-N 0.842 (O'Hern et al. PRE 68, 011306, 2003)
+    assert 0.80 < jammed_2d.phi_j < 0.86
+
+
+def test_history_follows_the_bisection_rule(jammed_2d):
+    h = jammed_2d.history
+    above = h["energy_per_particle"] > 2e-16
+    below = h["energy_per_particle"] < 1e-16
+    for k in range(1, len(h["phi"]) - 1):
+        dphi = h["phi"][k + 1] - h["phi"][k]
+        assert (dphi > 0) == bool(below[k]) and (dphi < 0) == bool(above[k])
+        crossed = (above[k] and below[k - 1]) or (below[k] and above[k - 1])
+        # history dphi[k] is the increment that led to phi[k]; it halves after a crossing
+        assert h["dphi"][k + 1] == (h["dphi"][k] / 2 if crossed else h["dphi"][k])
+        assert abs(dphi) == pytest.approx(h["dphi"][k + 1], rel=1e-9)
+
+
+def test_same_seed_same_phi_j(jammed_2d):
+    again = jam(n=64, dim=2, sizes="bi:1.4:0.5", seed=11)
+    assert abs(again.phi_j - jammed_2d.phi_j) < 1e-10
+
+
+def test_3d_monodisperse_spheres():
+    res = jam(n=48, dim=3, sizes="mono", seed=2)
+    assert_jammed(res)
+    assert 0.55 < res.phi_j < 0.66  # small-N; large-N value 0.639-0.64 (O'Hern et al. 2003)
+
+
+@pytest.mark.parametrize("method", ["cg", "md"])
+def test_other_minimizers_reach_the_window(method):
+    settings = CompressionSettings(minimizer=MinimizerSettings(method=method))
+    res = jam(n=32, dim=2, sizes="bi:1.4:0.5", seed=5, settings=settings)
+    assert 1e-16 < res.energy_per_particle < 2e-16
+
+
+def test_hertz_polydisperse_uses_plugin_and_jams():
+    res = jam(n=32, dim=2, sizes="poly-uniform:0.4", potential="hertz", seed=3)
+    assert_jammed(res)
+
+
+@pytest.mark.parametrize("kwargs,match", [
+    (dict(n=1), "n must be"), (dict(dim=4), "dim"), (dict(sizes="tri:1"), "size spec"),
+    (dict(potential="morse"), "potential"), (dict(seed=-1), "seed"),
+])
+def test_bad_input_raises_before_lammps(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        jam(**kwargs)
+
+
+@pytest.mark.parametrize("kwargs", [dict(phi0=0.95), dict(phi0=0.0), dict(dphi0=-1e-4),
+                                    dict(v_tol=float("nan")), dict(v_tol=-1.0)])
+def test_bad_settings_rejected(kwargs):
+    with pytest.raises(ValueError):
+        jam(settings=CompressionSettings(**kwargs))
+
+
+def test_repulsive_lj_starts_from_relaxed_overlaps():
+    """Seed step 1: RLJ needs a start without significant overlaps."""
+    res = jam(n=32, dim=2, sizes="bi:1.4:0.5", potential="rlj", seed=4)
+    assert_jammed(res)
