@@ -257,12 +257,12 @@ class Stability:
 
 
 def lowest_nontrivial_mode(spec: SpectrumResult) -> tuple[float, np.ndarray]:
-    """Lowest mode orthogonal to the d translations: Rayleigh-Ritz on the lowest
-    max(d + 1, n_zero + 1) eigenvectors with the translations projected out (a degenerate
+    """Lowest mode orthogonal to the d translations: Rayleigh-Ritz on the eigenvectors up to
+    the first nonzero one (at least d + 1) with the translations projected out (a degenerate
     zero-mode subspace can mix translations into the solver's vectors)."""
     dyn = spec.dynamical
     t = dyn.translations()
-    m = min(max(spec.dim + 1, spec.n_zero + 1), spec.eigenvectors.shape[1])
+    m = min(max(spec.dim + 1, spec.n_negative + spec.n_zero + 1), spec.eigenvectors.shape[1])
     v = spec.eigenvectors[:, :m]
     w = v - t @ (t.T @ v)
     basis, s, _ = np.linalg.svd(w, full_matrices=False)
