@@ -10,6 +10,7 @@ from . import __version__
 
 SUBCOMMANDS = {
     "jam": ("jamflow.commands.jam", "jam particles at onset by isotropic compression"),
+    "modes": ("jamflow.commands.modes", "contacts, floaters, normal modes, D(omega) and stability class of packing files"),
 }
 
 
