@@ -12,6 +12,7 @@ from typing import Sequence
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.ticker import NullFormatter
 
 from ..io import atomic_path
 from .correlations import BondCorrelationResult, ExponentialFit
@@ -55,8 +56,8 @@ def _envelope(ax, fit: ExponentialFit, label: str) -> None:
 def plot_rdf(rdf: RDFResult, path, *, r_min: float | None = None, fit: ExponentialFit | None = None,
              title: str = "") -> Path:
     """g(r) (and partials) with the first minimum; right panel: envelope of g - 1 and its fit."""
-    fig = Figure(figsize=(10, 4))
-    ax, env = fig.subplots(1, 2)
+    fig = Figure(figsize=(10, 4) if fit is not None else (5.5, 4))
+    ax, env = fig.subplots(1, 2) if fit is not None else (fig.subplots(), None)
     ax.plot(rdf.r, rdf.g, lw=1, color="k", label="g(r)")
     for a in range(len(rdf.species)):
         for b in range(a, len(rdf.species)):
@@ -71,8 +72,8 @@ def plot_rdf(rdf: RDFResult, path, *, r_min: float | None = None, fit: Exponenti
     _legend(ax)
     if fit is not None:
         _envelope(env, fit, "g - 1")
-    env.set(xlabel="r / <sigma^2>^1/2", ylabel="g(r) - 1 maxima")
-    _legend(env)
+        env.set(xlabel="r / <sigma^2>^1/2", ylabel="g(r) - 1 maxima")
+        _legend(env)
     return _save(fig, path)
 
 
@@ -81,6 +82,7 @@ def plot_structure_factor(sk: StructureFactorResult, path, *, title: str = "") -
     fig = Figure(figsize=(5.5, 4))
     ax = fig.subplots()
     ax.loglog(sk.k, sk.s, ".-", lw=0.7, ms=3)
+    ax.xaxis.set_minor_formatter(NullFormatter())
     ax.axhline(1.0, color="0.6", lw=0.5)
     ax.set(xlabel="k <sigma^2>^1/2", ylabel="S(k)", title=f"{title} ({sk.n_packings} packing(s))")
     return _save(fig, path)
