@@ -19,7 +19,8 @@ import numpy as np
 
 from jamflow.analysis.correlations import BondCorrelation, rdf_correlation_length
 from jamflow.analysis.order import BondOrder, first_minimum, particle_bond_order, translational_order
-from jamflow.analysis.plots_structure import plot_bond_correlations, plot_rdf, plot_structure_factor
+from jamflow.analysis.plots_structure import (plot_bond_correlations, plot_bond_order_map, plot_rdf,
+                                             plot_structure_factor)
 from jamflow.analysis.structure import (RDF, StructureFactor, fcc_packing, rms_contact_distance,
                                         structure_factor_grid, triangular_packing)
 from jamflow.io import load_packing
@@ -53,6 +54,8 @@ def disks(n: int, figures: Path) -> None:
               f"q6 all-pairs baseline {corr.baseline:.4f}")
         plot_rdf(rdf, figures / f"structure-disks-p{p}-rdf.png", r_min=r_min, fit=g_fit, title=f"p = {p}")
         plot_bond_correlations(corr, figures / f"structure-disks-p{p}-q6corr.png", title=f"p = {p}, N = {n}")
+        plot_bond_order_map(packings[0], orders[0], figures / f"structure-disks-p{p}-map.png",
+                            title=f"{files[0].name}:")
 
 
 def spheres(n: int, figures: Path) -> None:

@@ -279,7 +279,7 @@ def test_analyze_command_writes_hdf5_and_plots(tmp_path, lammps_files):
         assert f["order/Q6_global"][0] == pytest.approx(1.0, abs=1e-12)
         assert f["order/G"][0] == 0.0 and 1 < f.attrs["r_min"] < math.sqrt(3)
         assert f["sk/s"].shape == f["sk/k"].shape and f["rdf/g"].shape == f["rdf/r"].shape
-    for kind in ("rdf", "sk", "q6corr", "order"):
+    for kind in ("rdf", "sk", "q6corr", "order", "q6map"):
         assert (tmp_path / f"res-{kind}.png").stat().st_size > 1000
     bad = parser.parse_args([str(lammps_files[1] / "p.dump"), "--out", str(out), "--dr", "-1"])
     with pytest.raises(ValueError, match="--dr"):

@@ -16,7 +16,8 @@ from .. import __version__
 from ..io import atomic_path, check_writable, load_packing
 from ..analysis.correlations import BondCorrelation, rdf_correlation_length
 from ..analysis.order import BondOrder, first_minimum, translational_order
-from ..analysis.plots_structure import plot_bond_correlations, plot_order, plot_rdf, plot_structure_factor
+from ..analysis.plots_structure import (plot_bond_correlations, plot_bond_order_map, plot_order, plot_rdf,
+                                       plot_structure_factor)
 from ..analysis.readers import packings_from_lammps
 from ..analysis.structure import MAX_SPECIES, RDF, StructureFactor
 
@@ -131,10 +132,15 @@ def write_results(path, res: dict, files) -> None:
             grp["r_points"], grp["y_points"] = fit.r_points, fit.y_points
 
 
-def write_plots(directory: Path, stem: str, res: dict) -> list[Path]:
+def write_plots(directory: Path, stem: str, res: dict, first) -> list[Path]:
+    """g(r), S(k), q6 correlations, order parameters; for 2D also the psi_6 map of the first packing."""
     title = f"{res['rdf'].n_packings} packing(s)"
     table = res["table"]
-    return [
+    extra = []
+    if first.dim == 2:
+        extra.append(plot_bond_order_map(first, BondOrder(r_min=res["r_min"]).compute(first),
+                                         directory / f"{stem}-q6map.png", title=f"{res['labels'][0]}:"))
+    return extra + [
         plot_rdf(res["rdf"], directory / f"{stem}-rdf.png", r_min=res["r_min"], fit=res["g_fit"], title=title),
         plot_structure_factor(res["sk"], directory / f"{stem}-sk.png", title="S(k)"),
         plot_bond_correlations(res["corr"], directory / f"{stem}-q6corr.png", title=title),
@@ -155,7 +161,7 @@ def run(args) -> int:
         raise ValueError("the input files mix 2D and 3D packings; analyse them separately")
     res = analyze(packings, labels, args)
     write_results(args.out, res, args.files)
-    written = write_plots(plots, Path(args.out).stem, res)
+    written = write_plots(plots, Path(args.out).stem, res, packings[0])
     t = res["table"]
     print(f"{len(packings)} packing(s): r_min = {res['r_min']:.3f}  Q6 global = {t['Q6_global'].mean():.3f}  "
           f"Q6 local = {t['Q6_local'].mean():.3f}  G = {res['G'].G:.3g}  first peak g = {res['G'].g_max:.3g}  "
