@@ -11,7 +11,7 @@ from numpy.polynomial import legendre
 
 from jamflow.analysis.order import (BondOrder, Nematic, TranslationalOrder, first_minimum, neighbour_rdf,
                                     particle_bond_order, translational_order)
-from jamflow.analysis.structure import RDF, fcc_packing, rms_contact_distance, triangular_packing
+from jamflow.analysis.structure import fcc_packing, rms_contact_distance, triangular_packing
 from jamflow.box import Box
 from jamflow.packing import Packing, random_packing
 from jamflow.sizes import parse_sizes

@@ -26,9 +26,9 @@ from scipy.ndimage import gaussian_filter1d
 from scipy.signal import find_peaks
 
 from ..packing import Packing
-from .order import first_minimum, particle_bond_order
-from .structure import RDF, RDFResult, as_packings, check_r_max, max_reduced_radius, pair_chunks, radial_edges, \
-    rms_contact_distance
+from .order import even_degree, first_minimum, particle_bond_order
+from .structure import (UNITS_R, RDF, RDFResult, as_packings, check_r_max, max_reduced_radius, pair_chunks,
+                        positive, radial_edges, rms_contact_distance)
 
 
 # --- exponential envelope fits --------------------------------------------------------------
@@ -89,7 +89,8 @@ class PairCorrelationLength:
     """``compute(packings)``: xi from the g(r) - 1 envelope of a packing or an ensemble."""
 
     def __init__(self, dr: float = 0.02, r_min: float | None = None, smooth: float = 0.05):
-        self.rdf, self.r_min, self.smooth = RDF(dr=dr), r_min, smooth
+        self.rdf, self.smooth = RDF(dr=dr), positive("smooth", smooth, UNITS_R)
+        self.r_min = None if r_min is None else positive("r_min", r_min, UNITS_R)
 
     def compute(self, packings: Packing | Iterable[Packing]) -> ExponentialFit:
         return rdf_correlation_length(self.rdf.compute(packings), self.r_min, self.smooth)
@@ -130,9 +131,9 @@ class BondCorrelation:
     """
 
     def __init__(self, l: int = 6, r_min: float | None = None, dr: float = 0.1, r_max: float | None = None):
-        if not (isinstance(dr, (int, float)) and math.isfinite(dr) and dr > 0):
-            raise ValueError(f"dr must be a positive number (units of <sigma^2>^1/2), got {dr!r}")
-        self.l, self.r_min, self.dr, self.r_max = l, r_min, float(dr), r_max
+        self.l, self.dr = even_degree(l), positive("dr", dr, UNITS_R)
+        self.r_min = None if r_min is None else positive("r_min", r_min, UNITS_R)
+        self.r_max = None if r_max is None else positive("r_max", r_max, UNITS_R)
 
     def compute(self, packings: Packing | Iterable[Packing]) -> BondCorrelationResult:
         items = as_packings(packings)

@@ -32,7 +32,7 @@ from scipy.ndimage import gaussian_filter1d
 from scipy.special import sph_harm_y
 
 from ..packing import Packing
-from .structure import RDF, RDFResult, max_reduced_radius, pair_chunks, rms_contact_distance
+from .structure import UNITS_R, RDF, RDFResult, max_reduced_radius, pair_chunks, positive, rms_contact_distance
 
 
 # --- r_min: the first minimum of g(r) --------------------------------------------------------
@@ -105,7 +105,8 @@ class TranslationalOrder:
     """``TranslationalOrder(dr).compute(packing)``: G from that packing's own g(r)."""
 
     def __init__(self, dr: float = 0.02, r_min: float | None = None, smooth: float = 0.05):
-        self.dr, self.r_min, self.smooth = dr, r_min, smooth
+        self.dr, self.smooth = positive("dr", dr, UNITS_R), positive("smooth", smooth, UNITS_R)
+        self.r_min = None if r_min is None else positive("r_min", r_min, UNITS_R)
 
     def compute(self, packing: Packing) -> TranslationalOrderResult:
         return translational_order(neighbour_rdf(packing, self.dr), self.r_min, self.smooth)
@@ -116,10 +117,8 @@ def particle_bond_order(packing: Packing, r_cut: float, l: int = 6) -> tuple[np.
     """(Q, n): per-particle complex vectors Q (N, 1) in 2D or (N, 2l+1) in 3D (normalised so
     |Q_i| is psi_l(i) resp. q_l(i)), and neighbour counts n (N,). ``r_cut`` in diameters.
     Rows of particles with no neighbour are zero."""
-    if not (isinstance(l, (int, np.integer)) and l >= 0 and l % 2 == 0):
-        raise ValueError(f"l must be an even non-negative integer (bond directions are unsigned), got {l!r}")
-    if not (math.isfinite(r_cut) and r_cut > 0):
-        raise ValueError(f"neighbour cutoff must be a positive length, got {r_cut}")
+    even_degree(l)
+    positive("neighbour cutoff", r_cut, "diameters")
     width = 1 if packing.dim == 2 else 2 * l + 1
     total = np.zeros((packing.n, width), complex)
     count = np.zeros(packing.n)
@@ -131,6 +130,12 @@ def particle_bond_order(packing: Packing, r_cut: float, l: int = 6) -> tuple[np.
     with np.errstate(invalid="ignore", divide="ignore"):
         q = np.where(count[:, None] > 0, total / count[:, None], 0.0)
     return q, count.astype(int)
+
+
+def even_degree(l) -> int:
+    if not (isinstance(l, (int, np.integer)) and not isinstance(l, bool) and l >= 0 and l % 2 == 0):
+        raise ValueError(f"l must be an even non-negative integer (bond directions are unsigned), got {l!r}")
+    return int(l)
 
 
 def _bond_harmonics(dr: np.ndarray, l: int) -> np.ndarray:
@@ -188,9 +193,8 @@ class BondOrder:
     """
 
     def __init__(self, l: int = 6, r_min: float | None = None, dr: float = 0.02):
-        if r_min is not None and not (math.isfinite(r_min) and r_min > 0):
-            raise ValueError(f"r_min must be a positive number (units of <sigma^2>^1/2), got {r_min}")
-        self.l, self.r_min, self.dr = l, r_min, dr
+        self.l, self.dr = even_degree(l), positive("dr", dr, UNITS_R)
+        self.r_min = None if r_min is None else positive("r_min", r_min, UNITS_R)
 
     def compute(self, packing: Packing) -> BondOrderResult:
         r_min = self.r_min if self.r_min is not None else first_minimum(neighbour_rdf(packing, self.dr))

@@ -39,6 +39,17 @@ MAX_SPECIES = 8  # more distinct diameters than this is treated as continuous po
 
 
 # --- helpers shared by the analysis modules -------------------------------------------------
+UNITS_R = "units of <sigma^2>^1/2"
+
+
+def positive(name: str, value, units: str = "") -> float:
+    """``value`` as a float if it is a finite positive number, else a ValueError naming it."""
+    ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+    if not (ok and math.isfinite(value) and value > 0):
+        raise ValueError(f"{name} must be a finite positive number{f' ({units})' if units else ''}, got {value!r}")
+    return float(value)
+
+
 def as_packings(packings: Packing | Iterable[Packing]) -> list[Packing]:
     """One packing or an ensemble -> non-empty list; all of the same dimension."""
     items = [packings] if isinstance(packings, Packing) else list(packings)
@@ -87,8 +98,7 @@ def ball_volume(r, dim: int):
 
 def radial_edges(r_max: float, dr: float) -> np.ndarray:
     """Bin edges 0, dr, 2 dr, ... <= r_max; validated."""
-    if not (math.isfinite(dr) and dr > 0):
-        raise ValueError(f"bin width dr must be a positive number, got {dr}")
+    positive("bin width dr", dr)
     if not dr < r_max:
         raise ValueError(f"bin width dr = {dr} must be smaller than r_max = {r_max:.4g}")
     return np.arange(int(math.floor(r_max / dr + 1e-9)) + 1) * dr
@@ -99,8 +109,7 @@ def check_r_max(r_max, packings: Sequence[Packing]) -> float:
     limit = max_reduced_radius(packings)
     if r_max is None:
         return limit
-    if not (math.isfinite(r_max) and r_max > 0):
-        raise ValueError(f"r_max must be a positive number, got {r_max}")
+    positive("r_max", r_max, UNITS_R)
     if r_max > limit * (1 + 1e-12):
         raise ValueError(f"r_max = {r_max:g} exceeds half the shortest box width ({limit:.4g} in units of "
                          "<sigma^2>^1/2); beyond it shells are cut by the periodic cell (seed section 4.2). "
@@ -153,9 +162,9 @@ class RDF:
     """
 
     def __init__(self, dr: float = 0.01, r_max: float | None = None, partial: bool = False):
-        if not (isinstance(dr, (int, float)) and math.isfinite(dr) and dr > 0):
-            raise ValueError(f"dr must be a positive number (units of <sigma^2>^1/2), got {dr!r}")
-        self.dr, self.r_max, self.partial = float(dr), r_max, bool(partial)
+        self.dr = positive("dr", dr, UNITS_R)
+        self.r_max = None if r_max is None else positive("r_max", r_max, UNITS_R)
+        self.partial = bool(partial)
 
     def compute(self, packings: Packing | Iterable[Packing]) -> RDFResult:
         items = as_packings(packings)
@@ -219,8 +228,7 @@ def structure_factor_grid(packing: Packing, k_max: float) -> tuple[np.ndarray, n
     rho(k) = sum_j exp(2 pi i n.s_j) (s: fractional coordinates) factorises over dimensions,
     so rho on the whole integer grid is a product of per-dimension phase matrices (BLAS).
     """
-    if not (math.isfinite(k_max) and k_max > 0):
-        raise ValueError(f"k_max must be a positive number, got {k_max}")
+    positive("k_max", k_max, "1/diameter")
     box = packing.box
     bounds = [int(math.ceil(k_max * np.linalg.norm(box.h[:, d]) / (2 * math.pi))) for d in range(box.dim)]
     frac = box.to_fractional(packing.positions)
@@ -268,11 +276,10 @@ class StructureFactor:
     """
 
     def __init__(self, k_max: float = 20.0, dk: float | None = None):
-        if not (isinstance(k_max, (int, float)) and math.isfinite(k_max) and k_max > 0):
-            raise ValueError(f"k_max must be a positive number (units of 1/<sigma^2>^1/2), got {k_max!r}")
-        if dk is not None and not (isinstance(dk, (int, float)) and math.isfinite(dk) and 0 < dk < k_max):
-            raise ValueError(f"dk must be a positive number below k_max, got {dk!r}")
-        self.k_max, self.dk = float(k_max), dk
+        self.k_max = positive("k_max", k_max, "units of 1/<sigma^2>^1/2")
+        if dk is not None and positive("dk", dk) >= self.k_max:
+            raise ValueError(f"dk = {dk} must be smaller than k_max = {k_max}")
+        self.dk = dk
 
     def compute(self, packings: Packing | Iterable[Packing]) -> StructureFactorResult:
         items = as_packings(packings)

@@ -19,7 +19,7 @@ from ..analysis.order import BondOrder, first_minimum, translational_order
 from ..analysis.plots_structure import (plot_bond_correlations, plot_bond_order_map, plot_order, plot_rdf,
                                        plot_structure_factor)
 from ..analysis.readers import packings_from_lammps
-from ..analysis.structure import MAX_SPECIES, RDF, StructureFactor
+from ..analysis.structure import MAX_SPECIES, RDF, StructureFactor, positive
 
 FORMATS = ("auto", "jamflow", "data", "dump")
 
@@ -71,12 +71,9 @@ def load_inputs(files, fmt: str, diameters, dim) -> tuple[list, list[str]]:
 
 
 def _check_numbers(args) -> None:
-    for name in ("dr", "k_max", "q6_dr"):
-        value = getattr(args, name)
-        if not (math.isfinite(value) and value > 0):
-            raise ValueError(f"--{name.replace('_', '-')} must be a positive number, got {value}")
-    if args.r_min is not None and not (math.isfinite(args.r_min) and args.r_min > 0):
-        raise ValueError(f"--r-min must be a positive number, got {args.r_min}")
+    for name in ("dr", "k_max", "q6_dr", "r_min"):
+        if getattr(args, name) is not None:
+            positive(f"--{name.replace('_', '-')}", getattr(args, name))
 
 
 def _discrete(packings) -> bool:
