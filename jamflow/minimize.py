@@ -39,14 +39,15 @@ class MinimizerSettings:
     delta: float = 1e-16  # seed's relative energy change threshold
     v_min: float = 1e-16  # seed's V_min (per particle)
     max_iterations: int = 500_000
-    window: int = 2000  # iterations per LAMMPS call between rule checks
-    timestep: float = 0.05  # FIRE initial step / MD step, in sqrt(m diameter^2 / eps)
-    damping: float = 0.5  # md only: drag coefficient b, in sqrt(m eps) / diameter
+    window: int = 10000  # iterations per LAMMPS call between rule checks
+    timestep: float = 0.05  # FIRE initial step (0.1 diverges: docs/failure-modes.md), in sqrt(m diameter^2 / eps)
+    md_timestep: float = 0.1  # damped-MD step
+    damping: float = 0.3  # md only: drag coefficient b, in sqrt(m eps) / diameter
 
     def __post_init__(self):
         if self.method not in METHODS:
             raise ValueError(f"unknown minimizer {self.method!r}; use one of {', '.join(METHODS)}")
-        for name in ("delta", "v_min", "timestep", "damping"):
+        for name in ("delta", "v_min", "timestep", "md_timestep", "damping"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"minimizer {name} must be a finite positive number, got {value}")
@@ -119,7 +120,7 @@ def _stop_reason(s, ftol, energy, fmax, energy_prev, fmax_prev, ran, steps, done
 
 def _install(engine, s: MinimizerSettings, ftol: float) -> None:
     engine.run_commands([
-        f"timestep {s.timestep:.17g}",
+        f"timestep {(s.md_timestep if s.method == 'md' else s.timestep):.17g}",
         "variable jf_epp equal pe/atoms",
         f"fix jf_halt all halt 1 v_jf_epp < {s.v_min:.17g} error continue",
     ])

@@ -18,11 +18,12 @@ import numpy as np
 
 from ..engine.lammps import LammpsEngine
 from ..minimize import MinimizerSettings, MinimizeResult
-from ..packing import DENSEST_PHI, Packing, random_packing
+from ..packing import DENSEST_PHI, Packing, particle_volumes, random_packing
 from ..potentials import Potential, RepulsiveLJ, Spring, parse_potential
 from ..sizes import parse_sizes
 
 DEFAULT_PHI0 = {2: 0.80, 3: 0.55}
+NEWTON_FINAL_FACTOR = 3.0  # jump straight into the window only from within 3x its predicted distance
 HISTORY_COLUMNS = ("phi", "energy_per_particle", "pressure", "dphi", "iterations", "max_force", "converged")
 
 
@@ -35,6 +36,13 @@ class CompressionSettings:
     dphi0: float = 1e-4
     v_tol: float = 1e-16
     max_steps: int = 100_000
+    dphi_growth: float = 1.0  # >1: grow dphi below jamming until the first crossing (speed-up)
+    dphi_max: float = 1e-3  # cap on the grown increment
+    newton: bool = False  # above jamming, jump to the predicted window from V and P (speed-up)
+    newton_ratio: float = 20.0  # a Newton jump shrinks phi - phi_J at most by this factor (stays jammed)
+    coarse_v_min: float | None = None  # before the first crossing, V below this counts as unjammed (speed-up)
+    approach_force_rtol: float | None = None  # before the final approach: force tol = this x pressure (speed-up)
+    coarse_force_tol: float = 1e-10  # force tolerance before the first crossing when approach_force_rtol is set
     minimizer: MinimizerSettings = field(default_factory=MinimizerSettings)
 
     def __post_init__(self):
@@ -50,6 +58,14 @@ class CompressionSettings:
             raise ValueError(f"dphi0 must lie in (0, 0.1), got {self.dphi0}; the seed uses 1e-4")
         if not self.v_tol > 0:
             raise ValueError(f"vtol must be positive, got {self.v_tol}; the seed uses 1e-16")
+        if not (math.isfinite(self.dphi_growth) and self.dphi_growth >= 1.0):
+            raise ValueError(f"dphi_growth must be >= 1 (1 = the seed's constant increment), got {self.dphi_growth}")
+        if not (math.isfinite(self.dphi_max) and self.dphi_max > 0):
+            raise ValueError(f"dphi_max must be a finite positive number, got {self.dphi_max}")
+        if self.coarse_v_min is not None and not (math.isfinite(self.coarse_v_min) and self.coarse_v_min > 2 * self.v_tol):
+            raise ValueError(f"coarse_v_min must be a finite number above 2 V_tol, got {self.coarse_v_min}")
+        if not (math.isfinite(self.newton_ratio) and self.newton_ratio > 1):
+            raise ValueError(f"newton_ratio must be a finite number > 1, got {self.newton_ratio}")
         if self.max_steps < 1:
             raise ValueError("max_steps must be a positive integer")
 
@@ -151,39 +167,117 @@ def compress(packing: Packing, settings: CompressionSettings, *, observers=(), e
 
     start_time = time.perf_counter()
     base_box, base_phi = packing.box, packing.phi
+    stepper = PhiStepper(settings, _newton_exponent(packing.potential), float(np.mean(particle_volumes(packing.diameters, packing.dim))))
     rows = {c: [] for c in HISTORY_COLUMNS}
+    phi = base_phi
     with LammpsEngine(packing, **(engine_options or {})) as engine:
-        phi, dphi, side = base_phi, settings.dphi0, None
         for step in range(settings.max_steps):
             engine.set_box(base_box.scaled((base_phi / phi) ** (1.0 / packing.dim)))
-            result = engine.minimize(settings.minimizer)
-            state = engine.state()
-            _record(rows, phi, result, state.pressure, dphi)
+            minimizer = stepper.minimizer()
+            result = engine.minimize(minimizer)
+            pressure = engine.state().pressure
+            _record(rows, phi, result, pressure, stepper.last_step)
             for observe in observers:
-                observe({"step": step, "phi": phi, "dphi": dphi, "result": result})
+                observe({"step": step, "phi": phi, "dphi": stepper.last_step, "result": result})
             v = result.energy_per_particle
-            if settings.v_tol < v < 2 * settings.v_tol:
+            if settings.v_tol < v < 2 * settings.v_tol and result.reason != "energy-below-vmin":
+                if minimizer.force_tol != settings.minimizer.force_tol:  # loose tolerance: polish in place
+                    stepper.final_approach = True
+                    continue
                 return _finish(engine, phi, result, rows, settings, start_time, lammps_version())
-            new_side = "below" if v <= settings.v_tol else "above"
-            if side is not None and new_side != side:
-                dphi /= 2.0
-            side = new_side
-            _check_resolution(phi, dphi, settings)
-            phi = phi + dphi if side == "below" else phi - dphi
-            if not 0.0 < phi < 1.0:
-                raise JammingFailed(f"packing fraction left (0, 1) (phi = {phi}); start from a lower phi0")
+            phi = stepper.next_phi(phi, v, pressure, unjammed=result.reason == "energy-below-vmin")
     raise JammingFailed(f"no packing in the window {settings.v_tol:g} < V < {2 * settings.v_tol:g} after "
-                        f"{settings.max_steps} minimisations (last phi = {phi}, dphi = {dphi:g}); raise "
-                        "max_steps or check the minimiser's stop reasons in the history")
+                        f"{settings.max_steps} minimisations (last phi = {phi}); raise max_steps or check "
+                        "the minimiser's stop reasons in the history")
 
 
-def _check_resolution(phi, dphi, settings):
-    if dphi < 4 * np.finfo(float).eps * phi:
-        raise JammingFailed(
-            f"the increment dphi = {dphi:.3g} reached float64 resolution at phi = {phi:.15f} without V landing in "
-            f"({settings.v_tol:g}, {2 * settings.v_tol:g}); the window is narrower than the energy step "
-            "between adjacent representable densities or the minimiser is not converging. Use a larger "
-            "vtol (>= 1e-20 is resolvable for N <= 10^4) or a tighter force tolerance.")
+class PhiStepper:
+    """Chooses the next packing fraction after each minimisation.
+
+    Seed rule (default): compress by dphi when V < V_tol, decompress when V > 2 V_tol, halve
+    dphi when the side changes. Options (``CompressionSettings``): ``dphi_growth`` > 1 grows
+    dphi (up to ``dphi_max``) while the packing is still below jamming and has never crossed;
+    ``approach_force_rtol`` loosens the force tolerance of every minimisation that is not a
+    final approach to that fraction of the pressure (``coarse_force_tol`` before the first
+    crossing); a state that lands in the window anyway is re-minimised in place;
+    ``coarse_v_min`` ends minimisations before the first crossing once V < coarse_v_min
+    (counted as below jamming; a jammed state then shows up as V > coarse_v_min);
+    ``newton`` jumps from a state above jamming to where V = 1.5 V_tol is predicted by
+    V ~ (phi - phi_J)^alpha and the virial pressure P = phi^2 dV/dphi / v (v the mean particle
+    volume), i.e. phi_J = phi - alpha V phi^2 / (P v), shrinking phi - phi_J by at most
+    ``newton_ratio`` per jump (and to no less than 3x the window's distance before the last
+    jump, as the prediction errs by a few % of phi - phi_J) so the packing stays jammed and in the same basin while the
+    prediction sharpens; targets outside the bracket of known below/above states fall
+    back to its midpoint.
+    """
+
+    def __init__(self, settings: CompressionSettings, alpha: float, mean_volume: float):
+        self.s, self.alpha, self.mean_volume = settings, alpha, mean_volume
+        self.dphi, self.side, self.crossed = settings.dphi0, None, False
+        self.lo, self.hi = -math.inf, math.inf  # highest phi below, lowest phi above the window
+        self.last_step = 0.0
+        self.final_approach = False  # True when the next minimisation aims at the window itself
+        self.pressure = 0.0  # pressure of the state the next step starts from
+
+    def minimizer(self) -> MinimizerSettings:
+        """Minimiser settings for the next step: the coarse V_min applies until the first
+        crossing, the approach force tolerance to every step that is not a final approach."""
+        m = self.s.minimizer
+        if self.s.coarse_v_min is not None and not self.crossed:
+            m = replace(m, v_min=self.s.coarse_v_min)
+        if self.s.approach_force_rtol is not None and not self.final_approach:
+            loose = self.s.approach_force_rtol * self.pressure if self.crossed else self.s.coarse_force_tol
+            m = replace(m, force_tol=max(loose, m.force_tol or 0.0))
+        return m
+
+    def next_phi(self, phi: float, v: float, pressure: float, unjammed: bool = False) -> float:
+        side = "below" if (v <= self.s.v_tol or unjammed) else "above"
+        self.pressure = pressure
+        if self.side is not None and side != self.side:
+            self.dphi /= 2.0
+            self.crossed = True
+        elif side == "below" and not self.crossed:
+            self.dphi = min(self.dphi * self.s.dphi_growth, max(self.s.dphi_max, self.s.dphi0))
+        self.side = side
+        if side == "below":
+            self.lo = max(self.lo, phi)
+        else:
+            self.hi = min(self.hi, phi)
+        target = self._newton(phi, v, pressure) if self.s.newton else None
+        if target is None:
+            target = phi + self.dphi if side == "below" else phi - self.dphi
+        self._check(phi, target)
+        self.last_step = abs(target - phi)
+        return target
+
+    def _newton(self, phi, v, pressure):
+        if self.side == "above" and pressure > 0:
+            width = self.alpha * v * phi**2 / (pressure * self.mean_volume)  # predicted phi - phi_J
+            window = width * (1.5 * self.s.v_tol / v) ** (1.0 / self.alpha)  # predicted phi - phi_J at V = 1.5 V_tol
+            self.final_approach = width <= 2 * NEWTON_FINAL_FACTOR * window
+            stop_at = window if self.final_approach else max(NEWTON_FINAL_FACTOR * window, width / self.s.newton_ratio)
+            target = phi - width + stop_at
+            if self.lo < target < self.hi:
+                return target
+        if math.isfinite(self.lo + self.hi):
+            self.final_approach = True
+            return 0.5 * (self.lo + self.hi)
+        return None
+
+    def _check(self, phi, target):
+        if not 0.0 < target < 1.0:
+            raise JammingFailed(f"packing fraction left (0, 1) (next phi = {target}); start from a lower phi0")
+        if abs(target - phi) < 4 * np.finfo(float).eps * phi:
+            raise JammingFailed(
+                f"the increment {abs(target - phi):.3g} reached float64 resolution at phi = {phi:.15f} without V "
+                f"landing in ({self.s.v_tol:g}, {2 * self.s.v_tol:g}); the window is narrower than the energy step "
+                "between adjacent representable densities or the minimiser is not converging. Use a larger "
+                "vtol (>= 1e-20 is resolvable for N <= 10^4) or a tighter force tolerance.")
+
+
+def _newton_exponent(potential) -> float:
+    """V ~ (phi - phi_J)^alpha near onset; repulsive LJ is harmonic at small overlap."""
+    return potential.alpha if isinstance(potential, Spring) else 2.0
 
 
 def _record(rows, phi, result: MinimizeResult, pressure, dphi):
