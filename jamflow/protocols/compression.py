@@ -77,6 +77,24 @@ class CompressionSettings:
         return {**out, **self.minimizer.as_dict()}
 
 
+FAST_PROTOCOL = dict(dphi_growth=2.0, dphi_max=1e-3, newton=True, newton_ratio=10.0,
+                     coarse_v_min=1e-10, approach_force_rtol=1e-5)
+
+
+def seed_protocol(**overrides) -> CompressionSettings:
+    """The seed chapter's protocol exactly: constant dphi0 until the first crossing, halving."""
+    return CompressionSettings(**overrides)
+
+
+def fast_protocol(**overrides) -> CompressionSettings:
+    """Same stopping rule, fewer and cheaper minimisations (docs/speed.md measures its bias)."""
+    return CompressionSettings(**{**FAST_PROTOCOL, **overrides})
+
+
+PROTOCOLS = {"seed": seed_protocol, "fast": fast_protocol}
+DEFAULT_PROTOCOL = "seed"
+
+
 @dataclass(frozen=True)
 class JamResult:
     """A packing at jamming onset and how it was found."""
@@ -121,7 +139,7 @@ def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | 
     ``observers`` are callables ``f(step: dict)`` called after every minimisation
     (progress bars, writers).
     """
-    settings = settings or CompressionSettings()
+    settings = settings or PROTOCOLS[DEFAULT_PROTOCOL]()
     if start is None:
         start = initial_packing(n, dim, sizes, potential, seed, settings.start_phi(dim))
         if isinstance(start.potential, RepulsiveLJ):
