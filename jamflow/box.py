@@ -116,10 +116,13 @@ class Box:
     def minimum_image(self, dr: np.ndarray) -> np.ndarray:
         """Shortest periodic image of separation vectors ``dr`` (..., d).
 
-        Rounds in fractional coordinates, then checks the 3^d neighbouring images,
-        so it is exact in strongly tilted cells too.
+        Orthogonal cells: rounding. Tilted cells: rounds in fractional coordinates, then
+        checks the 3^d neighbouring images, so it is exact in strongly tilted cells too.
         """
         dr = np.asarray(dr, float)
+        if not self.is_triclinic:  # rounding is exact for orthogonal cells
+            lengths = self.lengths
+            return dr - lengths * np.round(dr / lengths)
         s = self.to_fractional(dr.reshape(-1, self.dim))
         base = self.to_cartesian(s - np.round(s))
         shifts = self.to_cartesian(np.array(list(product((-1, 0, 1), repeat=self.dim)), float))

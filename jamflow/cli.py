@@ -11,6 +11,7 @@ from . import __version__
 SUBCOMMANDS = {
     "jam": ("jamflow.commands.jam", "jam particles at onset by isotropic compression"),
     "modes": ("jamflow.commands.modes", "contacts, floaters, normal modes, D(omega) and stability class of packing files"),
+    "analyze": ("jamflow.commands.analyze", "structure: g(r), S(k), Q6, G, correlation lengths"),
 }
 
 

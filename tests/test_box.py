@@ -48,3 +48,11 @@ def test_wrap_keeps_fractional_coordinates_in_unit_cell():
 def test_bad_boxes_are_rejected(h):
     with pytest.raises(ValueError):
         Box(h)
+
+
+def test_minimum_image_orthogonal_fast_path_matches_general_path():
+    rng = np.random.default_rng(5)
+    dr = rng.uniform(-9, 9, (300, 3))
+    ortho = Box(np.diag([3.0, 4.0, 5.0]))
+    tiny_tilt = Box([[3.0, 1e-300, 0], [0, 4.0, 0], [0, 0, 5.0]])  # takes the general path
+    assert np.allclose(ortho.minimum_image(dr), tiny_tilt.minimum_image(dr), atol=1e-12)

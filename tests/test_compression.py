@@ -83,3 +83,12 @@ def test_repulsive_lj_starts_from_relaxed_overlaps():
     """Seed step 1: RLJ needs a start without significant overlaps."""
     res = jam(n=32, dim=2, sizes="bi:1.4:0.5", potential="rlj", seed=4)
     assert_jammed(res)
+
+
+@pytest.mark.parametrize("dim,sizes", [(2, "bi:1.4:0.5"), (3, "mono")])
+def test_fast_protocol_reaches_the_window_with_force_balance(dim, sizes):
+    from jamflow.protocols.compression import fast_protocol
+
+    res = jam(n=64, dim=dim, sizes=sizes, seed=8, settings=fast_protocol())
+    assert_jammed(res)
+    assert res.minimizations < 150

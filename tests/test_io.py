@@ -56,3 +56,12 @@ def test_mdanalysis_universe(config):
     assert len(u.atoms) == 20
     assert np.allclose(u.atoms.radii, p.diameters / 2)
     assert u.dimensions[0] == pytest.approx(np.linalg.norm(p.box.h[:, 0]), rel=1e-6)
+
+
+def test_written_files_get_the_usual_permissions(config, tmp_path):
+    import os
+
+    path = save_packing(tmp_path / "p.h5", config(10, 2, 0.3, seed=1))
+    mask = os.umask(0)
+    os.umask(mask)
+    assert path.stat().st_mode & 0o777 == 0o666 & ~mask

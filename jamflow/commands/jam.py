@@ -26,6 +26,9 @@ def add_arguments(p) -> None:
     p.add_argument("--seed", type=int, default=0, help="random seed of the initial positions and sizes")
     p.add_argument("--out", default="packing.h5", help="output HDF5 file")
     p.add_argument("--quiet", action="store_true", help="no progress display")
+    p.add_argument("--emit-deck", default=None, metavar="DECK.lmp",
+                   help="write the LAMMPS deck that runs this jam in lmp alone (and its start, DECK.start.data) "
+                        "instead of running it; then: cd DIR && lmp -in DECK.lmp")
 
 
 def settings_from_args(args) -> CompressionSettings:
@@ -41,6 +44,8 @@ def run(args) -> int:
     settings = settings_from_args(args)
     check_writable(args.out)
     start = initial_packing(args.n, args.dim, args.sizes, args.potential, args.seed, settings.start_phi(args.dim))
+    if args.emit_deck:
+        return emit(args, start, settings)
     t0 = time.perf_counter()
     with CompressionProgress(disable=args.quiet) as progress:
         result = jam(start=start, settings=settings, observers=[progress])
@@ -48,4 +53,17 @@ def run(args) -> int:
                  pressure_tensor=result.pressure_tensor, protocol=settings.as_dict(),
                  history=result.history, lammps_version=result.lammps_version)
     print(f"{result.summary()}  -> {args.out} ({time.perf_counter() - t0:.2f} s)")
+    return 0
+
+
+def emit(args, start, settings) -> int:
+    """--emit-deck: the deck and start data file, no LAMMPS run."""
+    from pathlib import Path
+
+    from ..deck import emit_deck
+
+    check_writable(args.emit_deck)
+    deck, data = emit_deck(args.emit_deck, start, settings, out=Path(args.out).stem)
+    print(f"wrote {deck} and {data}; run: cd {deck.parent} && lmp -in {deck.name}  "
+          f"(writes {Path(args.out).stem}.data and {Path(args.out).stem}.protocol.txt)")
     return 0

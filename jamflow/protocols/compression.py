@@ -225,14 +225,16 @@ class PhiStepper:
     volume), i.e. phi_J = phi - alpha V phi^2 / (P v), shrinking phi - phi_J by at most
     ``newton_ratio`` per jump (and to no less than 3x the window's distance before the last
     jump, as the prediction errs by a few % of phi - phi_J) so the packing stays jammed and in the same basin while the
-    prediction sharpens; targets outside the bracket of known below/above states fall
-    back to its midpoint.
+    prediction sharpens. After a jump that lands below jamming, the next step is the midpoint
+    of the latest below and above states (the seed's halving). The latest states are used,
+    not the extreme ones, because a rearrangement can move phi_J of the current basin
+    outside an older bracket.
     """
 
     def __init__(self, settings: CompressionSettings, alpha: float, mean_volume: float):
         self.s, self.alpha, self.mean_volume = settings, alpha, mean_volume
         self.dphi, self.side, self.crossed = settings.dphi0, None, False
-        self.lo, self.hi = -math.inf, math.inf  # highest phi below, lowest phi above the window
+        self.lo, self.hi = -math.inf, math.inf  # latest phi below and above the window
         self.last_step = 0.0
         self.final_approach = False  # True when the next minimisation aims at the window itself
         self.pressure = 0.0  # pressure of the state the next step starts from
@@ -258,9 +260,9 @@ class PhiStepper:
             self.dphi = min(self.dphi * self.s.dphi_growth, max(self.s.dphi_max, self.s.dphi0))
         self.side = side
         if side == "below":
-            self.lo = max(self.lo, phi)
+            self.lo = phi
         else:
-            self.hi = min(self.hi, phi)
+            self.hi = phi
         target = self._newton(phi, v, pressure) if self.s.newton else None
         if target is None:
             target = phi + self.dphi if side == "below" else phi - self.dphi
@@ -274,9 +276,7 @@ class PhiStepper:
             window = width * (1.5 * self.s.v_tol / v) ** (1.0 / self.alpha)  # predicted phi - phi_J at V = 1.5 V_tol
             self.final_approach = width <= 2 * NEWTON_FINAL_FACTOR * window
             stop_at = window if self.final_approach else max(NEWTON_FINAL_FACTOR * window, width / self.s.newton_ratio)
-            target = phi - width + stop_at
-            if self.lo < target < self.hi:
-                return target
+            return phi - width + stop_at
         if math.isfinite(self.lo + self.hi):
             self.final_approach = True
             return 0.5 * (self.lo + self.hi)

@@ -1,0 +1,278 @@
+"""The compression protocol as a LAMMPS input deck: write it, run it with ``lmp``, read it back.
+
+The deck (``jamflow.deck_script``; rendered with the defaults as ``lammps_inputs/jam.lmp``)
+runs seed chapter section 2.1 in the LAMMPS input language alone and mirrors the Python
+controller (``jamflow.protocols.compression``) command for command. It covers the seed
+protocol with the linear spring (alpha = 2, eps = 1) for one or two discrete diameters,
+which LAMMPS's built-in ``harmonic/cut`` computes exactly, so any LAMMPS build runs it.
+
+Units: small diameter 1, epsilon 1, mass 1; V is the energy per particle.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import subprocess
+import sys
+import time
+from dataclasses import dataclass, fields
+from pathlib import Path
+
+import numpy as np
+
+from . import __version__
+from .box import Box
+from .io import atomic_path, write_lammps_data
+from .minimize import MinimizerSettings
+from .packing import Packing
+from .potentials import Potential, Spring, parse_potential
+from .protocols.compression import CompressionSettings
+from .sizes import parse_sizes
+
+DECK_NAME = "jam.lmp"
+OPTIONAL = ("data", "phi0", "ftol")
+PROTOCOL_COLUMNS = ("step", "phi", "energy_per_particle", "pressure", "dphi", "iterations", "max_force", "reason")
+
+
+class DeckFailed(RuntimeError):
+    """The deck stopped without a jammed packing; the message is the deck's reason."""
+
+
+# --- parameters --------------------------------------------------------------------------------
+def _num(x) -> str:
+    """Shortest text that parses back to the same float64 (LAMMPS and Python agree on it)."""
+    return repr(float(x)) if not float(x).is_integer() or abs(x) >= 1e16 else str(int(x))
+
+
+def deck_variables(n: int = 256, dim: int = 2, sizes="bi:1.4:0.5", seed: int = 0,
+                   settings: CompressionSettings | None = None, *, potential: str | Potential = "spring",
+                   data=None, phi0: float | None = None, out: str = "jammed") -> dict:
+    """The deck's variables for a jamflow run; ValueError for what the deck cannot run.
+
+    ``phi0`` overrides ``settings.phi0``; with ``data`` it should be the data file's
+    packing fraction as jamflow computes it (``Packing.phi``), passed at full precision.
+    """
+    settings = settings or CompressionSettings()
+    pot = parse_potential(potential) if isinstance(potential, str) else potential
+    if not (isinstance(pot, Spring) and pot.alpha == 2.0 and pot.epsilon == 1.0):
+        raise ValueError(f"the deck runs the linear spring (alpha = 2, eps = 1) only, got {pot.spec}; "
+                         "run other potentials with the Python controller (jamflow jam)")
+    spec = parse_sizes(sizes) if isinstance(sizes, str) else sizes
+    if spec.kind not in ("mono", "bi"):
+        raise ValueError(f"the deck runs mono or bi sizes only (atom types), got {spec.spec}; "
+                         "run polydisperse sizes with the Python controller (jamflow jam)")
+    _check_seed_protocol(settings)
+    d2, fsmall = (1.0, 1.0) if spec.kind == "mono" else spec.params
+    m: MinimizerSettings = settings.minimizer
+    values = dict(dim=int(dim), N=int(n), d1=1, d2=_num(d2), fsmall=_num(fsmall), seed=int(seed),
+                  vtol=_num(settings.v_tol), dphi0=_num(settings.dphi0), minimizer=m.method, vmin=_num(m.v_min),
+                  delta=_num(m.delta), window=m.window, maxiter=m.max_iterations, dt=_num(m.timestep),
+                  mddt=_num(m.md_timestep),
+                  damping=_num(m.damping), maxsteps=settings.max_steps, skin=_num(0.3), out=str(out))
+    start_phi = phi0 if phi0 is not None else settings.phi0
+    optional = {"data": None if data is None else str(data),
+                "phi0": None if start_phi is None else repr(float(start_phi)),
+                "ftol": None if m.force_tol is None else repr(float(m.force_tol))}
+    values.update({k: v for k, v in optional.items() if v is not None})
+    return values
+
+
+def _check_seed_protocol(settings: CompressionSettings) -> None:
+    """The deck mirrors the seed's bisection; optional speed-ups of the controller are refused."""
+    defaults = CompressionSettings()
+    extra = [f.name for f in fields(CompressionSettings)
+             if f.name not in ("phi0", "dphi0", "v_tol", "max_steps", "minimizer")
+             and getattr(settings, f.name) != getattr(defaults, f.name)]
+    if extra:
+        raise ValueError(f"the deck runs the seed's bisection only; unset {', '.join(extra)} "
+                         "(controller shortcuts) to emit or cross-check a deck")
+
+
+# --- the deck text -------------------------------------------------------------------------------
+def deck_text(variables: dict | None = None) -> str:
+    """The deck with ``variables`` (from ``deck_variables``) as its defaults."""
+    from .deck_script import BODY, HEADER
+
+    values = deck_variables() if variables is None else dict(variables)
+    optional = "".join(f"variable {k:<9} index {values.pop(k)}\n" for k in OPTIONAL if k in values)
+    return HEADER.format(version=__version__, optional=optional, **{k: str(v) for k, v in values.items()}) + BODY
+
+
+def write_deck(path, variables: dict | None = None) -> Path:
+    """Write the deck atomically to ``path``."""
+    with atomic_path(path) as tmp:
+        tmp.write_text(deck_text(variables))
+    return Path(path)
+
+
+# --- running it -------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class DeckResult:
+    """What one deck run produced (read back from its files)."""
+
+    packing: Packing
+    phi_j: float
+    energy_per_particle: float
+    pressure: float
+    max_force: float
+    history: dict  # PROTOCOL_COLUMNS -> np.ndarray, one entry per minimisation
+    seconds: float  # wall time of the lmp process
+    prefix: Path  # PREFIX.data, PREFIX.protocol.txt, PREFIX.lammps.log
+
+    @property
+    def minimizations(self) -> int:
+        return len(self.history["phi"])
+
+
+def lmp_command(lmp=None, ranks: int = 1) -> list[str]:
+    """argv prefix for the ``lmp`` executable, under ``mpirun -np ranks`` if ranks > 1."""
+    from .engine.lammps_lib import lmp_executable
+
+    if not isinstance(ranks, int) or ranks < 1:
+        raise ValueError(f"ranks must be a positive integer, got {ranks!r}")
+    exe = str(lmp) if lmp else lmp_executable()
+    if lmp and shutil.which(exe) is None:
+        raise ValueError(f"LAMMPS executable {lmp} not found or not executable; give the path of your lmp")
+    if ranks == 1:
+        return [exe]
+    mpirun = Path(sys.prefix) / "bin" / "mpirun"
+    mpirun = str(mpirun) if mpirun.is_file() else shutil.which("mpirun")
+    if mpirun is None:
+        raise ValueError("ranks > 1 needs mpirun (the mpich wheel installs it in the environment's bin)")
+    return [mpirun, "-np", str(ranks), exe]
+
+
+def run_deck(workdir, variables: dict | None = None, *, deck=None, lmp=None, ranks: int = 1,
+             timeout: float | None = None) -> DeckResult:
+    """Run the deck with ``lmp`` in ``workdir``; raise DeckFailed unless it jammed.
+
+    ``deck`` defaults to a fresh copy written into ``workdir``; ``variables`` become
+    ``-var`` arguments (paths in them are used as given, relative to ``workdir``).
+    """
+    from .engine.lammps_lib import lammps_env
+
+    workdir = Path(workdir)
+    if not workdir.is_dir():
+        raise ValueError(f"work directory {workdir} does not exist; create it first")
+    variables = dict(variables or {})
+    out = str(variables.setdefault("out", "jammed"))
+    command = lmp_command(lmp, ranks)
+    deck = Path(deck) if deck else write_deck(workdir / DECK_NAME)
+    args = [*command, "-in", str(deck.resolve()), "-log", f"{out}.lammps.log", "-screen", "none", "-nocite"]
+    for name, value in variables.items():
+        args += ["-var", name, str(value)]
+    start = time.perf_counter()
+    proc = subprocess.run(args, cwd=workdir, env=lammps_env(), capture_output=True, text=True, timeout=timeout)
+    seconds = time.perf_counter() - start
+    return read_deck_result(workdir / out, seconds, proc)
+
+
+def read_deck_result(prefix, seconds: float = math.nan, proc=None) -> DeckResult:
+    """Read PREFIX.protocol.txt and PREFIX.data; raise DeckFailed with the deck's reason."""
+    prefix = Path(prefix)
+    log = Path(f"{prefix}.protocol.txt")
+    if not log.is_file():
+        raise DeckFailed(f"the deck wrote no protocol log {log}: {_lammps_error(prefix, proc)}")
+    history, result = read_protocol(log)
+    if result.get("status") != "jammed":
+        raise DeckFailed(f"the deck did not jam: {result.get('message', 'no result line in ' + str(log))}")
+    packing = read_data_file(f"{prefix}.data")
+    return DeckResult(packing, float(result["phi_J"]), float(result["V"]), float(result["P"]),
+                      float(result["max_force"]), history, seconds, prefix)
+
+
+def _lammps_error(prefix, proc) -> str:
+    lines = []
+    for source in (Path(f"{prefix}.lammps.log"),):
+        if source.is_file():
+            lines += [ln for ln in source.read_text(errors="replace").splitlines() if "ERROR" in ln]
+    if proc is not None:
+        lines += [ln for ln in (proc.stdout + proc.stderr).splitlines() if ln.strip()][-3:]
+    return "; ".join(lines[-3:]) or "LAMMPS printed nothing (is lmp a LAMMPS executable?)"
+
+
+def read_protocol(path) -> tuple[dict, dict]:
+    """(history columns, result fields) of a deck's PREFIX.protocol.txt."""
+    rows, result = [], {}
+    for line in Path(path).read_text().splitlines():
+        if line.startswith("# result"):
+            words = line.split()[2:]
+            if words[:2] == ["status", "failed:"]:
+                result = {"status": "failed", "message": " ".join(words[2:])}
+            else:
+                result = dict(zip(words[::2], words[1::2]))
+        elif line.strip() and not line.startswith("#"):
+            rows.append(line.split())
+    history = {}
+    for k, name in enumerate(PROTOCOL_COLUMNS):
+        column = [r[k] for r in rows]
+        history[name] = np.array(column if name == "reason" else
+                                 [int(c) for c in column] if name in ("step", "iterations") else
+                                 [float(c) for c in column])
+    return history, result
+
+
+# --- LAMMPS data files at full precision ---------------------------------------------------------------
+def read_data_file(path, potential: Potential | None = None) -> Packing:
+    """A packing from a LAMMPS data file of ``atom_style sphere`` (as ``write_data`` writes
+    it), in float64 and atom-ID order, positions as written; the dimension is 2 when every
+    z is 0. (jamflow.analysis.readers goes through MDAnalysis, which keeps float32.)"""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no LAMMPS data file {path}")
+    lines = path.read_text().splitlines()
+    bounds, tilts, atoms = {}, (0.0, 0.0, 0.0), []
+    k = 1
+    while k < len(lines) and not lines[k].strip().startswith("Atoms"):
+        words = lines[k].split("#")[0].split()
+        if len(words) == 4 and words[2][1:] == "lo":
+            bounds[words[2][0]] = (float(words[0]), float(words[1]))
+        elif len(words) == 6 and words[3:] == ["xy", "xz", "yz"]:
+            tilts = tuple(float(w) for w in words[:3])
+        k += 1
+    if k == len(lines) or "sphere" not in lines[k]:
+        raise ValueError(f"{path} has no 'Atoms # sphere' section; write it with atom_style sphere")
+    for line in lines[k + 1:]:
+        words = line.split()
+        if not words:
+            if atoms:
+                break
+            continue
+        atoms.append(words[:7])
+    table = np.array(atoms, dtype=float)
+    table = table[np.argsort(table[:, 0])]
+    z = table[:, 6]
+    dim = 2 if np.all(z == 0.0) else 3
+    lengths = [bounds[a][1] - bounds[a][0] for a in "xyz"[:dim]]
+    origin = np.array([bounds[a][0] for a in "xyz"[:dim]])
+    box = Box.from_lammps(dim, lengths, tilts)
+    positions = table[:, 4:4 + dim] - origin  # write_data writes them inside the cell
+    meta = {"source": str(path)}
+    return Packing(positions, table[:, 2], box, potential or Spring(), meta)
+
+
+def emit_deck(path, start: Packing, settings: CompressionSettings | None = None, *, out: str = "jammed"):
+    """Write the deck that runs ``compress(start, settings)`` in ``lmp`` alone, and its start
+    as the data file PATH_STEM.start.data beside it (the deck names it relative to its own
+    directory: run it there). Returns (deck path, data path)."""
+    path = Path(path)
+    data = path.with_name(path.stem + ".start.data")
+    variables = deck_variables(start.n, start.dim, start.metadata.get("sizes", "bi:1.4:0.5"),
+                               start.metadata.get("seed", 0), settings, potential=start.potential,
+                               data=data.name, phi0=start.phi, out=out)
+    values = start.species()[0]
+    if values[0] != 1.0:
+        raise ValueError(f"the deck's small diameter is 1, got {values[0]}; rescale the packing")
+    write_lammps_data(data, start)
+    return write_deck(path, variables), data
+
+
+def default_deck_path() -> Path:
+    """``lammps_inputs/jam.lmp`` in a source checkout (not installed with the package)."""
+    return Path(__file__).resolve().parents[1] / "lammps_inputs" / DECK_NAME
+
+
+__all__ = ["DeckFailed", "DeckResult", "deck_text", "deck_variables", "write_deck", "run_deck",
+           "read_deck_result", "read_protocol", "read_data_file", "lmp_command", "emit_deck",
+           "default_deck_path"]

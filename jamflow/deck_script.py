@@ -1,0 +1,231 @@
+"""The LAMMPS input deck that runs jamflow's compression protocol on its own.
+
+``HEADER`` (formatted by ``jamflow.deck.deck_text``) documents the deck and sets its
+parameters as ``index`` variables, which ``lmp -var NAME VALUE`` overrides; ``BODY`` is
+the protocol. The body mirrors the Python controller command for command (see its
+comment), so the same start gives the same trajectory; tests/test_decks.py checks it.
+"""
+
+HEADER = """\
+# jamflow deck: jam N soft disks (dim 2) or spheres (dim 3) at onset by isotropic
+# compression (Schreck & O'Hern, seed chapter section 2.1) in the LAMMPS input language
+# alone. Written by jamflow {version}; `jamflow jam --emit-deck FILE ...` writes it again.
+#
+#   lmp -in jam.lmp -var N 256 -var seed 1 -var out jammed              2D, 50:50 d 1 and 1.4
+#   lmp -in jam.lmp -var dim 3 -var N 512 -var d2 1 -var seed 1         3D monodisperse
+#   lmp -in jam.lmp -var data start.data -var out jammed               from a data file
+#   mpirun -np 2 lmp -in jam.lmp ...                                    MPI ranks
+#
+# Writes OUT.data (the final packing) and OUT.protocol.txt (one line per minimisation:
+# step phi V P dphi iterations max_force reason, then a "# result" line). Exit status 0
+# when jammed (V_tol < V < 2 V_tol), 1 when the protocol failed (reason in both logs).
+# Units: LJ with small diameter 1, epsilon 1, mass 1; V is the energy per particle.
+# Potential: V(r) = eps/2 (1 - r/sigma_ij)^2 for r < sigma_ij (pair_style harmonic/cut).
+# Optional variables (not set here):
+#   -var data FILE   start from FILE (atom_style sphere; type 1 diameter d1, type 2 d2)
+#   -var phi0 PHI    start packing fraction; default 0.80 (2D) / 0.55 (3D); with data,
+#                    the file's own (and a given PHI must match it to 1e-12)
+#   -var ftol F      max force component tolerance; default 1e-14 max(1, L/20), L = box side
+{optional}
+variable dim       index {dim:<12} # 2: disks, 3: spheres
+variable N         index {N:<12} # particles (random start only)
+variable d1        index {d1:<12} # small diameter, type 1
+variable d2        index {d2:<12} # large diameter, type 2 (= d1: monodisperse)
+variable fsmall    index {fsmall:<12} # fraction of small particles (random start)
+variable seed      index {seed:<12} # random start: create_atoms seeds seed+1, seed+1000001
+variable vtol      index {vtol:<12} # energy window V_tol < V < 2 V_tol (per particle)
+variable dphi0     index {dphi0:<12} # initial packing-fraction increment
+variable minimizer index {minimizer:<12} # fire | cg | md (damped MD)
+variable vmin      index {vmin:<12} # stop a minimisation when V < V_min
+variable delta     index {delta:<12} # no-progress: energy decrease < delta V over a window
+variable window    index {window:<12} # iterations per minimize call between rule checks
+variable maxiter   index {maxiter:<12} # iteration cap per minimisation
+variable dt        index {dt:<12} # FIRE initial step
+variable mddt      index {mddt:<12} # damped-MD step
+variable damping   index {damping:<12} # md only: viscous drag b
+variable maxsteps  index {maxsteps:<12} # cap on minimisations
+variable skin      index {skin:<12} # neighbour-list skin
+variable out       index {out:<12} # output prefix
+"""
+
+BODY = r"""
+# ---------------------------------------------------------------------------------------
+# Everything below mirrors jamflow's Python controller command for command
+# (jamflow/engine/lammps.py, jamflow/minimize.py, jamflow/protocols/compression.py), so a
+# run from the same data file follows the same trajectory. Numbers that must be exact are
+# kept in internal-style variables: LAMMPS folds a constant equal-style formula to 15
+# digits, which would move phi by ~1e-16 and send FIRE down another path.
+# ---------------------------------------------------------------------------------------
+
+variable jf_log string ${out}.protocol.txt
+variable jf_logtmp string ${out}.protocol.txt.partial
+shell rm -f ${jf_logtmp}
+print "# jamflow deck: isotropic compression to jamming onset (seed chapter section 2.1)" file ${jf_logtmp} screen no
+variable jf_hasdata internal $(is_defined(variable,data))
+variable jf_autophi internal $(!is_defined(variable,phi0))
+variable jf_autoftol internal $(!is_defined(variable,ftol))
+if "${jf_hasdata} == 0" then "variable data string none"
+if "${jf_autoftol} == 1" then "variable ftol string auto"
+if "${jf_autophi} == 1" then "variable phi0 string auto"
+print "# dim ${dim} N ${N} d1 ${d1} d2 ${d2} phi0 ${phi0} seed ${seed} vtol ${vtol} dphi0 ${dphi0} minimizer ${minimizer} ftol ${ftol} data ${data}" append ${jf_logtmp} screen no
+
+# ---- check the parameters before any work ----
+if "${dim} != 2 && ${dim} != 3" then "variable jf_bad string 'dim must be 2 or 3'" "jump SELF jf_fail"
+if "${minimizer} != fire && ${minimizer} != cg && ${minimizer} != md" then "variable jf_bad string 'minimizer must be fire, cg or md'" "jump SELF jf_fail"
+if "$(v_vtol <= 0 || v_dphi0 <= 0 || v_dphi0 >= 0.1)" then "variable jf_bad string 'need vtol > 0 and 0 < dphi0 < 0.1'" "jump SELF jf_fail"
+if "$(v_d1 <= 0 || v_d2 < v_d1)" then "variable jf_bad string 'need 0 < d1 <= d2'" "jump SELF jf_fail"
+
+units lj
+dimension ${dim}
+boundary p p p
+atom_style sphere
+atom_modify map array
+comm_modify vel yes
+
+variable jf_a1 internal $(ternary(v_dim==2,PI*v_d1^2/4.0,PI*v_d1^3/6.0):%.17g)
+variable jf_a2 internal $(ternary(v_dim==2,PI*v_d2^2/4.0,PI*v_d2^3/6.0):%.17g)
+variable jf_ntypes internal $(ternary(v_d1==v_d2,1,2))
+if "${jf_hasdata} == 1" then "jump SELF jf_read"
+
+# ---- random start (seed step 1): uniform positions in a square/cubic box at phi0 ----
+if "${jf_autophi} == 1" then "variable phi0 delete" "variable phi0 string $(ternary(v_dim==2,0.80,0.55))"
+if "$(v_phi0 <= 0 || v_phi0 >= 1)" then "variable jf_bad string 'phi0 must lie in (0, 1)'" "jump SELF jf_fail"
+if "$(v_seed < 0 || v_N < 2)" then "variable jf_bad string 'need seed >= 0 and N >= 2'" "jump SELF jf_fail"
+variable jf_n1 internal $(ternary(v_jf_ntypes==1,v_N,round(v_fsmall*v_N)))
+variable jf_n2 internal $(v_N-v_jf_n1)
+variable jf_len internal $(((v_jf_n1*v_jf_a1+v_jf_n2*v_jf_a2)/v_phi0)^(1.0/v_dim):%.17g)
+variable jf_zlo internal $(ternary(v_dim==2,-0.5,0.0))
+variable jf_zhi internal $(ternary(v_dim==2,0.5,v_jf_len):%.17g)
+region jf_box block 0 $(v_jf_len:%.17g) 0 $(v_jf_len:%.17g) ${jf_zlo} $(v_jf_zhi:%.17g) units box
+create_box ${jf_ntypes} jf_box
+create_atoms 1 random $(v_jf_n1) $(v_seed+1) NULL
+if "$(v_jf_n2 > 0)" then "create_atoms 2 random $(v_jf_n2) $(v_seed+1000001) NULL"
+set type 1 diameter ${d1}
+if "$(v_jf_n2 > 0)" then "set type 2 diameter ${d2}"
+jump SELF jf_atoms_ready
+
+# ---- start from a data file (atom_style sphere; type 1 diameter d1, type 2 diameter d2) ----
+label jf_read
+read_data ${data}
+variable jf_wrongd atom "(type==1 && abs(2*radius-v_d1)>1e-12*v_d1) || (type==2 && abs(2*radius-v_d2)>1e-12*v_d2) || type>2"
+group jf_wrongd variable jf_wrongd
+if "$(count(jf_wrongd) > 0)" then "variable jf_bad string '$(count(jf_wrongd)) atoms of ${data} do not have diameter d1 = ${d1} (type 1) or d2 = ${d2} (type 2): pass -var d1 and -var d2'" "jump SELF jf_fail"
+group jf_wrongd delete
+
+label jf_atoms_ready
+set atom * mass 1.0
+group jf_t1 type 1
+group jf_t2 type 2
+variable jf_phibox internal $((count(jf_t1)*v_jf_a1+count(jf_t2)*v_jf_a2)/ternary(v_dim==2,lx*ly,lx*ly*lz):%.17g)
+group jf_t1 delete
+group jf_t2 delete
+# phi0 auto: the start's own packing fraction (summed in atom order: may differ from
+# jamflow's by ~1e-16; jamflow passes its value). A given phi0 must match the start.
+if "${jf_autophi} == 1" then "variable phi0 delete" "variable phi0 string $(v_jf_phibox:%.17g)"
+if "$(abs(v_phi0-v_jf_phibox) > 1e-12*v_jf_phibox)" then "variable jf_bad string 'phi0 = ${phi0} but the start has phi = $(v_jf_phibox:%.17g): omit -var phi0 to use the start as it is'" "jump SELF jf_fail"
+
+# ---- the exact pair potential V = eps/2 (1 - r/sigma_ij)^2 (harmonic/cut, eps = 1) ----
+pair_style harmonic/cut
+pair_coeff 1 1 $(1.0/(2*v_d1^2):%.17g) $(v_d1:%.17g)
+variable jf_s12 internal $(0.5*(v_d1+v_d2):%.17g)
+if "${jf_ntypes} == 2" then "pair_coeff 1 2 $(1.0/(2*v_jf_s12^2):%.17g) $(v_jf_s12:%.17g)" "pair_coeff 2 2 $(1.0/(2*v_d2^2):%.17g) $(v_d2:%.17g)"
+neighbor ${skin} bin
+neigh_modify every 1 delay 0 check yes
+compute jf_press all pressure NULL virial
+thermo_style custom step pe c_jf_press[*] fmax
+thermo_modify norm no
+thermo 0
+if "${dim} == 2" then "fix jf_2d all enforce2d"
+
+# ---- protocol state (seed steps 2-4) ----
+variable jf_basephi internal $(v_phi0:%.17g)
+variable jf_lx0 internal $(lx:%.17g)
+variable jf_ly0 internal $(ly:%.17g)
+variable jf_lz0 internal $(lz:%.17g)
+variable jf_phi internal $(v_phi0:%.17g)
+variable jf_dphi internal $(v_dphi0:%.17g)
+variable jf_side internal 0
+variable jf_step internal 0
+variable jf_laststep internal 0
+variable jf_iters internal 0
+variable jf_cg internal 0
+if "${minimizer} == cg" then "variable jf_cg internal 1"
+print "# step phi V P dphi iterations max_force reason" append ${jf_logtmp} screen no
+
+label jf_step_loop
+# the box is always set from the original one, so phi carries no accumulated round-off
+variable jf_scale internal $((v_jf_basephi/v_jf_phi)^(1.0/v_dim):%.17g)
+if "${dim} == 2" then "change_box all x final 0 $(v_jf_lx0*v_jf_scale:%.17g) y final 0 $(v_jf_ly0*v_jf_scale:%.17g) remap units box" else "change_box all x final 0 $(v_jf_lx0*v_jf_scale:%.17g) y final 0 $(v_jf_ly0*v_jf_scale:%.17g) z final 0 $(v_jf_lz0*v_jf_scale:%.17g) remap units box"
+variable jf_lmax internal $(ternary(lx>ly,lx,ly):%.17g)
+if "${dim} == 3" then "variable jf_lmax internal $(ternary(lz>v_jf_lmax,lz,v_jf_lmax):%.17g)"
+if "${jf_autoftol} == 1" then "variable jf_ftol internal $(1e-14*ternary(v_jf_lmax/20.0>1.0,v_jf_lmax/20.0,1.0):%.17g)" else "variable jf_ftol internal ${ftol}"
+
+# ---- one minimisation with the seed's stopping rules (jamflow/minimize.py) ----
+if "${minimizer} == md" then "timestep ${mddt}" else "timestep ${dt}"
+variable jf_epp equal pe/atoms
+fix jf_halt all halt 1 v_jf_epp < ${vmin} error continue
+if "${minimizer} == fire" then "min_style fire" "min_modify norm max"
+if "${minimizer} == cg" then "min_style cg" "min_modify norm max line forcezero"
+if "${minimizer} == md" then "velocity all set 0.0 0.0 0.0" "fix jf_nve all nve" "fix jf_visc all viscous ${damping}"
+variable jf_done internal 0
+variable jf_first internal 1
+variable jf_eprev internal 0
+variable jf_fmprev internal 0
+label jf_window
+variable jf_nsteps internal $(ternary(v_window<v_maxiter-v_jf_done,v_window,v_maxiter-v_jf_done))
+variable jf_before internal $(step)
+if "${minimizer} == md" then "run $(v_jf_nsteps)" else "minimize 0.0 $(v_jf_ftol:%.17g) $(v_jf_nsteps) $(10*v_jf_nsteps)"
+variable jf_ran internal $(step-v_jf_before)
+variable jf_done internal $(v_jf_done+v_jf_ran)
+variable jf_e internal $(pe/atoms:%.17g)
+variable jf_fm internal $(fmax:%.17g)
+variable jf_reason string none
+variable jf_conv internal 0
+variable jf_vminstop internal 0
+if "$(v_jf_fm < v_jf_ftol)" then "variable jf_reason string force" "variable jf_conv internal 1" "jump SELF jf_min_done"
+if "$(v_jf_e < v_vmin)" then "variable jf_reason string energy-below-vmin" "variable jf_conv internal 1" "variable jf_vminstop internal 1" "jump SELF jf_min_done"
+if "$(v_jf_first == 0 && (v_jf_eprev-v_jf_e) < v_delta*v_jf_e && v_jf_fm > 0.5*v_jf_fmprev)" then "variable jf_reason string no-progress" "jump SELF jf_min_done"
+if "$(v_jf_cg == 1 && v_jf_ran < v_jf_nsteps)" then "variable jf_reason string linesearch" "jump SELF jf_min_done"
+if "$(v_jf_done >= v_maxiter)" then "variable jf_reason string iteration-cap" "jump SELF jf_min_done"
+variable jf_eprev internal $(v_jf_e:%.17g)
+variable jf_fmprev internal $(v_jf_fm:%.17g)
+variable jf_first internal 0
+jump SELF jf_window
+label jf_min_done
+unfix jf_halt
+if "${minimizer} == md" then "unfix jf_nve" "unfix jf_visc" "velocity all set 0.0 0.0 0.0"
+variable jf_iters internal $(v_jf_iters+v_jf_done)
+variable jf_p internal $((c_jf_press[1]+c_jf_press[2]+ternary(v_dim==3,c_jf_press[3],0))/v_dim:%.17g)
+print "$(v_jf_step) $(v_jf_phi:%.17g) $(v_jf_e:%.17g) $(v_jf_p:%.17g) $(v_jf_laststep:%.17g) $(v_jf_done) $(v_jf_fm:%.17g) ${jf_reason}" append ${jf_logtmp} screen no
+
+# ---- decide: in the window, compress, or decompress; halve dphi on a crossing ----
+# (a minimisation stopped by V < V_min counts as unjammed, whatever V is)
+if "$(v_jf_e > v_vtol && v_jf_e < 2*v_vtol && v_jf_vminstop == 0)" then "jump SELF jf_jammed"
+variable jf_newside internal $(ternary(v_jf_e<=v_vtol||v_jf_vminstop==1,1,-1))
+if "$(v_jf_side != 0 && v_jf_side != v_jf_newside)" then "variable jf_dphi internal $(v_jf_dphi/2.0:%.17g)"
+variable jf_side internal ${jf_newside}
+variable jf_target internal $(ternary(v_jf_side>0,v_jf_phi+v_jf_dphi,v_jf_phi-v_jf_dphi):%.17g)
+if "$(v_jf_target <= 0 || v_jf_target >= 1)" then "variable jf_bad string 'packing fraction left (0, 1) (next phi = $(v_jf_target)): start from a lower phi0'" "jump SELF jf_fail"
+variable jf_laststep internal $(abs(v_jf_target-v_jf_phi):%.17g)
+if "$(v_jf_laststep < 4*2.220446049250313e-16*v_jf_phi)" then "variable jf_bad string 'the increment $(v_jf_laststep:%.3e) reached float64 resolution at phi = $(v_jf_phi:%.15f) without V landing in (vtol, 2 vtol): the window is narrower than the energy step between adjacent representable densities or the minimiser is not converging; use a larger vtol or a tighter ftol'" "jump SELF jf_fail"
+variable jf_phi internal $(v_jf_target:%.17g)
+variable jf_step internal $(v_jf_step+1)
+if "$(v_jf_step >= v_maxsteps)" then "variable jf_bad string 'no packing in the window after ${maxsteps} minimisations: raise maxsteps'" "jump SELF jf_fail"
+jump SELF jf_step_loop
+
+# ---- success: the final packing as a data file, and the summary line ----
+label jf_jammed
+if "${jf_conv} == 0" then "print '# warning: final minimisation stopped by ${jf_reason} with max force $(v_jf_fm:%.2e) (tolerance $(v_jf_ftol:%.1e)): force balance is only that good' append ${jf_logtmp} screen yes"
+write_data ${out}.data.partial
+shell mv ${out}.data.partial ${out}.data
+print "# result phi_J $(v_jf_phi:%.17g) V $(v_jf_e:%.17g) P $(v_jf_p:%.17g) max_force $(v_jf_fm:%.17g) minimisations $(v_jf_step+1) iterations $(v_jf_iters) status jammed" append ${jf_logtmp} screen no
+shell mv ${jf_logtmp} ${jf_log}
+print "jamflow deck: phi_J = $(v_jf_phi:%.12f)  V = $(v_jf_e:%.3e)  P = $(v_jf_p:%.3e)  max|F| = $(v_jf_fm:%.1e)  $(v_jf_step+1) minimisations  -> ${out}.data, ${jf_log}"
+quit 0
+
+label jf_fail
+print "# result status failed: ${jf_bad}" append ${jf_logtmp} screen no
+shell mv ${jf_logtmp} ${jf_log}
+print "ERROR: jamflow deck: ${jf_bad}"
+quit 1
+"""

@@ -1,0 +1,74 @@
+"""The compression step rules on a closed-form energy landscape V = A (phi - phi_J)^alpha.
+
+P follows from the virial relation P = phi^2 dV/dphi / v (v the mean particle volume),
+which is what the Newton jumps invert.
+"""
+
+import math
+
+import pytest
+
+from jamflow.protocols.compression import CompressionSettings, PhiStepper, fast_protocol, seed_protocol
+
+PHI_J, A, VBAR = 0.8412345678, 0.3, 1.16
+
+
+def landscape(phi, alpha):
+    delta = max(0.0, phi - PHI_J)
+    v = A * delta**alpha
+    pressure = phi**2 * alpha * A * delta ** (alpha - 1) / VBAR if delta > 0 else 0.0
+    return v, pressure
+
+
+def drive(settings, alpha, phi0=0.80, max_steps=2000):
+    stepper, phi = PhiStepper(settings, alpha, VBAR), phi0
+    for step in range(max_steps):
+        v, p = landscape(phi, alpha)
+        if settings.v_tol < v < 2 * settings.v_tol:
+            return phi, step + 1
+        phi = stepper.next_phi(phi, v, p, unjammed=v <= settings.v_tol)
+    raise AssertionError("did not reach the window")
+
+
+@pytest.mark.parametrize("alpha", [2.0, 2.5])
+def test_seed_rule_and_fast_rule_reach_the_same_window(alpha):
+    phi_seed, steps_seed = drive(seed_protocol(), alpha)
+    phi_fast, steps_fast = drive(fast_protocol(), alpha)
+    for phi in (phi_seed, phi_fast):
+        assert 1e-16 < landscape(phi, alpha)[0] < 2e-16
+    assert steps_fast < steps_seed / 5  # the point of the shortcut: far fewer minimisations
+    # the window pins phi to phi_J + (V/A)^(1/alpha) within its width
+    assert abs(phi_fast - phi_seed) < (2e-16 / A) ** (1 / alpha)
+
+
+def test_seed_rule_halves_on_every_crossing():
+    stepper = PhiStepper(seed_protocol(dphi0=1e-3), 2.0, VBAR)
+    assert stepper.next_phi(0.84, 0.0, 0.0, unjammed=True) == pytest.approx(0.841)
+    assert stepper.next_phi(0.841, 1e-9, 1e-5) == pytest.approx(0.841 - 5e-4)
+    assert stepper.next_phi(0.8405, 1e-9, 1e-5) == pytest.approx(0.8405 - 5e-4)  # same side: no halving
+    assert stepper.next_phi(0.840, 0.0, 0.0, unjammed=True) == pytest.approx(0.840 + 2.5e-4)
+
+
+def test_newton_jump_stays_above_jamming_until_close():
+    stepper = PhiStepper(fast_protocol(), 2.0, VBAR)
+    phi = PHI_J + 1e-3
+    v, p = landscape(phi, 2.0)
+    stepper.side, stepper.crossed = "below", True  # pretend we came from below
+    target = stepper.next_phi(phi, v, p)
+    assert target - PHI_J == pytest.approx(1e-3 / 10, rel=1e-9)  # shrinks phi - phi_J tenfold, exactly here
+    assert not stepper.final_approach
+
+
+def test_resolution_failure_is_reported():
+    from jamflow.protocols.compression import JammingFailed
+
+    stepper = PhiStepper(seed_protocol(dphi0=1e-17), 2.0, VBAR)
+    with pytest.raises(JammingFailed, match="float64 resolution"):
+        stepper.next_phi(0.8, 0.0, 0.0, unjammed=True)
+
+
+@pytest.mark.parametrize("kwargs", [dict(dphi_growth=0.5), dict(newton_ratio=1.0), dict(coarse_v_min=1e-16),
+                                    dict(dphi_max=-1.0)])
+def test_bad_shortcut_settings_rejected(kwargs):
+    with pytest.raises(ValueError):
+        CompressionSettings(**kwargs)
