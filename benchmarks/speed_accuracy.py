@@ -1,0 +1,261 @@
+"""Speed against accuracy of the compression protocol: time per packing against the error
+in phi_J, one parameter varied at a time around the seed protocol (dphi0 = 1e-4,
+V_tol = 1e-16, force tolerance 1e-14 max(1, L/20), FIRE), for N = 64, 256, 1024 2D
+bidisperse disks. The error of a run is |phi_J - phi_J,ref| for the same random start,
+phi_J,ref from the reference run (dphi0 = 1e-5, V_tol = V_min = 1e-20).
+
+    python benchmarks/speed_accuracy.py run --n 64 --seeds 0 1 2            (appends rows)
+    python benchmarks/speed_accuracy.py run --n 1024 --seeds 0 --variants reference seed cg
+    python benchmarks/speed_accuracy.py chart                               (CSV -> PNG)
+
+Rows are appended to docs/speed-accuracy.csv as each run ends and skipped when present,
+so an interrupted sweep resumes. Each run has its own process and a time limit; a run
+over the limit or failing is recorded with that status (never dropped). ``seconds`` is
+the protocol's wall time (JamResult.seconds), ``cpu_seconds`` the CPU time of the run's
+process; on this shared 2-core machine wall time inflates with load (the 1-minute load
+average is recorded beside each), CPU time much less, so the charts use CPU time.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+import multiprocessing as mp
+import os
+import queue
+import resource
+import signal
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+DOCS = Path(__file__).resolve().parents[1] / "docs"
+CSV = DOCS / "speed-accuracy.csv"
+COLUMNS = ["n", "seed", "variant", "status", "seconds", "cpu_seconds", "phi_j", "v", "max_force", "minimizations",
+           "iterations", "load"]
+
+# name -> (CompressionSettings overrides, MinimizerSettings overrides); one line per point
+VARIANTS = {
+    "reference": ({"dphi0": 1e-5, "v_tol": 1e-20}, {"v_min": 1e-20}),
+    "seed": ({}, {}),
+    "dphi0=1e-3": ({"dphi0": 1e-3}, {}),
+    "dphi0=3e-4": ({"dphi0": 3e-4}, {}),
+    "dphi0=3e-5": ({"dphi0": 3e-5}, {}),
+    "dphi0=1e-5": ({"dphi0": 1e-5}, {}),
+    "vtol=1e-12": ({"v_tol": 1e-12}, {}),
+    "vtol=1e-14": ({"v_tol": 1e-14}, {}),
+    "vtol=1e-18": ({"v_tol": 1e-18}, {"v_min": 1e-18}),
+    "vtol=1e-20": ({"v_tol": 1e-20}, {"v_min": 1e-20}),
+    "ftol=1e-10": ({}, {"force_tol": 1e-10}),
+    "ftol=1e-12": ({}, {"force_tol": 1e-12}),
+    "cg": ({}, {"method": "cg"}),
+    "md": ({}, {"method": "md"}),
+}
+GROUPS = {"dphi0": ["dphi0=1e-3", "dphi0=3e-4", "seed", "dphi0=3e-5", "dphi0=1e-5"],
+          "V_tol": ["vtol=1e-12", "vtol=1e-14", "seed", "vtol=1e-18", "vtol=1e-20"],
+          "force tol": ["ftol=1e-10", "ftol=1e-12", "seed"],
+          "minimiser": ["seed", "cg", "md"]}
+
+
+def settings_for(variant: str):
+    from jamflow.minimize import MinimizerSettings
+    from jamflow.protocols.compression import seed_protocol
+
+    protocol, minimizer = VARIANTS[variant]
+    return seed_protocol(**protocol, minimizer=replace(MinimizerSettings(), **minimizer))
+
+
+# --- helpers shared by the benchmark scripts ------------------------------------------------------
+def cpu_seconds() -> float:
+    """User + system CPU of this process and its waited-for children (lmp, mpirun ranks)."""
+    own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+def _child(q, fn, args):
+    os.setpgrp()  # own process group: a timeout also stops lmp/mpirun started by fn
+    try:
+        start = cpu_seconds()
+        value = fn(*args)
+        q.put(("ok", {**value, "cpu_seconds": f"{cpu_seconds() - start:.3f}"}))
+    except Exception as err:  # recorded as the run's status
+        q.put((f"failed: {type(err).__name__}: {str(err)[:150]}", None))
+
+
+def limited(fn, args, limit: float):
+    """(status, fn(*args)) with fn run in a forked process stopped after ``limit`` seconds."""
+    ctx = mp.get_context("fork")
+    q = ctx.Queue()
+    proc = ctx.Process(target=_child, args=(q, fn, args))
+    proc.start()
+    try:
+        status, value = q.get(timeout=limit)
+    except queue.Empty:
+        status, value = f"timeout>{limit:g}s", None
+    try:
+        os.killpg(proc.pid, signal.SIGTERM)
+    except ProcessLookupError:
+        pass
+    proc.join()
+    return status, value
+
+
+def done_keys(path: Path, keys) -> set:
+    if not path.exists():
+        return set()
+    with path.open() as fh:
+        return {tuple(row[k] for k in keys) for row in csv.DictReader(fh)}
+
+
+def append_row(path: Path, columns, row: dict) -> None:
+    """Append one row (header first if the file is new) and flush it to disk."""
+    new = not path.exists()
+    with path.open("a", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=columns)
+        if new:
+            w.writeheader()
+        w.writerow(row)
+        fh.flush()
+        os.fsync(fh.fileno())
+
+
+def sweep(path: Path, columns, points: list[dict], fn, limit: float) -> None:
+    """fn(*point.values()) for every point (dict of the key columns) not yet in the CSV at
+    ``path``; one row per run with its status, appended as it ends."""
+    done = done_keys(path, tuple(points[0])) if points else set()
+    for point in points:
+        if tuple(str(v) for v in point.values()) in done:
+            continue
+        status, value = limited(fn, tuple(point.values()), limit)
+        row = {**point, "status": status, "load": f"{os.getloadavg()[0]:.2f}", **(value or {})}
+        append_row(path, columns, row)
+        print(row, flush=True)
+
+
+def read_rows(path: Path) -> list[dict]:
+    with path.open() as fh:
+        return list(csv.DictReader(fh))
+
+
+def use_agg():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def save_figure(fig, path: Path) -> None:
+    """Write a PNG atomically."""
+    from jamflow.io import atomic_path
+
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=120, format="png")
+
+
+# --- this benchmark ---------------------------------------------------------------------------------
+def jam_once(n, seed, variant):
+    import warnings
+
+    from jamflow import jam
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        r = jam(n=n, dim=2, sizes="bi:1.4:0.5", seed=seed, settings=settings_for(variant))
+    return dict(seconds=f"{r.seconds:.3f}", phi_j=repr(r.phi_j), v=f"{r.energy_per_particle:.3e}",
+                max_force=f"{r.max_force:.2e}", minimizations=r.minimizations, iterations=r.iterations)
+
+
+def run(args) -> None:
+    points = [dict(n=n, seed=seed, variant=v) for n in args.n for seed in args.seeds for v in args.variants]
+    sweep(args.out, COLUMNS, points, jam_once, args.limit)
+
+
+def errors(rows):
+    """{(n, variant): [(seconds, |phi_J - phi_J,ref|), ...]} over seeds with a reference."""
+    ref = {(r["n"], r["seed"]): float(r["phi_j"]) for r in rows if r["variant"] == "reference" and r["status"] == "ok"}
+    out = {}
+    for r in rows:
+        key = (r["n"], r["seed"])
+        if r["status"] == "ok" and key in ref and r["variant"] != "reference":
+            out.setdefault((int(r["n"]), r["variant"]), []).append((float(r["cpu_seconds"]), abs(float(r["phi_j"]) - ref[key])))
+    return out
+
+
+def summary(rows):
+    """{(n, variant): (median seconds, mean |error|, max |error|, runs, failed/timed-out runs)}."""
+    err = errors(rows)
+    bad = {}
+    for r in rows:
+        if r["status"] != "ok":
+            bad[(int(r["n"]), r["variant"])] = bad.get((int(r["n"]), r["variant"]), 0) + 1
+    out = {}
+    for key, pairs in err.items():
+        secs = sorted(p[0] for p in pairs)
+        e = [p[1] for p in pairs]
+        out[key] = (secs[len(secs) // 2], sum(e) / len(e), max(e), len(e), bad.get(key, 0))
+    for key, count in bad.items():
+        out.setdefault(key, (math.nan, math.nan, math.nan, 0, count))
+    return out
+
+
+def chart(args) -> None:
+    rows = read_rows(args.out)
+    stats = summary(rows)
+    plt = use_agg()
+    sizes = sorted({k[0] for k in stats})
+    fig, axes = plt.subplots(1, len(GROUPS), figsize=(4.2 * len(GROUPS), 4.0), sharey=True)
+    floor = 1e-12  # identical phi_J (error 0) is drawn at this floor
+    for ax, (group, names) in zip(axes, GROUPS.items()):
+        for n, marker in zip(sizes, "osD^"):
+            pts = [(stats[(n, v)][0], max(stats[(n, v)][1], floor), v) for v in names
+                   if (n, v) in stats and stats[(n, v)][3]]
+            if not pts:
+                continue
+            ax.plot([p[0] for p in pts], [p[1] for p in pts], marker=marker, ls="-", label=f"N = {n}")
+            for x, y, v in pts:
+                ax.annotate(v.split("=")[-1], (x, y), fontsize=7, xytext=(3, 3), textcoords="offset points")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_title(f"varying {group}")
+        ax.set_xlabel("median CPU seconds per packing")
+    axes[0].set_ylabel(r"mean $|\phi_J - \phi_{J,\mathrm{ref}}|$ (same start)")
+    axes[0].axhline(1e-8, color="gray", lw=0.8, ls=":")
+    axes[0].legend(fontsize=8)
+    fig.suptitle("2D bidisperse disks: time against error in phi_J (reference: dphi0 = 1e-5, V_tol = 1e-20)")
+    fig.tight_layout()
+    save_figure(fig, args.out.with_suffix(".png"))
+    for key in sorted(stats):
+        sec, mean, worst, k, bad = stats[key]
+        print(f"N={key[0]:5d} {key[1]:12s} {sec:8.2f} s  mean|err| {mean:.2e}  max|err| {worst:.2e}  runs {k}  "
+              f"failed/timeout {bad}")
+
+
+def command_line(doc, argv, run, chart, csv_path: Path, add_run_arguments, limit: float = 300.0):
+    """``run`` (append rows) / ``chart`` (CSV -> PNG) sub-commands shared by the benchmark scripts."""
+    ap = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = ap.add_subparsers(dest="what", required=True)
+    r = sub.add_parser("run")
+    add_run_arguments(r)
+    r.add_argument("--limit", type=float, default=limit, help="seconds per run before it is stopped")
+    c = sub.add_parser("chart")
+    for p in (r, c):
+        p.add_argument("--out", type=Path, default=csv_path)
+    args = ap.parse_args(argv)
+    return run(args) if args.what == "run" else chart(args)
+
+
+def _run_arguments(r):
+    r.add_argument("--n", type=int, nargs="+", default=[64])
+    r.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
+    r.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
+
+
+def main(argv=None):
+    return command_line(__doc__, argv, run, chart, CSV, _run_arguments)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

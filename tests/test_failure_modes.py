@@ -1,0 +1,125 @@
+"""Where methods break down (docs/failure-modes.md): each case ends in a clear error or a
+flagged result, never a silent wrong packing. Cases jamflow does not detect yet are
+strict xfails naming the missing check; they turn into failures (XPASS) once it exists."""
+
+import pytest
+
+from jamflow import CompressionSettings, MinimizerSettings, jam
+from jamflow.deck import DeckFailed, default_deck_path, run_deck
+from jamflow.engine.lammps import LammpsEngine
+from jamflow.protocols.compression import JammingFailed, compress, initial_packing
+
+from test_decks import assert_jammed
+
+
+@pytest.fixture(scope="module")
+def onset():
+    """16 bidisperse disks at onset (FIRE, seed protocol)."""
+    return jam(n=16, dim=2, seed=5)
+
+
+@pytest.fixture(scope="module")
+def above(onset):
+    """The onset packing compressed by 1e-3: V ~ 1e-7 per particle, max force ~1e-4."""
+    return onset.packing.scaled_to_phi(onset.phi_j + 1e-3)
+
+
+def minimize(packing, **settings):
+    with LammpsEngine(packing) as engine:
+        return engine.minimize(MinimizerSettings(**settings))
+
+
+def test_cg_line_search_stall_is_reported(above):
+    """CG cannot reach a force tolerance below round-off: LAMMPS's line search stops it
+    early, and the result says so instead of claiming convergence."""
+    r = minimize(above, method="cg", force_tol=1e-20)
+    assert (r.reason, r.converged) == ("linesearch", False)
+    assert r.iterations < 2000 and r.max_force > 1e-20
+
+
+def test_fire_at_the_round_off_floor_stops_by_no_progress(above):
+    """FIRE with a tolerance below the ~1e-15 force floor: detected after two windows
+    without progress, well before the iteration cap."""
+    r = minimize(above, force_tol=1e-17, window=2000, max_iterations=200_000)
+    assert (r.reason, r.converged) == ("no-progress", False)
+    assert r.iterations < 50_000 and 1e-17 < r.max_force < 1e-13
+
+
+def test_final_minimisation_at_the_floor_warns():
+    start = initial_packing(16, 2, "bi:1.4:0.5", "spring", 5, 0.85)
+    settings = CompressionSettings(dphi0=1e-3, minimizer=MinimizerSettings(force_tol=1e-17, window=2000))
+    with pytest.warns(UserWarning, match="stopped by 'no-progress'"):
+        res = compress(start, settings)
+    assert 1e-16 < res.energy_per_particle < 2e-16 and res.max_force < 1e-13  # flagged, still balanced to 1e-13
+
+
+def test_damped_md_with_too_little_damping_is_not_converged(above):
+    """b = 1e-3: underdamped, the energy rings; the cap is reported as not converged."""
+    r = minimize(above, method="md", damping=1e-3, max_iterations=20_000)
+    assert (r.reason, r.converged) == ("iteration-cap", False) and r.max_force > 1e-10
+
+
+def test_damped_md_at_the_drag_limit_still_converges(above):
+    """b dt = 1 is steepest descent with step dt^2; still a correct minimiser."""
+    r = minimize(above, method="md", damping=10.0, max_iterations=60_000)
+    assert r.converged and r.max_force < 1e-13
+
+
+@pytest.mark.xfail(strict=True,
+                   reason="not detected yet: the explicit drag -b v diverges for b * md_timestep > 2 and the "
+                          "blown-up state reports V = 0, 'energy-below-vmin'; MinimizerSettings should reject "
+                          "damping * md_timestep >= 2 before any work")
+def test_damped_md_with_too_much_damping_is_rejected():
+    with pytest.raises(ValueError, match="damping"):
+        MinimizerSettings(method="md", damping=21.0)
+
+
+def test_large_increment_overshoots_then_bisects_into_the_window():
+    """dphi0 = 0.09 jumps far past jamming; the halving still brackets the window."""
+    res = jam(n=16, dim=2, seed=5, settings=CompressionSettings(dphi0=0.09))
+    assert_jammed(res)
+    assert res.history["energy_per_particle"][1] > 1e-6  # the first step landed far above jamming
+
+
+def test_unresolvable_vtol_fails_clearly():
+    """V_tol = 1e-34 per particle: overlaps ~1e-17 diameters, below float64 resolution of
+    positions; the protocol stops with the resolution error instead of a packing."""
+    settings = CompressionSettings(v_tol=1e-34, minimizer=MinimizerSettings(v_min=1e-34))
+    with pytest.raises(JammingFailed, match="float64 resolution"):
+        jam(n=16, dim=2, seed=5, settings=settings)
+
+
+def test_unresolvable_vtol_fails_clearly_in_the_deck(tmp_path):
+    with pytest.raises(DeckFailed, match="float64 resolution"):
+        run_deck(tmp_path, {"N": 16, "seed": 1, "vtol": 1e-34, "vmin": 1e-34}, deck=default_deck_path())
+
+
+@pytest.mark.xfail(strict=True,
+                   reason="not detected yet: with V_min (1e-16) above V_tol every state in the window is stopped "
+                          "by 'energy-below-vmin' and counted as unjammed; CompressionSettings should reject "
+                          "minimizer.v_min > v_tol before work (now: JammingFailed at float64 resolution)")
+def test_vtol_below_vmin_is_rejected_before_work():
+    with pytest.raises(ValueError, match="v_min"):
+        CompressionSettings(v_tol=1e-20)
+
+
+def test_start_above_jamming_decompresses_to_the_window():
+    res = jam(n=16, dim=2, seed=5, settings=CompressionSettings(phi0=0.88))
+    assert_jammed(res)
+    assert res.history["energy_per_particle"][0] > 2e-16 and res.phi_j < 0.88
+
+
+def test_repulsive_lj_above_jamming_start_is_refused():
+    with pytest.raises(JammingFailed, match="phi0 is above jamming"):
+        jam(n=16, dim=2, seed=5, potential="rlj", settings=CompressionSettings(phi0=0.88))
+
+
+@pytest.mark.xfail(strict=True,
+                   reason="not detected yet: compress() runs RLJ from an overlapping start and LAMMPS loses "
+                          "atoms (LammpsError 'Lost atoms'); compress() should refuse RLJ starts with "
+                          "r_ij/sigma_ij below ~0.9 before work and point to jam()/remove_overlaps()")
+def test_repulsive_lj_from_overlapping_start_is_refused_before_work():
+    start = initial_packing(16, 2, "bi:1.4:0.5", "rlj", 5, 0.80)
+    with pytest.raises(ValueError, match="overlap"):
+        compress(start, CompressionSettings())
+
