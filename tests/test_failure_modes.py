@@ -65,6 +65,11 @@ def test_damped_md_at_the_drag_limit_still_converges(above):
     assert r.converged and r.max_force < 1e-13
 
 
+def test_too_much_damping_is_refused_by_the_deck(tmp_path):
+    with pytest.raises(DeckFailed, match="damping x dt"):
+        run_deck(tmp_path, {"N": 16, "minimizer": "md", "damping": 21}, deck=default_deck_path())
+
+
 @pytest.mark.xfail(strict=True,
                    reason="not detected yet: the explicit drag -b v diverges for b * md_timestep > 2 and the "
                           "blown-up state reports V = 0, 'energy-below-vmin'; MinimizerSettings should reject "
