@@ -22,6 +22,8 @@ VARIANTS = {
     "seed": {},
     "fast": FAST_PROTOCOL,
     "fast, no Newton": {**FAST_PROTOCOL, "newton": False},
+    "fast, no growth": {**FAST_PROTOCOL, "dphi_growth": 1.0},
+    "fast, growth 1.2": {**FAST_PROTOCOL, "dphi_growth": 1.2},
     "growth only": {"dphi_growth": 2.0},
     "fast, dphi_max 1e-2": {**FAST_PROTOCOL, "dphi_max": 1e-2},
 }
@@ -62,7 +64,7 @@ def chart(stats, path, title):
     ax1.set_ylabel(r"mean $\phi_J$ $\pm$ s.e.")
     ax2.bar(range(len(names)), [stats[k][4] for k in names])
     ax2.set_xticks(range(len(names)), names, rotation=20, ha="right")
-    ax2.set_ylabel("median seconds per packing")
+    ax2.set_ylabel("median CPU seconds per packing")
     fig.suptitle(title)
     fig.tight_layout()
     fig.savefig(path, dpi=120)

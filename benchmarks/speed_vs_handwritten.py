@@ -23,7 +23,7 @@ from jamflow import jam
 from jamflow.engine.lammps_lib import new_lammps
 from jamflow.engine.pair_styles import harmonic_cut_commands
 from jamflow.io import write_lammps_data
-from jamflow.protocols.compression import CompressionSettings, initial_packing
+from jamflow.protocols.compression import PROTOCOLS, initial_packing
 
 
 def handwritten_jam(packing, data_path, cap=100_000, v_tol=1e-16, dphi0=1e-4):
@@ -59,6 +59,7 @@ def main():
     ap.add_argument("--seeds", type=int, default=5)
     ap.add_argument("--cap", type=int, default=100_000, help="baseline FIRE iteration cap per minimisation")
     ap.add_argument("--skip-baseline", action="store_true")
+    ap.add_argument("--protocol", choices=sorted(PROTOCOLS), default="fast", help="jamflow protocol preset")
     ap.add_argument("--out", default="docs/speed-vs-handwritten.csv")
     args = ap.parse_args()
     out = Path(args.out)
@@ -69,8 +70,8 @@ def main():
             w.writerow(["method", "n", "seed", "phi_j", "v", "minimizations", "seconds"])
         for seed in range(args.seeds):
             start = initial_packing(args.n, 2, "bi:1.4:0.5", "spring", seed, 0.80)
-            if ("jamflow", args.n, seed) not in done:
-                r = jam(start=start, settings=CompressionSettings())
+            if ("jamflow", args.n, seed) not in done:  # rows are per method name, not per preset
+                r = jam(start=start, settings=PROTOCOLS[args.protocol]())
                 w.writerow(["jamflow", args.n, seed, repr(r.phi_j), r.energy_per_particle, r.minimizations, f"{r.seconds:.3f}"])
                 fh.flush()
             if not args.skip_baseline and ("handwritten", args.n, seed) not in done:

@@ -10,8 +10,9 @@ Methods:
   and the net momentum of a periodic packing is zero, so the minima found are comparable.
 
 Stopping rules, checked after every ``window`` iterations (LAMMPS runs the window):
-1. ``force``: max force component below ``force_tol`` (default scales with the box side,
-   since round-off in positions of a box of side L limits forces to ~L * 1e-16).
+1. ``force``: max force component below ``force_tol`` (default scales with the box side and
+   the contact stiffness, since round-off in positions of a box of side L limits forces to
+   ~L * 1e-16 * d2V/dr2; repulsive LJ is 72x stiffer at contact than the linear spring).
 2. ``energy-below-vmin``: energy per particle below ``v_min`` (seed rule b, V_min = 1e-16),
    also caught inside a window by ``fix halt``.
 3. ``no-progress``: over a whole window the relative energy decrease was below ``delta``
@@ -35,7 +36,7 @@ class MinimizerSettings:
     """Parameters of one minimisation. Energies per particle in eps; forces in eps/diameter."""
 
     method: str = "fire"
-    force_tol: float | None = None  # None: 1e-14 * max(1, L / 20), L the longest box side
+    force_tol: float | None = None  # None: 1e-14 * max(1, L / 20) * k, L the longest box side, k the contact stiffness
     delta: float = 1e-16  # seed's relative energy change threshold
     v_min: float = 1e-16  # seed's V_min (per particle)
     max_iterations: int = 500_000
@@ -56,8 +57,11 @@ class MinimizerSettings:
         if self.max_iterations < 1 or self.window < 1:
             raise ValueError("max_iterations and window must be positive integers")
 
-    def resolved_force_tol(self, box) -> float:
-        return self.force_tol if self.force_tol is not None else 1e-14 * max(1.0, float(box.lengths.max()) / 20.0)
+    def resolved_force_tol(self, box, stiffness: float = 1.0) -> float:
+        """The force tolerance; by default above the round-off floor ~ L * 1e-16 * stiffness."""
+        if self.force_tol is not None:
+            return self.force_tol
+        return 1e-14 * max(1.0, float(box.lengths.max()) / 20.0) * max(1.0, stiffness)
 
     def as_dict(self) -> dict:
         return {f"minimizer_{k}": v for k, v in asdict(self).items()}
@@ -83,7 +87,7 @@ def minimize(engine, settings: MinimizerSettings) -> MinimizeResult:
     """Minimise the engine's configuration at fixed box; the engine holds the result."""
     start = time.perf_counter()
     n = engine.template.n
-    ftol = settings.resolved_force_tol(engine.box)
+    ftol = settings.resolved_force_tol(engine.box, engine.template.potential.contact_stiffness)
     _install(engine, settings, ftol)
     done, energy_prev, fmax_prev = 0, math.inf, math.inf
     try:

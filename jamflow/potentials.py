@@ -33,6 +33,11 @@ class Spring:
     name = "spring"
 
     @property
+    def contact_stiffness(self) -> float:
+        """Scale of d2V/dr2 near contact (eps/diameter^2); sets the force round-off floor."""
+        return self.epsilon
+
+    @property
     def spec(self) -> str:
         return "hertz" if self.alpha == 2.5 else ("spring" if self.alpha == 2.0 else f"spring:{self.alpha:g}")
 
@@ -61,6 +66,11 @@ class RepulsiveLJ:
 
     name = "rlj"
     spec = "rlj"
+
+    @property
+    def contact_stiffness(self) -> float:
+        """d2V/dr2 at r = sigma is 72 eps/sigma^2: forces carry 72x the round-off of springs."""
+        return 72.0 * self.epsilon
 
     def __post_init__(self):
         _check_epsilon(self.epsilon)

@@ -5,20 +5,21 @@ import pytest
 
 from jamflow import CompressionSettings, MinimizerSettings, jam
 from jamflow.engine.reference import energy_forces_pressure
+from jamflow.protocols.compression import fast_protocol, seed_protocol
 
 
-def assert_jammed(res, v_tol=1e-16):
+def assert_jammed(res, v_tol=1e-16, max_force=1e-13):
     assert v_tol < res.energy_per_particle < 2 * v_tol
     ref = energy_forces_pressure(res.packing)  # independent check of the final state
     assert ref.energy / res.packing.n == pytest.approx(res.energy_per_particle, rel=1e-6)
-    assert np.max(np.abs(ref.forces)) < 1e-13
+    assert np.max(np.abs(ref.forces)) < max_force
     assert res.pressure > 0
     assert res.history["phi"][-1] == res.phi_j == pytest.approx(res.packing.phi, rel=1e-14)
 
 
 @pytest.fixture(scope="module")
 def jammed_2d():
-    return jam(n=64, dim=2, sizes="bi:1.4:0.5", seed=11)
+    return jam(n=64, dim=2, sizes="bi:1.4:0.5", seed=11, settings=seed_protocol())
 
 
 def test_2d_bidisperse_reaches_window_with_force_balance(jammed_2d):
@@ -40,8 +41,14 @@ def test_history_follows_the_bisection_rule(jammed_2d):
         assert abs(dphi) == pytest.approx(h["dphi"][k + 1], rel=1e-9)
 
 
+def test_default_protocol_is_fast_and_reproducible():
+    a, b = (jam(n=64, dim=2, sizes="bi:1.4:0.5", seed=12) for _ in range(2))
+    assert a.settings == fast_protocol()
+    assert abs(a.phi_j - b.phi_j) < 1e-10
+
+
 def test_same_seed_same_phi_j(jammed_2d):
-    again = jam(n=64, dim=2, sizes="bi:1.4:0.5", seed=11)
+    again = jam(n=64, dim=2, sizes="bi:1.4:0.5", seed=11, settings=seed_protocol())
     assert abs(again.phi_j - jammed_2d.phi_j) < 1e-10
 
 
@@ -53,7 +60,7 @@ def test_3d_monodisperse_spheres():
 
 @pytest.mark.parametrize("method", ["cg", "md"])
 def test_other_minimizers_reach_the_window(method):
-    settings = CompressionSettings(minimizer=MinimizerSettings(method=method))
+    settings = fast_protocol(minimizer=MinimizerSettings(method=method))
     res = jam(n=32, dim=2, sizes="bi:1.4:0.5", seed=5, settings=settings)
     assert 1e-16 < res.energy_per_particle < 2e-16
 
@@ -82,13 +89,11 @@ def test_bad_settings_rejected(kwargs):
 def test_repulsive_lj_starts_from_relaxed_overlaps():
     """Seed step 1: RLJ needs a start without significant overlaps."""
     res = jam(n=32, dim=2, sizes="bi:1.4:0.5", potential="rlj", seed=4)
-    assert_jammed(res)
+    assert_jammed(res, max_force=72 * 1e-13)  # round-off floor scales with d2V/dr2 = 72 at contact
 
 
 @pytest.mark.parametrize("dim,sizes", [(2, "bi:1.4:0.5"), (3, "mono")])
 def test_fast_protocol_reaches_the_window_with_force_balance(dim, sizes):
-    from jamflow.protocols.compression import fast_protocol
-
     res = jam(n=64, dim=dim, sizes=sizes, seed=8, settings=fast_protocol())
     assert_jammed(res)
     assert res.minimizations < 150
