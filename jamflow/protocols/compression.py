@@ -23,7 +23,8 @@ from ..potentials import Potential, RepulsiveLJ, Spring, parse_potential
 from ..sizes import parse_sizes
 
 DEFAULT_PHI0 = {2: 0.80, 3: 0.55}
-NEWTON_FINAL_FACTOR = 3.0  # jump straight into the window only from within 3x its predicted distance
+NEWTON_FINAL_FACTOR = 3.0
+LOOSE_TRUST = 100.0  # a loosely minimised state decides its side only if V > 100 V_tol  # jump straight into the window only from within 3x its predicted distance
 HISTORY_COLUMNS = ("phi", "energy_per_particle", "pressure", "dphi", "iterations", "max_force", "converged")
 
 
@@ -201,10 +202,11 @@ def compress(packing: Packing, settings: CompressionSettings, *, observers=(), e
             for observe in observers:
                 observe({"step": step, "phi": phi, "dphi": stepper.last_step, "result": result})
             v = result.energy_per_particle
+            loose = minimizer.force_tol != settings.minimizer.force_tol
+            if loose and result.reason != "energy-below-vmin" and v < LOOSE_TRUST * settings.v_tol:
+                stepper.final_approach, stepper.last_step = True, 0.0  # too close to the window to trust
+                continue  # a loose minimum: polish it in place with the full tolerance
             if settings.v_tol < v < 2 * settings.v_tol and result.reason != "energy-below-vmin":
-                if minimizer.force_tol != settings.minimizer.force_tol:  # loose tolerance: polish in place
-                    stepper.final_approach = True
-                    continue
                 return _finish(engine, phi, result, rows, settings, start_time, lammps_version())
             phi = stepper.next_phi(phi, v, pressure, unjammed=result.reason == "energy-below-vmin")
     raise JammingFailed(f"no packing in the window {settings.v_tol:g} < V < {2 * settings.v_tol:g} after "
