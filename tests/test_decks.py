@@ -106,7 +106,7 @@ def test_crosscheck_command_reports_the_difference(tmp_path, capsys):
 
 
 def test_emitted_deck_reproduces_the_python_run(tmp_path, capsys):
-    assert main(["jam", "--n", "16", "--seed", "5", "--out", str(tmp_path / "p.h5"),
+    assert main(["jam", "--n", "16", "--seed", "5", "--protocol", "seed", "--out", str(tmp_path / "p.h5"),
                  "--emit-deck", str(tmp_path / "run.lmp")]) == 0
     assert "lmp -in run.lmp" in capsys.readouterr().out
     assert not (tmp_path / "p.h5").exists()  # the deck is written instead of running
@@ -138,6 +138,14 @@ def test_emit_deck_refuses_shortcut_protocol(tmp_path):
     with pytest.raises(ValueError, match="seed's bisection"):
         emit_deck(tmp_path / "d.lmp", start, fast_protocol())
     assert not (tmp_path / "d.lmp").exists() and not (tmp_path / "d.start.data").exists()
+
+
+def test_emit_deck_with_the_default_fast_protocol_says_what_to_do(tmp_path, capsys):
+    argv = ["jam", "--n", "16", "--emit-deck", str(tmp_path / "d.lmp"), "--out", str(tmp_path / "p.h5")]
+    if main(argv) == 0:  # the default protocol is the seed's: nothing to refuse
+        assert (tmp_path / "d.lmp").is_file()
+    else:
+        assert "--protocol seed" in capsys.readouterr().err and not (tmp_path / "d.lmp").exists()
 
 
 @pytest.mark.parametrize("variables,message", [
