@@ -18,9 +18,10 @@ def add_arguments(p) -> None:
     p.add_argument("--sizes", default="bi:1.4:0.5",
                    help="mono | bi:RATIO:FRACTION_SMALL | poly-uniform:WIDTH | poly-normal:WIDTH | poly-lognormal:WIDTH")
     p.add_argument("--potential", default="spring", help="spring | hertz | spring:ALPHA | rlj")
-    p.add_argument("--protocol", choices=sorted(PROTOCOLS), default=DEFAULT_PROTOCOL,
-                   help="seed: the chapter's constant-increment bisection; fast: the same stopping rule with "
-                        "growing increments and Newton jumps (docs/speed.md)")
+    p.add_argument("--protocol", choices=sorted(PROTOCOLS), default=None,
+                   help=f"seed: the chapter's constant-increment bisection; fast: the same stopping rule with "
+                        f"growing increments and Newton jumps (docs/speed.md). Default {DEFAULT_PROTOCOL}; "
+                        "seed with --emit-deck (decks run the seed protocol)")
     p.add_argument("--minimizer", choices=METHODS, default="fire", help="energy minimiser")
     p.add_argument("--phi0", type=float, default=None, help="initial packing fraction (default 0.80 in 2D, 0.55 in 3D)")
     p.add_argument("--dphi0", type=float, default=1e-4, help="initial packing-fraction increment")
@@ -40,7 +41,8 @@ def settings_from_args(args) -> CompressionSettings:
         if value is not None and (not math.isfinite(value) or value <= 0):
             raise ValueError(f"--{name} must be a finite positive number, got {value}")
     minimizer = MinimizerSettings(method=args.minimizer, force_tol=args.ftol)
-    return PROTOCOLS[args.protocol](phi0=args.phi0, dphi0=args.dphi0, v_tol=args.vtol, minimizer=minimizer)
+    protocol = args.protocol or ("seed" if args.emit_deck else DEFAULT_PROTOCOL)
+    return PROTOCOLS[protocol](phi0=args.phi0, dphi0=args.dphi0, v_tol=args.vtol, minimizer=minimizer)
 
 
 def run(args) -> int:
