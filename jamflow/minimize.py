@@ -54,6 +54,10 @@ class MinimizerSettings:
                 raise ValueError(f"minimizer {name} must be a finite positive number, got {value}")
         if self.force_tol is not None and not (math.isfinite(self.force_tol) and self.force_tol > 0):
             raise ValueError(f"force_tol must be a finite positive number, got {self.force_tol}")
+        if self.method == "md" and self.damping * self.md_timestep >= 2.0:
+            raise ValueError(f"damping x md_timestep = {self.damping * self.md_timestep:g} >= 2: the explicit drag "
+                             "-b v overshoots and diverges (the blown-up state even reports V = 0); use "
+                             "damping < 2 / md_timestep, e.g. 0.3 with md_timestep 0.1")
         if self.max_iterations < 1 or self.window < 1:
             raise ValueError("max_iterations and window must be positive integers")
 

@@ -1,6 +1,5 @@
 """Where methods break down (docs/failure-modes.md): each case ends in a clear error or a
-flagged result, never a silent wrong packing. Cases jamflow does not detect yet are
-strict xfails naming the missing check; they turn into failures (XPASS) once it exists."""
+flagged result, never a silent wrong packing."""
 
 import pytest
 
@@ -70,10 +69,6 @@ def test_too_much_damping_is_refused_by_the_deck(tmp_path):
         run_deck(tmp_path, {"N": 16, "minimizer": "md", "damping": 21}, deck=default_deck_path())
 
 
-@pytest.mark.xfail(strict=True,
-                   reason="not detected yet: the explicit drag -b v diverges for b * md_timestep > 2 and the "
-                          "blown-up state reports V = 0, 'energy-below-vmin'; MinimizerSettings should reject "
-                          "damping * md_timestep >= 2 before any work")
 def test_damped_md_with_too_much_damping_is_rejected():
     with pytest.raises(ValueError, match="damping"):
         MinimizerSettings(method="md", damping=21.0)
@@ -99,10 +94,6 @@ def test_unresolvable_vtol_fails_clearly_in_the_deck(tmp_path):
         run_deck(tmp_path, {"N": 16, "seed": 1, "vtol": 1e-34, "vmin": 1e-34}, deck=default_deck_path())
 
 
-@pytest.mark.xfail(strict=True,
-                   reason="not detected yet: with V_min (1e-16) above V_tol every state in the window is stopped "
-                          "by 'energy-below-vmin' and counted as unjammed; CompressionSettings should reject "
-                          "minimizer.v_min > v_tol before work (now: JammingFailed at float64 resolution)")
 def test_vtol_below_vmin_is_rejected_before_work():
     with pytest.raises(ValueError, match="v_min"):
         CompressionSettings(v_tol=1e-20)
@@ -119,10 +110,6 @@ def test_repulsive_lj_above_jamming_start_is_refused():
         jam(n=16, dim=2, seed=5, potential="rlj", settings=CompressionSettings(phi0=0.88))
 
 
-@pytest.mark.xfail(strict=True,
-                   reason="not detected yet: compress() runs RLJ from an overlapping start and LAMMPS loses "
-                          "atoms (LammpsError 'Lost atoms'); compress() should refuse RLJ starts with "
-                          "r_ij/sigma_ij below ~0.9 before work and point to jam()/remove_overlaps()")
 def test_repulsive_lj_from_overlapping_start_is_refused_before_work():
     start = initial_packing(16, 2, "bi:1.4:0.5", "rlj", 5, 0.80)
     with pytest.raises(ValueError, match="overlap"):

@@ -40,7 +40,7 @@ def settings_from_args(args) -> CompressionSettings:
         value = getattr(args, name)
         if value is not None and (not math.isfinite(value) or value <= 0):
             raise ValueError(f"--{name} must be a finite positive number, got {value}")
-    minimizer = MinimizerSettings(method=args.minimizer, force_tol=args.ftol)
+    minimizer = MinimizerSettings(method=args.minimizer, force_tol=args.ftol, v_min=args.vtol)
     protocol = args.protocol or ("seed" if args.emit_deck else DEFAULT_PROTOCOL)
     return PROTOCOLS[protocol](phi0=args.phi0, dphi0=args.dphi0, v_tol=args.vtol, minimizer=minimizer)
 

@@ -18,6 +18,7 @@ import numpy as np
 
 from ..engine.lammps import LammpsEngine
 from ..minimize import MinimizerSettings, MinimizeResult
+from ..pairs import overlapping_pairs
 from ..packing import DENSEST_PHI, Packing, particle_volumes, random_packing
 from ..potentials import Potential, RepulsiveLJ, Spring, parse_potential
 from ..sizes import parse_sizes
@@ -63,6 +64,9 @@ class CompressionSettings:
             raise ValueError(f"dphi_growth must be >= 1 (1 = the seed's constant increment), got {self.dphi_growth}")
         if not (math.isfinite(self.dphi_max) and self.dphi_max > 0):
             raise ValueError(f"dphi_max must be a finite positive number, got {self.dphi_max}")
+        if self.minimizer.v_min > self.v_tol:
+            raise ValueError(f"minimizer v_min = {self.minimizer.v_min:g} is above v_tol = {self.v_tol:g}: every "
+                             "state in the window would be stopped as unjammed; set MinimizerSettings(v_min=v_tol)")
         if self.coarse_v_min is not None and not (math.isfinite(self.coarse_v_min) and self.coarse_v_min > 2 * self.v_tol):
             raise ValueError(f"coarse_v_min must be a finite number above 2 V_tol, got {self.coarse_v_min}")
         if not (math.isfinite(self.newton_ratio) and self.newton_ratio > 1):
@@ -187,6 +191,7 @@ def compress(packing: Packing, settings: CompressionSettings, *, observers=(), e
     """Run the compression/decompression bisection from ``packing`` (seed steps 2-4)."""
     from ..engine.lammps_lib import lammps_version
 
+    _check_start(packing)
     start_time = time.perf_counter()
     base_box, base_phi = packing.box, packing.phi
     stepper = PhiStepper(settings, _newton_exponent(packing.potential), float(np.mean(particle_volumes(packing.diameters, packing.dim))))
@@ -212,6 +217,20 @@ def compress(packing: Packing, settings: CompressionSettings, *, observers=(), e
     raise JammingFailed(f"no packing in the window {settings.v_tol:g} < V < {2 * settings.v_tol:g} after "
                         f"{settings.max_steps} minimisations (last phi = {phi}); raise max_steps or check "
                         "the minimiser's stop reasons in the history")
+
+
+RLJ_MIN_START_RATIO = 0.9  # r/sigma below this: repulsive-LJ forces > ~1e2 eps/sigma, LAMMPS loses atoms
+
+
+def _check_start(packing: Packing) -> None:
+    """Refuse a repulsive-LJ start with deep overlaps before any work (seed step 1)."""
+    if not isinstance(packing.potential, RepulsiveLJ):
+        return
+    _, _, _, r, sigma = overlapping_pairs(packing)
+    if len(r) and (r / sigma).min() < RLJ_MIN_START_RATIO:
+        raise ValueError(f"repulsive LJ from a start with overlap r/sigma = {(r / sigma).min():.3f} < "
+                         f"{RLJ_MIN_START_RATIO}: forces diverge and LAMMPS loses atoms. Relax the start "
+                         "first (jamflow.protocols.compression.remove_overlaps) or let jam() make the start")
 
 
 class PhiStepper:
