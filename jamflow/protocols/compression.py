@@ -24,8 +24,8 @@ from ..potentials import Potential, RepulsiveLJ, Spring, parse_potential
 from ..sizes import parse_sizes
 
 DEFAULT_PHI0 = {2: 0.80, 3: 0.55}
-NEWTON_FINAL_FACTOR = 3.0
-LOOSE_TRUST = 100.0  # a loosely minimised state decides its side only if V > 100 V_tol  # jump straight into the window only from within 3x its predicted distance
+NEWTON_FINAL_FACTOR = 3.0  # intermediate jumps stop at >= 3x the window's predicted distance from phi_J
+LOOSE_TRUST = 10.0  # a loosely minimised state decides its side only if V > 10 V_tol
 HISTORY_COLUMNS = ("phi", "energy_per_particle", "pressure", "dphi", "iterations", "max_force", "converged")
 
 
@@ -249,16 +249,16 @@ class PhiStepper:
     volume), i.e. phi_J = phi - alpha V phi^2 / (P v), shrinking phi - phi_J by at most
     ``newton_ratio`` per jump (and to no less than 3x the window's distance before the last
     jump, as the prediction errs by a few % of phi - phi_J) so the packing stays jammed and in the same basin while the
-    prediction sharpens. After a jump that lands below jamming, the next step is the midpoint
-    of the latest below and above states (the seed's halving). The latest states are used,
-    not the extreme ones, because a rearrangement can move phi_J of the current basin
-    outside an older bracket.
+    prediction sharpens. A jump that lands below jamming is followed by the seed's rule with
+    dphi = that jump: compress by half of it, by the same again while still below. (An
+    earlier version bisected between the latest below and above states; the above state
+    can belong to another path's basin, and the bisection then converged onto it without
+    ever reaching the window.)
     """
 
     def __init__(self, settings: CompressionSettings, alpha: float, mean_volume: float):
         self.s, self.alpha, self.mean_volume = settings, alpha, mean_volume
         self.dphi, self.side, self.crossed = settings.dphi0, None, False
-        self.lo, self.hi = -math.inf, math.inf  # latest phi below and above the window
         self.last_step = 0.0
         self.final_approach = False  # True when the next minimisation aims at the window itself
         self.pressure = 0.0  # pressure of the state the next step starts from
@@ -283,28 +283,24 @@ class PhiStepper:
         elif side == "below" and not self.crossed:
             self.dphi = min(self.dphi * self.s.dphi_growth, max(self.s.dphi_max, self.s.dphi0))
         self.side = side
-        if side == "below":
-            self.lo = phi
-        else:
-            self.hi = phi
         target = self._newton(phi, v, pressure) if self.s.newton else None
         if target is None:
+            self.final_approach = self.crossed
             target = phi + self.dphi if side == "below" else phi - self.dphi
         self._check(phi, target)
         self.last_step = abs(target - phi)
         return target
 
     def _newton(self, phi, v, pressure):
-        if self.side == "above" and pressure > 0:
-            width = self.alpha * v * phi**2 / (pressure * self.mean_volume)  # predicted phi - phi_J
-            window = width * (1.5 * self.s.v_tol / v) ** (1.0 / self.alpha)  # predicted phi - phi_J at V = 1.5 V_tol
-            self.final_approach = width <= 2 * NEWTON_FINAL_FACTOR * window
-            stop_at = window if self.final_approach else max(NEWTON_FINAL_FACTOR * window, width / self.s.newton_ratio)
-            return phi - width + stop_at
-        if math.isfinite(self.lo + self.hi):
-            self.final_approach = True
-            return 0.5 * (self.lo + self.hi)
-        return None
+        """Target of a Newton jump from a jammed state, or None where none applies."""
+        if self.side != "above" or pressure <= 0:
+            return None
+        width = self.alpha * v * phi**2 / (pressure * self.mean_volume)  # predicted phi - phi_J
+        window = width * (1.5 * self.s.v_tol / v) ** (1.0 / self.alpha)  # predicted phi - phi_J at V = 1.5 V_tol
+        self.final_approach = width <= 2 * NEWTON_FINAL_FACTOR * window
+        stop_at = window if self.final_approach else max(NEWTON_FINAL_FACTOR * window, width / self.s.newton_ratio)
+        self.dphi = width - stop_at  # a jump that lands below is then halved by the seed rule
+        return phi - self.dphi
 
     def _check(self, phi, target):
         if not 0.0 < target < 1.0:
