@@ -280,7 +280,9 @@ class PhiStepper:
         if self.side is not None and side != self.side:
             self.dphi /= 2.0
             self.crossed = True
-        elif side == "below" and not self.crossed:
+        elif side == "below" and (not self.crossed or self.s.newton):
+            # with Newton jumps a jump can land below with a tiny dphi; growing it again keeps a
+            # creeping, barely unjammed state from being compressed in ~1e-8 steps for hundreds of steps
             self.dphi = min(self.dphi * self.s.dphi_growth, max(self.s.dphi_max, self.s.dphi0))
         self.side = side
         target = self._newton(phi, v, pressure) if self.s.newton else None
