@@ -238,7 +238,8 @@ class PhiStepper:
 
     Seed rule (default): compress by dphi when V < V_tol, decompress when V > 2 V_tol, halve
     dphi when the side changes. Options (``CompressionSettings``): ``dphi_growth`` > 1 grows
-    dphi (up to ``dphi_max``) while the packing is still below jamming and has never crossed;
+    dphi (up to ``dphi_max``) after every step that stays below jamming, before the first
+    crossing (and, with ``newton``, after it too);
     ``approach_force_rtol`` loosens the force tolerance of every minimisation that is not a
     final approach to that fraction of the pressure (``coarse_force_tol`` before the first
     crossing); a state that lands in the window anyway is re-minimised in place;
@@ -248,9 +249,10 @@ class PhiStepper:
     V ~ (phi - phi_J)^alpha and the virial pressure P = phi^2 dV/dphi / v (v the mean particle
     volume), i.e. phi_J = phi - alpha V phi^2 / (P v), shrinking phi - phi_J by at most
     ``newton_ratio`` per jump (and to no less than 3x the window's distance before the last
-    jump, as the prediction errs by a few % of phi - phi_J) so the packing stays jammed and in the same basin while the
-    prediction sharpens. A jump that lands below jamming is followed by the seed's rule with
-    dphi = that jump: compress by half of it, by the same again while still below. (An
+    jump, as the prediction errs by a few % of phi - phi_J) so the packing stays jammed and
+    in the same basin while the prediction sharpens. A jump that lands below jamming is
+    followed by the seed's rule with dphi = that jump: compress by half of it, then by a
+    growing step while still below. (An
     earlier version bisected between the latest below and above states; the above state
     can belong to another path's basin, and the bisection then converged onto it without
     ever reaching the window.)
