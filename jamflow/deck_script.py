@@ -74,6 +74,7 @@ if "${dim} != 2 && ${dim} != 3" then "variable jf_bad string 'dim must be 2 or 3
 if "${minimizer} != fire && ${minimizer} != cg && ${minimizer} != md" then "variable jf_bad string 'minimizer must be fire, cg or md'" "jump SELF jf_fail"
 if "$(v_vtol <= 0 || v_dphi0 <= 0 || v_dphi0 >= 0.1)" then "variable jf_bad string 'need vtol > 0 and 0 < dphi0 < 0.1'" "jump SELF jf_fail"
 if "$(v_d1 <= 0 || v_d2 < v_d1)" then "variable jf_bad string 'need 0 < d1 <= d2'" "jump SELF jf_fail"
+if "$(v_vmin > v_vtol)" then "variable jf_bad string 'vmin = ${vmin} is above vtol = ${vtol}: every state in the window would be stopped as unjammed; set -var vmin ${vtol}'" "jump SELF jf_fail"
 variable jf_md internal 0
 if "${minimizer} == md" then "variable jf_md internal 1"
 if "$(v_jf_md == 1 && v_damping*v_mddt >= 2)" then "variable jf_bad string 'damped MD with damping x dt = $(v_damping*v_mddt) >= 2: the explicit drag -b v diverges (atoms fly off, V reads 0); use damping < 2/dt'" "jump SELF jf_fail"

@@ -89,6 +89,11 @@ def test_unresolvable_vtol_fails_clearly():
         jam(n=16, dim=2, seed=5, settings=settings)
 
 
+def test_vtol_below_vmin_is_refused_by_the_deck(tmp_path):
+    with pytest.raises(DeckFailed, match="vmin = 1e-16 is above vtol"):
+        run_deck(tmp_path, {"N": 16, "vtol": 1e-20}, deck=default_deck_path())
+
+
 def test_unresolvable_vtol_fails_clearly_in_the_deck(tmp_path):
     with pytest.raises(DeckFailed, match="float64 resolution"):
         run_deck(tmp_path, {"N": 16, "seed": 1, "vtol": 1e-34, "vmin": 1e-34}, deck=default_deck_path())
