@@ -72,3 +72,13 @@ def test_resolution_failure_is_reported():
 def test_bad_shortcut_settings_rejected(kwargs):
     with pytest.raises(ValueError):
         CompressionSettings(**kwargs)
+
+
+def test_loose_tolerance_never_comes_from_a_zero_pressure():
+    """approach_force_rtol x P is 0 for a state below jamming (P = 0): the loose tolerance
+    falls back to coarse_force_tol instead of an invalid 0."""
+    stepper = PhiStepper(fast_protocol(), 2.0, VBAR)
+    stepper.crossed, stepper.pressure, stepper.final_approach = True, 0.0, False
+    assert stepper.minimizer().force_tol == stepper.s.coarse_force_tol
+    stepper.pressure = 1e-6
+    assert stepper.minimizer().force_tol == pytest.approx(1e-11)

@@ -272,7 +272,8 @@ class PhiStepper:
         if self.s.coarse_v_min is not None and not self.crossed:
             m = replace(m, v_min=self.s.coarse_v_min)
         if self.s.approach_force_rtol is not None and not self.final_approach:
-            loose = self.s.approach_force_rtol * self.pressure if self.crossed else self.s.coarse_force_tol
+            from_pressure = self.crossed and self.pressure > 0  # a state below jamming has P = 0
+            loose = self.s.approach_force_rtol * self.pressure if from_pressure else self.s.coarse_force_tol
             m = replace(m, force_tol=max(loose, m.force_tol or 0.0))
         return m
 
