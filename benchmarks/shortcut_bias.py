@@ -17,7 +17,6 @@ from __future__ import annotations
 import math
 import statistics
 import sys
-from pathlib import Path
 
 from speed_accuracy import DOCS, command_line, read_rows, save_figure, sweep, use_agg
 

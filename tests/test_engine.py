@@ -3,11 +3,9 @@
 import numpy as np
 import pytest
 
-from jamflow.box import Box
 from jamflow.engine.lammps import LammpsEngine, LammpsError
 from jamflow.engine.pair_styles import uses_harmonic_cut
 from jamflow.engine.reference import energy_forces_pressure
-from jamflow.packing import Packing
 from jamflow.potentials import RepulsiveLJ, Spring
 
 

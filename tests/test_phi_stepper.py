@@ -4,7 +4,6 @@ P follows from the virial relation P = phi^2 dV/dphi / v (v the mean particle vo
 which is what the Newton jumps invert.
 """
 
-import math
 
 import pytest
 
