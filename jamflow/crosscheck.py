@@ -88,7 +88,7 @@ def crosscheck(n: int = 32, dim: int = 2, sizes: str = "bi:1.4:0.5", seed: int =
         where = Path(workdir) if workdir is not None else Path(tmp)
         write_lammps_data(where / "start.data", start)
         deck = run_deck(where, variables, lmp=lmp, ranks=ranks, timeout=timeout)
-    controller = compress(start, settings)
+    controller = compress(start, settings, engine="lammps")  # the deck runs LAMMPS: same engine
     return compare(controller, deck, tolerance)
 
 

@@ -20,6 +20,8 @@ Stopping rules, checked after every ``window`` iterations (LAMMPS runs the windo
    Reported as not converged by force; the protocol records it.
 4. ``linesearch``: CG's line search could not move (LAMMPS stopped early).
 5. ``iteration-cap``: ``max_iterations`` reached (not converged).
+6. ``blown-up``: non-finite energy or force, or V < V_min with a force no state at V < V_min
+   can have (``_force_bound``): the integration diverged (not converged).
 """
 
 from __future__ import annotations
@@ -27,6 +29,8 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import asdict, dataclass
+
+import numpy as np
 
 METHODS = ("fire", "cg", "md")
 
@@ -88,31 +92,46 @@ CONVERGED_REASONS = ("force", "energy-below-vmin")
 
 
 def minimize(engine, settings: MinimizerSettings) -> MinimizeResult:
-    """Minimise the engine's configuration at fixed box; the engine holds the result."""
+    """Minimise the engine's configuration at fixed box; the engine holds the result.
+
+    The engine runs windows of iterations (``engine.minimizer_session``: LAMMPS or the
+    compiled FIRE); the stopping rules are applied here, the same for every engine."""
     start = time.perf_counter()
     n = engine.template.n
-    ftol = settings.resolved_force_tol(engine.box, engine.template.potential.contact_stiffness)
-    _install(engine, settings, ftol)
+    stiffness = engine.template.potential.contact_stiffness
+    ftol = settings.resolved_force_tol(engine.box, stiffness)
+    fmax_at_vmin = _force_bound(engine.template, n * settings.v_min)
     done, energy_prev, fmax_prev = 0, math.inf, math.inf
-    try:
+    with engine.minimizer_session(settings, ftol) as run_window:
         while True:
             steps = min(settings.window, settings.max_iterations - done)
-            before = engine.lmp.extract_global("ntimestep")
-            _run_window(engine, settings, ftol, steps)
-            ran = engine.lmp.extract_global("ntimestep") - before
+            ran, energy_total, fmax = run_window(steps)
             done += ran
-            energy = float(engine.lmp.get_thermo("pe")) / n
-            fmax = float(engine.lmp.get_thermo("fmax"))
-            reason = _stop_reason(settings, ftol, energy, fmax, energy_prev, fmax_prev, ran, steps, done)
+            energy = energy_total / n
+            reason = _stop_reason(settings, ftol, energy, fmax, energy_prev, fmax_prev, ran, steps, done,
+                                  fmax_at_vmin)
             if reason:
                 return MinimizeResult(reason in CONVERGED_REASONS, reason, done, energy, fmax,
                                       time.perf_counter() - start)
             energy_prev, fmax_prev = energy, fmax
-    finally:
-        _uninstall(engine, settings)
 
 
-def _stop_reason(s, ftol, energy, fmax, energy_prev, fmax_prev, ran, steps, done):
+def _force_bound(packing, energy: float) -> float:
+    """10x the largest force a particle can feel when the total energy is below ``energy``:
+    the force of one contact of the smallest pair holding all of it, times sqrt(12) contacts
+    (Cauchy-Schwarz) and a margin. A larger force at V < V_min means the state blew up."""
+    from scipy.optimize import brentq
+
+    pot, sigma = packing.potential, float(packing.diameters.min())
+    if pot.energy(np.array([0.5 * sigma]), sigma)[0] <= energy:
+        return math.inf
+    r = brentq(lambda x: pot.energy(np.array([x]), sigma)[0] - energy, 0.5 * sigma, sigma, xtol=1e-15 * sigma)
+    return 10.0 * abs(pot.dv_dr(np.array([r]), sigma)[0])
+
+
+def _stop_reason(s, ftol, energy, fmax, energy_prev, fmax_prev, ran, steps, done, fmax_at_vmin):
+    if not (math.isfinite(energy) and math.isfinite(fmax)) or (energy < s.v_min and fmax > fmax_at_vmin):
+        return "blown-up"
     if fmax < ftol:
         return "force"
     if energy < s.v_min:
@@ -124,34 +143,3 @@ def _stop_reason(s, ftol, energy, fmax, energy_prev, fmax_prev, ran, steps, done
     if done >= s.max_iterations:
         return "iteration-cap"
     return None
-
-
-def _install(engine, s: MinimizerSettings, ftol: float) -> None:
-    engine.run_commands([
-        f"timestep {(s.md_timestep if s.method == 'md' else s.timestep):.17g}",
-        "variable jf_epp equal pe/atoms",
-        f"fix jf_halt all halt 1 v_jf_epp < {s.v_min:.17g} error continue",
-    ])
-    if s.method == "fire":
-        engine.run_commands(["min_style fire", "min_modify norm max"])
-    elif s.method == "cg":
-        engine.run_commands(["min_style cg", "min_modify norm max line forcezero"])
-    else:
-        engine.run_commands(["velocity all set 0.0 0.0 0.0", "fix jf_nve all nve",
-                             f"fix jf_visc all viscous {s.damping:.17g}"])
-
-
-def _run_window(engine, s: MinimizerSettings, ftol: float, steps: int) -> None:
-    if s.method == "md":
-        engine.command(f"run {steps}")
-    else:
-        engine.command(f"minimize 0.0 {ftol:.17g} {steps} {10 * steps}")
-
-
-def _uninstall(engine, s: MinimizerSettings) -> None:
-    if engine.lmp is None:
-        return
-    fixes = ["jf_halt"] + (["jf_nve", "jf_visc"] if s.method == "md" else [])
-    engine.run_commands([f"unfix {f}" for f in fixes])
-    if s.method == "md":
-        engine.command("velocity all set 0.0 0.0 0.0")

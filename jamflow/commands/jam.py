@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 import time
 
+from ..engine.select import ENGINES, engine_name
 from ..io import check_writable, save_packing
 from ..minimize import METHODS, MinimizerSettings
 from ..protocols.compression import DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, initial_packing, jam
@@ -23,6 +24,8 @@ def add_arguments(p) -> None:
                         f"growing increments and Newton jumps (docs/speed.md). Default {DEFAULT_PROTOCOL}; "
                         "seed with --emit-deck (decks run the seed protocol)")
     p.add_argument("--minimizer", choices=METHODS, default="fire", help="energy minimiser")
+    p.add_argument("--engine", choices=ENGINES, default="auto",
+                   help="auto: compiled FIRE for springs in orthogonal boxes, else LAMMPS (docs/speed.md)")
     p.add_argument("--phi0", type=float, default=None, help="initial packing fraction (default 0.80 in 2D, 0.55 in 3D)")
     p.add_argument("--dphi0", type=float, default=1e-4, help="initial packing-fraction increment")
     p.add_argument("--vtol", type=float, default=1e-16, help="energy window V_tol < V < 2 V_tol (per particle)")
@@ -49,13 +52,14 @@ def run(args) -> int:
     settings = settings_from_args(args)
     check_writable(args.out)
     start = initial_packing(args.n, args.dim, args.sizes, args.potential, args.seed, settings.start_phi(args.dim))
+    engine_name(start, args.minimizer, args.engine)  # refuse --engine numba where it cannot run, before work
     if args.emit_deck:
         return emit(args, start, settings)
     t0 = time.perf_counter()
     with CompressionProgress(disable=args.quiet) as progress:
-        result = jam(start=start, settings=settings, observers=[progress])
+        result = jam(start=start, settings=settings, observers=[progress], engine=args.engine)
     save_packing(args.out, result.packing, energy_per_particle=result.energy_per_particle,
-                 pressure_tensor=result.pressure_tensor, protocol=settings.as_dict(),
+                 pressure_tensor=result.pressure_tensor, protocol={**settings.as_dict(), "engine": result.engine},
                  history=result.history, lammps_version=result.lammps_version)
     print(f"{result.summary()}  -> {args.out} ({time.perf_counter() - t0:.2f} s)")
     return 0

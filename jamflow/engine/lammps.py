@@ -12,6 +12,7 @@ Atoms have ids 1..N in packing order; everything extracted is returned in that o
 from __future__ import annotations
 
 import tempfile
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -61,6 +62,8 @@ class LammpsEngine:
     Parameters: ``skin`` neighbour-list skin (diameters); ``comm`` an mpi4py
     communicator to run on several ranks; ``args`` extra LAMMPS command-line args.
     """
+
+    name = "lammps"
 
     def __init__(self, packing: Packing, *, skin: float = 0.3, comm=None, args=()):
         self.template = packing
@@ -128,6 +131,15 @@ class LammpsEngine:
         order = self._order()
         return np.array(x[: len(order)][order, : self.template.dim])
 
+    def set_positions(self, positions: np.ndarray) -> None:
+        """Move the atoms (packing order); forces are stale until ``evaluate``. Serial only:
+        under MPI each rank holds only its own atoms."""
+        x = self.lmp.numpy.extract_atom("x")
+        order = self._order()
+        if len(order) != self.template.n:
+            raise RuntimeError("set_positions needs every atom on this rank (run serially)")
+        x[order, : self.template.dim] = positions
+
     def evaluate(self) -> State:
         """Energy, forces and virial pressure tensor at the current positions (run 0)."""
         self.command("run 0")
@@ -172,3 +184,37 @@ class LammpsEngine:
         from ..minimize import MinimizerSettings, minimize
 
         return minimize(self, settings or MinimizerSettings())
+
+    @contextmanager
+    def minimizer_session(self, settings, ftol: float):
+        """Install the minimiser (FIRE 2.0 ``norm max``, CG ``line forcezero``, or ``fix nve``
+        + ``fix viscous``) and ``fix halt`` at V < V_min; yield ``window(steps) ->
+        (iterations, total energy, max force component)``, one LAMMPS command per window."""
+        s, lmp = settings, self.lmp
+        md = s.method == "md"
+        self.run_commands([
+            f"timestep {(s.md_timestep if md else s.timestep):.17g}",
+            "variable jf_epp equal pe/atoms",
+            f"fix jf_halt all halt 1 v_jf_epp < {s.v_min:.17g} error continue",
+        ])
+        if s.method == "fire":
+            self.run_commands(["min_style fire", "min_modify norm max"])
+        elif s.method == "cg":
+            self.run_commands(["min_style cg", "min_modify norm max line forcezero"])
+        else:
+            self.run_commands(["velocity all set 0.0 0.0 0.0", "fix jf_nve all nve",
+                               f"fix jf_visc all viscous {s.damping:.17g}"])
+
+        def window(steps: int):
+            before = lmp.extract_global("ntimestep")
+            self.command(f"run {steps}" if md else f"minimize 0.0 {ftol:.17g} {steps} {10 * steps}")
+            return (lmp.extract_global("ntimestep") - before, float(lmp.get_thermo("pe")),
+                    float(lmp.get_thermo("fmax")))
+
+        try:
+            yield window
+        finally:
+            if self.lmp is not None:
+                self.run_commands([f"unfix {f}" for f in ["jf_halt"] + (["jf_nve", "jf_visc"] if md else [])])
+                if md:
+                    self.command("velocity all set 0.0 0.0 0.0")

@@ -17,6 +17,7 @@ from dataclasses import asdict, dataclass, field, replace
 import numpy as np
 
 from ..engine.lammps import LammpsEngine
+from ..engine.select import check_engine, open_engine
 from ..minimize import MinimizerSettings, MinimizeResult
 from ..pairs import overlapping_pairs
 from ..packing import DENSEST_PHI, Packing, particle_volumes, random_packing
@@ -116,6 +117,7 @@ class JamResult:
     settings: CompressionSettings
     seconds: float
     lammps_version: int
+    engine: str = "lammps"  # which engine minimised: "lammps" or "numba"
 
     @property
     def pressure(self) -> float:
@@ -132,7 +134,7 @@ class JamResult:
     def summary(self) -> str:
         return (f"phi_J = {self.phi_j:.10f}  V = {self.energy_per_particle:.3e}  "
                 f"P = {self.pressure:.3e}  max|F| = {self.max_force:.1e}  "
-                f"{self.minimizations} minimisations, {self.iterations} iterations, {self.seconds:.2f} s")
+                f"{self.minimizations} minimisations, {self.iterations} iterations ({self.engine}), {self.seconds:.2f} s")
 
 
 class JammingFailed(RuntimeError):
@@ -141,18 +143,20 @@ class JammingFailed(RuntimeError):
 
 def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | Potential = "spring",
         seed: int = 0, settings: CompressionSettings | None = None, *, start: Packing | None = None,
-        observers=(), engine_options: dict | None = None) -> JamResult:
+        observers=(), engine: str = "auto", engine_options: dict | None = None) -> JamResult:
     """Jam N particles by isotropic compression; ``start`` overrides the random start.
 
     ``observers`` are callables ``f(step: dict)`` called after every minimisation
-    (progress bars, writers).
+    (progress bars, writers). ``engine``: "auto" (compiled FIRE where exact for the scene,
+    else LAMMPS), "lammps" or "numba" (``jamflow.engine.select``).
     """
     settings = settings or PROTOCOLS[DEFAULT_PROTOCOL]()
+    check_engine(engine)
     if start is None:
         start = initial_packing(n, dim, sizes, potential, seed, settings.start_phi(dim))
         if isinstance(start.potential, RepulsiveLJ):
             start = remove_overlaps(start, settings.minimizer)
-    return compress(start, settings, observers=observers, engine_options=engine_options)
+    return compress(start, settings, observers=observers, engine=engine, engine_options=engine_options)
 
 
 def initial_packing(n, dim, sizes, potential, seed, phi0) -> Packing:
@@ -187,7 +191,8 @@ def remove_overlaps(packing: Packing, minimizer: MinimizerSettings) -> Packing:
     return replace(relaxed, potential=packing.potential)
 
 
-def compress(packing: Packing, settings: CompressionSettings, *, observers=(), engine_options=None) -> JamResult:
+def compress(packing: Packing, settings: CompressionSettings, *, observers=(), engine: str = "auto",
+             engine_options=None) -> JamResult:
     """Run the compression/decompression bisection from ``packing`` (seed steps 2-4)."""
     from ..engine.lammps_lib import lammps_version
 
@@ -197,12 +202,12 @@ def compress(packing: Packing, settings: CompressionSettings, *, observers=(), e
     stepper = PhiStepper(settings, _newton_exponent(packing.potential), float(np.mean(particle_volumes(packing.diameters, packing.dim))))
     rows = {c: [] for c in HISTORY_COLUMNS}
     phi = base_phi
-    with LammpsEngine(packing, **(engine_options or {})) as engine:
+    with open_engine(packing, settings.minimizer.method, engine, **(engine_options or {})) as sim:
         for step in range(settings.max_steps):
-            engine.set_box(base_box.scaled((base_phi / phi) ** (1.0 / packing.dim)))
+            sim.set_box(base_box.scaled((base_phi / phi) ** (1.0 / packing.dim)))
             minimizer = stepper.minimizer()
-            result = engine.minimize(minimizer)
-            pressure = engine.state().pressure
+            result = sim.minimize(minimizer)
+            pressure = sim.state().pressure
             _record(rows, phi, result, pressure, stepper.last_step)
             for observe in observers:
                 observe({"step": step, "phi": phi, "dphi": stepper.last_step, "result": result})
@@ -212,7 +217,7 @@ def compress(packing: Packing, settings: CompressionSettings, *, observers=(), e
                 stepper.final_approach, stepper.last_step = True, 0.0  # too close to the window to trust
                 continue  # a loose minimum: polish it in place with the full tolerance
             if settings.v_tol < v < 2 * settings.v_tol and result.reason != "energy-below-vmin":
-                return _finish(engine, phi, result, rows, settings, start_time, lammps_version())
+                return _finish(sim, phi, result, rows, settings, start_time, lammps_version())
             phi = stepper.next_phi(phi, v, pressure, unjammed=result.reason == "energy-below-vmin")
     raise JammingFailed(f"no packing in the window {settings.v_tol:g} < V < {2 * settings.v_tol:g} after "
                         f"{settings.max_steps} minimisations (last phi = {phi}); raise max_steps or check "
@@ -340,4 +345,4 @@ def _finish(engine, phi, result, rows, settings, start_time, version) -> JamResu
     history = {k: np.array(v) for k, v in rows.items()}
     history["reason"] = history["reason"].astype("S")
     return JamResult(packing, phi, result.energy_per_particle, state.pressure_tensor, result.max_force,
-                     history, settings, time.perf_counter() - start_time, version)
+                     history, settings, time.perf_counter() - start_time, version, engine.name)
