@@ -120,25 +120,20 @@ class LammpsEngine:
             self.command("fix jf_2d all enforce2d")
 
     # state ---------------------------------------------------------------------------------
-    def _order(self) -> np.ndarray:
-        nlocal = self.lmp.extract_setting("nlocal")
-        ids = np.array(self.lmp.numpy.extract_atom("id")[:nlocal])
-        return np.argsort(ids)
+    def _gather(self, name: str) -> np.ndarray:
+        """Per-atom vector ``name`` of every atom in id (= packing) order, on every MPI rank."""
+        raw = self.lmp.gather_atoms(name, 1, 3)
+        return np.ctypeslib.as_array(raw).reshape(-1, 3)[:, : self.template.dim].copy()
 
     def positions(self) -> np.ndarray:
         """Current positions (packing order), unwrapped into the cell."""
-        x = self.lmp.numpy.extract_atom("x")
-        order = self._order()
-        return np.array(x[: len(order)][order, : self.template.dim])
+        return self._gather("x")
 
     def set_positions(self, positions: np.ndarray) -> None:
-        """Move the atoms (packing order); forces are stale until ``evaluate``. Serial only:
-        under MPI each rank holds only its own atoms."""
-        x = self.lmp.numpy.extract_atom("x")
-        order = self._order()
-        if len(order) != self.template.n:
-            raise RuntimeError("set_positions needs every atom on this rank (run serially)")
-        x[order, : self.template.dim] = positions
+        """Move the atoms (packing order); forces are stale until ``evaluate``."""
+        full = np.zeros((self.template.n, 3))
+        full[:, : self.template.dim] = positions
+        self.lmp.scatter_atoms("x", 1, 3, np.ctypeslib.as_ctypes(full.ravel()))
 
     def evaluate(self) -> State:
         """Energy, forces and virial pressure tensor at the current positions (run 0)."""
@@ -149,9 +144,7 @@ class LammpsEngine:
         """State as last computed by LAMMPS (after run/minimize/run 0)."""
         lmp, dim = self.lmp, self.template.dim
         energy = float(lmp.get_thermo("pe"))
-        f = lmp.numpy.extract_atom("f")
-        order = self._order()
-        forces = np.array(f[: len(order)][order, :dim])
+        forces = self._gather("f")
         p = lmp.numpy.extract_compute("jf_press", LMP_STYLE_GLOBAL, LMP_TYPE_VECTOR)
         full = np.array([[p[0], p[3], p[4]], [p[3], p[1], p[5]], [p[4], p[5], p[2]]])
         return State(energy, forces, full[:dim, :dim])
