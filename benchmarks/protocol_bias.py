@@ -32,7 +32,7 @@ VARIANTS = {
 def run(n, dim, sizes, variant, seed):
     res = jam(n=n, dim=dim, sizes=sizes, seed=seed, settings=CompressionSettings(**VARIANTS[variant]))
     return [variant, n, seed, repr(res.phi_j), res.energy_per_particle, res.max_force, res.minimizations,
-            res.iterations, f"{res.seconds:.3f}"]
+            res.iterations, f"{res.seconds:.3f}", res.engine]
 
 
 def summary(rows):
@@ -84,7 +84,8 @@ def main():
     with out.open("a", newline="") as fh:
         w = csv.writer(fh)
         if not done:
-            w.writerow(["variant", "n", "seed", "phi_j", "v", "max_force", "minimizations", "iterations", "seconds"])
+            w.writerow(["variant", "n", "seed", "phi_j", "v", "max_force", "minimizations", "iterations", "seconds",
+                        "engine"])
         for seed in range(args.seeds):
             for variant in args.variants:
                 if (variant, str(seed)) not in done:

