@@ -46,19 +46,6 @@ def test_positions_round_trip_in_packing_order(config):
     assert np.max(np.abs(diff)) < 1e-12
 
 
-def test_set_box_is_affine_and_exact(config):
-    p = config(40, 3, 0.3, seed=4)
-    new = p.box.scaled(0.9)
-    with LammpsEngine(p) as eng:
-        eng.set_box(new)
-        x = eng.positions()
-        assert eng.box == new
-    frac_before = p.box.to_fractional(p.positions)
-    frac_after = new.to_fractional(x)
-    d = frac_after - frac_before
-    assert np.max(np.abs(d - np.round(d))) < 1e-13
-
-
 def test_lammps_error_names_the_command(config):
     p = config(10, 2, 0.3, seed=5)
     with LammpsEngine(p) as eng, pytest.raises(LammpsError, match="bogus_command"):

@@ -83,12 +83,14 @@ def test_pair_list_rebuilds_when_particles_travel(config):
     assert np.max(np.abs(state.forces - ref.forces)) <= 1e-13 + 1e-10 * np.max(np.abs(ref.forces))  # round-off
 
 
-def test_set_box_is_affine(config):
+@pytest.mark.parametrize("engine", [LammpsEngine, NumbaEngine], ids=lambda e: e.name)
+def test_set_box_is_affine_and_exact(config, engine):
     p = config(40, 3, 0.3, seed=4)
     new = p.box.scaled(0.9)
-    with NumbaEngine(p) as eng:
+    with engine(p) as eng:
         eng.set_box(new)
         x = eng.positions()
+        assert eng.box == new
     d = new.to_fractional(x) - p.box.to_fractional(p.positions)
     assert np.max(np.abs(d - np.round(d))) < 1e-13
 
