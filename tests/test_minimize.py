@@ -40,3 +40,28 @@ def test_iteration_cap_is_reported_as_not_converged(config):
 def test_unknown_method_rejected():
     with pytest.raises(ValueError, match="unknown minimizer"):
         MinimizerSettings(method="bfgs")
+
+
+def test_force_bound_closed_form_for_the_linear_spring(config):
+    from jamflow.minimize import _force_bound
+
+    # all of E in one contact of the smallest pair: delta = sqrt(2 E), |f| = delta / sigma
+    p = config(10, 2, 0.5, seed=1, diameters=np.full(10, 1.0))
+    assert _force_bound(p, 1e-12) == pytest.approx(10 * np.sqrt(2e-12), rel=1e-9)
+
+
+@pytest.mark.parametrize("energy,fmax", [(float("nan"), 1e-3), (1e-20, float("inf")), (0.0, 1e3)])
+def test_blown_up_states_are_not_reported_as_unjammed(energy, fmax):
+    """A diverged integration can report V = 0 with huge forces; it must not pass as V < V_min."""
+    from jamflow.minimize import _stop_reason
+
+    s = MinimizerSettings()
+    reason = _stop_reason(s, 1e-14, energy, fmax, 1.0, 1.0, 10, 10, 10, fmax_at_vmin=1e-6)
+    assert reason == "blown-up"
+
+
+def test_a_genuinely_unjammed_state_is_not_blown_up():
+    from jamflow.minimize import _stop_reason
+
+    s = MinimizerSettings()
+    assert _stop_reason(s, 1e-14, 1e-20, 1e-9, 1.0, 1.0, 10, 10, 10, fmax_at_vmin=1e-6) == "energy-below-vmin"

@@ -92,7 +92,8 @@ class NumbaEngine:
 
     # state ---------------------------------------------------------------------------------------
     def positions(self) -> np.ndarray:
-        return self._x.copy()
+        """Current positions (packing order), wrapped into the cell."""
+        return self.box.wrap(self._x)
 
     def set_positions(self, positions: np.ndarray) -> None:
         """Move the particles (packing order); forces are stale until ``evaluate``."""
