@@ -207,6 +207,10 @@ def compress(packing: Packing, settings: CompressionSettings, *, observers=(), e
             sim.set_box(base_box.scaled((base_phi / phi) ** (1.0 / packing.dim)))
             minimizer = stepper.minimizer()
             result = sim.minimize(minimizer)
+            if result.reason == "blown-up":
+                raise JammingFailed(f"the minimisation at phi = {phi:.10f} diverged (V = {result.energy_per_particle:.3g}, "
+                                    f"max force {result.max_force:.3g}): lower the timestep, or for damped MD use "
+                                    "damping x md_timestep well below 2")
             pressure = sim.state().pressure
             _record(rows, phi, result, pressure, stepper.last_step)
             for observe in observers:
