@@ -97,3 +97,20 @@ def test_fast_protocol_reaches_the_window_with_force_balance(dim, sizes):
     res = jam(n=64, dim=dim, sizes=sizes, seed=8, settings=fast_protocol())
     assert_jammed(res)
     assert res.minimizations < 150
+
+
+def test_state_in_window_cut_off_by_the_cap_is_minimised_again():
+    """A state in the window whose minimisation hit the iteration cap is not yet a minimum:
+    it is minimised again in place (dphi = 0 rows), at most WINDOW_RESUMES times, then
+    accepted with a warning."""
+    from jamflow.protocols.compression import WINDOW_RESUMES
+
+    settings = fast_protocol(minimizer=MinimizerSettings(max_iterations=3000, window=100))
+    with pytest.warns(UserWarning, match="iteration-cap"):
+        r = jam(n=64, seed=2, settings=settings)
+    h, reasons = r.history, [x.decode() for x in r.history["reason"]]
+    capped_in_window = [i for i in range(len(reasons) - 1) if reasons[i] == "iteration-cap"
+                        and 1e-16 < h["energy_per_particle"][i] < 2e-16]
+    assert len(capped_in_window) == WINDOW_RESUMES
+    for i in capped_in_window:
+        assert h["dphi"][i + 1] == 0.0 and h["phi"][i + 1] == h["phi"][i]

@@ -27,6 +27,7 @@ from ..sizes import parse_sizes
 DEFAULT_PHI0 = {2: 0.80, 3: 0.55}
 NEWTON_FINAL_FACTOR = 3.0  # intermediate jumps stop at >= 3x the window's predicted distance from phi_J
 LOOSE_TRUST = 10.0  # a loosely minimised state decides its side only if V > 10 V_tol
+WINDOW_RESUMES = 3  # a state in the window cut off by the iteration cap is minimised again (at most 3 times a run)
 HISTORY_COLUMNS = ("phi", "energy_per_particle", "pressure", "dphi", "iterations", "max_force", "converged")
 
 
@@ -201,7 +202,7 @@ def compress(packing: Packing, settings: CompressionSettings, *, observers=(), e
     base_box, base_phi = packing.box, packing.phi
     stepper = PhiStepper(settings, _newton_exponent(packing.potential), float(np.mean(particle_volumes(packing.diameters, packing.dim))))
     rows = {c: [] for c in HISTORY_COLUMNS}
-    phi = base_phi
+    phi, resumes = base_phi, 0
     with open_engine(packing, settings.minimizer.method, engine, **(engine_options or {})) as sim:
         for step in range(settings.max_steps):
             sim.set_box(base_box.scaled((base_phi / phi) ** (1.0 / packing.dim)))
@@ -220,7 +221,14 @@ def compress(packing: Packing, settings: CompressionSettings, *, observers=(), e
             if loose and result.reason != "energy-below-vmin" and v < LOOSE_TRUST * settings.v_tol:
                 stepper.final_approach, stepper.last_step = True, 0.0  # too close to the window to trust
                 continue  # a loose minimum: polish it in place with the full tolerance
-            if settings.v_tol < v < 2 * settings.v_tol and result.reason != "energy-below-vmin":
+            in_window = settings.v_tol < v < 2 * settings.v_tol and result.reason != "energy-below-vmin"
+            if in_window and result.reason == "iteration-cap" and resumes < WINDOW_RESUMES:
+                # not yet a minimum (near onset FIRE can creep off a saddle for 10^5-10^6
+                # iterations, docs/speed.md): keep minimising before the window decides
+                resumes += 1
+                stepper.last_step = 0.0
+                continue
+            if in_window:
                 return _finish(sim, phi, result, rows, settings, start_time, lammps_version())
             phi = stepper.next_phi(phi, v, pressure, unjammed=result.reason == "energy-below-vmin")
     raise JammingFailed(f"no packing in the window {settings.v_tol:g} < V < {2 * settings.v_tol:g} after "
