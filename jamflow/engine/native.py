@@ -15,10 +15,10 @@ from __future__ import annotations
 from contextlib import contextmanager
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from ..box import Box
 from ..packing import Packing
+from ..pairs import candidate_pairs
 from ..potentials import Spring
 from . import fire_numba as kernels
 from .lammps import State
@@ -67,21 +67,16 @@ class NumbaEngine:
 
     # pair list --------------------------------------------------------------------------------
     def _build_pairs(self):
-        """Pairs within sigma_ij + skin (i < j), from a periodic k-d tree."""
-        lengths = self.box.lengths
+        """Pairs within sigma_ij + skin (i < j) and their periodic image offsets."""
         self._x = self.box.wrap(self._x)
-        wrapped = np.where(self._x >= lengths, 0.0, self._x)
         diameters = self.template.diameters
-        tree = cKDTree(wrapped, boxsize=lengths)
-        pairs = tree.query_pairs(float(diameters.max()) + self.skin, output_type="ndarray")
-        i, j = pairs[:, 0], pairs[:, 1]
+        i, j = candidate_pairs(self.packing(), float(diameters.max()) + self.skin)
         sigma = 0.5 * (diameters[i] + diameters[j])
         dr = self.box.minimum_image(self._x[i] - self._x[j])
-        keep = np.flatnonzero(np.einsum("ij,ij->i", dr, dr) < (sigma + self.skin) ** 2)
-        keep = keep[np.lexsort((j[keep], i[keep]))]
-        shift = dr[keep] - (self._x[i[keep]] - self._x[j[keep]])  # image offset of each pair
-        self._pairs = (i[keep].astype(np.int64), j[keep].astype(np.int64), sigma[keep], self._x.copy(),
-                       np.ascontiguousarray(shift))
+        keep = np.einsum("ij,ij->i", dr, dr) < (sigma + self.skin) ** 2
+        i, j, sigma, dr = i[keep], j[keep], sigma[keep], dr[keep]
+        shift = dr - (self._x[i] - self._x[j])  # image offset of each pair
+        self._pairs = (i.astype(np.int64), j.astype(np.int64), sigma, self._x.copy(), np.ascontiguousarray(shift))
 
     def _kernel_args(self):
         if self._pairs is None:
