@@ -152,6 +152,7 @@ variable jf_side internal 0
 variable jf_step internal 0
 variable jf_laststep internal 0
 variable jf_iters internal 0
+variable jf_resumes internal 0
 variable jf_cg internal 0
 if "${minimizer} == cg" then "variable jf_cg internal 1"
 print "# step phi V P dphi iterations max_force reason" append ${jf_logtmp} screen no
@@ -184,13 +185,14 @@ variable jf_done internal $(v_jf_done+v_jf_ran)
 variable jf_e internal $(pe/atoms:%.17g)
 variable jf_fm internal $(fmax:%.17g)
 variable jf_reason string none
+variable jf_capped internal 0
 variable jf_conv internal 0
 variable jf_vminstop internal 0
 if "$(v_jf_fm < v_jf_ftol)" then "variable jf_reason string force" "variable jf_conv internal 1" "jump SELF jf_min_done"
 if "$(v_jf_e < v_vmin)" then "variable jf_reason string energy-below-vmin" "variable jf_conv internal 1" "variable jf_vminstop internal 1" "jump SELF jf_min_done"
 if "$(v_jf_first == 0 && (v_jf_eprev-v_jf_e) < v_delta*v_jf_e && v_jf_fm > 0.5*v_jf_fmprev)" then "variable jf_reason string no-progress" "jump SELF jf_min_done"
 if "$(v_jf_cg == 1 && v_jf_ran < v_jf_nsteps)" then "variable jf_reason string linesearch" "jump SELF jf_min_done"
-if "$(v_jf_done >= v_maxiter)" then "variable jf_reason string iteration-cap" "jump SELF jf_min_done"
+if "$(v_jf_done >= v_maxiter)" then "variable jf_reason string iteration-cap" "variable jf_capped internal 1" "jump SELF jf_min_done"
 variable jf_eprev internal $(v_jf_e:%.17g)
 variable jf_fmprev internal $(v_jf_fm:%.17g)
 variable jf_first internal 0
@@ -201,6 +203,10 @@ if "${minimizer} == md" then "unfix jf_nve" "unfix jf_visc" "velocity all set 0.
 variable jf_iters internal $(v_jf_iters+v_jf_done)
 variable jf_p internal $((c_jf_press[1]+c_jf_press[2]+ternary(v_dim==3,c_jf_press[3],0))/v_dim:%.17g)
 print "$(v_jf_step) $(v_jf_phi:%.17g) $(v_jf_e:%.17g) $(v_jf_p:%.17g) $(v_jf_laststep:%.17g) $(v_jf_done) $(v_jf_fm:%.17g) ${jf_reason}" append ${jf_logtmp} screen no
+
+# ---- a state in the window cut off by the iteration cap is not yet a minimum: minimise it
+# again in place, at most 3 times a run (WINDOW_RESUMES in jamflow/protocols/compression.py) ----
+if "$(v_jf_capped == 1 && v_jf_e > v_vtol && v_jf_e < 2*v_vtol && v_jf_resumes < 3)" then "variable jf_resumes internal $(v_jf_resumes+1)" "variable jf_laststep internal 0" "variable jf_step internal $(v_jf_step+1)" "jump SELF jf_step_loop"
 
 # ---- decide: in the window, compress, or decompress; halve dphi on a crossing ----
 # (a minimisation stopped by V < V_min counts as unjammed, whatever V is)

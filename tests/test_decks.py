@@ -172,3 +172,18 @@ def test_deck_rejects_a_data_file_with_other_diameters(tmp_path):
 def test_missing_lmp_is_a_clear_error(tmp_path):
     with pytest.raises(ValueError, match="not found"):
         run_deck(tmp_path, {}, lmp=tmp_path / "no-such-lmp")
+
+
+def test_window_resume_mirrored_in_the_deck():
+    """With a tiny iteration cap, states in the window are cut off by the cap and minimised
+    again (WINDOW_RESUMES times): deck and controller take the same steps, bit for bit."""
+    from jamflow.protocols.compression import WINDOW_RESUMES
+
+    settings = CompressionSettings(minimizer=MinimizerSettings(max_iterations=300, window=100))
+    res = crosscheck(32, 2, seed=3, settings=settings)
+    reasons = [r.decode() if isinstance(r, bytes) else r for r in res.controller.history["reason"]]
+    h = res.controller.history
+    resumed = [i for i in range(1, len(reasons)) if h["dphi"][i] == 0.0 and reasons[i - 1] == "iteration-cap"]
+    assert len(resumed) == WINDOW_RESUMES
+    assert res.first_difference is None and res.agree
+    assert f"v_jf_resumes < {WINDOW_RESUMES}" in deck_text()
