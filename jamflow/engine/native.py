@@ -13,6 +13,7 @@ tilted boxes, CG, damped MD, MPI) runs in LAMMPS.
 from __future__ import annotations
 
 from contextlib import contextmanager
+from typing import NamedTuple
 
 import numpy as np
 
@@ -35,6 +36,16 @@ def unsupported_reason(packing: Packing, method: str = "fire", comm=None) -> str
     if comm is not None:
         return "an MPI communicator (the compiled engine is serial)"
     return None
+
+
+class PairList(NamedTuple):
+    """Pairs i < j within sigma_ij + skin, with the positions they were built at."""
+
+    i: np.ndarray
+    j: np.ndarray
+    sigma: np.ndarray
+    built_at: np.ndarray  # (N, d) positions at the build: a move > skin/2 asks for a rebuild
+    shift: np.ndarray  # (P, d) periodic image offset of each pair
 
 
 class NumbaEngine:
@@ -76,14 +87,14 @@ class NumbaEngine:
         keep = np.einsum("ij,ij->i", dr, dr) < (sigma + self.skin) ** 2
         i, j, sigma, dr = i[keep], j[keep], sigma[keep], dr[keep]
         shift = dr - (self._x[i] - self._x[j])  # image offset of each pair
-        self._pairs = (i.astype(np.int64), j.astype(np.int64), sigma, self._x.copy(), np.ascontiguousarray(shift))
+        self._pairs = PairList(i.astype(np.int64), j.astype(np.int64), sigma, self._x.copy(),
+                               np.ascontiguousarray(shift))
 
     def _kernel_args(self):
         if self._pairs is None:
             self._build_pairs()
-        i, j, sigma, _, shift = self._pairs
-        pot = self.template.potential
-        return shift, i, j, sigma, float(pot.alpha), float(pot.epsilon)
+        p, pot = self._pairs, self.template.potential
+        return p.shift, p.i, p.j, p.sigma, float(pot.alpha), float(pot.epsilon)
 
     # state ---------------------------------------------------------------------------------------
     def positions(self) -> np.ndarray:
@@ -108,8 +119,8 @@ class NumbaEngine:
 
     def _pressure_tensor(self) -> np.ndarray:
         """Virial P_ab = sum_pairs r_a f_b / volume over overlapping pairs (eps/diameter^d)."""
-        i, j, sigma, _, shift = self._pairs
-        dr = self._x[i] - self._x[j] + shift
+        i, j, sigma = self._pairs.i, self._pairs.j, self._pairs.sigma
+        dr = self._x[i] - self._x[j] + self._pairs.shift
         r = np.linalg.norm(dr, axis=1)
         inside = r < sigma
         dr, r, sigma = dr[inside], r[inside], sigma[inside]
@@ -153,7 +164,8 @@ class NumbaEngine:
             while True:
                 shift, i, j, sigma, alpha, eps = self._kernel_args()
                 ran, reason, energy = kernels.fire(self._x, v, self._f, state, shift, i, j, sigma, alpha, eps,
-                                                   self._pairs[3], (self.skin / 2) ** 2, steps - done, ftol, halt)
+                                                   self._pairs.built_at, (self.skin / 2) ** 2, steps - done, ftol,
+                                                   halt)
                 done += ran
                 self._energy = energy
                 if reason != kernels.REBUILD or done >= steps:
