@@ -1,4 +1,4 @@
-"""LAMMPS FIRE against the compiled FIRE (NumbaEngine), side by side in one run.
+"""LAMMPS FIRE against the compiled FIRE (CompiledEngine), side by side in one run.
 
 1. Cost per FIRE iteration: the same overcompressed 2D bidisperse state (phi = 0.85, relaxed
    first so that the pair list is stable, as near jamming), ``--iterations`` FIRE iterations
@@ -23,16 +23,16 @@ from pathlib import Path
 
 from jamflow import jam
 from jamflow.engine.lammps import LammpsEngine
-from jamflow.engine.native import NumbaEngine
+from jamflow.engine.compiled.engine import CompiledEngine
 from jamflow.minimize import MinimizerSettings
 from jamflow.protocols.compression import initial_packing
 
-ENGINES = {"lammps": LammpsEngine, "numba": NumbaEngine}
+ENGINES = {"lammps": LammpsEngine, "numba": CompiledEngine}
 
 
 def near_jamming_state(n: int, seed: int = 0):
     start = initial_packing(n, 2, "bi:1.4:0.5", "spring", seed, 0.85)
-    with NumbaEngine(start) as eng:
+    with CompiledEngine(start) as eng:
         eng.minimize(MinimizerSettings(force_tol=1e-9, max_iterations=200_000))
         return eng.packing()
 
@@ -82,7 +82,7 @@ def main():
     ap.add_argument("--jam-seeds", type=int, default=0)
     ap.add_argument("--out", default="docs/engines.csv")
     args = ap.parse_args()
-    microseconds_per_iteration(NumbaEngine, near_jamming_state(64), 10)  # compile / load the kernels
+    microseconds_per_iteration(CompiledEngine, near_jamming_state(64), 10)  # compile / load the kernels
     rows = per_iteration_rows(args.sizes, args.iterations, args.reps)
     if args.jam_seeds:
         rows += jam_rows(args.jam_n, args.jam_seeds)

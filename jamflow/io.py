@@ -1,17 +1,34 @@
 """Packing files: a versioned HDF5 schema, LAMMPS data files, MDAnalysis Universes.
 
-HDF5 schema ``jamflow.packing`` version 1 (all lengths in small diameters, energies in
+HDF5 schema ``jamflow.packing`` version 2 (all lengths in small diameters, energies in
 epsilon, pressures in epsilon / diameter^d)::
 
     /                       attrs: schema, schema_version, jamflow_version, lammps_version,
                                    dim, n, phi, energy_per_particle, pressure, potential,
-                                   alpha, epsilon, seed, sizes, created (ISO time)
+                                   alpha, epsilon, seed, sizes, created (ISO time),
+                                   shape (JSON: kind and parameters, e.g.
+                                   {"kind": "ellipsoid", "alpha": 1.5, "contact": "exact"}),
+                                   shape_spec (text, e.g. "ellipse:1.5"), gamma (shear strain
+                                   xy / ly of the box, accumulated)
     /positions  (N, d)      float64, Cartesian, wrapped into the cell
-    /diameters  (N,)        float64
+    /diameters  (N,)        float64, each particle's size scale (jamflow.packing)
     /box        (d, d)      float64, upper-triangular, columns = cell vectors (LAMMPS tilt)
     /pressure_tensor (d, d) float64, virial part (athermal), if known
+    /orientations (N,) | (N, 4)   2D angle (radians) | 3D unit quaternion (w, x, y, z);
+                                  every shape that is not round
+    /directors  (N, d)      unit vector of each particle's body x-axis: the long axis of
+                            ellipses, prolate spheroids and linear bodies, the symmetry
+                            axis of oblate spheroids
+    /axes       (N, 2)      ellipses/spheroids: full lengths along and across the director
+                            (major, minor for ellipses and prolate spheroids)
+    /sites (N, S, d), /site_diameters (N, S)   rigid bodies: world positions and diameters
+                                               of each body's sites
     /protocol               attrs: every protocol and minimiser parameter
     /history/<column> (M,)  one dataset per recorded column (phi, energy, pressure, ...)
+
+Version 1 files (disks and spheres, no shape attributes) still load. The derived datasets
+(directors, axes, sites, site_diameters) are written for other tools; loading rebuilds the
+packing from positions, diameters, orientations and the shape attribute.
 
 Every file is written to a temporary sibling and renamed onto its name, so an interrupted
 run never leaves a half-written file.
@@ -21,6 +38,7 @@ from __future__ import annotations
 
 import contextlib
 import datetime
+import json
 import math
 import os
 import tempfile
@@ -32,10 +50,11 @@ import numpy as np
 from . import __version__
 from .box import Box
 from .packing import Packing
-from .potentials import RepulsiveLJ, Spring
+from .potentials import potential_from_attrs
+from .shapes.shape import shape_from_attrs
 
 SCHEMA = "jamflow.packing"
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
 
 
 @contextlib.contextmanager
@@ -85,6 +104,8 @@ def save_packing(path, packing: Packing, *, energy_per_particle=None, pressure_t
         alpha=float(getattr(pot, "alpha", math.nan)), epsilon=float(pot.epsilon),
         seed=int(packing.metadata.get("seed", -1)), sizes=str(packing.metadata.get("sizes", "")),
         created=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        shape=json.dumps(packing.shape.attrs()), shape_spec=packing.shape.spec(packing.dim),
+        gamma=packing.box.shear_strain,
     )
     ptensor = None if pressure_tensor is None else np.asarray(pressure_tensor, float)
     attrs["pressure"] = math.nan if ptensor is None else float(np.trace(ptensor) / packing.dim)
@@ -93,6 +114,8 @@ def save_packing(path, packing: Packing, *, energy_per_particle=None, pressure_t
         f["positions"] = packing.box.wrap(packing.positions)
         f["diameters"] = packing.diameters
         f["box"] = packing.box.h
+        for name, data in shape_datasets(packing.with_positions(packing.box.wrap(packing.positions))).items():
+            f[name] = data
         if ptensor is not None:
             f["pressure_tensor"] = ptensor
         f.create_group("protocol").attrs.update({k: _attr(v) for k, v in (protocol or {}).items()})
@@ -113,10 +136,28 @@ def load_packing(path) -> Packing:
             raise ValueError(f"{path} is not a jamflow packing file (schema {schema!r})")
         if int(f.attrs["schema_version"]) > SCHEMA_VERSION:
             raise ValueError(f"{path} has schema version {f.attrs['schema_version']}, newer than this "
-                             f"jamflow ({SCHEMA_VERSION}); upgrade jamflow")
-        pot = _potential(str(f.attrs["potential"]), float(f.attrs["alpha"]), float(f.attrs["epsilon"]))
+                             f"jamflow reads (up to {SCHEMA_VERSION}); upgrade jamflow")
+        pot = potential_from_attrs(str(f.attrs["potential"]), float(f.attrs["alpha"]), float(f.attrs["epsilon"]))
+        shape = shape_from_attrs(json.loads(_text(f.attrs.get("shape", '{"kind": "sphere"}'))))
+        orientations = f["orientations"][...] if "orientations" in f else None
         meta = {"seed": int(f.attrs["seed"]), "sizes": str(f.attrs["sizes"]), "source": str(path)}
-        return Packing(f["positions"][...], f["diameters"][...], Box(f["box"][...]), pot, meta)
+        return Packing(f["positions"][...], f["diameters"][...], Box(f["box"][...]), pot, meta, shape,
+                       orientations)
+
+
+def shape_datasets(packing: Packing) -> dict:
+    """The orientation and shape datasets of schema v2 that this packing has."""
+    out = {}
+    if packing.orientations is not None:
+        out["orientations"] = packing.orientations
+        out["directors"] = packing.directors
+    kind = packing.shape.kind
+    if kind == "ellipsoid":
+        out["axes"] = packing.shape.axes(packing.diameters)
+    elif kind == "rigid":
+        out["sites"] = packing.shape.world_sites(packing.positions, packing.orientations, packing.diameters)
+        out["site_diameters"] = packing.diameters[:, None] * packing.shape.site_diameters[None, :]
+    return out
 
 
 def read_history(path) -> dict:
@@ -132,26 +173,72 @@ def read_attrs(path) -> dict:
 
 
 def write_lammps_data(path, packing: Packing) -> Path:
-    """LAMMPS data file for ``atom_style sphere`` (id type diameter density x y z);
-    types number the distinct diameters; mass 1 per particle (density = 1/volume)."""
+    """LAMMPS data file of ``packing``; types number the distinct sizes; mass 1 per particle.
+
+    - disks/spheres: ``atom_style sphere`` (id type diameter density x y z);
+    - ellipses/spheroids: ``atom_style ellipsoid`` (id type 1 density x y z) and an
+      ``Ellipsoids`` section (id a b b qw qx qy qz: full lengths, body x along the director);
+    - rigid bodies: ``atom_style hybrid sphere molecular``, one atom per site
+      (id type x y z diameter density molecule), molecule = body; each site carries 1/S of the
+      body's mass.
+    Densities use LAMMPS's 3D volumes (also in 2D), so the masses come out as stated."""
     values, types = packing.species()
     box = packing.box.to_lammps()
-    pos = packing.box.wrap(packing.positions)
-    if packing.dim == 2:
-        pos = np.column_stack([pos, np.zeros(packing.n)])
-    vol = np.pi * packing.diameters**3 / 6.0  # LAMMPS sphere mass = density * 4/3 pi r^3, also in 2D
-    lines = [f"jamflow {__version__} packing, phi = {packing.phi:.17g}", "",
-             f"{packing.n} atoms", f"{len(values)} atom types", "",
-             f"{box['xlo']:.17g} {box['xhi']:.17g} xlo xhi", f"{box['ylo']:.17g} {box['yhi']:.17g} ylo yhi",
-             f"{box['zlo']:.17g} {box['zhi']:.17g} zlo zhi"]
+    pos = _xyz(packing.box.wrap(packing.positions))
+    n, kind = packing.n, packing.shape.kind
+    atoms = n * (packing.shape.n_sites if kind == "rigid" else 1)
+    lines = [f"jamflow {__version__} packing, phi = {packing.phi:.17g}, shape {packing.shape.spec(packing.dim)}", "",
+             f"{atoms} atoms", f"{len(values)} atom types"]
+    if kind == "ellipsoid":
+        lines.append(f"{n} ellipsoids")
+    lines += ["", f"{box['xlo']:.17g} {box['xhi']:.17g} xlo xhi", f"{box['ylo']:.17g} {box['yhi']:.17g} ylo yhi",
+              f"{box['zlo']:.17g} {box['zhi']:.17g} zlo zhi"]
     if packing.box.is_triclinic:
         lines.append(f"{box['xy']:.17g} {box['xz']:.17g} {box['yz']:.17g} xy xz yz")
-    lines += ["", "Atoms # sphere", ""]
-    lines += [f"{k + 1} {types[k] + 1} {packing.diameters[k]:.17g} {1.0 / vol[k]:.17g} "
-              f"{pos[k, 0]:.17g} {pos[k, 1]:.17g} {pos[k, 2]:.17g}" for k in range(packing.n)]
+    if kind == "sphere":
+        vol = np.pi * packing.diameters**3 / 6.0  # LAMMPS sphere mass = density * 4/3 pi r^3, also in 2D
+        lines += ["", "Atoms # sphere", ""]
+        lines += [f"{k + 1} {types[k] + 1} {packing.diameters[k]:.17g} {1.0 / vol[k]:.17g} "
+                  f"{_row(pos[k])}" for k in range(n)]
+    elif kind == "ellipsoid":
+        a, b = packing.shape.axes(packing.diameters).T
+        quat = lammps_quaternions(packing)
+        lines += ["", "Atoms # ellipsoid", ""]
+        lines += [f"{k + 1} {types[k] + 1} 1 {6.0 / (np.pi * a[k] * b[k] * b[k]):.17g} {_row(pos[k])}" for k in range(n)]
+        lines += ["", "Ellipsoids", ""]
+        lines += [f"{k + 1} {a[k]:.17g} {b[k]:.17g} {b[k]:.17g} {_row(quat[k])}" for k in range(n)]
+    else:
+        sites = packing.shape.world_sites(packing.box.wrap(packing.positions), packing.orientations, packing.diameters)
+        site_d = packing.diameters[:, None] * packing.shape.site_diameters[None, :]
+        per_site = 1.0 / packing.shape.n_sites
+        lines += ["", "Atoms # hybrid", ""]
+        rows, atom = [], 0
+        for k in range(n):
+            for s in range(packing.shape.n_sites):
+                atom += 1
+                xyz = _xyz(packing.box.wrap(sites[k, s][None]))[0]
+                rows.append(f"{atom} {types[k] + 1} {_row(xyz)} {site_d[k, s]:.17g} "
+                            f"{per_site / (np.pi * site_d[k, s] ** 3 / 6.0):.17g} {k + 1}")
+        lines += rows
     with atomic_path(path) as tmp:
         tmp.write_text("\n".join(lines) + "\n")
     return Path(path)
+
+
+def lammps_quaternions(packing: Packing) -> np.ndarray:
+    """(N, 4) quaternions (w, x, y, z) of the particles as LAMMPS stores them (2D: about z)."""
+    o = packing.orientations
+    if packing.dim == 3:
+        return o
+    return np.column_stack([np.cos(o / 2), np.zeros(len(o)), np.zeros(len(o)), np.sin(o / 2)])
+
+
+def _xyz(pos: np.ndarray) -> np.ndarray:
+    return pos if pos.shape[1] == 3 else np.column_stack([pos, np.zeros(len(pos))])
+
+
+def _row(values) -> str:
+    return " ".join(f"{float(v):.17g}" for v in values)
 
 
 def to_universe(packing: Packing):
@@ -172,8 +259,8 @@ def to_universe(packing: Packing):
     return u
 
 
-def _potential(spec, alpha, epsilon):
-    return RepulsiveLJ(epsilon) if spec == "rlj" else Spring(alpha, epsilon)
+def _text(value) -> str:
+    return value.decode() if isinstance(value, bytes) else str(value)
 
 
 def _num(x):

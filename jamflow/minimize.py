@@ -12,7 +12,9 @@ Methods:
 Stopping rules, checked after every ``window`` iterations (LAMMPS runs the window):
 1. ``force``: max force component below ``force_tol`` (default scales with the box side and
    the contact stiffness, since round-off in positions of a box of side L limits forces to
-   ~L * 1e-16 * d2V/dr2; repulsive LJ is 72x stiffer at contact than the linear spring).
+   ~L * 1e-16 * d2V/dr2; repulsive LJ is 72x stiffer at contact than the linear spring),
+   and, for particles that turn, every generalized torque component tau_a / d_k below it too
+   (torque balance; d_k the rotational length of ``jamflow.shapes``).
 2. ``energy-below-vmin``: energy per particle below ``v_min`` (seed rule b, V_min = 1e-16),
    also caught inside a window by ``fix halt``.
 3. ``no-progress``: over a whole window the relative energy decrease was below ``delta``
@@ -86,6 +88,7 @@ class MinimizeResult:
     energy_per_particle: float
     max_force: float
     seconds: float
+    max_torque: float = 0.0  # largest generalized torque component tau_a / d_k (eps/diameter)
 
 
 CONVERGED_REASONS = ("force", "energy-below-vmin")
@@ -95,7 +98,9 @@ def minimize(engine, settings: MinimizerSettings) -> MinimizeResult:
     """Minimise the engine's configuration at fixed box; the engine holds the result.
 
     The engine runs windows of iterations (``engine.minimizer_session``: LAMMPS or the
-    compiled FIRE); the stopping rules are applied here, the same for every engine."""
+    compiled FIRE), each returning (iterations, total energy, max force component, max
+    generalized torque component); the stopping rules are applied here, the same for every
+    engine."""
     start = time.perf_counter()
     n = engine.template.n
     stiffness = engine.template.potential.contact_stiffness
@@ -105,15 +110,16 @@ def minimize(engine, settings: MinimizerSettings) -> MinimizeResult:
     with engine.minimizer_session(settings, ftol) as run_window:
         while True:
             steps = min(settings.window, settings.max_iterations - done)
-            ran, energy_total, fmax = run_window(steps)
+            ran, energy_total, fmax, gmax = run_window(steps)
             done += ran
             energy = energy_total / n
-            reason = _stop_reason(settings, ftol, energy, fmax, energy_prev, fmax_prev, ran, steps, done,
+            worst = max(fmax, gmax)  # forces and generalized torques share the units and the tolerance
+            reason = _stop_reason(settings, ftol, energy, worst, energy_prev, fmax_prev, ran, steps, done,
                                   fmax_at_vmin)
             if reason:
                 return MinimizeResult(reason in CONVERGED_REASONS, reason, done, energy, fmax,
-                                      time.perf_counter() - start)
-            energy_prev, fmax_prev = energy, fmax
+                                      time.perf_counter() - start, gmax)
+            energy_prev, fmax_prev = energy, worst
 
 
 def _force_bound(packing, energy: float) -> float:
@@ -122,7 +128,7 @@ def _force_bound(packing, energy: float) -> float:
     (Cauchy-Schwarz) and a margin. A larger force at V < V_min means the state blew up."""
     from scipy.optimize import brentq
 
-    pot, sigma = packing.potential, float(packing.diameters.min())
+    pot, sigma = packing.potential, float(packing.shape.smallest_contact(packing.diameters))
     if pot.energy(np.array([0.5 * sigma]), sigma)[0] <= energy:
         return math.inf
     r = brentq(lambda x: pot.energy(np.array([x]), sigma)[0] - energy, 0.5 * sigma, sigma, xtol=1e-15 * sigma)

@@ -1,7 +1,14 @@
-"""The ``Packing`` value object: positions, diameters, box, potential, metadata.
+"""The ``Packing`` value object: the whole configuration of a particle system.
 
-Immutable: every operation returns a new Packing. Units: lengths in small diameters,
-energies in epsilon, masses 1.
+Positions, sizes, orientations and the particle shape, the periodic box and the pair
+potential: everything an engine, an analysis or a file needs. Immutable: every operation
+returns a new Packing. Units: lengths in small diameters (the scale 1 of the smallest
+particle), energies in epsilon, masses 1.
+
+Sizes: ``diameters[i]`` is particle i's scale: the diameter of a disk/sphere, the
+across-axis length b of an ellipse/spheroid, the scale factor of a rigid body's sites
+(``jamflow.shapes``). Orientations (``jamflow.shapes.rotations``): None for disks and
+spheres; (N,) angles in 2D, (N, 4) unit quaternions in 3D for every other shape.
 """
 
 from __future__ import annotations
@@ -13,6 +20,8 @@ import numpy as np
 
 from .box import Box
 from .potentials import Potential, Spring
+from .shapes.rotations import check_orientations, directors, random_orientations
+from .shapes.shape import SPHERE
 from .sizes import SizeSpec
 
 # Densest packings of equal disks (hexagonal) and spheres (FCC): pi/(2 sqrt 3), pi/(3 sqrt 2).
@@ -21,19 +30,20 @@ DENSEST_PHI = {2: math.pi / (2 * math.sqrt(3)), 3: math.pi / (3 * math.sqrt(2))}
 
 def particle_volumes(diameters: np.ndarray, dim: int) -> np.ndarray:
     """Area (2D) or volume (3D) of disks/spheres with the given diameters."""
-    d = np.asarray(diameters, float)
-    return math.pi * d**2 / 4.0 if dim == 2 else math.pi * d**3 / 6.0
+    return SPHERE.volumes(diameters, dim)
 
 
 @dataclass(frozen=True)
 class Packing:
-    """N disks (2D) or spheres (3D) in a periodic box, with their pair potential."""
+    """N particles of one shape in a periodic box, with their pair potential."""
 
     positions: np.ndarray
     diameters: np.ndarray
     box: Box
     potential: Potential = field(default_factory=Spring)
     metadata: dict = field(default_factory=dict)
+    shape: object = SPHERE
+    orientations: np.ndarray | None = None
 
     def __post_init__(self):
         pos = np.array(self.positions, dtype=float)
@@ -46,7 +56,16 @@ class Packing:
             raise ValueError("positions and diameters must be finite")
         if np.any(dia <= 0):
             raise ValueError("diameters must be positive")
-        if 2 * dia.max() >= self.box.widths.min():
+        self.shape.check(self.box.dim)
+        if self.shape.oriented:
+            if self.orientations is None:
+                raise ValueError(f"a packing of {self.shape.name(self.box.dim)} particles needs orientations")
+            orient = check_orientations(self.orientations, len(pos), self.box.dim)
+            orient.setflags(write=False)
+            object.__setattr__(self, "orientations", orient)
+        elif self.orientations is not None:
+            raise ValueError("disks and spheres have no orientations; pass orientations=None")
+        if len(dia) and 4 * self.shape.reach(dia).max() >= self.box.widths.min():
             raise ValueError("box too small: the largest contact distance must stay below half "
                              "the box width for a unique minimum image; use more particles")
         pos.setflags(write=False)
@@ -63,18 +82,46 @@ class Packing:
         return self.box.dim
 
     @property
+    def volumes(self) -> np.ndarray:
+        """Area (2D) or volume (3D) of every particle."""
+        return self.shape.volumes(self.diameters, self.dim)
+
+    @property
     def phi(self) -> float:
         """Packing fraction: particle volume over box volume."""
-        return float(particle_volumes(self.diameters, self.dim).sum() / self.box.volume)
+        return float(self.volumes.sum() / self.box.volume)
+
+    @property
+    def dof_per_particle(self) -> int:
+        """d_f of the seed chapter (section 3)."""
+        return self.shape.dof(self.dim)
+
+    @property
+    def directors(self) -> np.ndarray | None:
+        """(N, d) unit vectors along each particle's body x-axis (None for disks/spheres)."""
+        return None if self.orientations is None else directors(self.orientations, self.dim)
+
+    @property
+    def rotational_lengths(self) -> np.ndarray:
+        """(N, r) d_k of each rotational body axis (r = 0 for disks and spheres)."""
+        return self.shape.rotational_lengths(self.diameters, self.dim)
 
     def species(self) -> tuple[np.ndarray, np.ndarray]:
         """(distinct diameters, type index 0.. of each particle)."""
         values, index = np.unique(self.diameters, return_inverse=True)
         return values, index
 
-    def with_positions(self, positions, box: Box | None = None, **metadata) -> "Packing":
+    def with_positions(self, positions, box: Box | None = None, orientations=None, **metadata) -> "Packing":
+        """Same particles at new positions (and orientations, if given) in ``box``."""
         return replace(self, positions=positions, box=box or self.box,
+                       orientations=self.orientations if orientations is None else orientations,
                        metadata={**self.metadata, **metadata})
+
+    def subset(self, keep: np.ndarray, **metadata) -> "Packing":
+        """The packing of particles ``keep`` (indices or mask), same box, shape and potential."""
+        orient = None if self.orientations is None else self.orientations[keep]
+        return replace(self, positions=self.positions[keep], diameters=self.diameters[keep],
+                       orientations=orient, metadata={**self.metadata, **metadata})
 
     def scaled_to_phi(self, phi: float) -> "Packing":
         """Affine rescaling of box and positions to packing fraction ``phi``."""
@@ -83,13 +130,15 @@ class Packing:
 
 
 def random_packing(n: int, dim: int, sizes: SizeSpec, phi: float, seed: int,
-                   potential: Potential | None = None) -> Packing:
-    """Uniformly random positions in a square/cubic box at packing fraction ``phi``
-    (seed step 1). Diameters are drawn first, then positions, from one generator."""
+                   potential: Potential | None = None, shape=SPHERE) -> Packing:
+    """Uniformly random positions in a square/cubic box at packing fraction ``phi`` and, for
+    shapes that are not round, uniformly random orientations (seed step 1). Diameters are
+    drawn first, then positions, then orientations, from one generator."""
     rng = np.random.default_rng(seed)
     diameters = sizes.draw(n, rng)
-    length = (particle_volumes(diameters, dim).sum() / phi) ** (1.0 / dim)
+    length = (shape.volumes(diameters, dim).sum() / phi) ** (1.0 / dim)
     box = Box.cube(length, dim)
     positions = rng.random((n, dim)) * length
+    orientations = random_orientations(n, dim, rng) if shape.oriented else None
     return Packing(positions, diameters, box, potential or Spring(),
-                   metadata={"seed": seed, "sizes": sizes.spec})
+                   metadata={"seed": seed, "sizes": sizes.spec}, shape=shape, orientations=orientations)

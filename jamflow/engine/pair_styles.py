@@ -11,14 +11,13 @@
 from __future__ import annotations
 
 from ..packing import Packing
-from ..potentials import Spring
 
 MAX_DISCRETE_SPECIES = 8
 
 
 def uses_harmonic_cut(packing: Packing) -> bool:
     pot = packing.potential
-    return isinstance(pot, Spring) and pot.alpha == 2.0 and len(packing.species()[0]) <= MAX_DISCRETE_SPECIES
+    return pot.name == "spring" and pot.alpha == 2.0 and len(packing.species()[0]) <= MAX_DISCRETE_SPECIES
 
 
 def pair_setup(packing: Packing, lmp=None) -> list[str]:

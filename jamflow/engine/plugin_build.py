@@ -25,7 +25,6 @@ import sys
 import warnings
 from pathlib import Path
 
-from ..potentials import RepulsiveLJ, Spring
 
 PLUGIN_DIR = Path(__file__).with_name("plugin")
 SOURCES = ("pair_jamflow.cpp", "lammpsplugin.h")
@@ -191,35 +190,19 @@ def load_plugin(lmp) -> bool:
 
 
 # pair commands ----------------------------------------------------------------------------------
-def lepton_expression(potential) -> str:
-    """The potential as a ``lepton/sphere`` expression in r, radi, radj (sigma = radi + radj).
-
-    Uses ``max`` rather than ``step``: a negative base raised to a non-integer power is NaN,
-    and step(...) * NaN stays NaN beyond contact.
-    """
-    if isinstance(potential, Spring):
-        return (f"E/A*max(0,1-r/(radi+radj))^A; E={float(potential.epsilon)!r}; "
-                f"A={float(potential.alpha)!r}")
-    if isinstance(potential, RepulsiveLJ):
-        return f"E*(max(1,(radi+radj)/r)^6-1)^2; E={float(potential.epsilon)!r}"
-    raise ValueError(f"no lepton expression for {potential!r}; use Spring(alpha) or RepulsiveLJ()")
-
-
 def pair_style_commands(potential, cutoff: float, *, plugin: bool = True) -> list[str]:
-    """``pair_style`` + ``pair_coeff`` lines for ``potential`` (needs ``atom_style sphere``).
+    """``pair_style`` + ``pair_coeff`` lines for ``potential`` (needs ``atom_style sphere``):
+    the potential's own plugin style (``Potential.plugin_style``; call ``load_plugin(lmp)``
+    first) or, with ``plugin=False``, ``lepton/sphere`` with its expression (``Potential.lepton``).
 
-    ``cutoff`` is the neighbour-list cutoff: the largest particle diameter. With
-    ``plugin`` the jamflow styles (call ``load_plugin(lmp)`` first), else lepton/sphere.
+    ``cutoff`` is the neighbour-list cutoff: the largest particle diameter.
     """
     cutoff = float(cutoff)
     if not cutoff > 0:
         raise ValueError(f"cutoff must be the largest diameter (> 0), got {cutoff}")
+    if not hasattr(potential, "plugin_style"):
+        raise ValueError(f"no LAMMPS pair style for {potential!r}; pass a jamflow potential: Spring(alpha) or "
+                         "RepulsiveLJ()")
     if not plugin:
-        return [f"pair_style lepton/sphere {cutoff!r}", f'pair_coeff * * "{lepton_expression(potential)}"']
-    if isinstance(potential, Spring):
-        style = f"jamflow/spring {float(potential.alpha)!r} {cutoff!r}"
-    elif isinstance(potential, RepulsiveLJ):
-        style = f"jamflow/rlj {cutoff!r}"
-    else:
-        raise ValueError(f"no jamflow pair style for {potential!r}; use Spring(alpha) or RepulsiveLJ()")
-    return [f"pair_style {style}", f"pair_coeff * * {float(potential.epsilon)!r}"]
+        return [f"pair_style lepton/sphere {cutoff!r}", f'pair_coeff * * "{potential.lepton}"']
+    return [f"pair_style {potential.plugin_style(cutoff)}", f"pair_coeff * * {float(potential.epsilon)!r}"]

@@ -1,8 +1,16 @@
-"""All-pairs numpy reference for energy, forces and the pressure tensor.
+"""All-pairs numpy reference: energy, forces, torques and the pressure tensor of every shape.
 
-Independent of LAMMPS and of the cell search in ``jamflow.pairs`` (it loops over every
-pair with the minimum image), so it serves as the second implementation in tests.
-Units: energy eps, force eps/diameter, pressure eps/diameter^d.
+Independent of the engines and of the cell search in ``jamflow.pairs``: it loops over every
+pair with the minimum image, so it serves as the second implementation in tests. It uses the
+potential's own law (``jamflow.potentials``) and, for ellipsoids, the numpy contact distance
+and its gradient (``jamflow.shapes.contact_distance``).
+
+For a pair energy V(s), s = r_ij / sigma_ij(r_hat, u_i, u_j): the force on i is
+-V'(s) (r_hat / sigma - r grad_r sigma / sigma^2) (grad_r sigma = tangential gradient in r_hat
+over r), the torque on i is V'(s) r / sigma^2 (u_i x dsigma/du_i); for rigid bodies each site
+force acts at its site. Pressure tensor (seed eq. 2.34) P_ab = V^-1 sum_pairs r_ij,a f_ij,b with
+r_ij joining the particle centres. Units: energy eps, force eps/diameter, torque eps,
+pressure eps/diameter^d.
 """
 
 from __future__ import annotations
@@ -19,24 +27,92 @@ from ..pairs import all_pairs, contact_distances, separations
 class ReferenceResult:
     energy: float  # total potential energy, sum over distinct pairs
     forces: np.ndarray  # (N, d)
-    pressure_tensor: np.ndarray  # (d, d), virial only (athermal): sum_pairs r_ij f_ij / volume
+    pressure_tensor: np.ndarray  # (d, d), virial only (athermal)
+    torques: np.ndarray | None = None  # (N,) in 2D, (N, 3) in 3D, world frame; None for spheres
 
     @property
     def pressure(self) -> float:
         return float(np.trace(self.pressure_tensor) / len(self.pressure_tensor))
 
 
-def energy_forces_pressure(packing: Packing) -> ReferenceResult:
-    """Direct sum over all N(N-1)/2 pairs; use for N up to a few thousand."""
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """z-component in 2D, the vector in 3D."""
+    if a.shape[1] == 2:
+        return a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    return np.cross(a, b)
+
+
+def _rows(c: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """c_p x_p for scalars (2D torques) or vectors (3D)."""
+    return c[:, None] * x if x.ndim == 2 else c * x
+
+
+def _reduced(pot, r, sigma):
+    """V and V'(s) at s = r / sigma, zero beyond contact."""
+    s = r / sigma
+    inside = s < 1.0
+    v, dv = pot.energy_force(np.where(inside, s, 0.5), pot.params)
+    return np.where(inside, v, 0.0), np.where(inside, dv, 0.0)
+
+
+def _spheres(packing: Packing):
     i, j = all_pairs(packing.n)
     dr = separations(packing, i, j)
     r = np.linalg.norm(dr, axis=1)
     sigma = contact_distances(packing, i, j)
-    pot = packing.potential
-    energy = float(np.sum(pot.energy(r, sigma)))
-    fpair = -pot.dv_dr(r, sigma)[:, None] * dr / r[:, None]  # force on i from j
+    v, dv = _reduced(packing.potential, r, sigma)
+    fpair = (-dv / (sigma * r))[:, None] * dr  # force on i from j
+    return i, j, dr, fpair, float(v.sum()), None
+
+
+def _ellipsoids(packing: Packing):
+    from ..shapes.contact_distance import contact_distance_gradient
+
+    i, j = all_pairs(packing.n)
+    dr = separations(packing, i, j)
+    r = np.linalg.norm(dr, axis=1)
+    r_hat = dr / r[:, None]
+    axes, u = packing.shape.axes(packing.diameters), packing.directors
+    sigma, g_r, g_i, g_j = contact_distance_gradient(axes[i, 0], axes[i, 1], axes[j, 0], axes[j, 1], r_hat, u[i], u[j],
+                                                     method=packing.shape.contact)
+    v, dv = _reduced(packing.potential, r, sigma)
+    fpair = -dv[:, None] * (r_hat / sigma[:, None] - g_r / sigma[:, None] ** 2)
+    lever = dv * r / sigma**2
+    torques = np.zeros((packing.n, 3) if packing.dim == 3 else packing.n)
+    np.add.at(torques, i, _rows(lever, _cross(u[i], g_i)))
+    np.add.at(torques, j, _rows(lever, _cross(u[j], g_j)))
+    return i, j, dr, fpair, float(v.sum()), torques
+
+
+def _bodies(packing: Packing):
+    shape, n, d = packing.shape, packing.n, packing.dim
+    k = shape.n_sites
+    world = shape.world_sites(packing.positions, packing.orientations, packing.diameters).reshape(-1, d)
+    lever = world - np.repeat(packing.positions, k, axis=0)
+    site_d = (packing.diameters[:, None] * shape.site_diameters[None, :]).ravel()
+    body = np.repeat(np.arange(n), k)
+    s, t = all_pairs(n * k)
+    s, t = s[body[s] != body[t]], t[body[s] != body[t]]
+    dr = packing.box.minimum_image(world[s] - world[t])
+    r = np.linalg.norm(dr, axis=1)
+    sigma = 0.5 * (site_d[s] + site_d[t])
+    v, dv = _reduced(packing.potential, r, sigma)
+    fsite = (-dv / (sigma * r))[:, None] * dr  # force on site s from site t
+    torques = np.zeros((n, 3) if d == 3 else n)
+    np.add.at(torques, body[s], _cross(lever[s], fsite))
+    np.add.at(torques, body[t], -_cross(lever[t], fsite))
+    centre_dr = dr - lever[s] + lever[t]
+    return body[s], body[t], centre_dr, fsite, float(v.sum()), torques
+
+
+_SHAPES = {"sphere": _spheres, "ellipsoid": _ellipsoids, "rigid": _bodies}
+
+
+def energy_forces_pressure(packing: Packing) -> ReferenceResult:
+    """Direct sum over all pairs (of sites, for rigid bodies); for N up to a few thousand."""
+    i, j, dr, fpair, energy, torques = _SHAPES[packing.shape.kind](packing)
     forces = np.zeros((packing.n, packing.dim))
     np.add.at(forces, i, fpair)
     np.add.at(forces, j, -fpair)
     virial = np.einsum("pa,pb->ab", dr, fpair)
-    return ReferenceResult(energy, forces, virial / packing.box.volume)
+    return ReferenceResult(energy, forces, virial / packing.box.volume, torques)

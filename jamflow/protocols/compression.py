@@ -1,6 +1,6 @@
 """Isotropic compression to jamming onset (seed chapter section 2.1, steps 1-4).
 
-Start from random positions at phi0; after each minimisation compress by dphi if
+Start from random positions (and orientations) at phi0; after each minimisation compress by dphi if
 V < V_tol, decompress if V > 2 V_tol, halve dphi whenever the state crosses from one
 side to the other, and stop when V_tol < V < 2 V_tol (V is the energy per particle).
 Box changes are affine (LAMMPS ``change_box ... remap``); the box is always set from
@@ -16,12 +16,12 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
-from ..engine.lammps import LammpsEngine
-from ..engine.select import check_engine, open_engine
+from ..engine.base import check_engine, open_engine
 from ..minimize import MinimizerSettings, MinimizeResult
-from ..pairs import overlapping_pairs
-from ..packing import DENSEST_PHI, Packing, particle_volumes, random_packing
-from ..potentials import Potential, RepulsiveLJ, Spring, parse_potential
+from ..pairs import overlapping_pairs, overlapping_sites
+from ..packing import DENSEST_PHI, Packing, random_packing
+from ..potentials import Potential, Spring, parse_potential
+from ..shapes.shape import parse_shape
 from ..sizes import parse_sizes
 
 DEFAULT_PHI0 = {2: 0.80, 3: 0.55}
@@ -120,6 +120,7 @@ class JamResult:
     seconds: float
     lammps_version: int
     engine: str = "lammps"  # which engine minimised: "lammps" or "numba"
+    max_torque: float = 0.0  # largest generalized torque component tau / d_k (0 for disks, spheres)
 
     @property
     def pressure(self) -> float:
@@ -134,8 +135,9 @@ class JamResult:
         return int(np.sum(self.history["iterations"]))
 
     def summary(self) -> str:
+        torque = f"  max|tau/d| = {self.max_torque:.1e}" if self.packing.shape.oriented else ""
         return (f"phi_J = {self.phi_j:.10f}  V = {self.energy_per_particle:.3e}  "
-                f"P = {self.pressure:.3e}  max|F| = {self.max_force:.1e}  "
+                f"P = {self.pressure:.3e}  max|F| = {self.max_force:.1e}{torque}  "
                 f"{self.minimizations} minimisations, {self.iterations} iterations ({self.engine}), {self.seconds:.2f} s")
 
 
@@ -145,24 +147,25 @@ class JammingFailed(RuntimeError):
 
 def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | Potential = "spring",
         seed: int = 0, settings: CompressionSettings | None = None, *, start: Packing | None = None,
-        observers=(), engine: str = "auto", engine_options: dict | None = None) -> JamResult:
+        observers=(), engine: str = "auto", engine_options: dict | None = None, shape="disk") -> JamResult:
     """Jam N particles by isotropic compression; ``start`` overrides the random start.
 
+    ``shape``: a ``--shape`` spec or shape object (``jamflow.shapes``; default disks/spheres).
     ``observers`` are callables ``f(step: dict)`` called after every minimisation
-    (progress bars, writers). ``engine``: "auto" (compiled FIRE where exact for the scene,
-    else LAMMPS), "lammps" or "numba" (``jamflow.engine.select``).
+    (progress bars, writers). ``engine``: "auto" (the compiled engine wherever it runs the
+    scene, else LAMMPS), "lammps" or "numba" (``jamflow.engine.base``).
     """
     settings = settings or PROTOCOLS[DEFAULT_PROTOCOL]()
     check_engine(engine)
     if start is None:
-        start = initial_packing(n, dim, sizes, potential, seed, settings.start_phi(dim))
-        if isinstance(start.potential, RepulsiveLJ):
-            start = remove_overlaps(start, settings.minimizer)
+        start = initial_packing(n, dim, sizes, potential, seed, settings.start_phi(dim), shape)
+        if start.potential.soft_start:
+            start = remove_overlaps(start, settings.minimizer, engine)
     return compress(start, settings, observers=observers, engine=engine, engine_options=engine_options)
 
 
-def initial_packing(n, dim, sizes, potential, seed, phi0) -> Packing:
-    """Validated random start (seed step 1); errors before any LAMMPS work."""
+def initial_packing(n, dim, sizes, potential, seed, phi0, shape="disk") -> Packing:
+    """Validated random start (seed step 1); errors before any engine work."""
     if not isinstance(n, (int, np.integer)) or n < 2:
         raise ValueError(f"n must be an integer >= 2, got {n!r}")
     if dim not in (2, 3):
@@ -174,19 +177,21 @@ def initial_packing(n, dim, sizes, potential, seed, phi0) -> Packing:
         raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
     pot = parse_potential(potential) if isinstance(potential, str) else potential
     size_spec = parse_sizes(sizes) if isinstance(sizes, str) else sizes
+    particle = parse_shape(shape, dim)
     try:
-        return random_packing(int(n), dim, size_spec, phi0, int(seed), pot)
+        return random_packing(int(n), dim, size_spec, phi0, int(seed), pot, particle)
     except ValueError as err:
         raise ValueError(f"{err} (n = {n} is too small for these sizes)") from None
 
 
-def remove_overlaps(packing: Packing, minimizer: MinimizerSettings) -> Packing:
+def remove_overlaps(packing: Packing, minimizer: MinimizerSettings, engine: str = "auto") -> Packing:
     """Relax a random start with the linear spring until V < V_min, so that a potential
     that diverges at r -> 0 (repulsive LJ) starts without significant overlaps (seed step 1;
     from a raw random start RLJ forces reach ~1e13 and LAMMPS loses atoms)."""
-    with LammpsEngine(replace(packing, potential=Spring())) as engine:
-        result = engine.minimize(minimizer)
-        relaxed = engine.packing()
+    soft = replace(packing, potential=Spring())
+    with open_engine(soft, minimizer.method, engine) as sim:
+        result = sim.minimize(minimizer)
+        relaxed = sim.packing()
     if result.energy_per_particle >= minimizer.v_min:
         raise JammingFailed(f"the random start at phi0 = {packing.phi:.4f} does not relax to zero overlap "
                             f"(V = {result.energy_per_particle:.2e}): phi0 is above jamming; use a lower phi0")
@@ -201,7 +206,7 @@ def compress(packing: Packing, settings: CompressionSettings, *, observers=(), e
     _check_start(packing)
     start_time = time.perf_counter()
     base_box, base_phi = packing.box, packing.phi
-    stepper = PhiStepper(settings, _newton_exponent(packing.potential), float(np.mean(particle_volumes(packing.diameters, packing.dim))))
+    stepper = PhiStepper(settings, packing.potential.onset_exponent, float(np.mean(packing.volumes)))
     rows = {c: [] for c in HISTORY_COLUMNS}
     phi, resumes = base_phi, 0
     with open_engine(packing, settings.minimizer.method, engine, **(engine_options or {})) as sim:
@@ -242,9 +247,9 @@ RLJ_MIN_START_RATIO = 0.9  # r/sigma below this: repulsive-LJ forces > ~1e2 eps/
 
 def _check_start(packing: Packing) -> None:
     """Refuse a repulsive-LJ start with deep overlaps before any work (seed step 1)."""
-    if not isinstance(packing.potential, RepulsiveLJ):
+    if not packing.potential.soft_start:
         return
-    _, _, _, r, sigma = overlapping_pairs(packing)
+    r, sigma = (overlapping_sites(packing) if packing.shape.kind == "rigid" else overlapping_pairs(packing))[-2:]
     if len(r) and (r / sigma).min() < RLJ_MIN_START_RATIO:
         raise ValueError(f"repulsive LJ from a start with overlap r/sigma = {(r / sigma).min():.3f} < "
                          f"{RLJ_MIN_START_RATIO}: forces diverge and LAMMPS loses atoms. Relax the start "
@@ -336,11 +341,6 @@ class PhiStepper:
                 "vtol (>= 1e-20 is resolvable for N <= 10^4) or a tighter force tolerance.")
 
 
-def _newton_exponent(potential) -> float:
-    """V ~ (phi - phi_J)^alpha near onset; repulsive LJ is harmonic at small overlap."""
-    return potential.alpha if isinstance(potential, Spring) else 2.0
-
-
 def _record(rows, phi, result: MinimizeResult, pressure, dphi):
     values = (phi, result.energy_per_particle, pressure, dphi, result.iterations, result.max_force, result.converged)
     for column, value in zip(HISTORY_COLUMNS, values):
@@ -358,4 +358,4 @@ def _finish(engine, phi, result, rows, settings, start_time, version) -> JamResu
     history = {k: np.array(v) for k, v in rows.items()}
     history["reason"] = history["reason"].astype("S")
     return JamResult(packing, phi, result.energy_per_particle, state.pressure_tensor, result.max_force,
-                     history, settings, time.perf_counter() - start_time, version, engine.name)
+                     history, settings, time.perf_counter() - start_time, version, engine.name, result.max_torque)

@@ -1,4 +1,5 @@
-"""Particle shapes: contact distance of ellipses and spheroids (chapter section 2.3.2)."""
+"""Particle shapes (chapter section 2.3): disks/spheres, ellipses/spheroids with the exact
+contact distance, rigid bodies of fused spherical sites; orientations; contact distances."""
 
 from .contact_distance import (
     APART,
@@ -13,12 +14,17 @@ from .contact_distance import (
     overlap_state,
 )
 from .ellipse_plot import draw_contact_pair, figure_2_12
+from .shape import SPHERE, Ellipsoid, RigidBody, Sphere, parse_shape, shape_from_attrs
 
 __all__ = [
     "APART",
     "METHODS",
     "OVERLAPPING",
+    "SPHERE",
     "TOUCHING",
+    "Ellipsoid",
+    "RigidBody",
+    "Sphere",
     "contact_distance",
     "contact_distance_gradient",
     "contact_function",
@@ -27,4 +33,6 @@ __all__ = [
     "figure_2_12",
     "lambda_polynomial",
     "overlap_state",
+    "parse_shape",
+    "shape_from_attrs",
 ]

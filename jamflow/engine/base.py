@@ -1,0 +1,139 @@
+"""The engine contract: what every engine computes, what it can run, and how one is chosen.
+
+An engine holds one packing and evaluates or minimises it at a fixed (or, for constant
+stress, variable) box. Every engine implements ``Engine`` and returns the neutral ``State``;
+it declares what it runs in ``CAPABILITIES`` (shapes, potentials, minimisers, boxes,
+processes) and ``supports(packing, method, comm)`` turns that table into a reason or None.
+``open_engine`` picks one: ``"auto"`` takes the compiled engine wherever it supports the
+scene (it needs no LAMMPS), LAMMPS elsewhere; ``"lammps"`` / ``"numba"`` force one, and a
+forced engine that cannot run the scene, or an option it does not take, is an error raised
+before any work.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+
+ENGINES = ("auto", "lammps", "numba")
+
+
+@dataclass(frozen=True)
+class State:
+    """Energy, forces, torques and pressure tensor at the current configuration.
+
+    ``torques`` are world-frame torques: (N,) about z in 2D, (N, 3) in 3D; None for disks and
+    spheres. ``pressure_tensor`` is the virial part of the stress (athermal packings),
+    P_ab = V^-1 sum_pairs r_ij,a f_ij,b (seed eq. 2.34; for rigid bodies r_ij joins the
+    centres), positive under compression."""
+
+    energy: float  # total, eps
+    forces: np.ndarray  # (N, d), eps/diameter, packing order
+    pressure_tensor: np.ndarray  # (d, d), eps/diameter^d
+    torques: np.ndarray | None = None  # eps
+
+    @property
+    def energy_per_particle(self) -> float:
+        return self.energy / len(self.forces)
+
+    @property
+    def pressure(self) -> float:
+        return float(np.trace(self.pressure_tensor) / len(self.pressure_tensor))
+
+    @property
+    def max_force(self) -> float:
+        return float(np.max(np.abs(self.forces))) if self.forces.size else 0.0
+
+    @property
+    def max_torque(self) -> float:
+        return float(np.max(np.abs(self.torques))) if self.torques is not None and self.torques.size else 0.0
+
+
+@dataclass(frozen=True)
+class Capabilities:
+    """What an engine runs; ``reason`` says why it cannot run a scene (None if it can)."""
+
+    shapes: frozenset
+    potentials: frozenset
+    methods: frozenset
+    tilted_boxes: bool = True
+    mpi: bool = False
+    options: frozenset = field(default_factory=frozenset)  # keyword options its constructor takes
+
+    def reason(self, packing, method: str = "fire", comm=None) -> str | None:
+        if packing.shape.kind not in self.shapes:
+            return f"{packing.shape.name(packing.dim)} particles (it runs {', '.join(sorted(self.shapes))})"
+        if packing.potential.name not in self.potentials:
+            return f"potential {packing.potential.spec} (it runs {', '.join(sorted(self.potentials))})"
+        if method not in self.methods:
+            return f"minimizer {method} (it runs {', '.join(sorted(self.methods))})"
+        if packing.box.is_triclinic and not self.tilted_boxes:
+            return "a tilted (sheared) box"
+        if comm is not None and not self.mpi:
+            return "an MPI communicator (it is serial)"
+        return None
+
+
+class Engine(Protocol):
+    """One packing held by an engine (a context manager; ``close`` frees it)."""
+
+    name: str
+    template: object  # the Packing it was built from (shape, sizes, potential)
+    box: object  # the current Box
+    commands: list  # LAMMPS commands sent (empty for engines that send none)
+
+    def set_box(self, box) -> None: ...  # affine deformation, positions follow
+    def positions(self) -> np.ndarray: ...
+    def set_positions(self, positions, orientations=None) -> None: ...
+    def evaluate(self) -> State: ...  # compute at the current configuration
+    def state(self) -> State: ...  # as last computed
+    def packing(self, **metadata): ...  # the current configuration as a Packing
+    def minimizer_session(self, settings, ftol: float): ...  # context -> window(steps)
+    def close(self) -> None: ...
+
+
+def check_engine(engine: str) -> None:
+    if engine not in ENGINES:
+        raise ValueError(f"unknown engine {engine!r}; use one of {', '.join(ENGINES)}")
+
+
+def engine_class(name: str):
+    if name == "numba":
+        from .compiled.engine import CompiledEngine
+
+        return CompiledEngine
+    from .lammps import LammpsEngine
+
+    return LammpsEngine
+
+
+def engine_name(packing, method: str = "fire", engine: str = "auto", comm=None) -> str:
+    """'numba' or 'lammps' for this scene; ValueError if a forced engine cannot run it."""
+    check_engine(engine)
+    if engine != "auto":
+        reason = engine_class(engine).CAPABILITIES.reason(packing, method, comm)
+        if reason:
+            other = "lammps" if engine == "numba" else "numba"
+            raise ValueError(f"engine {engine} cannot run {reason}; use engine {other} (or auto)")
+        return engine
+    for name in ("numba", "lammps"):
+        if engine_class(name).CAPABILITIES.reason(packing, method, comm) is None:
+            return name
+    raise ValueError(f"no engine runs this scene: compiled: "
+                     f"{engine_class('numba').CAPABILITIES.reason(packing, method, comm)}; lammps: "
+                     f"{engine_class('lammps').CAPABILITIES.reason(packing, method, comm)}")
+
+
+def open_engine(packing, method: str = "fire", engine: str = "auto", **options):
+    """A new engine holding ``packing``. ``options`` go to the engine's constructor
+    (LAMMPS: skin, comm, args; compiled: skin); an option the chosen engine does not take is
+    an error, not silently dropped."""
+    name = engine_name(packing, method, engine, options.get("comm"))
+    cls = engine_class(name)
+    unknown = set(options) - cls.CAPABILITIES.options
+    if unknown:
+        raise ValueError(f"engine {name} takes no option {', '.join(sorted(unknown))} (it takes "
+                         f"{', '.join(sorted(cls.CAPABILITIES.options))})")
+    return cls(packing, **options)

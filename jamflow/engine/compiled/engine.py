@@ -1,0 +1,173 @@
+"""``CompiledEngine`` (engine name "numba"): the FIRE of ``compiled.fire`` with the kernel of the
+packing's shape, in process, no LAMMPS.
+
+It runs every box (orthogonal or tilted: pairs carry their periodic image offsets, box changes
+are affine, x -> h' h^-1 x) on one core, minimises with FIRE only, and is measured against
+LAMMPS and the numpy reference in tests/test_engines.py and benchmarks/engines.py. The
+interface is ``jamflow.engine.base.Engine``.
+"""
+
+from __future__ import annotations
+
+from contextlib import contextmanager
+
+import numpy as np
+
+from ...box import Box
+from ...packing import Packing
+from ..base import Capabilities, State
+from . import fire as kernels
+from .kernels import BUILDERS
+
+
+def _orientation_array(packing: Packing) -> np.ndarray:
+    """Orientations as the kernels hold them: (N, 0) spheres, (N, 1) 2D angles, (N, 4) quaternions."""
+    if packing.orientations is None:
+        return np.zeros((packing.n, 0))
+    o = np.array(packing.orientations, dtype=float)
+    return o.reshape(packing.n, -1).copy()
+
+
+class CompiledEngine:
+    """Serial in-process engine; ``skin`` is the pair-list skin in diameters."""
+
+    name = "numba"
+    CAPABILITIES = Capabilities(shapes=frozenset(BUILDERS), potentials=frozenset({"spring", "rlj"}),
+                                methods=frozenset({"fire"}), tilted_boxes=True, mpi=False,
+                                options=frozenset({"skin"}))
+
+    def __init__(self, packing: Packing, *, skin: float = 0.3):
+        reason = self.CAPABILITIES.reason(packing)
+        if reason:
+            raise ValueError(f"the compiled engine cannot run {reason}; use engine lammps")
+        if not (np.isfinite(skin) and skin > 0):
+            raise ValueError(f"skin must be a finite positive length (diameters), got {skin!r}")
+        self.template = packing
+        self.box = packing.box
+        self.skin = float(skin)
+        self.commands: list[str] = []  # no LAMMPS commands: nothing to replay as a deck
+        n, d = packing.n, packing.dim
+        self._x = np.array(packing.positions, dtype=float)
+        self._o = _orientation_array(packing)
+        self._f = np.zeros((n, d))
+        self._dk = np.ascontiguousarray(packing.rotational_lengths)
+        r = self._dk.shape[1]
+        self._tau, self._g = np.zeros((n, r)), np.zeros((n, r))
+        self._mask = np.array(packing.shape.rotation_mask(d), dtype=float)
+        self._reach = np.asarray(packing.shape.reach(packing.diameters), float)
+        self._virial = np.zeros((d, d))
+        self._energy = None
+        self._pairs = None
+        self._built_at = self._x.copy()
+        self._turned = np.zeros(n)
+
+    # lifecycle ---------------------------------------------------------------------------------
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def close(self):
+        self._pairs = None
+
+    # pair list -----------------------------------------------------------------------------------
+    def _build_pairs(self):
+        self._x = self.box.wrap(self._x)
+        self._pairs = BUILDERS[self.template.shape.kind](self.packing(), self._x, self.skin)
+        self._built_at = self._x.copy()
+        self._turned[:] = 0.0
+
+    def _model(self):
+        if self._pairs is None:
+            self._build_pairs()
+        return self._pairs
+
+    # state -----------------------------------------------------------------------------------------
+    def positions(self) -> np.ndarray:
+        """Current positions (packing order), wrapped into the cell."""
+        return self.box.wrap(self._x)
+
+    def orientations(self) -> np.ndarray | None:
+        """Current orientations in the Packing's form (None for disks and spheres)."""
+        if self.template.orientations is None:
+            return None
+        return self._o[:, 0].copy() if self.template.dim == 2 else self._o.copy()
+
+    def set_positions(self, positions: np.ndarray, orientations=None) -> None:
+        """Move (and turn) the particles; forces are stale until ``evaluate``."""
+        self._x = np.array(positions, dtype=float)
+        if orientations is not None:
+            self._o = _orientation_array(self.template.with_positions(self._x, orientations=orientations))
+        self._pairs, self._energy = None, None
+
+    def evaluate(self) -> State:
+        """Energy, forces, torques and virial pressure tensor at the current configuration."""
+        self._energy = kernels.forces(self._model(), self._x, self._f, self._o, self._tau, self._g, self._dk,
+                                      self._mask, self._virial)
+        return self.state()
+
+    def state(self) -> State:
+        if self._energy is None:
+            return self.evaluate()
+        torques = None
+        if self.template.orientations is not None:
+            torques = self._tau[:, 0].copy() if self.template.dim == 2 else self._tau.copy()
+        return State(float(self._energy), self._f.copy(), self._virial / self.box.volume, torques)
+
+    def packing(self, **metadata) -> Packing:
+        return self.template.with_positions(self.box.wrap(self._x), box=self.box,
+                                            orientations=self.orientations(), **metadata)
+
+    # box changes ------------------------------------------------------------------------------------
+    def set_box(self, box: Box) -> None:
+        """Deform the cell affinely (positions follow, x -> h' h^-1 x), like LAMMPS
+        ``change_box ... remap``; orientations do not change."""
+        if box.dim != self.box.dim:
+            raise ValueError("cannot change the dimension of a running system")
+        if box.is_triclinic or self.box.is_triclinic:
+            self._x = box.to_cartesian(self.box.to_fractional(self._x))
+        else:
+            self._x = self._x * (box.lengths / self.box.lengths)
+        self.box = box
+        self._pairs, self._energy = None, None
+
+    # minimisation -------------------------------------------------------------------------------------
+    def minimize(self, settings=None):
+        """Minimise at fixed box with the seed's stopping rules; returns MinimizeResult."""
+        from ...minimize import MinimizerSettings, minimize
+
+        return minimize(self, settings or MinimizerSettings())
+
+    @contextmanager
+    def minimizer_session(self, settings, ftol: float):
+        """Yield ``window(steps) -> (iterations, total energy, max force component, max
+        generalized torque component)``; each window restarts FIRE (v = 0, dt = timestep) like one
+        LAMMPS ``minimize`` command."""
+        if settings.method != "fire":
+            raise ValueError(f"the compiled engine runs FIRE only, not {settings.method}; use engine lammps")
+        n = self.template.n
+        halt = settings.v_min * n
+        half_skin_sq = (self.skin / 2) ** 2
+
+        def window(steps: int):
+            state = kernels.fire_state(settings.timestep)
+            v, w = np.zeros_like(self._x), np.zeros_like(self._g)
+            done = 0
+            while True:
+                ran, reason, energy = kernels.fire(self._model(), self._x, v, self._f, self._o, w, self._tau, self._g,
+                                                   self._dk, self._mask, self._virial, state, self._built_at,
+                                                   self._turned, self._reach, half_skin_sq, steps - done, ftol, halt)
+                done += ran
+                self._energy = energy
+                if reason != kernels.REBUILD or done >= steps:
+                    break
+                self._build_pairs()
+            if reason == kernels.REBUILD:  # the cap fell on a rebuild step: forces with a fresh list
+                self._build_pairs()
+                self.evaluate()
+            fmax = float(np.abs(self._f).max()) if n else 0.0
+            gmax = float(np.abs(self._g).max()) if self._g.size else 0.0
+            return done, float(self._energy), fmax, gmax
+
+        yield window

@@ -1,0 +1,32 @@
+"""The shape kernels and their dispatch.
+
+Each kernel module defines ``KIND`` (the shape kind it runs), ``Pairs`` (its pair-list
+NamedTuple), ``build(packing, x, skin) -> Pairs`` and the compiled
+``forces(pairs, x, o, f, tau, virial) -> energy``. ``evaluate`` picks the kernel by the type
+of the pair list at compile time. A new shape is one more module in ``MODULES``.
+"""
+
+from __future__ import annotations
+
+from numba.extending import overload
+
+from . import bodies, spheres
+
+MODULES = (spheres, bodies)
+KERNELS = {m.Pairs: m.forces for m in MODULES}
+BUILDERS = {m.KIND: m.build for m in MODULES}
+
+
+def evaluate(model, x, o, f, tau, virial):
+    """Energy; fills forces f (N, d), world torques tau (N, r) and the virial (d, d)."""
+    return KERNELS[type(model)](model, x, o, f, tau, virial)
+
+
+@overload(evaluate, jit_options={"cache": True})
+def _evaluate(model, x, o, f, tau, virial):
+    kernel = KERNELS[model.instance_class]
+
+    def impl(model, x, o, f, tau, virial):
+        return kernel(model, x, o, f, tau, virial)
+
+    return impl

@@ -1,0 +1,85 @@
+"""Orientations of particles (numpy): 2D angles, 3D unit quaternions.
+
+Conventions used throughout jamflow:
+- 2D: ``orientation`` theta (radians, shape (N,)) rotates the body frame by theta about z;
+  the director (long axis of an ellipse, axis of a linear body) is the body x-axis,
+  u = (cos theta, sin theta) (seed section 2.3.1: theta is the angle between x and the
+  long axis).
+- 3D: a unit quaternion q = (w, x, y, z) per particle (shape (N, 4)) rotates body-frame
+  vectors into the world frame, v_world = R(q) v_body; the director is R(q) x_body.
+  Axisymmetric particles (spheroids, linear bodies) ignore rotations about their director.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+UNIT_TOL = 1e-8  # | |q| - 1 | allowed for a quaternion read from a user or a file
+
+
+def quaternion_matrices(q: np.ndarray) -> np.ndarray:
+    """(N, 3, 3) rotation matrices of unit quaternions (N, 4) (w, x, y, z)."""
+    w, x, y, z = np.asarray(q, float).T
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+    ], -2)
+
+
+def angle_matrices(theta: np.ndarray) -> np.ndarray:
+    """(N, 2, 2) rotation matrices of angles theta (N,)."""
+    c, s = np.cos(theta), np.sin(theta)
+    return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
+
+
+def rotation_matrices(orientations: np.ndarray, dim: int) -> np.ndarray:
+    """(N, d, d) body-to-world rotations of 2D angles or 3D quaternions."""
+    return angle_matrices(orientations) if dim == 2 else quaternion_matrices(orientations)
+
+
+def directors(orientations: np.ndarray, dim: int) -> np.ndarray:
+    """(N, d) unit vectors along each particle's body x-axis."""
+    return rotation_matrices(orientations, dim)[:, :, 0]
+
+
+def random_orientations(n: int, dim: int, rng: np.random.Generator) -> np.ndarray:
+    """Uniformly random orientations: angles on [0, 2 pi) in 2D (directors uniform on the circle);
+    Haar-uniform quaternions in 3D (directors uniform on the sphere; Shoemake's method)."""
+    if dim == 2:
+        return 2 * np.pi * rng.random(n)
+    u1, u2, u3 = rng.random((3, n))
+    a, b = np.sqrt(1 - u1), np.sqrt(u1)
+    return np.column_stack([a * np.sin(2 * np.pi * u2), a * np.cos(2 * np.pi * u2),
+                            b * np.sin(2 * np.pi * u3), b * np.cos(2 * np.pi * u3)])
+
+
+def quaternion_from_director(u: np.ndarray) -> np.ndarray:
+    """(N, 4) unit quaternions that rotate the body x-axis onto the unit vectors u (N, 3)
+    (the shortest rotation; for u = -x a half turn about z)."""
+    u = np.asarray(u, float)
+    w = 1.0 + u[:, 0]
+    q = np.column_stack([w, np.zeros(len(u)), -u[:, 2], u[:, 1]])  # (1 + x.u, x cross u)
+    flip = w < 1e-12
+    q[flip] = [0.0, 0.0, 0.0, 1.0]
+    return q / np.linalg.norm(q, axis=1, keepdims=True)
+
+
+def check_orientations(orientations, n: int, dim: int) -> np.ndarray:
+    """Validated float array: (N,) finite angles in 2D, (N, 4) unit quaternions in 3D
+    (renormalised to round-off); ValueError says what is wrong."""
+    o = np.array(orientations, dtype=float)
+    shape = (n,) if dim == 2 else (n, 4)
+    if o.shape != shape:
+        what = "one angle (radians) per particle" if dim == 2 else "one unit quaternion (w, x, y, z) per particle"
+        raise ValueError(f"orientations must have shape {shape} ({what}), got {o.shape}")
+    if not np.all(np.isfinite(o)):
+        raise ValueError("orientations must be finite")
+    if dim == 3:
+        norm = np.linalg.norm(o, axis=1)
+        worst = float(np.max(np.abs(norm - 1))) if n else 0.0
+        if worst > UNIT_TOL:
+            raise ValueError(f"orientations must be unit quaternions (| |q| - 1 | <= {UNIT_TOL:g}, worst "
+                             f"{worst:.3g}); normalise with q / np.linalg.norm(q, axis=1, keepdims=True)")
+        o = o / norm[:, None]
+    return o
