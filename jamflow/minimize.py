@@ -5,14 +5,17 @@ Methods:
 - ``cg``: Polak-Ribiere conjugate gradient, ``min_modify line forcezero`` (the default
   backtracking line search stalls at forces ~1e-10, see docs/failure-modes.md).
 - ``md``: damped molecular dynamics, ``fix nve`` + ``fix viscous b`` (drag -b v on every
-  particle). This is *not* the pairwise damping of seed eq. 2.3: it also damps rattlers
+  particle); for ellipsoids ``fix nve/asphere`` + ``fix langevin`` at T = 0 with ``angmom``
+  (drag ``rotating_damping`` on translations and rotations, the only LAMMPS route that turns them). This is *not* the pairwise damping of seed eq. 2.3: it also damps rattlers
   and is not Galilean invariant; both dissipate to the same local minima for large b,
   and the net momentum of a periodic packing is zero, so the minima found are comparable.
 
 Stopping rules, checked after every ``window`` iterations (LAMMPS runs the window):
 1. ``force``: max force component below ``force_tol`` (default scales with the box side and
    the contact stiffness, since round-off in positions of a box of side L limits forces to
-   ~L * 1e-16 * d2V/dr2; repulsive LJ is 72x stiffer at contact than the linear spring),
+   ~L * 1e-16 * d2V/dr2; repulsive LJ is 72x stiffer at contact than the linear spring;
+   ellipses/spheroids start from 5e-13 instead of 1e-14: near onset their quartic modes make
+   every minimiser creep, docs/ellipses.md),
    and, for particles that turn, every generalized torque component tau_a / d_k below it too
    (torque balance; d_k the rotational length of ``jamflow.shapes``).
 2. ``energy-below-vmin``: energy per particle below ``v_min`` (seed rule b, V_min = 1e-16),
@@ -42,7 +45,8 @@ class MinimizerSettings:
     """Parameters of one minimisation. Energies per particle in eps; forces in eps/diameter."""
 
     method: str = "fire"
-    force_tol: float | None = None  # None: 1e-14 * max(1, L / 20) * k, L the longest box side, k the contact stiffness
+    force_tol: float | None = None  # None: base * max(1, L / 20) * k, L the longest box side, k the contact
+    # stiffness, base the shape's ``force_tol_base`` (1e-14; 5e-13 for ellipses/spheroids)
     delta: float = 1e-16  # seed's relative energy change threshold
     v_min: float = 1e-16  # seed's V_min (per particle)
     max_iterations: int = 500_000
@@ -50,28 +54,33 @@ class MinimizerSettings:
     timestep: float = 0.05  # FIRE initial step (0.1 diverges: docs/failure-modes.md), in sqrt(m diameter^2 / eps)
     md_timestep: float = 0.1  # damped-MD step
     damping: float = 0.3  # md only: drag coefficient b, in sqrt(m eps) / diameter
+    # md of particles that turn (LAMMPS ellipsoids: fix langevin at T = 0, drag rate b / m on translations
+    # and rotations). Near onset 0.01 reached the force tolerance where 0.3 was 500x off after 3e5 steps
+    # (docs/ellipses.md)
+    rotating_damping: float = 0.01
 
     def __post_init__(self):
         if self.method not in METHODS:
             raise ValueError(f"unknown minimizer {self.method!r}; use one of {', '.join(METHODS)}")
-        for name in ("delta", "v_min", "timestep", "md_timestep", "damping"):
+        for name in ("delta", "v_min", "timestep", "md_timestep", "damping", "rotating_damping"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"minimizer {name} must be a finite positive number, got {value}")
         if self.force_tol is not None and not (math.isfinite(self.force_tol) and self.force_tol > 0):
             raise ValueError(f"force_tol must be a finite positive number, got {self.force_tol}")
-        if self.method == "md" and self.damping * self.md_timestep >= 2.0:
+        if self.method == "md" and max(self.damping, self.rotating_damping) * self.md_timestep >= 2.0:
             raise ValueError(f"damping x md_timestep = {self.damping * self.md_timestep:g} >= 2: the explicit drag "
                              "-b v overshoots and diverges (the blown-up state even reports V = 0); use "
                              "damping < 2 / md_timestep, e.g. 0.3 with md_timestep 0.1")
         if self.max_iterations < 1 or self.window < 1:
             raise ValueError("max_iterations and window must be positive integers")
 
-    def resolved_force_tol(self, box, stiffness: float = 1.0) -> float:
-        """The force tolerance; by default above the round-off floor ~ L * 1e-16 * stiffness."""
+    def resolved_force_tol(self, box, stiffness: float = 1.0, base: float = 1e-14) -> float:
+        """The force tolerance; by default above the round-off floor ~ L * 1e-16 * stiffness
+        (``base`` 1e-14), or above the creep of a shape's soft modes (``Shape.force_tol_base``)."""
         if self.force_tol is not None:
             return self.force_tol
-        return 1e-14 * max(1.0, float(box.lengths.max()) / 20.0) * max(1.0, stiffness)
+        return base * max(1.0, float(box.lengths.max()) / 20.0) * max(1.0, stiffness)
 
     def as_dict(self) -> dict:
         return {f"minimizer_{k}": v for k, v in asdict(self).items()}
@@ -104,7 +113,7 @@ def minimize(engine, settings: MinimizerSettings) -> MinimizeResult:
     start = time.perf_counter()
     n = engine.template.n
     stiffness = engine.template.potential.contact_stiffness
-    ftol = settings.resolved_force_tol(engine.box, stiffness)
+    ftol = settings.resolved_force_tol(engine.box, stiffness, engine.template.shape.force_tol_base)
     fmax_at_vmin = _force_bound(engine.template, n * settings.v_min)
     done, energy_prev, fmax_prev = 0, math.inf, math.inf
     with engine.minimizer_session(settings, ftol) as run_window:

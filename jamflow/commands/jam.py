@@ -11,6 +11,7 @@ from ..io import check_writable, save_packing
 from ..minimize import METHODS, MinimizerSettings
 from ..protocols.compression import DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, initial_packing, jam
 from ..progress import CompressionProgress
+from ..shapes.contact_distance import METHODS as METHODS_CONTACT
 
 
 def add_arguments(p) -> None:
@@ -19,8 +20,13 @@ def add_arguments(p) -> None:
     p.add_argument("--sizes", default="bi:1.4:0.5",
                    help="mono | bi:RATIO:FRACTION_SMALL | poly-uniform:WIDTH | poly-normal:WIDTH | poly-lognormal:WIDTH")
     p.add_argument("--potential", default="spring", help="spring | hertz | spring:ALPHA | rlj")
-    p.add_argument("--shape", default="disk", help="particle shape: disk | sphere (the same: round particles); "
-                   "--sizes scales whole particles")
+    p.add_argument("--shape", default="disk", help="particle shape: disk | sphere (the same: round particles) | "
+                   "ellipse:ALPHA (2D, ALPHA = a/b >= 1) | spheroid:ALPHA (3D, ALPHA < 1 oblate); ALPHA = 1 is the "
+                   "disk/sphere. --sizes scales whole particles (b; a = ALPHA b)")
+    p.add_argument("--contact", choices=METHODS_CONTACT, default="exact",
+                   help="contact distance of ellipses/spheroids (seed section 2.3.2): exact (Perram-Wertheim), "
+                        "gaussian (equal sizes only), cleaver, linear, quadratic (3D: equal sizes only); "
+                        "docs/contact-distance.md")
     p.add_argument("--protocol", choices=sorted(PROTOCOLS), default=None,
                    help=f"seed: the chapter's constant-increment bisection; fast: the same stopping rule with "
                         f"growing increments and Newton jumps (docs/speed.md). Default {DEFAULT_PROTOCOL}; "
@@ -56,7 +62,7 @@ def run(args) -> int:
     settings = settings_from_args(args)
     check_writable(args.out)
     start = initial_packing(args.n, args.dim, args.sizes, args.potential, args.seed, settings.start_phi(args.dim),
-                            args.shape)
+                            args.shape, args.contact)
     engine_name(start, args.minimizer, args.engine)  # refuse --engine numba where it cannot run, before work
     if args.emit_deck:
         return emit(args, start, settings)

@@ -61,14 +61,20 @@ class Capabilities:
     tilted_boxes: bool = True
     mpi: bool = False
     options: frozenset = field(default_factory=frozenset)  # keyword options its constructor takes
+    shape_methods: tuple = ()  # (shape kind, minimisers, why) where a shape runs fewer minimisers
 
-    def reason(self, packing, method: str = "fire", comm=None) -> str | None:
+    def reason(self, packing, method: str | None = "fire", comm=None) -> str | None:
+        """Why the engine cannot run the scene, or None; ``method`` None: any of its minimisers."""
         if packing.shape.kind not in self.shapes:
             return f"{packing.shape.name(packing.dim)} particles (it runs {', '.join(sorted(self.shapes))})"
         if packing.potential.name not in self.potentials:
             return f"potential {packing.potential.spec} (it runs {', '.join(sorted(self.potentials))})"
-        if method not in self.methods:
+        if method is not None and method not in self.methods:
             return f"minimizer {method} (it runs {', '.join(sorted(self.methods))})"
+        for kind, methods, why in self.shape_methods:
+            if method is not None and packing.shape.kind == kind and method not in methods:
+                return (f"minimizer {method} on {packing.shape.name(packing.dim)} particles: {why} (it runs "
+                        f"{', '.join(sorted(methods))} there)")
         if packing.box.is_triclinic and not self.tilted_boxes:
             return "a tilted (sheared) box"
         if comm is not None and not self.mpi:

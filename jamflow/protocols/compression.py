@@ -18,7 +18,7 @@ import numpy as np
 
 from ..engine.base import check_engine, open_engine
 from ..minimize import MinimizerSettings, MinimizeResult
-from ..pairs import overlapping_pairs, overlapping_sites
+from ..pairs import candidate_pairs, overlapping_pairs, overlapping_sites
 from ..packing import DENSEST_PHI, Packing, random_packing
 from ..potentials import Potential, Spring, parse_potential
 from ..shapes.shape import parse_shape
@@ -121,6 +121,7 @@ class JamResult:
     lammps_version: int
     engine: str = "lammps"  # which engine minimised: "lammps" or "numba"
     max_torque: float = 0.0  # largest generalized torque component tau / d_k (0 for disks, spheres)
+    counters: dict = field(default_factory=dict)  # what the engine's kernel counted (ellipsoids: fallbacks, ...)
 
     @property
     def pressure(self) -> float:
@@ -147,10 +148,13 @@ class JammingFailed(RuntimeError):
 
 def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | Potential = "spring",
         seed: int = 0, settings: CompressionSettings | None = None, *, start: Packing | None = None,
-        observers=(), engine: str = "auto", engine_options: dict | None = None, shape="disk") -> JamResult:
+        observers=(), engine: str = "auto", engine_options: dict | None = None, shape="disk",
+        contact: str = "exact") -> JamResult:
     """Jam N particles by isotropic compression; ``start`` overrides the random start.
 
-    ``shape``: a ``--shape`` spec or shape object (``jamflow.shapes``; default disks/spheres).
+    ``shape``: a ``--shape`` spec or shape object (``jamflow.shapes``; default disks/spheres);
+    ``sizes`` scale whole particles (an ellipse's b; a = ALPHA b). ``contact``: the contact-distance
+    method of ellipses/spheroids given as a spec (exact, gaussian, cleaver, linear, quadratic).
     ``observers`` are callables ``f(step: dict)`` called after every minimisation
     (progress bars, writers). ``engine``: "auto" (the compiled engine wherever it runs the
     scene, else LAMMPS), "lammps" or "numba" (``jamflow.engine.base``).
@@ -158,13 +162,13 @@ def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | 
     settings = settings or PROTOCOLS[DEFAULT_PROTOCOL]()
     check_engine(engine)
     if start is None:
-        start = initial_packing(n, dim, sizes, potential, seed, settings.start_phi(dim), shape)
+        start = initial_packing(n, dim, sizes, potential, seed, settings.start_phi(dim), shape, contact)
         if start.potential.soft_start:
             start = remove_overlaps(start, settings.minimizer, engine)
     return compress(start, settings, observers=observers, engine=engine, engine_options=engine_options)
 
 
-def initial_packing(n, dim, sizes, potential, seed, phi0, shape="disk") -> Packing:
+def initial_packing(n, dim, sizes, potential, seed, phi0, shape="disk", contact="exact") -> Packing:
     """Validated random start (seed step 1); errors before any engine work."""
     if not isinstance(n, (int, np.integer)) or n < 2:
         raise ValueError(f"n must be an integer >= 2, got {n!r}")
@@ -177,11 +181,13 @@ def initial_packing(n, dim, sizes, potential, seed, phi0, shape="disk") -> Packi
         raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
     pot = parse_potential(potential) if isinstance(potential, str) else potential
     size_spec = parse_sizes(sizes) if isinstance(sizes, str) else sizes
-    particle = parse_shape(shape, dim)
+    particle = parse_shape(shape, dim, contact)
     try:
         return random_packing(int(n), dim, size_spec, phi0, int(seed), pot, particle)
     except ValueError as err:
-        raise ValueError(f"{err} (n = {n} is too small for these sizes)") from None
+        if "box too small" in str(err):
+            raise ValueError(f"{err} (n = {n} is too small for these sizes)") from None
+        raise
 
 
 def remove_overlaps(packing: Packing, minimizer: MinimizerSettings, engine: str = "auto") -> Packing:
@@ -235,7 +241,9 @@ def compress(packing: Packing, settings: CompressionSettings, *, observers=(), e
                 stepper.last_step = 0.0
                 continue
             if in_window:
-                return _finish(sim, phi, result, rows, settings, start_time, lammps_version())
+                jammed = _finish(sim, phi, result, rows, settings, start_time, lammps_version())
+                _warn_fallbacks(jammed)
+                return jammed
             phi = stepper.next_phi(phi, v, pressure, unjammed=result.reason == "energy-below-vmin")
     raise JammingFailed(f"no packing in the window {settings.v_tol:g} < V < {2 * settings.v_tol:g} after "
                         f"{settings.max_steps} minimisations (last phi = {phi}); raise max_steps or check "
@@ -243,10 +251,14 @@ def compress(packing: Packing, settings: CompressionSettings, *, observers=(), e
 
 
 RLJ_MIN_START_RATIO = 0.9  # r/sigma below this: repulsive-LJ forces > ~1e2 eps/sigma, LAMMPS loses atoms
+CONTACT_RANGE = 1e-6  # ellipsoids: r / (smallest possible sigma) below this leaves r_hat, hence sigma, imprecise
 
 
 def _check_start(packing: Packing) -> None:
-    """Refuse a repulsive-LJ start with deep overlaps before any work (seed step 1)."""
+    """Refuse before any work a start the engines cannot evaluate: ellipses/spheroids with centres so
+    close that the contact distance is undefined or imprecise, repulsive LJ with deep overlaps."""
+    if packing.shape.kind == "ellipsoid":
+        _check_contact_range(packing)
     if not packing.potential.soft_start:
         return
     r, sigma = (overlapping_sites(packing) if packing.shape.kind == "rigid" else overlapping_pairs(packing))[-2:]
@@ -254,6 +266,32 @@ def _check_start(packing: Packing) -> None:
         raise ValueError(f"repulsive LJ from a start with overlap r/sigma = {(r / sigma).min():.3f} < "
                          f"{RLJ_MIN_START_RATIO}: forces diverge and LAMMPS loses atoms. Relax the start "
                          "first (jamflow.protocols.compression.remove_overlaps) or let jam() make the start")
+
+
+def _check_contact_range(packing: Packing) -> None:
+    """sigma_ij depends on the direction r_hat = r_ij / |r_ij|, known to ~1e-16 L / |r_ij| in a box of
+    side L; at r_ij = 0 it is undefined (the contact-distance solver would return NaN)."""
+    reach = packing.shape.reach(packing.diameters)
+    i, j = candidate_pairs(packing, 2.0 * float(reach.max()))
+    r = np.linalg.norm(packing.box.minimum_image(packing.positions[i] - packing.positions[j]), axis=1)
+    shortest = packing.shape.axes(packing.diameters).min(axis=1)
+    ratio = r / (0.5 * (shortest[i] + shortest[j]))  # <= r / sigma_ij
+    if len(ratio) and ratio.min() < CONTACT_RANGE:
+        k = int(np.argmin(ratio))
+        raise ValueError(f"the start is too dense for the contact distance: particles {i[k]} and {j[k]} have centres "
+                         f"{r[k]:.3g} apart (r/sigma <= {ratio[k]:.2g} < {CONTACT_RANGE:g}), where the direction r_hat, "
+                         "and with it sigma_ij, is undefined or imprecise; use a lower phi0 or another seed, or "
+                         "separate the pair")
+
+
+def _warn_fallbacks(result: JamResult) -> None:
+    """Warn when a truncated contact distance (linear, quadratic) fell back to lambda = 1/2."""
+    fallbacks, evaluations = result.counters.get("fallbacks", 0), result.counters.get("approximate", 0)
+    if fallbacks:
+        warnings.warn(f"contact method {result.packing.shape.contact}: the truncated root left (0, 1) and lambda "
+                      f"fell back to 1/2 in {fallbacks} of {evaluations} contact evaluations "
+                      f"({100 * fallbacks / max(evaluations, 1):.2g} %) during this run; there sigma is Cleaver's "
+                      "(eq. 2.6), and it jumps where the root leaves. Use --contact exact to avoid it", stacklevel=3)
 
 
 class PhiStepper:
@@ -353,9 +391,11 @@ def _finish(engine, phi, result, rows, settings, start_time, version) -> JamResu
     packing = engine.packing()
     if not result.converged:
         warnings.warn(f"final minimisation stopped by '{result.reason}' with max force {result.max_force:.2e} "
-                      f"(tolerance {settings.minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness):.1e}); the packing is in "
+                      f"(tolerance {settings.minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness, packing.shape.force_tol_base):.1e}); the packing is in "
                       "the energy window but force balance is only as good as that max force", stacklevel=3)
     history = {k: np.array(v) for k, v in rows.items()}
     history["reason"] = history["reason"].astype("S")
+    counters = engine.counters() if hasattr(engine, "counters") else {}
     return JamResult(packing, phi, result.energy_per_particle, state.pressure_tensor, result.max_force,
-                     history, settings, time.perf_counter() - start_time, version, engine.name, result.max_torque)
+                     history, settings, time.perf_counter() - start_time, version, engine.name, result.max_torque,
+                     counters)
