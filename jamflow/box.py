@@ -10,21 +10,30 @@ The cell is an upper-triangular matrix ``h`` whose *columns* are the cell vector
 which is exactly LAMMPS's restricted triclinic cell (``xy``, ``xz``, ``yz`` are tilt
 *lengths*). The shear strain of Lees-Edwards boundaries is ``gamma = xy / ly``
 (seed eq. 2.4). freud and HOOMD use dimensionless tilts ``xy / ly``; see ``to_freud``.
+
+Walls (seed section 2.3): an axis that is not ``periodic`` is bounded by flat walls at its
+faces, x_a = 0 and x_a = L_a; separations along it are direct (no image) and positions are
+not wrapped along it. A walled axis can take part in no tilt: a shear across a wall has no
+periodic image to act on, and a tilted face is no flat axis-aligned wall.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from itertools import product
 
 import numpy as np
 
+AXES = "xyz"
+
 
 @dataclass(frozen=True)
 class Box:
-    """An upper-triangular periodic cell; ``h`` columns are the cell vectors."""
+    """An upper-triangular cell; ``h`` columns are the cell vectors; ``periodic`` per axis
+    (None: every axis periodic; False: walls at both faces of that axis)."""
 
     h: np.ndarray
+    periodic: tuple | None = None
 
     def __post_init__(self):
         h = np.array(self.h, dtype=float)
@@ -36,22 +45,31 @@ class Box:
             raise ValueError("Box h-matrix must be upper-triangular (LAMMPS restricted triclinic)")
         if np.any(np.diag(h) <= 0):
             raise ValueError(f"Box side lengths must be positive, got {np.diag(h)}")
+        periodic = (True,) * len(h) if self.periodic is None else tuple(bool(p) for p in self.periodic)
+        if len(periodic) != len(h):
+            raise ValueError(f"periodic needs one flag per axis ({len(h)}), got {self.periodic!r}")
+        for a, b in zip(*np.triu_indices(len(h), 1)):
+            if h[a, b] != 0 and not (periodic[a] and periodic[b]):
+                axis = AXES[a] if not periodic[a] else AXES[b]
+                raise ValueError(f"walls on {axis} with a sheared box (tilt {AXES[a]}{AXES[b]} = {h[a, b]:g}): a "
+                                 f"walled axis takes part in no shear; remove the walls on {axis} or the shear")
         h.setflags(write=False)
         object.__setattr__(self, "h", h)
+        object.__setattr__(self, "periodic", periodic)
 
     # construction -----------------------------------------------------------------
     @classmethod
-    def cube(cls, length: float, dim: int) -> "Box":
+    def cube(cls, length: float, dim: int, periodic=None) -> "Box":
         """Square (2D) or cubic (3D) box of side ``length``."""
-        return cls(np.eye(dim) * float(length))
+        return cls(np.eye(dim) * float(length), periodic)
 
     @classmethod
-    def from_lammps(cls, dim: int, lengths, tilts=(0.0, 0.0, 0.0)) -> "Box":
+    def from_lammps(cls, dim: int, lengths, tilts=(0.0, 0.0, 0.0), periodic=None) -> "Box":
         """From LAMMPS side lengths (lx, ly[, lz]) and tilt lengths (xy, xz, yz)."""
         xy, xz, yz = tilts
         if dim == 2:
-            return cls([[lengths[0], xy], [0.0, lengths[1]]])
-        return cls([[lengths[0], xy, xz], [0.0, lengths[1], yz], [0.0, 0.0, lengths[2]]])
+            return cls([[lengths[0], xy], [0.0, lengths[1]]], periodic)
+        return cls([[lengths[0], xy, xz], [0.0, lengths[1], yz], [0.0, 0.0, lengths[2]]], periodic)
 
     # properties -------------------------------------------------------------------
     @property
@@ -69,6 +87,16 @@ class Box:
         if self.dim == 2:
             return float(self.h[0, 1]), 0.0, 0.0
         return float(self.h[0, 1]), float(self.h[0, 2]), float(self.h[1, 2])
+
+    @property
+    def walls(self) -> tuple[int, ...]:
+        """The walled (non-periodic) axes."""
+        return tuple(a for a, p in enumerate(self.periodic) if not p)
+
+    @property
+    def wall_spec(self) -> str:
+        """The walled axes as ``--walls`` writes them ("" without walls, "y", "x,y")."""
+        return ",".join(AXES[a] for a in self.walls)
 
     @property
     def is_triclinic(self) -> bool:
@@ -94,13 +122,17 @@ class Box:
     # transformations ----------------------------------------------------------------
     def scaled(self, factor: float) -> "Box":
         """Every cell vector multiplied by ``factor`` (isotropic compression < 1)."""
-        return Box(self.h * float(factor))
+        return replace(self, h=self.h * float(factor))
+
+    def with_h(self, h) -> "Box":
+        """Another cell matrix, the same periodicity (walls)."""
+        return replace(self, h=h)
 
     def with_shear_strain(self, gamma: float) -> "Box":
         """Same cell with the xy tilt set to ``gamma * ly``."""
         h = self.h.copy()
         h[0, 1] = gamma * h[1, 1]
-        return Box(h)
+        return replace(self, h=h)
 
     def to_fractional(self, positions: np.ndarray) -> np.ndarray:
         return np.linalg.solve(self.h, np.asarray(positions, float).T).T
@@ -109,23 +141,31 @@ class Box:
         return np.asarray(fractional, float) @ self.h.T
 
     def wrap(self, positions: np.ndarray) -> np.ndarray:
-        """Positions mapped into the primary cell [0, 1)^d in fractional coordinates."""
+        """Positions mapped into the primary cell [0, 1)^d in fractional coordinates along
+        the periodic axes (walled axes are left as they are)."""
         s = self.to_fractional(positions)
-        return self.to_cartesian(s - np.floor(s))
+        return self.to_cartesian(s - np.floor(s) * self._periodic_mask)
+
+    @property
+    def _periodic_mask(self) -> np.ndarray:
+        return np.array(self.periodic, float)
 
     def minimum_image(self, dr: np.ndarray) -> np.ndarray:
         """Shortest periodic image of separation vectors ``dr`` (..., d).
 
         Orthogonal cells: rounding. Tilted cells: rounds in fractional coordinates, then
         checks the 3^d neighbouring images, so it is exact in strongly tilted cells too.
+        Walled axes have no images: separations along them are direct.
         """
         dr = np.asarray(dr, float)
+        mask = self._periodic_mask
         if not self.is_triclinic:  # rounding is exact for orthogonal cells
             lengths = self.lengths
-            return dr - lengths * np.round(dr / lengths)
+            return dr - lengths * np.round(dr / lengths) * mask
         s = self.to_fractional(dr.reshape(-1, self.dim))
-        base = self.to_cartesian(s - np.round(s))
-        shifts = self.to_cartesian(np.array(list(product((-1, 0, 1), repeat=self.dim)), float))
+        base = self.to_cartesian(s - np.round(s) * mask)
+        images = product(*[(-1, 0, 1) if p else (0,) for p in self.periodic])
+        shifts = self.to_cartesian(np.array(list(images), float))
         candidates = base[:, None, :] + shifts[None, :, :]
         best = np.argmin(np.einsum("nkd,nkd->nk", candidates, candidates), axis=1)
         return candidates[np.arange(len(base)), best].reshape(dr.shape)
@@ -146,6 +186,9 @@ class Box:
         lx, ly = self.h[0, 0], self.h[1, 1]
         xy, xz, yz = self.tilts
         if self.dim == 2:
-            return freud.box.Box(Lx=lx, Ly=ly, xy=xy / ly, is2D=True)
-        lz = self.h[2, 2]
-        return freud.box.Box(Lx=lx, Ly=ly, Lz=lz, xy=xy / ly, xz=xz / lz, yz=yz / lz)
+            box = freud.box.Box(Lx=lx, Ly=ly, xy=xy / ly, is2D=True)
+        else:
+            lz = self.h[2, 2]
+            box = freud.box.Box(Lx=lx, Ly=ly, Lz=lz, xy=xy / ly, xz=xz / lz, yz=yz / lz)
+        box.periodic = list(self.periodic) + [True] * (3 - self.dim)
+        return box

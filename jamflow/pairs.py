@@ -1,7 +1,7 @@
 """Pairs of particles within reach, with float64 minimum-image separations.
 
 Candidate pairs come from a cell search (scipy's cKDTree for orthogonal boxes, freud's
-AABB query for tilted ones); separations are then recomputed in float64 with
+AABB query for tilted ones; walled axes have no periodic images); separations are then recomputed in float64 with
 ``Box.minimum_image``, because freud works in float32 and contact overlaps near
 jamming are ~1e-8 of a diameter.
 """
@@ -24,9 +24,10 @@ def candidate_pairs(packing: Packing, rmax: float) -> tuple[np.ndarray, np.ndarr
     box = packing.box
     rmax = min(float(rmax) * (1 + 1e-6) + 1e-9, 0.5 * box.widths.min() * (1 - 1e-12))
     if not box.is_triclinic:
+        periodic = np.array(box.periodic)
         wrapped = box.wrap(packing.positions)
-        wrapped = np.where(wrapped >= box.lengths, 0.0, wrapped)
-        tree = cKDTree(wrapped, boxsize=box.lengths)
+        wrapped = np.where(periodic & (wrapped >= box.lengths), 0.0, wrapped)
+        tree = cKDTree(wrapped, boxsize=np.where(periodic, box.lengths, 0.0))  # 0: no images (walls)
         pairs = tree.query_pairs(rmax, output_type="ndarray")
     else:
         pairs = _freud_pairs(packing, rmax)
