@@ -156,10 +156,11 @@ def face_pressures(box: Box, loads: np.ndarray) -> np.ndarray:
 
 
 def with_walls(packing, axes, wall_type: str = "smooth"):
-    """``packing`` with walls on ``axes`` (walled axes bound the box at its faces); rough walls
-    add rows of fixed particles of the smallest diameter on every walled face (appended after
-    the mobile particles), spaced by at least their diameter up to the densest packing of
-    equal disks/spheres."""
+    """A start with walls on ``axes`` (walled axes bound the box at its faces): the mobile
+    particles' coordinates along walled axes are mapped affinely into [a_i/2, L_a - a_i/2], so
+    none starts on or behind a wall (LAMMPS refuses that). Rough walls add rows of fixed
+    particles of the smallest diameter on every walled face (appended after the mobile ones),
+    spaced by at least their diameter up to the densest packing of equal disks/spheres."""
     from .packing import DENSEST_PHI
 
     if wall_type not in WALL_TYPES:
@@ -167,15 +168,19 @@ def with_walls(packing, axes, wall_type: str = "smooth"):
     if not axes:
         return packing
     box = walled_box(packing.box, axes)
+    x, half = np.array(packing.positions), 0.5 * packing.diameters
+    for a in box.walls:
+        x[:, a] = half + (x[:, a] / box.lengths[a]) * (box.lengths[a] - 2 * half)
+    packing = replace(packing, box=box, positions=x)
     if wall_type == "smooth":
-        return replace(packing, box=box)
+        return packing
     if packing.shape.kind != "sphere" or packing.fixed is not None:
         raise ValueError("rough walls are made of fixed disks/spheres next to mobile disks/spheres")
     small = float(packing.diameters.min())
     shrink = (packing.phi / DENSEST_PHI[packing.dim]) ** (1.0 / packing.dim)
     sites = rough_wall_particles(box, small, min(1.0, shrink))
     n = packing.n
-    return replace(packing, box=box, positions=np.vstack([packing.positions, sites]),
+    return replace(packing, positions=np.vstack([packing.positions, sites]),
                    diameters=np.concatenate([packing.diameters, np.full(len(sites), small)]),
                    fixed=np.concatenate([np.zeros(n, bool), np.ones(len(sites), bool)]))
 

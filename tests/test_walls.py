@@ -155,6 +155,25 @@ def test_engines_match_the_reference_with_walls(engine, name, dim):
         assert np.all(got.forces[p.fixed] == 0.0)
 
 
+@pytest.mark.parametrize("engine", list(ENGINES))
+def test_walls_follow_the_box(engine):
+    """After a box change the walls are at the new faces (a LAMMPS EDGE wall would stay behind)."""
+    p = scene(2, (0, 1), "rough", 0.0)
+    box = p.box.scaled(0.97)
+    with ENGINES[engine](p) as eng:
+        eng.set_box(box)
+        got = eng.evaluate()
+    ref = energy_forces_pressure(p.with_positions(p.positions * 0.97, box=box))
+    assert got.energy == pytest.approx(ref.energy, rel=1e-13)
+    assert np.max(np.abs(got.forces - ref.forces)) < 1e-13 * np.max(np.abs(ref.forces))
+
+
+def test_random_starts_keep_clear_of_the_walls():
+    p = scene(3, (0, 1, 2), "smooth", 0.0)
+    gap = np.minimum(p.positions, p.box.lengths - p.positions) - 0.5 * p.diameters[:, None]
+    assert gap.min() >= -1e-12
+
+
 @pytest.mark.parametrize("name", ["rough-gravity", "closed"])
 def test_reference_forces_and_wall_virial_are_energy_derivatives(name):
     """Forces = -grad U and the virial W_aa = -dU/de_aa (affine strain of box, walls and all

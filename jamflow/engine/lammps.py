@@ -12,7 +12,10 @@ Walls and gravity (``jamflow.walls``): walled axes are ``boundary f``; smooth wa
 ``fix wall/harmonic`` per particle size on the mobile particles of that size, E = K (rc - h)^2
 with K = 2 eps / a^2, rc = a / 2, which is exactly eps/2 (1 - h/(a/2))^2, the linear spring at
 contact distance a/2 (so LAMMPS walls need the linear spring and a few discrete sizes; the
-compiled engine runs every law); fixed particles are a group held by ``fix setforce 0 0 0``
+compiled engine runs every law). The wall coordinates are equal-style variables of the box
+(``v_jf_ylo`` = ylo, ...): an ``EDGE`` wall stays where the box edge was when the fix was
+defined and would not follow ``change_box``. LAMMPS refuses a particle on or behind a wall
+("Particle on or inside fix wall surface"), which the soft law itself allows; fixed particles are a group held by ``fix setforce 0 0 0``
 whose mutual pairs are excluded from the neighbour list; gravity is ``fix addforce 0 -g 0``
 (a constant force, whose energy g y LAMMPS adds itself; ``fix gravity`` is ignored by
 ``minimize``). Each fix has ``fix_modify energy yes`` and the walls ``virial yes``.
@@ -282,10 +285,12 @@ def boundary_commands(packing: Packing) -> list[str]:
     if packing.box.walls:
         values, types = packing.species()
         eps = packing.potential.epsilon
+        lines += [f"variable jf_{'xyz'[ax]}{side} equal {'xyz'[ax]}{side}" for ax in packing.box.walls
+                  for side in ("lo", "hi")]
         for t, a in enumerate(values):
             if not np.any(packing.mobile & (types == t)):
                 continue
-            faces = " ".join(f"{'xyz'[ax]}{side} EDGE {2 * eps / a**2:.17g} 0.0 {a / 2:.17g}"
+            faces = " ".join(f"{'xyz'[ax]}{side} v_jf_{'xyz'[ax]}{side} {2 * eps / a**2:.17g} 0.0 {a / 2:.17g}"
                              for ax in packing.box.walls for side in ("lo", "hi"))
             if mobile == "all":
                 lines += [f"group jf_w{t + 1} type {t + 1}"]
