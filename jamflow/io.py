@@ -274,9 +274,10 @@ def to_universe(packing: Packing):
     _, types = packing.species()
     u.add_TopologyAttr("types", [str(t + 1) for t in types])
     u.add_TopologyAttr("radii", packing.diameters / 2.0)
-    h = packing.box.h if packing.dim == 3 else np.diag([*np.diag(packing.box.h), 1.0])
+    cell = packing.box.reduced().h  # the same lattice with the tilt folded in, as MDAnalysis expects
+    h = cell if packing.dim == 3 else np.diag([*np.diag(cell), 1.0])
     if packing.dim == 2:
-        h[0, 1] = packing.box.h[0, 1]
+        h[0, 1] = cell[0, 1]
     pos = packing.box.wrap(packing.positions)
     u.atoms.positions = pos if packing.dim == 3 else np.column_stack([pos, np.zeros(packing.n)])
     u.dimensions = triclinic_box(*h.T)

@@ -15,8 +15,8 @@ contact distance a/2 (so LAMMPS walls need the linear spring and a few discrete 
 compiled engine runs every law). The wall coordinates are equal-style variables of the box
 (``v_jf_ylo`` = ylo, ...): an ``EDGE`` wall stays where the box edge was when the fix was
 defined and would not follow ``change_box``. LAMMPS refuses a particle on or behind a wall
-("Particle on or inside fix wall surface"), which the soft law itself allows; fixed particles are a group held by ``fix setforce 0 0 0``
-whose mutual pairs are excluded from the neighbour list; gravity is ``fix addforce 0 -g 0``
+("Particle on or inside fix wall surface"), which the soft law itself allows. Fixed particles
+are a group held by ``fix setforce 0 0 0`` whose mutual pairs are excluded from the neighbour list; gravity is ``fix addforce 0 -g 0``
 (a constant force, whose energy g y LAMMPS adds itself; ``fix gravity`` is ignored by
 ``minimize``). Each fix has ``fix_modify energy yes`` and the walls ``virial yes``.
 At a target pressure the box relaxes by ``fix box/relax`` (CG only, ``etol 0``).
@@ -73,7 +73,9 @@ class LammpsEngine:
         self.commands: list[str] = []
         self.lmp = new_lammps(args=args, comm=comm)
         self._tmp = tempfile.TemporaryDirectory(prefix="jamflow-")
-        self.box = packing.box
+        self.box = packing.box  # the accumulated cell; LAMMPS holds its reduced form
+        self._fold = packing.box.reduction()[1]  # box.h @ _fold = the cell LAMMPS holds
+        self._triclinic = packing.box.is_triclinic  # LAMMPS box style (write_lammps_data's choice)
         try:
             self._setup(packing, skin)
         except Exception:
@@ -164,21 +166,53 @@ class LammpsEngine:
 
     # box changes -------------------------------------------------------------------------------
     def set_box(self, box: Box) -> None:
-        """Deform the cell affinely (atoms remapped) to ``box``; origin stays at 0."""
+        """Deform the cell affinely (atoms remapped) to ``box``, which may carry any accumulated
+        tilt; origin stays at 0. LAMMPS gets the reduced cell; when the reduction changes (a
+        tilt crosses +-l/2) the cell is flipped to the new reduced one after the affine step,
+        keeping positions, energy, stress and image flags (unwrapped coordinates) consistent."""
         if box.dim != self.box.dim:
             raise ValueError("cannot change the dimension of a running system")
-        lo = box.to_lammps()
-        parts = [f"x final 0 {lo['xhi']:.17g}", f"y final 0 {lo['yhi']:.17g}"]
-        if box.dim == 3:
-            parts.append(f"z final 0 {lo['zhi']:.17g}")
-        if box.is_triclinic or self.box.is_triclinic:
-            if not self.box.is_triclinic:
-                self.command("change_box all triclinic")
-            parts.append(f"xy final {lo['xy']:.17g}")
-            if box.dim == 3:
-                parts += [f"xz final {lo['xz']:.17g}", f"yz final {lo['yz']:.17g}"]
-        self.command("change_box all " + " ".join(parts) + " remap units box")
-        self.box = box
+        cell, fold = box.reduction()
+        if box.is_triclinic and not self._triclinic:
+            self.command("change_box all triclinic")
+            self._triclinic = True
+        if np.array_equal(fold, self._fold):
+            self.command(self._change_box(cell) + " remap units box")
+        else:  # affine step in the old folding (the same deformation h' h^-1), then the flip
+            self.command(self._change_box(Box(box.h @ self._fold)) + " remap units box")
+            self._flip(cell, np.linalg.solve(fold, self._fold).round().astype(np.int64))
+        self.box, self._fold = box, fold
+
+    def _change_box(self, cell: Box) -> str:
+        """``change_box`` to ``cell``'s own bounds and tilts (cell must be what LAMMPS should hold)."""
+        h, dim = cell.h, cell.dim
+        parts = [f"x final 0 {h[0, 0]:.17g}", f"y final 0 {h[1, 1]:.17g}"]
+        if dim == 3:
+            parts.append(f"z final 0 {h[2, 2]:.17g}")
+        if self._triclinic:
+            xy, xz, yz = cell.tilts
+            parts.append(f"xy final {xy:.17g}")
+            if dim == 3:
+                parts += [f"xz final {xz:.17g}", f"yz final {yz:.17g}"]
+        return "change_box all " + " ".join(parts)
+
+    def _flip(self, cell: Box, relabel: np.ndarray) -> None:
+        """Switch to ``cell``, the same lattice as LAMMPS's current cell C with C = cell.h @ relabel,
+        without moving atoms. LAMMPS wraps the atoms into the new cell and adds the wrap k to
+        their image flags n, which still count cells of C; the unwrapped position x + C n is
+        kept by n' = k + relabel n (the wheel notes: a flip without this corrupts iy != 0)."""
+        before = self._images()
+        self.command(self._change_box(cell) + " units box")
+        wrapped_by = self._images() - before
+        full = np.eye(3, dtype=np.int64)
+        full[: cell.dim, : cell.dim] = relabel
+        images = wrapped_by + before @ full.T
+        self.lmp.scatter_atoms("image", 0, 3, np.ctypeslib.as_ctypes(images.astype(np.int32).ravel()))
+
+    def _images(self) -> np.ndarray:
+        """Image flags (N, 3) of every atom in id order (LAMMPS unpacks them for count 3)."""
+        raw = self.lmp.gather_atoms("image", 0, 3)
+        return np.ctypeslib.as_array(raw).reshape(-1, 3).astype(np.int64)
 
     # minimisation ------------------------------------------------------------------------------
     def minimize(self, settings=None):
@@ -235,8 +269,9 @@ class LammpsEngine:
         if s.method != "cg":
             raise ValueError(f"LAMMPS relaxes the box with fix box/relax, which runs with minimizer cg only, not "
                              f"{s.method}; use --minimizer cg or the compiled engine (FIRE)")
-        if s.stress == "tri" and not self.box.is_triclinic:
+        if s.stress == "tri" and not self._triclinic:
             self.command("change_box all triclinic")
+            self._triclinic = True
         lmp = self.lmp
         self.run_commands([f"timestep {s.timestep:.17g}", "min_style cg", "min_modify norm max line forcezero",
                            f"fix jf_relax all box/relax {s.stress} {s.pressure:.17g} vmax 0.001"])
@@ -244,7 +279,7 @@ class LammpsEngine:
         def window(steps: int):
             before = lmp.extract_global("ntimestep")
             self.command(f"minimize 0.0 {ftol:.17g} {steps} {10 * steps}")
-            self.box = self._lammps_box()
+            self.box, self._fold = self._lammps_box(), np.eye(self.template.dim, dtype=np.int64)  # LAMMPS's own cell
             state = self.state()
             field = make_field(self.packing(), s.pressure, s.stress)
             gb = np.zeros(len(field.basis))
