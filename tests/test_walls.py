@@ -296,6 +296,10 @@ def test_bad_boundaries_are_refused_before_work():
         LammpsEngine(with_walls(replace(p, potential=Spring(2.5)), (1,)))
     with pytest.raises(ValueError, match="rough walls"):
         with_walls(e, (1,), "rough")
+    from jamflow.analysis.hessian import hessian
+
+    with pytest.raises(ValueError, match="no wall, gravity or fixed-particle terms"):
+        hessian(with_walls(p, (1,)))
 
 
 @pytest.mark.parametrize("argv, message", [

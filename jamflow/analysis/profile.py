@@ -71,26 +71,3 @@ class PressureProfile:
         share = np.where(hi - lo > 0, inside / span, ((lo >= edges[:-1, None]) & (lo < edges[1:, None])).astype(float))
         sigma_xx = (share * (dr[:, 0] * f[:, 0])[None, :]).sum(axis=1) / (area * np.diff(edges))
         return ProfileResult(centres, sigma_zz, weight, sigma_xx, top)
-
-
-def plot_profile(result: ProfileResult, path, title: str = "") -> None:
-    """sigma_zz (planes), the weight above and sigma_xx against height, written atomically."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from ..io import atomic_path
-
-    fig, ax = plt.subplots(figsize=(5, 4.5))
-    ax.plot(result.sigma_zz, result.heights, "o", ms=4, label=r"$\sigma_{zz}$ (contacts across the plane)")
-    ax.plot(result.weight_above, result.heights, "-", lw=1, label=r"weight above / area, $g N(>z)/A$")
-    ax.plot(result.sigma_xx, result.heights, "s", ms=3, label=r"$\sigma_{xx}$ (slab virial)")
-    ax.set_xlabel(r"stress ($\epsilon/\sigma^d$)")
-    ax.set_ylabel("height z (small diameters)")
-    ax.set_title(title or "pressure profile under gravity")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=130)
-    plt.close(fig)
