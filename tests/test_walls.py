@@ -337,7 +337,8 @@ def test_walls_in_a_tilted_cell_pair_search_and_engines():
     a, b = np.triu_indices(q.n, 1)
     images = np.array([[u, v, 0] for u in (-2, -1, 0, 1, 2) for v in (-1, 0, 1)], float) @ q.box.h.T
     dr = (q.positions[a] - q.positions[b])[:, None, :] + images[None]
-    brute = set(zip(a[np.linalg.norm(dr, axis=2).min(axis=1) < 1.4].tolist(), b[np.linalg.norm(dr, axis=2).min(axis=1) < 1.4].tolist()))
+    close = np.linalg.norm(dr, axis=2).min(axis=1) < 1.4
+    brute = set(zip(a[close].tolist(), b[close].tolist()))
     assert brute <= found
     ref = energy_forces_pressure(q)
     for engine in ENGINES.values():

@@ -12,8 +12,7 @@ import time
 from ..engine.base import ENGINES, engine_name
 from ..io import check_writable, save_packing
 from ..minimize import METHODS, MinimizerSettings
-from ..protocols.compression import (DEFAULT_PROTOCOL, GRAVITY_PHI0, PROTOCOLS, CompressionSettings, initial_packing,
-                                     jam)
+from ..protocols.compression import DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, initial_packing, jam
 from ..progress import CompressionProgress
 from ..walls import WALL_TYPES
 
@@ -89,9 +88,9 @@ def run(args) -> int:
     check_boundary_args(args)
     settings = settings_from_args(args)
     check_writable(args.out)
-    phi0 = settings.start_phi(args.dim) if args.phi0 is not None or not args.gravity else GRAVITY_PHI0[args.dim]
-    start = initial_packing(args.n, args.dim, args.sizes, args.potential, args.seed, phi0, args.shape,
-                            args.walls, args.wall_type, args.gravity)
+    start = initial_packing(args.n, args.dim, args.sizes, args.potential, args.seed,
+                            settings.start_phi(args.dim, args.gravity), args.shape, args.walls, args.wall_type,
+                            args.gravity)
     if args.pressure is not None:
         return run_pressure(args, start, settings)
     engine_name(start, args.minimizer, args.engine)  # refuse --engine numba where it cannot run, before work

@@ -16,9 +16,9 @@ compiled engine runs every law). The wall coordinates are equal-style variables 
 (``v_jf_ylo`` = ylo, ...): an ``EDGE`` wall stays where the box edge was when the fix was
 defined and would not follow ``change_box``. LAMMPS refuses a particle on or behind a wall
 ("Particle on or inside fix wall surface"), which the soft law itself allows. Fixed particles
-are a group held by ``fix setforce 0 0 0`` whose mutual pairs are excluded from the neighbour list; gravity is ``fix addforce 0 -g 0``
-(a constant force, whose energy g y LAMMPS adds itself; ``fix gravity`` is ignored by
-``minimize``). Each fix has ``fix_modify energy yes`` and the walls ``virial yes``.
+are a group held by ``fix setforce 0 0 0`` whose mutual pairs are excluded from the neighbour
+list; gravity is ``fix addforce 0 -g 0`` (a constant force, whose energy g y LAMMPS adds itself;
+``fix gravity`` is ignored by ``minimize``). Each fix has ``fix_modify energy yes`` and the walls ``virial yes``.
 At a target pressure the box relaxes by ``fix box/relax`` (CG only, ``etol 0``).
 """
 

@@ -30,6 +30,7 @@ from ..sizes import parse_sizes
 from ..walls import parse_walls, wall_loads, with_walls
 
 DEFAULT_PHI0 = {2: 0.80, 3: 0.55}
+GRAVITY_PHI0 = {2: 0.5, 3: 0.35}  # random starts under gravity: the settled pile stays clear of the ceiling
 NEWTON_FINAL_FACTOR = 3.0  # intermediate jumps stop at >= 3x the window's predicted distance from phi_J
 LOOSE_TRUST = 10.0  # a loosely minimised state decides its side only if V > 10 V_tol
 WINDOW_RESUMES = 3  # a state in the window cut off by the iteration cap is minimised again (at most 3 times a run)
@@ -81,8 +82,11 @@ class CompressionSettings:
         if self.max_steps < 1:
             raise ValueError("max_steps must be a positive integer")
 
-    def start_phi(self, dim: int) -> float:
-        return DEFAULT_PHI0.get(dim, math.nan) if self.phi0 is None else self.phi0
+    def start_phi(self, dim: int, gravity: float = 0.0) -> float:
+        """phi0, or the default start for this dimension (a looser one under gravity)."""
+        if self.phi0 is not None:
+            return self.phi0
+        return (GRAVITY_PHI0 if gravity else DEFAULT_PHI0).get(dim, math.nan)
 
     def as_dict(self) -> dict:
         out = {k: v for k, v in asdict(self).items() if k != "minimizer"}
@@ -177,8 +181,8 @@ def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | 
     settings = settings or PROTOCOLS[DEFAULT_PROTOCOL]()
     check_engine(engine)
     if start is None:
-        phi0 = settings.start_phi(dim) if settings.phi0 is not None or not gravity else GRAVITY_PHI0[dim]
-        start = initial_packing(n, dim, sizes, potential, seed, phi0, shape, walls, wall_type, gravity)
+        start = initial_packing(n, dim, sizes, potential, seed, settings.start_phi(dim, gravity), shape, walls,
+                                wall_type, gravity)
         if start.potential.soft_start:
             start = remove_overlaps(start, settings.minimizer, engine)
     if start.gravity > 0:
@@ -187,8 +191,6 @@ def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | 
         return settle(start, settings.minimizer, observers=observers, engine=engine, engine_options=engine_options)
     return compress(start, settings, observers=observers, engine=engine, engine_options=engine_options)
 
-
-GRAVITY_PHI0 = {2: 0.5, 3: 0.35}  # random starts under gravity: the settled pile stays clear of the ceiling
 
 
 def initial_packing(n, dim, sizes, potential, seed, phi0, shape="disk", walls=None, wall_type="smooth",

@@ -91,11 +91,12 @@ def check_pressure_start(packing: Packing, settings: PressureSettings) -> None:
     if packing.box.walls or packing.gravity > 0 or packing.fixed is not None:
         raise ValueError("constant pressure relaxes a periodic box: it runs without walls, gravity or fixed particles")
     floor = pressure_floor(packing, settings.minimizer)
+    ftol = settings.minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness)
     if min(settings.pressures) < floor:
         raise ValueError(f"target pressure {min(settings.pressures):g} is below what float64 resolves at N = "
-                         f"{packing.n} (box side {packing.box.lengths.max():.3g}): contact forces ~ P a^(d-1) must stay "
-                         f"{FLOOR_MARGIN:g}x above the force round-off floor {settings.minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness):.1e}, "
-                         f"so P >= {floor:.1e}; choose a larger target pressure")
+                         f"{packing.n} (box side {packing.box.lengths.max():.3g}): contact forces ~ P a^(d-1) must "
+                         f"stay {FLOOR_MARGIN:g}x above the force round-off floor {ftol:.1e}, so P >= {floor:.1e}; "
+                         "choose a larger target pressure")
 
 
 def extrapolate_phi_j(pressures, phis, onset_exponent: float) -> float:
@@ -150,8 +151,9 @@ class PressureResult:
 
     def summary(self) -> str:
         target = self.history["target_pressure"][-1]
+        shear = shear_stress(self.pressure_tensor)
         return (f"P_target = {target:.3e}  P = {self.pressure:.6e} (rel. {self.pressure / target - 1:+.1e})  "
-                f"phi = {self.phi:.10f}  phi_J(P->0) = {self.phi_j:.10f}  shear stress {shear_stress(self.pressure_tensor):.1e}  "
+                f"phi = {self.phi:.10f}  phi_J(P->0) = {self.phi_j:.10f}  shear stress {shear:.1e}  "
                 f"max|F| = {self.max_force:.1e}  {len(self.history['phi'])} pressures, {self.iterations} iterations "
                 f"({self.engine}), {self.seconds:.2f} s")
 

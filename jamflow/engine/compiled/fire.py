@@ -78,9 +78,10 @@ def fire(model, fld, x, v, f, o, w, tau, g, dk, mask, virial, ub, gb, state, x_b
     rotational velocities and generalized torques, tau (N, r) world torques, dk (N, r) rotational
     lengths, mask (r,) 1 for the body axes that are degrees of freedom; fld the external field
     (``field.Field``), ub, gb (k,) box-coordinate velocities and forces (k = 0: fixed box).
-    Stops on: every particle's |f_i| and |g_i| and every |gb_k| below ftol (FORCE), energy < energy_halt (ENERGY_BELOW, like
-    LAMMPS ``fix halt``), a particle moved more than half the skin since the pair list was built
-    (REBUILD; rotations count as reach x angle turned), or max_steps (CAP).
+    Stops on: every particle's |f_i| and |g_i| and every |gb_k| below ftol (FORCE), energy <
+    energy_halt (ENERGY_BELOW, like LAMMPS ``fix halt``), a particle moved more than half the
+    skin since the pair list was built (REBUILD; rotations count as reach x angle turned; box
+    steps move particles affinely, which this counts too), or max_steps (CAP).
     """
     n, d = x.shape
     r = w.shape[1]
