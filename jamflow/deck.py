@@ -156,11 +156,13 @@ def _walls_of(variables: dict) -> tuple:
 
 
 def run_deck(workdir, variables: dict | None = None, *, deck=None, lmp=None, ranks: int = 1,
-             timeout: float | None = None) -> DeckResult:
+             timeout: float | None = None, reader=None) -> DeckResult:
     """Run the deck with ``lmp`` in ``workdir``; raise DeckFailed unless it jammed.
 
     ``deck`` defaults to a fresh copy written into ``workdir``; ``variables`` become
-    ``-var`` arguments (paths in them are used as given, relative to ``workdir``).
+    ``-var`` arguments (paths in them are used as given, relative to ``workdir``);
+    ``reader(path) -> Packing`` reads the final data file (default ``read_data_file``; the ellipse
+    deck's is ``jamflow.deck_ellipsoids.read_ellipsoid_data``).
     """
     from .engine.lammps_lib import lammps_env
 
@@ -177,10 +179,10 @@ def run_deck(workdir, variables: dict | None = None, *, deck=None, lmp=None, ran
     start = time.perf_counter()
     proc = subprocess.run(args, cwd=workdir, env=lammps_env(), capture_output=True, text=True, timeout=timeout)
     seconds = time.perf_counter() - start
-    return read_deck_result(workdir / out, seconds, proc, periodic=_walls_of(variables))
+    return read_deck_result(workdir / out, seconds, proc, periodic=_walls_of(variables), reader=reader)
 
 
-def read_deck_result(prefix, seconds: float = math.nan, proc=None, periodic=None) -> DeckResult:
+def read_deck_result(prefix, seconds: float = math.nan, proc=None, periodic=None, reader=None) -> DeckResult:
     """Read PREFIX.protocol.txt and PREFIX.data (``periodic``: per axis, False where the deck
     had walls); raise DeckFailed with the deck's reason."""
     prefix = Path(prefix)
@@ -190,7 +192,7 @@ def read_deck_result(prefix, seconds: float = math.nan, proc=None, periodic=None
     history, result = read_protocol(log)
     if result.get("status") != "jammed":
         raise DeckFailed(f"the deck did not jam: {result.get('message', 'no result line in ' + str(log))}")
-    packing = read_data_file(f"{prefix}.data", periodic=periodic)
+    packing = reader(f"{prefix}.data") if reader else read_data_file(f"{prefix}.data", periodic=periodic)
     return DeckResult(packing, float(result["phi_J"]), float(result["V"]), float(result["P"]),
                       float(result["max_force"]), history, seconds, prefix)
 

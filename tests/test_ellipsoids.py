@@ -22,7 +22,7 @@ from jamflow.engine.reference import energy_forces_pressure
 from jamflow.minimize import MinimizerSettings
 from jamflow.packing import Packing, random_packing
 from jamflow.potentials import RepulsiveLJ, Spring
-from jamflow.protocols.compression import compress, fast_protocol
+from jamflow.protocols.compression import compress, fast_protocol, initial_packing
 from jamflow.shapes import Ellipsoid, contact_distance
 from jamflow.sizes import parse_sizes
 
@@ -311,3 +311,57 @@ def test_start_too_dense_for_the_contact_distance_is_refused_before_work(monkeyp
     monkeypatch.setattr(compression, "open_engine", lambda *a, **k: pytest.fail("work started"))
     with pytest.raises(ValueError, match="too dense for the contact distance: particles 0 and 1"):
         compress(p.with_positions(x), fast_protocol())
+
+
+def test_checked_in_ellipse_deck_is_the_generated_one():
+    from jamflow.deck_ellipsoids import deck_text, default_deck_path
+
+    assert default_deck_path().read_text() == deck_text()
+
+
+def test_cli_emits_the_ellipse_deck(tmp_path, capsys):
+    from jamflow.deck_ellipsoids import read_ellipsoid_data
+    from jamflow.engine.plugin_build import plugin_library
+
+    deck = tmp_path / "deck.lmp"
+    assert main(["jam", "--n", "12", "--shape", "ellipse:1.3", "--contact", "cleaver", "--seed", "3",
+                 "--emit-deck", str(deck), "--out", str(tmp_path / "jammed.h5")]) == 0
+    assert "deck.start.data" in capsys.readouterr().out
+    text = deck.read_text()
+    for line in ("variable alpha     index 1.3", "variable contact   index cleaver", f"index {plugin_library()}"):
+        assert line in text
+    start = read_ellipsoid_data(tmp_path / "deck.start.data", contact="cleaver")
+    expected = initial_packing(12, 2, "bi:1.4:0.5", "spring", 3, 0.8, "ellipse:1.3", contact="cleaver")
+    assert np.abs(start.positions - expected.positions).max() < 1e-13
+    assert np.abs(np.cos(start.orientations - expected.orientations) - 1).max() < 1e-13
+
+
+def test_ellipse_deck_jams_in_lmp_alone(tmp_path):
+    """lmp runs the deck with the plugin and damped dynamics, from a start just above onset (the
+    compiled engine's packing compressed by 2e-5); the packing it writes is at onset by the
+    independent brute-force check."""
+    from jamflow.deck import run_deck
+    from jamflow.deck_ellipsoids import emit_deck, read_ellipsoid_data
+    from jamflow.protocols.compression import seed_protocol
+
+    near = jam(n=12, sizes="bi:1.4:0.6667", shape="ellipse:1.3", seed=3)
+    start = near.packing.scaled_to_phi(near.phi_j + 2e-5)
+    deck, _ = emit_deck(tmp_path / "deck.lmp", start, seed_protocol(dphi0=1e-5))
+    res = run_deck(tmp_path, {}, deck=deck, reader=read_ellipsoid_data, timeout=1200)
+    assert 1e-16 < res.energy_per_particle < 2e-16 and res.packing.n == 12
+    assert res.packing.shape == Ellipsoid(1.3) and res.history["reason"][-1] == "force"
+    check = independent_check(res.packing)
+    assert check.energy_per_particle == pytest.approx(res.energy_per_particle, rel=1e-6)
+    worst = max(check.max_force(), check.max_generalized_torque())
+    assert worst < 1e-12 and worst == pytest.approx(res.max_force, rel=1e-3)  # the deck's max(F, tau/d_k)
+
+
+def test_ellipse_deck_refuses_what_it_cannot_run():
+    from jamflow.deck_ellipsoids import deck_variables
+
+    with pytest.raises(ValueError, match="identical particles"):
+        deck_variables(contact="gaussian")
+    with pytest.raises(ValueError, match="turned by 90 degrees"):
+        deck_variables(alpha=0.5)
+    with pytest.raises(ValueError, match="linear spring"):
+        deck_variables(potential="hertz")

@@ -27,8 +27,8 @@ from ..packing import Packing
 from ..pairs import candidate_pairs, separations
 from ..shapes.rotations import generalized_torques
 
-GRID = 2001  # lambda grid points in (0, 1)
-GOLDEN_STEPS = 60  # golden-section steps in the best grid cell: 1/2000 * 0.618^60 ~ 1e-16
+GRID = 401  # lambda grid points in (0, 1)
+GOLDEN_STEPS = 80  # golden-section steps in the best two grid cells: 1/200 * 0.618^80 ~ 1e-19
 ANGLE_STEP = 1e-5  # radians, central differences of sigma
 
 
@@ -67,6 +67,12 @@ def brute_contact_distance(a_i, b_i, a_j, b_j, r_hat, u_i, u_j) -> np.ndarray:
                         np.where(left, h_new, hd), np.where(left, hc, h_new))
     h_max = np.maximum(hc, hd)
     return 1.0 / np.sqrt(h_max)
+
+
+def _sigma_half(a_i, b_i, a_j, b_j, r_hat, u_i, u_j):
+    """sigma(1/2) from the matrix form: an upper bound on the contact distance."""
+    h = _h(np.full((len(r_hat), 1), 0.5), _shape_matrices(a_i, b_i, u_i), _shape_matrices(a_j, b_j, u_j), r_hat)
+    return 1.0 / np.sqrt(h[:, 0])
 
 
 def _rotate(v, axis, angle):
@@ -124,10 +130,11 @@ def independent_check(packing: Packing) -> IndependentCheck:
     i, j = candidate_pairs(packing, 2.0 * float(reach.max()))
     dr = separations(packing, i, j)
     r = np.linalg.norm(dr, axis=1)
-    near = r < reach[i] + reach[j]
-    i, j, dr, r = i[near], j[near], dr[near], r[near]
     r_hat = dr / r[:, None]
     axes, u = packing.shape.axes(packing.diameters), packing.directors
+    # sigma(1/2) >= sigma (any lambda bounds it): pairs at r >= sigma(1/2) cannot touch
+    near = r < _sigma_half(axes[i, 0], axes[i, 1], axes[j, 0], axes[j, 1], r_hat, u[i], u[j])
+    i, j, dr, r, r_hat = i[near], j[near], dr[near], r[near], r_hat[near]
     a_i, b_i, a_j, b_j = axes[i, 0], axes[i, 1], axes[j, 0], axes[j, 1]
 
     def sigma_of(vecs):

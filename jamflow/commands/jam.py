@@ -131,13 +131,19 @@ def run_pressure(args, start, settings) -> int:
 
 
 def emit(args, start, settings) -> int:
-    """--emit-deck: the deck and start data file, no LAMMPS run."""
+    """--emit-deck: the deck and start data file, no LAMMPS run (ellipses/spheroids: the ellipse
+    deck, lammps_inputs/jam-ellipses.lmp, which minimises by damped dynamics with rotations)."""
     from pathlib import Path
 
     from ..deck import emit_deck
+    from ..deck_ellipsoids import emit_deck as emit_ellipsoid_deck
 
+    kind = start.shape.kind
+    if kind not in ("sphere", "ellipsoid"):
+        raise ValueError(f"--emit-deck writes decks for disks/spheres and ellipses/spheroids, not {start.shape.name(start.dim)}")
     check_writable(args.emit_deck)
-    deck, data = emit_deck(args.emit_deck, start, settings, out=Path(args.out).stem)
+    writer = emit_ellipsoid_deck if kind == "ellipsoid" else emit_deck
+    deck, data = writer(args.emit_deck, start, settings, out=Path(args.out).stem)
     print(f"wrote {deck} and {data}; run: cd {deck.parent} && lmp -in {deck.name}  "
           f"(writes {Path(args.out).stem}.data and {Path(args.out).stem}.protocol.txt)")
     return 0

@@ -193,7 +193,7 @@ inline void PairJamflowEllipsoid::init_style()
     amax_local = std::fmax(amax_local, std::fmax(std::sqrt(props[i][0]), std::sqrt(props[i][1])));
   double amax = 0.0;
   MPI_Allreduce(&amax_local, &amax, 1, MPI_DOUBLE, MPI_MAX, world);
-  if (amax > cut_global)
+  if (amax > cut_global * (1.0 + 1e-12))    // (a from sqrt(a^2): allow round-off)
     error->all(FLERR, "Pair style jamflow/ellipsoid: CUTOFF " + std::to_string(cut_global) +
                           " is below the largest long axis " + std::to_string(amax) + "; pass it as CUTOFF");
 }
