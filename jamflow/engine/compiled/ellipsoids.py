@@ -9,7 +9,8 @@ by numba; this module adds the per-pair control flow of its solvers:
 - ``exact``: lambda_min from the quartic (2D, any sizes) or quintic (3D identical spheroids),
   the root in y = lambda - 1/2 bracketed in [-1/2, 1/2] and polished by safeguarded Newton from
   the quadratic truncation; 3D pairs of different sizes maximise h(lambda) over [0, 1] by the
-  same safeguarded Newton on dh/dlambda, from the sphere value d_i / (d_i + d_j);
+  same safeguarded Newton on dh/dlambda, from the sphere value d_i / (d_i + d_j); after the first
+  evaluation each listed pair starts from its last lambda (one or two Newton steps);
 - ``gaussian`` / ``cleaver``: lambda = 1/2;
 - ``linear`` / ``quadratic``: lambda from eq. 2.26 truncated, with its own derivative; where
   the root leaves (-1/2, 1/2) lambda = 1/2, and the pair list's ``counters`` count it.
@@ -36,6 +37,9 @@ from . import jit
 from .laws import energy_force
 
 KIND = "ellipsoid"
+# the list holds every pair within an orientation-independent bound of its contact distance,
+# so turning a particle cannot bring a pair into reach: only translations trigger rebuilds
+TURNING_MOVES_SITES = False
 EXACT, GAUSSIAN, CLEAVER, LINEAR, QUADRATIC = range(5)  # index in contact_distance.METHODS
 # what ``forces`` counts in Pairs.counters (contact_distance.ENGINE_COUNTERS)
 COUNTERS = ENGINE_COUNTERS
@@ -63,6 +67,8 @@ class Pairs(NamedTuple):
     method: int
     law: tuple
     counters: np.ndarray
+    u: np.ndarray  # (N, 3) scratch: directors
+    lam: np.ndarray  # (P,) each pair's lambda at its last evaluation (NaN: not yet), starts the exact solvers
 
 
 @jit
@@ -104,9 +110,10 @@ def _safeguarded_step(t, f, df, left, right):
 
 
 @jit
-def _polynomial_root(q0, q1, q2, q3, q4, q5):
-    """The root of f(y) = sum q_k y^k in (-1/2, 1/2), from the quadratic truncation."""
-    t = truncated_root(q0, q1, q2, 1.0)[0]
+def _polynomial_root(q0, q1, q2, q3, q4, q5, t0):
+    """The root of f(y) = sum q_k y^k in (-1/2, 1/2), from t0 (the pair's last root) or, when t0
+    is NaN, the quadratic truncation."""
+    t = t0 if -0.5 < t0 < 0.5 else truncated_root(q0, q1, q2, 1.0)[0]
     left, right = -0.5, 0.5
     for _ in range(MAX_ITER):
         f, df = q5, 0.0
@@ -120,11 +127,12 @@ def _polynomial_root(q0, q1, q2, q3, q4, q5):
 
 
 @jit
-def _maximise(ai2, bi2, aj2, bj2, x, z, m, g):
-    """lambda_min maximising h over [0, 1] (3D pairs of different sizes)."""
+def _maximise(ai2, bi2, aj2, bj2, x, z, m, g, t0):
+    """lambda_min maximising h over [0, 1] (3D pairs of different sizes), from t0 (the pair's last
+    lambda) or, when t0 is NaN, the sphere value d_i / (d_i + d_j)."""
     d_i = math.sqrt(bi2 + (ai2 - bi2) * x * x)
     d_j = math.sqrt(bj2 + (aj2 - bj2) * z * z)
-    t = min(max(d_i / (d_i + d_j), 0.0), 1.0)
+    t = t0 if 0.0 < t0 < 1.0 else min(max(d_i / (d_i + d_j), 0.0), 1.0)
     left, right = 0.0, 1.0
     for _ in range(MAX_ITER):
         f, df = h_lambda_derivatives(t, ai2, bi2, aj2, bj2, x, z, m, g)
@@ -144,14 +152,15 @@ def _coefficients(d, ai2, bi2, aj2, bj2, x, z, m, g):
 
 
 @jit
-def contact(method, d, identical, ai2, bi2, aj2, bj2, x, z, m, g):
-    """(sigma, dsigma/dx, dsigma/dz, dsigma/dm, fell back, capped) for one pair."""
+def contact(method, d, identical, ai2, bi2, aj2, bj2, x, z, m, g, lam0=math.nan):
+    """(sigma, dsigma/dx, dsigma/dz, dsigma/dm, fell back, capped, lambda) for one pair; ``lam0``
+    starts the exact solvers (the pair's lambda at the last evaluation; NaN: their own guess)."""
     partial_x, partial_z, partial_m, fell_back, capped = 0.0, 0.0, 0.0, False, False
     if method == EXACT:
         if d == 2 or identical:
-            lam = 0.5 + _polynomial_root(*_coefficients(d, ai2, bi2, aj2, bj2, x, z, m, g))
+            lam = 0.5 + _polynomial_root(*_coefficients(d, ai2, bi2, aj2, bj2, x, z, m, g), lam0 - 0.5)
         else:
-            lam = _maximise(ai2, bi2, aj2, bj2, x, z, m, g)
+            lam = _maximise(ai2, bi2, aj2, bj2, x, z, m, g, lam0)
     elif method == GAUSSIAN or method == CLEAVER:
         lam = 0.5
     else:
@@ -168,7 +177,7 @@ def contact(method, d, identical, ai2, bi2, aj2, bj2, x, z, m, g):
     if partial_x != 0.0 or partial_z != 0.0 or partial_m != 0.0:
         s_lam = -0.5 * sigma**3 * h_lambda_derivatives(lam, ai2, bi2, aj2, bj2, x, z, m, g)[0]
         s_x, s_z, s_m = s_x + s_lam * partial_x, s_z + s_lam * partial_z, s_m + s_lam * partial_m
-    return sigma, s_x, s_z, s_m, fell_back, capped
+    return sigma, s_x, s_z, s_m, fell_back, capped, lam
 
 
 @jit
@@ -179,7 +188,9 @@ def forces(pl, x, o, f, tau, virial):
     tau[:] = 0.0
     virial[:] = 0.0
     energy = 0.0
-    dr, rh, ui, uj, force = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
+    for k in range(n):
+        _director(o, k, d, pl.u[k])
+    dr, rh, force = np.zeros(3), np.zeros(3), np.zeros(3)
     approximate = pl.method == LINEAR or pl.method == QUADRATIC
     for k in range(pl.i.shape[0]):
         i, j = pl.i[k], pl.j[k]
@@ -190,12 +201,10 @@ def forces(pl, x, o, f, tau, virial):
         if r2 >= _bound_sq(pl.method, pl.reach[i], pl.reach[j]):
             continue
         r = math.sqrt(r2)
-        for a in range(d):
-            rh[a] = dr[a] / r
-        _director(o, i, d, ui)
-        _director(o, j, d, uj)
+        ui, uj = pl.u[i], pl.u[j]
         xx, zz, mm = 0.0, 0.0, 0.0
         for a in range(d):
+            rh[a] = dr[a] / r
             xx += rh[a] * ui[a]
             zz += rh[a] * uj[a]
             mm += ui[a] * uj[a]
@@ -203,8 +212,11 @@ def forces(pl, x, o, f, tau, virial):
         if d == 3:
             g = (rh[0] * (ui[1] * uj[2] - ui[2] * uj[1]) + rh[1] * (ui[2] * uj[0] - ui[0] * uj[2])
                  + rh[2] * (ui[0] * uj[1] - ui[1] * uj[0])) ** 2
-        sigma, s_x, s_z, s_m, fell_back, capped = contact(pl.method, d, pl.identical[k], pl.a2[i], pl.b2[i], pl.a2[j],
-                                                  pl.b2[j], xx, zz, mm, g)
+        ai2, bi2, aj2, bj2 = pl.a2[i], pl.b2[i], pl.a2[j], pl.b2[j]
+        if r2 * pw_h(0.5, ai2, bi2, aj2, bj2, xx, zz, mm, g) >= 1.0:  # r >= sigma(1/2) >= every method's sigma
+            continue
+        sigma, s_x, s_z, s_m, fell_back, capped, pl.lam[k] = contact(pl.method, d, pl.identical[k], ai2, bi2,
+                                                                     aj2, bj2, xx, zz, mm, g, pl.lam[k])
         if not (sigma > 0.0 and sigma < math.inf):
             pl.counters[INVALID] += 1
             continue
@@ -266,4 +278,4 @@ def build(packing: Packing, x: np.ndarray, skin: float) -> Pairs:
                  & np.isclose(b[i], b[j], rtol=SAME_SIZE_RTOL, atol=0))
     return Pairs(i.astype(np.int64), j.astype(np.int64), np.ascontiguousarray(shift), identical.astype(np.bool_),
                  a * a, b * b, reach, method, packing.potential.params,
-                 np.zeros(len(COUNTERS), np.int64))
+                 np.zeros(len(COUNTERS), np.int64), np.zeros((packing.n, 3)), np.full(len(i), np.nan))

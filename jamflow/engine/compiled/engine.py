@@ -20,7 +20,7 @@ from ...packing import Packing
 from ..base import Capabilities, State
 from . import fire as kernels
 from .field import make_field
-from .kernels import BUILDERS, COUNTERS
+from .kernels import BUILDERS, COUNTERS, TURNING_MOVES_SITES
 
 
 def _orientation_array(packing: Packing) -> np.ndarray:
@@ -58,7 +58,8 @@ class CompiledEngine:
         r = self._dk.shape[1]
         self._tau, self._g = np.zeros((n, r)), np.zeros((n, r))
         self._mask = np.array(packing.shape.rotation_mask(d), dtype=float)
-        self._reach = np.asarray(packing.shape.reach(packing.diameters), float)
+        reach = np.asarray(packing.shape.reach(packing.diameters), float)
+        self._reach = reach if TURNING_MOVES_SITES[packing.shape.kind] else np.zeros_like(reach)  # rebuild rule
         self._virial = np.zeros((d, d))
         self._field = make_field(packing)
         self._gb = np.zeros(0)  # box-coordinate forces (constant stress only)

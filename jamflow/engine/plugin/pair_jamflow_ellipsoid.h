@@ -289,6 +289,7 @@ template <int LAW> void PairJamflowEllipsoid::eval(int /*eflag*/, int /*vflag*/)
       }
       const double tol = 1e-12;  // contact_distance.SAME_SIZE_RTOL
       const bool identical = std::fabs(p.ai2 - p.aj2) <= 2 * tol * p.ai2 && std::fabs(p.bi2 - p.bj2) <= 2 * tol * p.bi2;
+      if (r2 * pw_h(0.5, p) >= 1.0) continue;    // r >= sigma(1/2) >= every method's sigma
       double sigma, s_x, s_z, s_m;
       bool fell_back, capped;
       contact(method, dim, identical, p, sigma, s_x, s_z, s_m, fell_back, capped);
