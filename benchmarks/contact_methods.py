@@ -17,7 +17,6 @@ finish and skipped when present (resumable); CPU seconds (time.process_time) and
 from __future__ import annotations
 
 import argparse
-import csv
 import os
 import statistics
 import time
@@ -32,6 +31,8 @@ from jamflow.analysis.contacts import Contacts
 from jamflow.engine.reference import energy_forces_pressure
 from jamflow.io import atomic_path
 from jamflow.shapes import Ellipsoid
+
+from ellipse_ensembles import read_rows, write_rows  # (benchmarks/ is the script's directory)
 
 MIXTURES = {"bi:1.4:0.6667": ("exact", "cleaver", "linear", "quadratic"),
             "mono": ("exact", "gaussian", "linear", "quadratic")}
@@ -56,21 +57,6 @@ def one(sizes, contact, alpha, seed, n) -> dict:
                 **{k: res.counters.get(k, 0) for k in ("fallbacks", "capped", "approximate")})
 
 
-def read_rows(path: Path) -> list[dict]:
-    if not path.is_file():
-        return []
-    with path.open() as f:
-        return list(csv.DictReader(f))
-
-
-def write_rows(path: Path, rows) -> None:
-    with atomic_path(path) as tmp:
-        with open(tmp, "w", newline="") as f:
-            w = csv.DictWriter(f, COLUMNS)
-            w.writeheader()
-            w.writerows(rows)
-
-
 def run(args) -> None:
     out = Path(args.out)
     rows = read_rows(out)
@@ -79,7 +65,7 @@ def run(args) -> None:
             if (sizes, m, args.alpha, s) not in done]
     for sizes, method, seed in tqdm(todo, desc="contact methods", unit="packing"):
         rows.append(one(sizes, method, args.alpha, seed, args.n))
-        write_rows(out, rows)
+        write_rows(out, rows, COLUMNS)
 
 
 def paired(rows, sizes, method, column):

@@ -81,16 +81,18 @@ def _force_difference(packing, check) -> float:
 
 
 def read_rows(path: Path) -> list[dict]:
+    """The rows of a results CSV (empty if it does not exist yet)."""
     if not path.is_file():
         return []
     with path.open() as f:
         return list(csv.DictReader(f))
 
 
-def write_rows(path: Path, rows: list[dict]) -> None:
+def write_rows(path: Path, rows: list[dict], columns=COLUMNS) -> None:
+    """The whole results CSV again, atomically (an interrupted run keeps the last one)."""
     with atomic_path(path) as tmp:
         with open(tmp, "w", newline="") as f:
-            w = csv.DictWriter(f, COLUMNS)
+            w = csv.DictWriter(f, columns)
             w.writeheader()
             w.writerows(rows)
 

@@ -57,6 +57,20 @@ def deck_variables(n: int = 256, dim: int = 2, sizes="bi:1.4:0.5", seed: int = 0
     from .walls import parse_walls
 
     settings = settings or CompressionSettings()
+    d2, fsmall = checked_inputs(potential, sizes, settings)
+    m: MinimizerSettings = settings.minimizer
+    values = dict(dim=int(dim), N=int(n), d1=1, d2=_num(d2), fsmall=_num(fsmall), seed=int(seed),
+                  vtol=_num(settings.v_tol), dphi0=_num(settings.dphi0), minimizer=m.method, vmin=_num(m.v_min),
+                  delta=_num(m.delta), window=m.window, maxiter=m.max_iterations, dt=_num(m.timestep),
+                  mddt=_num(m.md_timestep),
+                  damping=_num(m.damping), maxsteps=settings.max_steps, skin=_num(0.3), out=str(out),
+                  walls="".join("xyz"[a] for a in parse_walls(walls, int(dim))) or "none")
+    return {**values, **optional_values(settings, data, phi0)}
+
+
+def checked_inputs(potential, sizes, settings: CompressionSettings) -> tuple[float, float]:
+    """(d2, fraction small) of mono/bi sizes; ValueError for what the decks cannot run (another
+    potential, polydisperse sizes, the controller's protocol shortcuts)."""
     pot = parse_potential(potential) if isinstance(potential, str) else potential
     if not (isinstance(pot, Spring) and pot.alpha == 2.0 and pot.epsilon == 1.0):
         raise ValueError(f"the deck runs the linear spring (alpha = 2, eps = 1) only, got {pot.spec}; "
@@ -66,20 +80,17 @@ def deck_variables(n: int = 256, dim: int = 2, sizes="bi:1.4:0.5", seed: int = 0
         raise ValueError(f"the deck runs mono or bi sizes only (atom types), got {spec.spec}; "
                          "run polydisperse sizes with the Python controller (jamflow jam)")
     _check_seed_protocol(settings)
-    d2, fsmall = (1.0, 1.0) if spec.kind == "mono" else spec.params
-    m: MinimizerSettings = settings.minimizer
-    values = dict(dim=int(dim), N=int(n), d1=1, d2=_num(d2), fsmall=_num(fsmall), seed=int(seed),
-                  vtol=_num(settings.v_tol), dphi0=_num(settings.dphi0), minimizer=m.method, vmin=_num(m.v_min),
-                  delta=_num(m.delta), window=m.window, maxiter=m.max_iterations, dt=_num(m.timestep),
-                  mddt=_num(m.md_timestep),
-                  damping=_num(m.damping), maxsteps=settings.max_steps, skin=_num(0.3), out=str(out),
-                  walls="".join("xyz"[a] for a in parse_walls(walls, int(dim))) or "none")
+    return (1.0, 1.0) if spec.kind == "mono" else spec.params
+
+
+def optional_values(settings: CompressionSettings, data=None, phi0: float | None = None) -> dict:
+    """The deck's optional variables that are set (data, phi0, ftol), at full precision."""
     start_phi = phi0 if phi0 is not None else settings.phi0
+    force_tol = settings.minimizer.force_tol
     optional = {"data": None if data is None else str(data),
                 "phi0": None if start_phi is None else repr(float(start_phi)),
-                "ftol": None if m.force_tol is None else repr(float(m.force_tol))}
-    values.update({k: v for k, v in optional.items() if v is not None})
-    return values
+                "ftol": None if force_tol is None else repr(float(force_tol))}
+    return {k: v for k, v in optional.items() if v is not None}
 
 
 def _check_seed_protocol(settings: CompressionSettings) -> None:
@@ -98,9 +109,14 @@ def deck_text(variables: dict | None = None) -> str:
     """The deck with ``variables`` (from ``deck_variables``) as its defaults."""
     from .deck_script import BODY, HEADER
 
-    values = deck_variables() if variables is None else dict(variables)
+    return render(HEADER, BODY, deck_variables() if variables is None else variables)
+
+
+def render(header: str, body: str, variables: dict) -> str:
+    """A deck: ``header`` formatted with ``variables`` (OPTIONAL ones as extra lines), then ``body``."""
+    values = dict(variables)
     optional = "".join(f"variable {k:<9} index {values.pop(k)}\n" for k in OPTIONAL if k in values)
-    return HEADER.format(version=__version__, optional=optional, **{k: str(v) for k, v in values.items()}) + BODY
+    return header.format(version=__version__, optional=optional, **{k: str(v) for k, v in values.items()}) + body
 
 
 def write_deck(path, variables: dict | None = None) -> Path:

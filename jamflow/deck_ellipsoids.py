@@ -15,18 +15,15 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__
 from .box import Box
-from .deck import _check_seed_protocol, _num
+from .deck import _num, checked_inputs, optional_values, render
 from .io import atomic_path, write_lammps_data
 from .packing import Packing
-from .potentials import Potential, Spring, parse_potential
+from .potentials import Potential, Spring
 from .protocols.compression import CompressionSettings
 from .shapes.shape import Ellipsoid
-from .sizes import parse_sizes
 
 DECK_NAME = "jam-ellipses.lmp"
-OPTIONAL = ("data", "phi0", "ftol")
 DEFAULT_PLUGIN = "jamflow_pairs.so"
 
 
@@ -38,39 +35,24 @@ def deck_variables(n: int = 64, dim: int = 2, alpha: float = 1.6, sizes="bi:1.4:
     ``Packing`` check them, before any work). ``plugin``: the library path the deck loads
     (default ``jamflow_pairs.so``; pass ``plugin_build.plugin_library()``)."""
     settings = settings or CompressionSettings()
-    pot = parse_potential(potential) if isinstance(potential, str) else potential
-    if not (isinstance(pot, Spring) and pot.alpha == 2.0 and pot.epsilon == 1.0):
-        raise ValueError(f"the ellipse deck runs the linear spring (alpha = 2, eps = 1) only, got {pot.spec}; "
-                         "run other potentials with the Python controller (jamflow jam)")
     shape = Ellipsoid(float(alpha), contact)
     shape.check(dim)
-    spec = parse_sizes(sizes) if isinstance(sizes, str) else sizes
-    if spec.kind not in ("mono", "bi"):
-        raise ValueError(f"the deck runs mono or bi sizes only (atom types), got {spec.spec}")
-    d2, fsmall = (1.0, 1.0) if spec.kind == "mono" else spec.params
+    d2, fsmall = checked_inputs(potential, sizes, settings)
     shape.check_sizes(np.array([1.0, d2]), dim)
-    _check_seed_protocol(settings)
     m = settings.minimizer
     values = dict(plugin=str(plugin or DEFAULT_PLUGIN), dim=int(dim), N=int(n), alpha=_num(alpha), contact=contact,
                   d1=1, d2=_num(d2), fsmall=_num(fsmall), seed=int(seed), vtol=_num(settings.v_tol),
                   dphi0=_num(settings.dphi0), vmin=_num(m.v_min), delta=_num(m.delta), window=m.window,
                   maxiter=m.max_iterations, mddt=_num(m.md_timestep), damping=_num(m.rotating_damping),
                   maxsteps=settings.max_steps, skin=_num(0.3), out=str(out))
-    start_phi = phi0 if phi0 is not None else settings.phi0
-    optional = {"data": None if data is None else str(data),
-                "phi0": None if start_phi is None else repr(float(start_phi)),
-                "ftol": None if m.force_tol is None else repr(float(m.force_tol))}
-    values.update({k: v for k, v in optional.items() if v is not None})
-    return values
+    return {**values, **optional_values(settings, data, phi0)}
 
 
 def deck_text(variables: dict | None = None) -> str:
     """The deck with ``variables`` (from ``deck_variables``) as its defaults."""
     from .deck_ellipsoids_script import BODY, HEADER
 
-    values = deck_variables() if variables is None else dict(variables)
-    optional = "".join(f"variable {k:<9} index {values.pop(k)}\n" for k in OPTIONAL if k in values)
-    return HEADER.format(version=__version__, optional=optional, **{k: str(v) for k, v in values.items()}) + BODY
+    return render(HEADER, BODY, deck_variables() if variables is None else variables)
 
 
 def write_deck(path, variables: dict | None = None) -> Path:

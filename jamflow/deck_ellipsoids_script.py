@@ -5,8 +5,12 @@ plugin pair style jamflow/ellipsoid and damped dynamics over positions and orien
 parameters as ``index`` variables (``lmp -var NAME VALUE`` overrides them); ``BODY`` is the
 seed protocol (section 2.1), minimising as ``LammpsEngine`` does for ellipsoids (its rotating
 session: fix nve/asphere + fix langevin at T = 0 with angmom; forces and generalized torques
-measured without the drag) and stopping by ``jamflow.minimize``'s rules on both.
+measured without the drag) and stopping by ``jamflow.minimize``'s rules on both. The window's
+stopping rules and the bisection that follows each minimisation are the disk deck's own text
+(``deck_script.RULES``, ``deck_script.DECIDE``).
 """
+
+from .deck_script import DECIDE, LOG_AND_OPTIONS, RULES
 
 HEADER = """\
 # jamflow deck: jam N soft ellipses (dim 2) or spheroids (dim 3) at onset by isotropic
@@ -55,18 +59,7 @@ variable skin      index {skin:<12} # neighbour-list skin
 variable out       index {out:<12} # output prefix
 """
 
-BODY = r"""
-variable jf_log string ${out}.protocol.txt
-variable jf_logtmp string ${out}.protocol.txt.partial
-shell rm -f ${jf_logtmp}
-print "# jamflow deck: ellipsoids, isotropic compression to jamming onset (seed chapter section 2.1)" file ${jf_logtmp} screen no
-variable jf_hasdata internal $(is_defined(variable,data))
-variable jf_autophi internal $(!is_defined(variable,phi0))
-variable jf_autoftol internal $(!is_defined(variable,ftol))
-if "${jf_hasdata} == 0" then "variable data string none"
-if "${jf_autoftol} == 1" then "variable ftol string auto"
-if "${jf_autophi} == 1" then "variable phi0 string auto"
-print "# dim ${dim} N ${N} alpha ${alpha} contact ${contact} d1 ${d1} d2 ${d2} phi0 ${phi0} seed ${seed} vtol ${vtol} dphi0 ${dphi0} damping ${damping} ftol ${ftol} data ${data}" append ${jf_logtmp} screen no
+_SETUP = "\n" + LOG_AND_OPTIONS + r"""print "# dim ${dim} N ${N} alpha ${alpha} contact ${contact} d1 ${d1} d2 ${d2} phi0 ${phi0} seed ${seed} vtol ${vtol} dphi0 ${dphi0} damping ${damping} ftol ${ftol} data ${data}" append ${jf_logtmp} screen no
 
 # ---- check the parameters before any work ----
 if "${dim} != 2 && ${dim} != 3" then "variable jf_bad string 'dim must be 2 or 3'" "jump SELF jf_fail"
@@ -181,6 +174,7 @@ variable jf_step internal 0
 variable jf_laststep internal 0
 variable jf_iters internal 0
 variable jf_resumes internal 0
+variable jf_cg internal 0
 print "# step phi V P dphi iterations max_force reason" append ${jf_logtmp} screen no
 
 label jf_step_loop
@@ -216,20 +210,9 @@ variable jf_e internal $(pe/atoms:%.17g)
 variable jf_fm internal $(ternary(fmax>c_jf_gmax,fmax,c_jf_gmax):%.17g)
 fix jf_lang all langevin 0.0 0.0 $(1.0/v_damping:%.17g) 4928459 angmom 1.0
 if "${dim} == 2" then "unfix jf_2d" "fix jf_2d all enforce2d"
-variable jf_reason string none
-variable jf_capped internal 0
-variable jf_conv internal 0
-variable jf_vminstop internal 0
-if "$(v_jf_fm < v_jf_ftol)" then "variable jf_reason string force" "variable jf_conv internal 1" "jump SELF jf_min_done"
-if "$(v_jf_e < v_vmin)" then "variable jf_reason string energy-below-vmin" "variable jf_conv internal 1" "variable jf_vminstop internal 1" "jump SELF jf_min_done"
-if "$(v_jf_first == 0 && (v_jf_eprev-v_jf_e) < v_delta*v_jf_e && v_jf_fm > 0.5*v_jf_fmprev)" then "variable jf_reason string no-progress" "jump SELF jf_min_done"
-if "$(v_jf_done >= v_maxiter)" then "variable jf_reason string iteration-cap" "variable jf_capped internal 1" "jump SELF jf_min_done"
-variable jf_eprev internal $(v_jf_e:%.17g)
-variable jf_fmprev internal $(v_jf_fm:%.17g)
-variable jf_first internal 0
-jump SELF jf_window
-label jf_min_done
-unfix jf_halt
+"""
+
+_MINIMISATION_DONE = r"""unfix jf_halt
 unfix jf_nve
 unfix jf_lang
 velocity all set 0.0 0.0 0.0
@@ -237,37 +220,6 @@ set group all angmom 0.0 0.0 0.0
 variable jf_iters internal $(v_jf_iters+v_jf_done)
 variable jf_p internal $((c_jf_press[1]+c_jf_press[2]+ternary(v_dim==3,c_jf_press[3],0))/v_dim:%.17g)
 print "$(v_jf_step) $(v_jf_phi:%.17g) $(v_jf_e:%.17g) $(v_jf_p:%.17g) $(v_jf_laststep:%.17g) $(v_jf_done) $(v_jf_fm:%.17g) ${jf_reason}" append ${jf_logtmp} screen no
-
-# ---- a state in the window cut off by the step cap is minimised again in place (at most 3 times) ----
-if "$(v_jf_capped == 1 && v_jf_e > v_vtol && v_jf_e < 2*v_vtol && v_jf_resumes < 3)" then "variable jf_resumes internal $(v_jf_resumes+1)" "variable jf_laststep internal 0" "variable jf_step internal $(v_jf_step+1)" "jump SELF jf_step_loop"
-
-# ---- decide: in the window, compress, or decompress; halve dphi on a crossing ----
-if "$(v_jf_e > v_vtol && v_jf_e < 2*v_vtol && v_jf_vminstop == 0)" then "jump SELF jf_jammed"
-variable jf_newside internal $(ternary(v_jf_e<=v_vtol||v_jf_vminstop==1,1,-1))
-if "$(v_jf_side != 0 && v_jf_side != v_jf_newside)" then "variable jf_dphi internal $(v_jf_dphi/2.0:%.17g)"
-variable jf_side internal ${jf_newside}
-variable jf_target internal $(ternary(v_jf_side>0,v_jf_phi+v_jf_dphi,v_jf_phi-v_jf_dphi):%.17g)
-if "$(v_jf_target <= 0 || v_jf_target >= 1)" then "variable jf_bad string 'packing fraction left (0, 1) (next phi = $(v_jf_target)): start from a lower phi0'" "jump SELF jf_fail"
-variable jf_laststep internal $(abs(v_jf_target-v_jf_phi):%.17g)
-if "$(v_jf_laststep < 4*2.220446049250313e-16*v_jf_phi)" then "variable jf_bad string 'the increment reached float64 resolution at phi = $(v_jf_phi:%.15f) without V landing in (vtol, 2 vtol); use a larger vtol or a tighter ftol'" "jump SELF jf_fail"
-variable jf_phi internal $(v_jf_target:%.17g)
-variable jf_step internal $(v_jf_step+1)
-if "$(v_jf_step >= v_maxsteps)" then "variable jf_bad string 'no packing in the window after ${maxsteps} minimisations: raise maxsteps'" "jump SELF jf_fail"
-jump SELF jf_step_loop
-
-# ---- success: the final packing as a data file, and the summary line ----
-label jf_jammed
-if "${jf_conv} == 0" then "print '# warning: final minimisation stopped by ${jf_reason} with max force/torque $(v_jf_fm:%.2e) (tolerance $(v_jf_ftol:%.1e))' append ${jf_logtmp} screen yes"
-write_data ${out}.data.partial
-shell mv ${out}.data.partial ${out}.data
-print "# result phi_J $(v_jf_phi:%.17g) V $(v_jf_e:%.17g) P $(v_jf_p:%.17g) max_force $(v_jf_fm:%.17g) minimisations $(v_jf_step+1) iterations $(v_jf_iters) status jammed" append ${jf_logtmp} screen no
-shell mv ${jf_logtmp} ${jf_log}
-print "jamflow deck: phi_J = $(v_jf_phi:%.12f)  V = $(v_jf_e:%.3e)  P = $(v_jf_p:%.3e)  max|F|,|tau/d| = $(v_jf_fm:%.1e)  $(v_jf_step+1) minimisations  -> ${out}.data, ${jf_log}"
-quit 0
-
-label jf_fail
-print "# result status failed: ${jf_bad}" append ${jf_logtmp} screen no
-shell mv ${jf_logtmp} ${jf_log}
-print "ERROR: jamflow deck: ${jf_bad}"
-quit 1
 """
+
+BODY = _SETUP + RULES + _MINIMISATION_DONE + DECIDE

@@ -52,16 +52,8 @@ variable out       index {out:<12} # output prefix
 variable walls     index {walls:<12} # none | x | y | z | xy | xz | yz | xyz: smooth walls on those axes
 """
 
-BODY = r"""
-# ---------------------------------------------------------------------------------------
-# Everything below mirrors jamflow's Python controller command for command
-# (jamflow/engine/lammps.py, jamflow/minimize.py, jamflow/protocols/compression.py), so a
-# run from the same data file follows the same trajectory. Numbers that must be exact are
-# kept in internal-style variables: LAMMPS folds a constant equal-style formula to 15
-# digits, which would move phi by ~1e-16 and send FIRE down another path.
-# ---------------------------------------------------------------------------------------
-
-variable jf_log string ${out}.protocol.txt
+# the protocol log and the optional variables (data, phi0, ftol); shared with the ellipse deck
+LOG_AND_OPTIONS = r"""variable jf_log string ${out}.protocol.txt
 variable jf_logtmp string ${out}.protocol.txt.partial
 shell rm -f ${jf_logtmp}
 print "# jamflow deck: isotropic compression to jamming onset (seed chapter section 2.1)" file ${jf_logtmp} screen no
@@ -71,7 +63,18 @@ variable jf_autoftol internal $(!is_defined(variable,ftol))
 if "${jf_hasdata} == 0" then "variable data string none"
 if "${jf_autoftol} == 1" then "variable ftol string auto"
 if "${jf_autophi} == 1" then "variable phi0 string auto"
-print "# dim ${dim} N ${N} d1 ${d1} d2 ${d2} phi0 ${phi0} seed ${seed} vtol ${vtol} dphi0 ${dphi0} minimizer ${minimizer} ftol ${ftol} data ${data}" append ${jf_logtmp} screen no
+"""
+
+_SETUP = (r"""
+# ---------------------------------------------------------------------------------------
+# Everything below mirrors jamflow's Python controller command for command
+# (jamflow/engine/lammps.py, jamflow/minimize.py, jamflow/protocols/compression.py), so a
+# run from the same data file follows the same trajectory. Numbers that must be exact are
+# kept in internal-style variables: LAMMPS folds a constant equal-style formula to 15
+# digits, which would move phi by ~1e-16 and send FIRE down another path.
+# ---------------------------------------------------------------------------------------
+
+""" + LOG_AND_OPTIONS + r"""print "# dim ${dim} N ${N} d1 ${d1} d2 ${d2} phi0 ${phi0} seed ${seed} vtol ${vtol} dphi0 ${dphi0} minimizer ${minimizer} ftol ${ftol} data ${data}" append ${jf_logtmp} screen no
 
 # ---- check the parameters before any work ----
 if "${dim} != 2 && ${dim} != 3" then "variable jf_bad string 'dim must be 2 or 3'" "jump SELF jf_fail"
@@ -214,7 +217,10 @@ variable jf_ran internal $(step-v_jf_before)
 variable jf_done internal $(v_jf_done+v_jf_ran)
 variable jf_e internal $(pe/atoms:%.17g)
 variable jf_fm internal $(fmax:%.17g)
-variable jf_reason string none
+""")
+
+# the stopping rules of one window (jamflow/minimize.py); shared with the ellipse deck
+RULES = r"""variable jf_reason string none
 variable jf_capped internal 0
 variable jf_conv internal 0
 variable jf_vminstop internal 0
@@ -228,12 +234,17 @@ variable jf_fmprev internal $(v_jf_fm:%.17g)
 variable jf_first internal 0
 jump SELF jf_window
 label jf_min_done
-unfix jf_halt
+"""
+
+_MINIMISATION_DONE = r"""unfix jf_halt
 if "${minimizer} == md" then "unfix jf_nve" "unfix jf_visc" "velocity all set 0.0 0.0 0.0"
 variable jf_iters internal $(v_jf_iters+v_jf_done)
 variable jf_p internal $((c_jf_press[1]+c_jf_press[2]+ternary(v_dim==3,c_jf_press[3],0))/v_dim:%.17g)
 print "$(v_jf_step) $(v_jf_phi:%.17g) $(v_jf_e:%.17g) $(v_jf_p:%.17g) $(v_jf_laststep:%.17g) $(v_jf_done) $(v_jf_fm:%.17g) ${jf_reason}" append ${jf_logtmp} screen no
+"""
 
+# keep resuming, decide the side, step phi, finish; shared with the ellipse deck
+DECIDE = r"""
 # ---- a state in the window cut off by the iteration cap is not yet a minimum: minimise it
 # again in place, at most 3 times a run (WINDOW_RESUMES in jamflow/protocols/compression.py) ----
 if "$(v_jf_capped == 1 && v_jf_e > v_vtol && v_jf_e < 2*v_vtol && v_jf_resumes < 3)" then "variable jf_resumes internal $(v_jf_resumes+1)" "variable jf_laststep internal 0" "variable jf_step internal $(v_jf_step+1)" "jump SELF jf_step_loop"
@@ -269,3 +280,6 @@ shell mv ${jf_logtmp} ${jf_log}
 print "ERROR: jamflow deck: ${jf_bad}"
 quit 1
 """
+
+BODY = _SETUP + RULES + _MINIMISATION_DONE + DECIDE
+

@@ -25,6 +25,7 @@ from jamflow.potentials import RepulsiveLJ, Spring
 from jamflow.protocols.compression import compress, fast_protocol, initial_packing
 from jamflow.shapes import Ellipsoid, contact_distance
 from jamflow.sizes import parse_sizes
+from test_engines import assert_energy_derivatives, rel, tilted
 
 ENGINES = {"lammps": LammpsEngine, "numba": CompiledEngine}
 
@@ -46,15 +47,7 @@ def sample(dim, alpha, sizes, method, tilt=0.0, n=None, seed=3, potential=None, 
     n = n or (40 if dim == 2 else 100)
     p = random_packing(n, dim, parse_sizes(sizes), phi or (0.9 if dim == 2 else 0.65), seed,
                        potential or Spring(2.5), Ellipsoid(alpha, method))
-    if tilt:
-        h = p.box.h.copy()
-        h[0, 1] = tilt * h[1, 1]
-        p = p.with_positions(Box(h).to_cartesian(p.box.to_fractional(p.positions)), box=Box(h))
-    return p
-
-
-def rel(a, b):
-    return float(np.max(np.abs(np.asarray(a) - np.asarray(b))) / np.max(np.abs(b)))
+    return tilted(p, tilt) if tilt else p
 
 
 @pytest.mark.parametrize("engine", list(ENGINES))
@@ -102,23 +95,8 @@ def test_lammps_rlj_and_hertz_laws_on_ellipsoids():
 @pytest.mark.parametrize("dim,method", [(2, "linear"), (2, "quadratic"), (3, "quadratic"), (2, "cleaver")])
 def test_reference_forces_and_torques_are_energy_derivatives_for_approximations(dim, method):
     """Central differences (step 1e-6) of the reference energy with the truncated lambda."""
-    from test_engines import _turned
-
     p = sample(dim, 1.8, "bi:1.4:0.5" if dim == 2 else "mono", method, n=24 if dim == 2 else 60, seed=5)
-    ref = energy_forces_pressure(p)
-    h = 1e-6
-    for k in range(0, p.n, 6):
-        for a in range(dim):
-            dx = np.zeros_like(p.positions)
-            dx[k, a] = h
-            fd = -(energy_forces_pressure(p.with_positions(p.positions + dx)).energy
-                   - energy_forces_pressure(p.with_positions(p.positions - dx)).energy) / (2 * h)
-            assert fd == pytest.approx(ref.forces[k, a], rel=1e-6, abs=1e-8)
-        for axis in ([2] if dim == 2 else [0, 1, 2]):
-            fd = -(energy_forces_pressure(_turned(p, k, h, axis)).energy
-                   - energy_forces_pressure(_turned(p, k, -h, axis)).energy) / (2 * h)
-            torque = ref.torques[k] if dim == 2 else ref.torques[k, axis]
-            assert fd == pytest.approx(torque, rel=1e-6, abs=1e-8)
+    assert_energy_derivatives(p, 6)
 
 
 @pytest.mark.parametrize("engine", ["reference", *ENGINES])

@@ -72,16 +72,18 @@ inline double law_of_s(double s, double eps, double eps_over_alpha, double alpha
 }
 }    // namespace
 
-class PairJamflow : public Pair {
+/* What every jamflow style shares: the law of s and its parameters, epsilon per type pair
+   (pair_coeff I J EPSILON, mixed geometrically where unset), the cutoff. */
+
+class PairJamflowLaw : public Pair {
  public:
-  PairJamflow(LAMMPS *lmp, bool rlj) : Pair(lmp), rlj_style(rlj)
+  explicit PairJamflowLaw(LAMMPS *lmp) : Pair(lmp)
   {
-    single_enable = 1;
     restartinfo = 0;
     writedata = 0;
   }
 
-  ~PairJamflow() override
+  ~PairJamflowLaw() override
   {
     if (allocated) {
       memory->destroy(setflag);
@@ -91,24 +93,36 @@ class PairJamflow : public Pair {
     }
   }
 
-  void settings(int narg, char **arg) override;
   void coeff(int narg, char **arg) override;
-  void init_style() override;
   double init_one(int i, int j) override;
-  void compute(int eflag, int vflag) override;
-  double single(int i, int j, int itype, int jtype, double rsq, double factor_coul,
-                double factor_lj, double &fforce) override;
 
- private:
-  const bool rlj_style;
+ protected:
   int law = SPRING2;
   double alpha = 2.0;
   double cut_global = 0.0;
   double **epsilon = nullptr;
   double **eps_over_alpha = nullptr;
 
-  std::string name() const { return rlj_style ? "jamflow/rlj" : "jamflow/spring"; }
+  virtual std::string name() const = 0;
   void allocate();
+  /* "ALPHA CUTOFF" (spring) or "CUTOFF" (rlj); false if the count is wrong */
+  bool parse_law(bool rlj, int narg, char **arg);
+};
+
+class PairJamflow : public PairJamflowLaw {
+ public:
+  PairJamflow(LAMMPS *lmp, bool rlj) : PairJamflowLaw(lmp), rlj_style(rlj) { single_enable = 1; }
+
+  void settings(int narg, char **arg) override;
+  void init_style() override;
+  void compute(int eflag, int vflag) override;
+  double single(int i, int j, int itype, int jtype, double rsq, double factor_coul,
+                double factor_lj, double &fforce) override;
+
+ private:
+  const bool rlj_style;
+
+  std::string name() const override { return rlj_style ? "jamflow/rlj" : "jamflow/spring"; }
   template <int LAW> double pair_law(double rsq, double sigma, int itype, int jtype,
                                      double &fpair) const;
   template <int LAW, int EVFLAG, int NEWTON> void eval();
@@ -234,7 +248,7 @@ double PairJamflow::single(int i, int j, int itype, int jtype, double rsq,
 
 /* ---------------------------------------------------------------------- */
 
-void PairJamflow::allocate()
+void PairJamflowLaw::allocate()
 {
   allocated = 1;
   const int n = atom->ntypes + 1;
@@ -246,18 +260,13 @@ void PairJamflow::allocate()
   memory->create(eps_over_alpha, n, n, "pair:eps_over_alpha");
 }
 
-/* pair_style jamflow/spring ALPHA CUTOFF | pair_style jamflow/rlj CUTOFF */
-
-void PairJamflow::settings(int narg, char **arg)
+bool PairJamflowLaw::parse_law(bool rlj, int narg, char **arg)
 {
-  const int expected = rlj_style ? 1 : 2;
-  if (narg != expected)
-    error->all(FLERR, "Illegal pair_style " + name() + " command: expected " +
-                          (rlj_style ? std::string("CUTOFF") : std::string("ALPHA CUTOFF")));
-  if (!rlj_style) {
+  if (narg != (rlj ? 1 : 2)) return false;
+  if (!rlj) {
     alpha = utils::numeric(FLERR, arg[0], false, lmp);
     if (!(alpha > 1.0) || !std::isfinite(alpha))
-      error->all(FLERR, "pair_style jamflow/spring: ALPHA must be a finite number > 1");
+      error->all(FLERR, "pair_style " + name() + ": ALPHA must be a finite number > 1");
     law = (alpha == 2.0) ? SPRING2 : (alpha == 2.5) ? HERTZ : SPRING_POW;
   } else {
     law = RLJ;
@@ -265,12 +274,22 @@ void PairJamflow::settings(int narg, char **arg)
   cut_global = utils::numeric(FLERR, arg[narg - 1], false, lmp);
   if (!(cut_global > 0.0) || !std::isfinite(cut_global))
     error->all(FLERR, "pair_style " + name() + ": CUTOFF must be a positive number "
-                      "(use the largest particle diameter)");
+                      "(use the largest contact distance: diameter, or long axis)");
+  return true;
+}
+
+/* pair_style jamflow/spring ALPHA CUTOFF | pair_style jamflow/rlj CUTOFF */
+
+void PairJamflow::settings(int narg, char **arg)
+{
+  if (!parse_law(rlj_style, narg, arg))
+    error->all(FLERR, "Illegal pair_style " + name() + " command: expected " +
+                          (rlj_style ? std::string("CUTOFF") : std::string("ALPHA CUTOFF")));
 }
 
 /* pair_coeff I J EPSILON */
 
-void PairJamflow::coeff(int narg, char **arg)
+void PairJamflowLaw::coeff(int narg, char **arg)
 {
   if (narg != 3)
     error->all(FLERR, "Incorrect args for pair_coeff of " + name() + ": expected I J EPSILON");
@@ -312,7 +331,7 @@ void PairJamflow::init_style()
                           "; pass the largest diameter as CUTOFF");
 }
 
-double PairJamflow::init_one(int i, int j)
+double PairJamflowLaw::init_one(int i, int j)
 {
   if (setflag[i][j] == 0) epsilon[i][j] = mix_energy(epsilon[i][i], epsilon[j][j], 1.0, 1.0);
   epsilon[j][i] = epsilon[i][j];

@@ -33,17 +33,15 @@
 
 namespace LAMMPS_NS {
 
-class PairJamflowEllipsoid : public Pair {
+class PairJamflowEllipsoid : public PairJamflowLaw {
  public:
   static constexpr int NPROPS = 6;     // a^2, b^2, quaternion w x y z per atom
   static constexpr int NCOUNTS = 4;    // fallbacks, capped, approximate, invalid
   static constexpr int NEXTRA = NCOUNTS + 9;    // + 9 virial components
 
-  PairJamflowEllipsoid(LAMMPS *lmp) : Pair(lmp)
+  PairJamflowEllipsoid(LAMMPS *lmp) : PairJamflowLaw(lmp)
   {
     single_enable = 0;
-    restartinfo = 0;
-    writedata = 0;
     comm_forward = NPROPS;
     no_virial_fdotr_compute = 1;
     nextra = NEXTRA;
@@ -55,19 +53,11 @@ class PairJamflowEllipsoid : public Pair {
   {
     delete[] pvector;
     memory->destroy(props);
-    if (allocated) {
-      memory->destroy(setflag);
-      memory->destroy(cutsq);
-      memory->destroy(epsilon);
-      memory->destroy(eps_over_alpha);
-    }
     // the internal compute stays (a new instance of this style reuses it; Modify may be gone here)
   }
 
   void settings(int narg, char **arg) override;
-  void coeff(int narg, char **arg) override;
   void init_style() override;
-  double init_one(int, int) override { return cut_global; }
   void compute(int eflag, int vflag) override;
   int pack_forward_comm(int n, int *list, double *buf, int, int *) override
   {
@@ -86,17 +76,12 @@ class PairJamflowEllipsoid : public Pair {
  private:
   const char *PROPS_ID = "jamflow_ellipsoid_props";
   int method = jamflow_contact::EXACT;
-  int law = SPRING2;
-  double alpha = 2.0;
-  double cut_global = 0.0;
-  double **epsilon = nullptr;
-  double **eps_over_alpha = nullptr;
   double **props = nullptr;
   int nmax_props = 0;
   Compute *props_compute = nullptr;
   double counts[NCOUNTS] = {0.0, 0.0, 0.0, 0.0};
 
-  void allocate();
+  std::string name() const override { return "jamflow/ellipsoid"; }
   void gather_props();
   template <int LAW> void eval(int eflag, int vflag);
 };
@@ -114,54 +99,7 @@ inline void PairJamflowEllipsoid::settings(int narg, char **arg)
     if (std::string(arg[0]) == methods[k]) method = k;
   if (method < 0) error->all(FLERR, usage);
   const std::string kind = arg[1];
-  if (kind == "spring" && narg == 4) {
-    alpha = utils::numeric(FLERR, arg[2], false, lmp);
-    if (!(alpha > 1.0) || !std::isfinite(alpha))
-      error->all(FLERR, "pair_style jamflow/ellipsoid: ALPHA must be a finite number > 1");
-    law = (alpha == 2.0) ? SPRING2 : (alpha == 2.5) ? HERTZ : SPRING_POW;
-  } else if (kind == "rlj" && narg == 3) {
-    law = RLJ;
-  } else {
-    error->all(FLERR, usage);
-  }
-  cut_global = utils::numeric(FLERR, arg[narg - 1], false, lmp);
-  if (!(cut_global > 0.0) || !std::isfinite(cut_global))
-    error->all(FLERR, "pair_style jamflow/ellipsoid: CUTOFF must be a positive number (the largest long axis)");
-}
-
-inline void PairJamflowEllipsoid::allocate()
-{
-  allocated = 1;
-  const int n = atom->ntypes + 1;
-  memory->create(setflag, n, n, "pair:setflag");
-  for (int i = 1; i < n; i++)
-    for (int j = i; j < n; j++) setflag[i][j] = 0;
-  memory->create(cutsq, n, n, "pair:cutsq");
-  memory->create(epsilon, n, n, "pair:epsilon");
-  memory->create(eps_over_alpha, n, n, "pair:eps_over_alpha");
-}
-
-/* pair_coeff I J EPSILON (the same epsilon for every pair of types) */
-
-inline void PairJamflowEllipsoid::coeff(int narg, char **arg)
-{
-  if (narg != 3) error->all(FLERR, "Incorrect args for pair_coeff of jamflow/ellipsoid: expected I J EPSILON");
-  if (!allocated) allocate();
-  int ilo, ihi, jlo, jhi;
-  utils::bounds(FLERR, arg[0], 1, atom->ntypes, ilo, ihi, error);
-  utils::bounds(FLERR, arg[1], 1, atom->ntypes, jlo, jhi, error);
-  const double eps_one = utils::numeric(FLERR, arg[2], false, lmp);
-  if (!(eps_one > 0.0) || !std::isfinite(eps_one))
-    error->all(FLERR, "pair_coeff for jamflow/ellipsoid: EPSILON must be a positive number");
-  int count = 0;
-  for (int i = ilo; i <= ihi; i++)
-    for (int j = (jlo > i ? jlo : i); j <= jhi; j++) {
-      epsilon[i][j] = epsilon[j][i] = eps_one;
-      eps_over_alpha[i][j] = eps_over_alpha[j][i] = eps_one / alpha;
-      setflag[i][j] = 1;
-      count++;
-    }
-  if (count == 0) error->all(FLERR, "Incorrect args for pair coefficients");
+  if ((kind != "spring" && kind != "rlj") || !parse_law(kind == "rlj", narg - 2, arg + 2)) error->all(FLERR, usage);
 }
 
 /* Needs atom_style ellipsoid with every atom an ellipsoid; checks the cutoff. */
