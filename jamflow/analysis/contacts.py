@@ -12,8 +12,11 @@
   along the centre line. Removing a floater can make its neighbours floaters, so the test is
   repeated until nothing changes.
 - Shapes: ellipses/spheroids touch when r_ij < sigma_ij with the shape's contact distance;
-  rigid bodies are in contact when any two of their sites overlap (one contact per pair of
-  bodies, however many site pairs touch).
+  rigid bodies are in contact when any two of their sites overlap: by default one contact
+  per pair of bodies, however many site pairs touch (``count="bodies"``); with
+  ``count="sites"`` every overlapping site pair is one contact, the constraint count of the
+  dynamical matrix (each site pair is a point-point distance; two dimers touching at two site
+  pairs fix two coordinates), which ``DynamicalMatrix`` uses.
 - N' = N - N_f, N_c = contacts among non-floaters, <z> = 2 N_c / N',
   N_c,iso = N' d_f - d + 1 (d trivial translations subtracted, one added for phi); packings
   of particles that turn are generally hypostatic (N_c < N_c,iso, seed section 4.1).
@@ -27,7 +30,8 @@ import numpy as np
 from scipy.optimize import linprog
 
 from ..packing import Packing
-from ..pairs import candidate_pairs, contact_distances, particle_contacts, separations, site_packing
+from ..pairs import (candidate_pairs, contact_distances, overlapping_sites, particle_contacts, separations,
+                     site_packing)
 
 
 @dataclass(frozen=True)
@@ -95,9 +99,15 @@ class Contacts:
     ``min_contacts``: a particle with fewer is a floater (default d_f + 1).
     ``half_space``: also remove disks/spheres whose contacts all lie in one half-space.
     ``near_tol``: relative width of the near-contact diagnostic.
+    ``count``: rigid bodies only: "bodies" (one contact per touching pair of bodies) or "sites"
+    (one per overlapping site pair).
     """
 
-    def __init__(self, min_contacts: int | None = None, half_space: bool = True, near_tol: float = 1e-12):
+    def __init__(self, min_contacts: int | None = None, half_space: bool = True, near_tol: float = 1e-12,
+                 count: str = "bodies"):
+        if count not in ("bodies", "sites"):
+            raise ValueError(f"count must be 'bodies' or 'sites' (how rigid-body contacts are counted), got {count!r}")
+        self.count = count
         if min_contacts is not None and (not isinstance(min_contacts, (int, np.integer)) or min_contacts < 0):
             raise ValueError(f"min_contacts must be a non-negative integer or None (d + 1), got {min_contacts!r}")
         if not (np.isfinite(near_tol) and near_tol >= 0):
@@ -107,7 +117,8 @@ class Contacts:
         self.near_tol = float(near_tol)
 
     def compute(self, packing: Packing) -> ContactsResult:
-        i, j, dr = particle_contacts(packing)
+        i, j, dr = (site_contacts(packing) if self.count == "sites" and packing.shape.kind == "rigid"
+                    else particle_contacts(packing))
         d_f = packing.dof_per_particle
         need = d_f + 1 if self.min_contacts is None else int(self.min_contacts)
         unit = dr / np.linalg.norm(dr, axis=1)[:, None]  # points from j to i
@@ -117,6 +128,13 @@ class Contacts:
         z = np.bincount(i[keep], minlength=packing.n) + np.bincount(j[keep], minlength=packing.n)
         return ContactsResult(i[keep], j[keep], floater, z, packing.dim, len(i),
                               near_contact_count(packing, self.near_tol), d_f)
+
+
+def site_contacts(packing: Packing):
+    """(body_i, body_j, dr) for every overlapping pair of sites of different bodies (a pair of
+    bodies appears once per touching site pair; dr = centre separation)."""
+    bi, bj, *_ = overlapping_sites(packing)
+    return bi, bj, separations(packing, bi, bj)
 
 
 def find_floaters(n: int, i, j, unit, need: int, half_space: bool = True) -> np.ndarray:

@@ -357,11 +357,12 @@ class DynamicalMatrixResult:
 
 class DynamicalMatrix:
     """Sparse dynamical matrix; ``remove_floaters`` drops floaters first (default).
-    ``contacts`` configures the floater search (a ``Contacts`` instance)."""
+    ``contacts`` configures the floater search (a ``Contacts`` instance; default counts every
+    overlapping site pair of rigid bodies as a contact, the constraints the matrix holds)."""
 
     def __init__(self, remove_floaters: bool = True, contacts: Contacts | None = None):
         self.remove_floaters = bool(remove_floaters)
-        self.contacts = contacts or Contacts()
+        self.contacts = contacts or Contacts(count="sites")
 
     def compute(self, packing: Packing) -> DynamicalMatrixResult:
         if not self.remove_floaters:
