@@ -17,7 +17,7 @@ import h5py
 import numpy as np
 import pytest
 
-from jamflow.analysis.contacts import Contacts
+from jamflow.analysis.contacts import Contacts, remove_floaters
 from jamflow.analysis.deformation import PROBE, displaced, energy_change, pair_changes
 from jamflow.analysis.hessian import Coordinates, hessian
 from jamflow.analysis.modes import QUARTIC_STABLE, STABLE, DensityOfStates, Spectrum, Stability
@@ -25,6 +25,7 @@ from jamflow.box import Box
 from jamflow.engine.reference import energy_forces_pressure
 from jamflow.io import load_packing
 from jamflow.packing import Packing
+from jamflow.pairs import overlapping_sites
 from jamflow.potentials import Spring
 from test_engines import dimer
 from test_hessian_shapes import model_packing
@@ -55,6 +56,34 @@ def test_energy_change_matches_reference_difference_and_quadratic_form(model, di
     tiny = 1e-7
     sym = 0.5 * (energy_change(p, tiny * u, tiny * w) + energy_change(p, -tiny * u, -tiny * w))
     assert sym == pytest.approx(0.5 * tiny**2 * xi @ (hessian(p) @ xi), rel=1e-6)
+
+
+def test_relaxed_quartic_coefficient_obeys_the_self_stress_bound(ellipses):
+    """With contact forces lambda_c = -V'(s_c) (lambda^T C = 0 at force balance) every path
+    correction keeps lambda^T (C eta + b) = lambda^T b, so the one-sided residual is at least
+    (V''/2) (lambda^T b)^2 / |lambda|^2 (linear springs: V'' = 1); and it is at most the straight
+    coefficient. lambda^T b < 0 is the stress term that makes e > 0: e = -2 lambda^T b."""
+    from jamflow.analysis.hessian import _local_index, law_derivatives, reduced_distances
+    from jamflow.analysis.quartic import quartic_coefficients
+
+    checked = 0
+    for p in ellipses:
+        spec = Spectrum().compute(p)
+        q, coords = spec.dynamical.packing, spec.dynamical.coordinates
+        null = spec.eigenvectors[:, np.abs(spec.eigenvalues) <= spec.e_min]
+        red = reduced_distances(q)
+        lam = -law_derivatives(q.potential, red.s)[0]
+        for pr in Stability().compute(p, spec).profiles:
+            if pr.behaviour != "quartic":
+                continue
+            local = pr.mode[_local_index(coords, red.i, red.j)]
+            b = 0.5 * np.einsum("pa,pab,pb->p", local, red.d2s, local)
+            assert -2 * lam @ b == pytest.approx(pr.eigenvalue, rel=1e-3)  # the stress term is e
+            straight, relaxed = quartic_coefficients(q, pr.mode, null)
+            bound = 0.5 * (lam @ b) ** 2 / (lam @ lam)
+            assert bound * (1 - 1e-3) <= relaxed <= straight  # lambda^T C = 0 holds to ~1e-7 of |lambda|
+            checked += 1
+    assert checked == 10
 
 
 def test_stored_ellipse_packings_are_at_onset(ellipses):
@@ -110,6 +139,29 @@ def test_dimer_packing_obeys_maxwell_with_site_contacts(dimers):
     assert bodies.n_contacts < Contacts(count="sites", min_contacts=0).compute(dimers).n_contacts
 
 
+def test_load_bearing_particles_with_few_contacts_are_kept_and_turn_freely():
+    """Seed Figure 2.19's exception: a particle with d + 1 .. d_f contacts whose contact forces
+    balance it is no floater. In this dimer packing each such dimer carries all its contacts on
+    one site; dropping it (the bare count rule) leaves its neighbours out of balance. Kept, each
+    turns freely about that site: a flat zero mode carried by one particle, one per missing
+    contact -- no quartic modes."""
+    p = load_packing(DATA / "dimer2d_a1.5_n64_s0.h5")
+    c = Contacts(count="sites").compute(p)
+    plain = Contacts(count="sites", balanced_exception=False).compute(p)
+    assert c.n_balanced == 3 and c.n_floaters == 0 and plain.n_floaters == 4
+    bi, bj, s, t, dr, r, sigma = overlapping_sites(p)
+    contact_force = np.max(1 - r / sigma)  # |f| = eps (1 - r/sigma) / sigma, sigma = 1
+    whole = energy_forces_pressure(p)  # nothing removed: in balance
+    assert np.abs(whole.forces).max() < 1e-13 and np.abs(whole.torques).max() < 1e-13
+    dropped = energy_forces_pressure(remove_floaters(p, plain))
+    assert np.abs(dropped.forces).max() > 0.1 * contact_force
+    spec = Spectrum().compute(p)
+    st = Stability().compute(p, spec)
+    missing = -spec.dynamical.contacts.excess_contacts
+    assert missing == 4 and spec.n_zero == spec.dim + missing and spec.n_negative == 0
+    assert st.n_single_flat == missing and st.n_quartic == 0
+
+
 def test_two_dimers_touching_at_two_site_pairs():
     body = dimer(2)
     p = Packing([[0.0, 0.0], [0.0, 0.95]], [1.0, 1.0], Box.cube(10.0, 2), Spring(), shape=body,
@@ -162,8 +214,8 @@ def test_cli_stores_mode_character_and_profiles(tmp_path, capsys):
     out = capsys.readouterr().out
     res = modes.read_modes(tmp_path / (target.stem + ".modes.hdf5"))
     missing = res["missing_contacts"]
-    assert f"quartic modes {missing} (missing contacts {missing})" in out
-    assert "quartic modes = missing contacts 1/1" in out
+    assert f"quartic modes {missing}, one-particle flat 0 (missing contacts {missing})" in out
+    assert "extra zero modes = missing contacts 1/1, quartic modes = missing contacts 1/1" in out
     assert res["schema_version"] == 2 and res["shape"] == "ellipse:1.5" and res["dof_per_particle"] == 3
     assert res["n_quartic"] == missing and res["classification"] == QUARTIC_STABLE
     assert res["n_translational"] == 2 * res["n_kept"]

@@ -11,6 +11,12 @@
   half-space rule is the disks' and spheres' only: for other shapes a contact's normal is not
   along the centre line. Removing a floater can make its neighbours floaters, so the test is
   repeated until nothing changes.
+- The exception of seed Figure 2.19: a particle that turns and has at least d + 1 but fewer
+  than d_f + 1 contacts is kept if its contact forces balance its force and torque (the
+  generalized force of its live contacts is below ``BALANCE_TOL`` times its largest contact
+  term). With three contacts on an ellipse this is the condition that their normals meet in
+  one point; such a particle carries load, and dropping it would leave its neighbours out of
+  balance (measured on 2D dimer packings: net forces as large as the contact forces).
 - Shapes: ellipses/spheroids touch when r_ij < sigma_ij with the shape's contact distance;
   rigid bodies are in contact when any two of their sites overlap: by default one contact
   per pair of bodies, however many site pairs touch (``count="bodies"``); with
@@ -46,6 +52,12 @@ class ContactsResult:
     n_overlapping: int  # overlapping pairs before floater removal
     n_near_contact: int  # pairs with |r/sigma - 1| < near_tol (diagnostic)
     dof: int | None = None  # d_f, degrees of freedom per particle (None: d, disks and spheres)
+    balanced: np.ndarray | None = None  # (N,) bool: kept by the Figure 2.19 exception (None: not tested)
+
+    @property
+    def n_balanced(self) -> int:
+        """Non-floaters with fewer than d_f + 1 contacts whose contact forces balance them."""
+        return 0 if self.balanced is None else int(self.balanced.sum())
 
     @property
     def n_floaters(self) -> int:
@@ -101,10 +113,13 @@ class Contacts:
     ``near_tol``: relative width of the near-contact diagnostic.
     ``count``: rigid bodies only: "bodies" (one contact per touching pair of bodies) or "sites"
     (one per overlapping site pair).
+    ``balanced_exception``: keep force-balanced particles that turn with d + 1 to d_f contacts
+    (seed Figure 2.19; only with the default ``min_contacts``).
     """
 
     def __init__(self, min_contacts: int | None = None, half_space: bool = True, near_tol: float = 1e-12,
-                 count: str = "bodies"):
+                 count: str = "bodies", balanced_exception: bool = True):
+        self.balanced_exception = bool(balanced_exception)
         if count not in ("bodies", "sites"):
             raise ValueError(f"count must be 'bodies' or 'sites' (how rigid-body contacts are counted), got {count!r}")
         self.count = count
@@ -123,11 +138,14 @@ class Contacts:
         need = d_f + 1 if self.min_contacts is None else int(self.min_contacts)
         unit = dr / np.linalg.norm(dr, axis=1)[:, None]  # points from j to i
         half_space = self.half_space and packing.shape.kind == "sphere"
-        floater = find_floaters(packing.n, i, j, unit, need, half_space)
+        test = self.balanced_exception and self.min_contacts is None and d_f > packing.dim
+        wrenches = contact_wrenches(packing, i, j) if test else None
+        floater = find_floaters(packing.n, i, j, unit, need, half_space, wrenches, packing.dim + 1)
         keep = ~floater[i] & ~floater[j]
         z = np.bincount(i[keep], minlength=packing.n) + np.bincount(j[keep], minlength=packing.n)
+        balanced = (~floater & (z < need)) if test else None
         return ContactsResult(i[keep], j[keep], floater, z, packing.dim, len(i),
-                              near_contact_count(packing, self.near_tol), d_f)
+                              near_contact_count(packing, self.near_tol), d_f, balanced)
 
 
 def site_contacts(packing: Packing):
@@ -137,16 +155,56 @@ def site_contacts(packing: Packing):
     return bi, bj, separations(packing, bi, bj)
 
 
-def find_floaters(n: int, i, j, unit, need: int, half_space: bool = True) -> np.ndarray:
+BALANCE_TOL = 1e-3  # |net generalized force| / largest contact term below which a particle is balanced
+
+
+def contact_wrenches(packing: Packing, i: np.ndarray, j: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(C, d_f) generalized forces (forces, torques tau_a / d_k) that each listed contact (i, j)
+    exerts on i and on j; a pair of rigid bodies listed once collects all its site pairs."""
+    from .hessian import pair_terms
+
+    terms = pair_terms(packing)
+    d, r = packing.dim, terms.gradient.shape[1] // 2 - packing.dim
+    on_i = -terms.gradient[:, np.r_[0:d, 2 * d:2 * d + r]]
+    on_j = -terms.gradient[:, np.r_[d:2 * d, 2 * d + r:2 * d + 2 * r]]
+    if len(terms.i) == len(i) and np.array_equal(terms.i, i) and np.array_equal(terms.j, j):
+        return on_i, on_j  # one term per contact (pairs of particles, or site pairs one by one)
+    keys = i.astype(np.int64) * packing.n + j  # bodies listed once per pair: sorted, unique
+    index = np.searchsorted(keys, terms.i.astype(np.int64) * packing.n + terms.j)
+    wi, wj = np.zeros((len(i), on_i.shape[1])), np.zeros((len(i), on_i.shape[1]))
+    np.add.at(wi, index, on_i)
+    np.add.at(wj, index, on_j)
+    return wi, wj
+
+
+def balanced_mask(n: int, i, j, wrenches) -> np.ndarray:
+    """Particles whose live contacts (i, j with generalized forces ``wrenches``) balance them."""
+    wi, wj = wrenches
+    net = np.zeros((n, wi.shape[1]))
+    np.add.at(net, i, wi)
+    np.add.at(net, j, wj)
+    scale = np.zeros(n)
+    np.maximum.at(scale, i, np.linalg.norm(wi, axis=1))
+    np.maximum.at(scale, j, np.linalg.norm(wj, axis=1))
+    return (scale > 0) & (np.linalg.norm(net, axis=1) <= BALANCE_TOL * scale)
+
+
+def find_floaters(n: int, i, j, unit, need: int, half_space: bool = True, wrenches=None,
+                  fewest: int = 0) -> np.ndarray:
     """Boolean mask of floaters, removed iteratively (see module docstring).
 
-    ``unit[p]`` is the unit vector from particle j[p] to particle i[p].
+    ``unit[p]`` is the unit vector from particle j[p] to particle i[p]. ``wrenches``: per-contact
+    generalized forces on i and j (``contact_wrenches``) for the Figure 2.19 exception, which
+    keeps balanced particles with ``fewest`` to ``need - 1`` contacts.
     """
     floater = np.zeros(n, bool)
     while True:
         live = ~floater[i] & ~floater[j]
         z = np.bincount(i[live], minlength=n) + np.bincount(j[live], minlength=n)
         bad = ~floater & (z < need)
+        if wrenches is not None and bad.any():
+            live_wrenches = (wrenches[0][live], wrenches[1][live])
+            bad &= ~((z >= fewest) & balanced_mask(n, i[live], j[live], live_wrenches))
         if half_space:
             candidates = ~floater & ~bad & (z > 0)
             bad |= candidates & ~spanning_mask(n, i[live], j[live], unit[live], candidates)

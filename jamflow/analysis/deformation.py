@@ -69,7 +69,7 @@ def _ellipsoid_changes(packing: Packing, u: np.ndarray, phi: np.ndarray):
     (Delta r, Delta u, Delta lambda) throughout, so it is accurate relative to itself."""
     from ..shapes.contact_distance import contact_lambda
 
-    shape, d = packing.shape, packing.dim
+    shape = packing.shape
     reach = 2.0 * float(shape.reach(packing.diameters).max()) + 2.0 * float(np.linalg.norm(u, axis=1).max())
     i, j = candidate_pairs(packing, reach)
     dr = separations(packing, i, j)

@@ -37,6 +37,7 @@ the same network that ``Contacts`` counts.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
@@ -114,13 +115,51 @@ def pair_stiffness(potential, dr: np.ndarray, r: np.ndarray, sigma: np.ndarray) 
     return second * nn + tension * (eye - nn)
 
 
+class ReducedDistances(NamedTuple):
+    """s = r / sigma of every contact (overlapping pair; site pair for rigid bodies) and its
+    first and second derivatives in the pair's local coordinates [x_i (d), x_j (d), rot_i (r),
+    rot_j (r)] (``_local_index``); every pair energy is V(s), so these carry all the geometry."""
+
+    i: np.ndarray  # (P,) first particle
+    j: np.ndarray  # (P,) second particle
+    s: np.ndarray  # (P,) < 1
+    ds: np.ndarray  # (P, L)
+    d2s: np.ndarray  # (P, L, L)
+
+
+def reduced_distances(packing: Packing) -> ReducedDistances:
+    """Contacts in the order of ``overlapping_pairs`` (``overlapping_sites`` for rigid bodies)."""
+    return ReducedDistances(*_REDUCED[packing.shape.kind](packing, Coordinates.of(packing)))
+
+
+class PairTerms(NamedTuple):
+    """Derivatives of each contact's energy V(s) in its local coordinates."""
+
+    i: np.ndarray  # (P,) first particle
+    j: np.ndarray  # (P,) second particle
+    gradient: np.ndarray  # (P, L) dV/dxi: minus the generalized forces of the pair on i and j
+    hessian: np.ndarray  # (P, L, L)
+
+
+def law_derivatives(potential, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """dV/ds and d2V/ds2 of the pair law at reduced distances s < 1."""
+    return potential.energy_force(s, potential.params)[1], potential.curvature(s, potential.params)
+
+
+def pair_terms(packing: Packing) -> PairTerms:
+    """Gradient and Hessian blocks of every contact: V' ds and V'' ds ds^T + V' d2s."""
+    red = reduced_distances(packing)
+    v1, v2 = law_derivatives(packing.potential, red.s)
+    hess = v2[:, None, None] * red.ds[:, :, None] * red.ds[:, None, :] + v1[:, None, None] * red.d2s
+    return PairTerms(red.i, red.j, v1[:, None] * red.ds, hess)
+
+
 def hessian(packing: Packing) -> sp.csr_matrix:
     """Sparse (d_f N, d_f N) Hessian of the total energy over every overlapping pair, in the
     coordinates of ``Coordinates.of(packing)`` (for disks and spheres: row k d + a is
     coordinate a of particle k, packing order)."""
-    coords = Coordinates.of(packing)
-    i, j, blocks = _BLOCKS[packing.shape.kind](packing, coords)
-    return _assemble(coords, i, j, blocks)
+    terms = pair_terms(packing)
+    return _assemble(Coordinates.of(packing), terms.i, terms.j, terms.hessian)
 
 
 def _local_index(coords: Coordinates, i: np.ndarray, j: np.ndarray) -> np.ndarray:
@@ -142,10 +181,14 @@ def _assemble(coords: Coordinates, i, j, blocks) -> sp.csr_matrix:
     return sp.coo_matrix((blocks.ravel(), (rows, cols)), shape).tocsr()
 
 
-def _sphere_blocks(packing: Packing, coords: Coordinates):
+def _sphere_reduced(packing: Packing, coords: Coordinates):
+    """s = r / sigma: ds = (n, -n) / sigma, d2s = (I - n n) / (r sigma) in [[+, -], [-, +]]
+    (with V(s) this is K = V'' n n^T + V'/r (I - n n^T) per block, ``pair_stiffness``)."""
     i, j, dr, r, sigma = overlapping_pairs(packing)
-    k = pair_stiffness(packing.potential, dr, r, sigma)
-    return i, j, np.concatenate([np.concatenate([k, -k], 2), np.concatenate([-k, k], 2)], 1)
+    n = dr / r[:, None]
+    q = (np.eye(packing.dim)[None] - n[:, :, None] * n[:, None, :]) / (r * sigma)[:, None, None]
+    ds = np.concatenate([n, -n], 1) / sigma[:, None]
+    return i, j, r / sigma, ds, np.concatenate([np.concatenate([q, -q], 2), np.concatenate([-q, q], 2)], 1)
 
 
 # --- shapes that turn: vectors are handled in 3D (2D vectors get z = 0) ---------------------
@@ -221,7 +264,9 @@ class _PairFrame:
         return first_i, first_j, second_i, second_j
 
 
-def _rigid_blocks(packing: Packing, coords: Coordinates):
+def _rigid_reduced(packing: Packing, coords: Coordinates):
+    """Site pairs: s = |dr| / sigma with dr(xi) from the lever arms (module docstring), so
+    ds = B^T n / sigma and d2s = (B^T (I - n n) B / r + n . d2 dr) / sigma."""
     shape, d = packing.shape, packing.dim
     bi, bj, s, t, dr, r, sigma = overlapping_sites(packing)
     world = shape.world_sites(packing.positions, packing.orientations, packing.diameters).reshape(-1, d)
@@ -229,15 +274,15 @@ def _rigid_blocks(packing: Packing, coords: Coordinates):
     frame = _PairFrame.of(packing, coords, bi, bj)
     first_s, first_t, second_s, second_t = frame.body_vector(lever[s], lever[t])
     jac = frame.separation_jacobian() + first_s - first_t  # d dr / d xi
-    curvature = second_s - second_t
-    stiff = np.zeros((len(r), 3, 3))
-    stiff[:, :d, :d] = pair_stiffness(packing.potential, dr, r, sigma)
-    force = _embed((packing.potential.dv_dr(r, sigma) / r)[:, None] * dr)  # dV / d dr
-    blocks = np.einsum("pak,pkl,pbl->pab", jac, stiff, jac) + np.einsum("pk,pabk->pab", force, curvature)
-    return bi, bj, blocks
+    n = _embed(dr / r[:, None])
+    perp = np.eye(3)[None] - n[:, :, None] * n[:, None, :]
+    ds = np.einsum("pak,pk->pa", jac, n) / sigma[:, None]
+    d2s = (np.einsum("pak,pkl,pbl->pab", jac, perp, jac) / r[:, None, None]
+           + np.einsum("pk,pabk->pab", n, second_s - second_t)) / sigma[:, None, None]
+    return bi, bj, r / sigma, ds, d2s
 
 
-def _ellipsoid_blocks(packing: Packing, coords: Coordinates):
+def _ellipsoid_reduced(packing: Packing, coords: Coordinates):
     from ..shapes.contact_distance import contact_lambda
 
     shape = packing.shape
@@ -252,12 +297,7 @@ def _ellipsoid_blocks(packing: Packing, coords: Coordinates):
     frame = _PairFrame.of(packing, coords, i, j)
     s, ds, d2s = reduced_distance_derivatives(frame, _embed(dr), _embed(u[i]), _embed(u[j]), 0.5 * axes[i],
                                               0.5 * axes[j], lam, envelope=shape.contact == "exact")
-    pot = packing.potential
-    inside = np.where(s < 1.0, s, 0.5)
-    v1 = np.where(s < 1.0, pot.energy_force(inside, pot.params)[1], 0.0)
-    v2 = np.where(s < 1.0, pot.curvature(inside, pot.params), 0.0)
-    blocks = v2[:, None, None] * ds[:, :, None] * ds[:, None, :] + v1[:, None, None] * d2s
-    return i, j, blocks
+    return i, j, s, ds, d2s
 
 
 def shape_matrices(u: np.ndarray, semi: np.ndarray) -> np.ndarray:
@@ -314,7 +354,7 @@ def reduced_distance_derivatives(frame: _PairFrame, rvec, u_i, u_j, semi_i, semi
     return s, ds, d2s
 
 
-_BLOCKS = {"sphere": _sphere_blocks, "rigid": _rigid_blocks, "ellipsoid": _ellipsoid_blocks}
+_REDUCED = {"sphere": _sphere_reduced, "rigid": _rigid_reduced, "ellipsoid": _ellipsoid_reduced}
 
 
 @dataclass(frozen=True)

@@ -32,6 +32,7 @@ import scipy.linalg as sla
 import scipy.sparse.linalg as spla
 
 from ..packing import Packing
+from . import quartic
 from .deformation import energy_change, network_amplitudes, opening_amplitude  # noqa: F401 (public here)
 from .hessian import DynamicalMatrix, DynamicalMatrixResult
 
@@ -225,11 +226,14 @@ class ModeProfile:
     deltas: np.ndarray  # amplitudes delta (diameters)
     delta_v_plus: np.ndarray  # V(xi_0 + delta e) - V(xi_0), total, eps
     delta_v_minus: np.ndarray  # V(xi_0 - delta e) - V(xi_0)
-    power: float  # slope of log|symmetric part| vs log delta (nan when flat)
+    power: float  # slope of log|symmetric part| vs log delta (zero modes: of the part beyond e delta^2/2; nan when flat)
     flat: bool  # symmetric part below e_min delta^2 / 2 at every delta
     sign: int  # sign of the symmetric part at the largest delta (-1: energy decreases)
     regime: str  # HARMONIC (below the first contact opening) or BEYOND_OPENING (zero modes)
     translational_fraction: float  # share of |e|^2 in the centre coordinates
+    participation: float  # 1 / sum_k w_k^2, w_k particle k's share of |e|^2: particles taking part (1 to N')
+    quartic_straight: float = float("nan")  # zero modes: fourth-order coefficient along the line (``quartic``)
+    quartic_relaxed: float = float("nan")  # ... and its minimum over curved paths; nan: not computed
 
     @property
     def delta_v(self) -> np.ndarray:
@@ -238,9 +242,12 @@ class ModeProfile:
 
     @property
     def behaviour(self) -> str:
-        """'flat', '[negative ]quadratic', '[negative ]quartic' or '[negative ]power P'."""
+        """'flat', '[negative ]quadratic', '[negative ]quartic' or '[negative ]power P'; a zero
+        mode whose relaxed fourth-order coefficient is positive is 'quartic' (``quartic``)."""
         if self.flat:
             return "flat"
+        if math.isfinite(self.quartic_relaxed):
+            return "quartic"
         prefix = "negative " if self.sign < 0 else ""
         for name, p in (("quadratic", 2.0), ("quartic", 4.0)):
             if abs(self.power - p) < 0.3:
@@ -283,6 +290,12 @@ class StabilityResult:
         """Profiled modes whose energy rises as delta^4 (seed Figure 2.17, branch 1)."""
         return sum(b == "quartic" for b in self.behaviours)
 
+    @property
+    def n_single_flat(self) -> int:
+        """Profiled flat modes carried by about one particle (participation < 1.5): a particle
+        free to move or turn alone, e.g. a dimer whose contacts all lie on one of its sites."""
+        return sum(p.flat and p.participation < 1.5 for p in self.profiles)
+
 
 class Stability:
     """Classify a packing (seed section 3) with the Delta V(delta) evidence.
@@ -292,9 +305,10 @@ class Stability:
     (diameters) of xi_0 + delta e, or None to choose them per mode: for nonzero modes the
     harmonic regime delta_open * logspace(-2, -0.5, 7), delta_open being the amplitude at which
     the contact network first changes (``opening_amplitude``); for zero modes the range
-    beyond it, top * logspace(-1.5, 0, 7) with top = 0.3 min(delta_close, 0.1), delta_close the
-    amplitude at which a pair not in contact would touch. A zero mode's energy shows there what
-    holds it: contacts that open (disks, spheres: "flat") or contacts that overlap at second
+    beyond it, top * logspace(-1.5, 0, 7) with top = min(0.1 delta_close, 0.03), delta_close the
+    amplitude at which a pair not in contact would touch (to second order). A zero mode's energy
+    shows there what holds it (its power is fitted to Delta V - e delta^2 / 2, the part beyond
+    its sub-threshold quadratic term): contacts that open (disks, spheres: "flat") or contacts that overlap at second
     order, Delta V ~ delta^4 ("quartic": the just-touching limit of ellipse packings, seed
     Figure 2.17). Moving along a mode moves centres by delta u and turns particles by
     delta (d_k theta) / d_k. Class: unstable if any e < -e_min; mechanically stable if exactly
@@ -302,7 +316,7 @@ class Stability:
     locally stable otherwise. ``spectrum``: the ``Spectrum`` used (its e_min is the threshold).
     """
 
-    def __init__(self, deltas=None, spectrum: Spectrum | None = None, n_modes="zero"):
+    def __init__(self, deltas=None, spectrum: Spectrum | None = None, n_modes="zero", relaxed: bool = True):
         if deltas is not None:
             deltas = np.asarray(deltas, float)
             if deltas.ndim != 1 or len(deltas) < 2 or not np.all(np.isfinite(deltas) & (deltas > 0)):
@@ -312,6 +326,7 @@ class Stability:
         self.deltas = deltas
         self.spectrum = spectrum or Spectrum()
         self.n_modes = n_modes
+        self.relaxed = bool(relaxed)
 
     def compute(self, packing: Packing, spectrum: SpectrumResult | None = None) -> StabilityResult:
         spec = spectrum or self.spectrum.compute(packing)
@@ -344,17 +359,27 @@ class Stability:
         if deltas is None:
             if zero:
                 closing = network_amplitudes(dyn.packing, u, w)[1]
-                deltas = 0.3 * min(closing, 0.1) * np.logspace(-1.5, 0, 7)
+                deltas = min(0.1 * closing, 0.03) * np.logspace(-1.5, 0, 7)
             else:
                 deltas = opening_amplitude(dyn.packing, u, w) * np.logspace(-2, -0.5, 7)
         plus = np.array([energy_change(dyn.packing, d * u, d * w) for d in deltas])
         minus = np.array([energy_change(dyn.packing, -d * u, -d * w) for d in deltas])
         sym = 0.5 * (plus + minus)
         flat = bool(np.all(np.abs(sym) <= 0.5 * spec.e_min * deltas**2))
-        power = float("nan") if flat else float(np.polyfit(np.log(deltas), np.log(np.abs(sym) + 1e-300), 1)[0])
+        straight = relaxed = float("nan")
+        if zero and self.relaxed:
+            null = spec.eigenvectors[:, np.abs(spec.eigenvalues) <= spec.e_min]
+            straight, relaxed = quartic.quartic_coefficients(dyn.packing, mode, null)
+            if math.isfinite(relaxed):
+                flat = bool(relaxed <= quartic.RELAXED_TOL * straight)  # free to fourth order
+        # a zero mode's quadratic part e delta^2 / 2 is below the threshold: fit what lies beyond it
+        beyond = sym - 0.5 * value * deltas**2 if zero else sym
+        power = float("nan") if flat else float(np.polyfit(np.log(deltas), np.log(np.abs(beyond) + 1e-300), 1)[0])
+        weight = np.sum(u**2, axis=1) + np.sum(w**2, axis=1)
         return ModeProfile(value, mode, deltas, plus, minus, power, flat, int(np.sign(sym[-1])),
                            BEYOND_OPENING if zero and self.deltas is None else HARMONIC,
-                           float(dyn.translational_fraction(mode)[0]))
+                           float(dyn.translational_fraction(mode)[0]), float(1.0 / np.sum(weight**2)),
+                           straight, relaxed)
 
 
 def lowest_nontrivial_modes(spec: SpectrumResult, count: int | None = None) -> tuple[np.ndarray, np.ndarray]:

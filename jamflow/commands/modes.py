@@ -81,7 +81,8 @@ def _draw(args, rows, dos):
 def summary_line(path, spec, stab) -> str:
     c = spec.dynamical.contacts
     turning = spec.dynamical.packing.shape.oriented
-    quartic = f"  quartic modes {stab.n_quartic} (missing contacts {max(-c.excess_contacts, 0)})" if turning else ""
+    quartic = (f"  quartic modes {stab.n_quartic}, one-particle flat {stab.n_single_flat} (missing contacts "
+               f"{max(-c.excess_contacts, 0)})" if turning else "")
     return (f"{path}: N' = {c.n_kept} ({c.n_floaters} floaters)  N_c = {c.n_contacts} (iso {c.isostatic_count}, "
             f"excess {c.excess_contacts:+d})  <z> = {c.mean_z:.4f}  near-contacts {c.n_near_contact}  "
             f"zero modes {spec.n_zero}  negative {spec.n_negative}  lowest e = {spec.lowest_nonzero:.4e}{quartic}  "
@@ -97,14 +98,17 @@ def ensemble_summary(spectra, stabilities=()) -> str:
             f"lowest nonzero e: mean {np.nanmean(low):.4e}, median {np.nanmedian(low):.4e}, "
             f"min {np.nanmin(low):.4e}, max {np.nanmax(low):.4e}")
     if stabilities and any(s.dynamical.packing.shape.oriented for s in spectra):
-        match = sum(st.n_quartic == max(-s.dynamical.contacts.excess_contacts, 0) for s, st in zip(spectra, stabilities))
-        line += f", quartic modes = missing contacts {match}/{n}"
+        missing = [max(-s.dynamical.contacts.excess_contacts, 0) for s in spectra]
+        zeros = sum(s.n_extra_zero == m for s, m in zip(spectra, missing))
+        match = sum(st.n_quartic == m for st, m in zip(stabilities, missing))
+        line += f", extra zero modes = missing contacts {zeros}/{n}, quartic modes = missing contacts {match}/{n}"
     return line
 
 
 def save_modes(out, source, spec, stab, vectors=False) -> Path:
     """Write one packing's results atomically (schema jamflow.modes v2: v1 plus ``shape``,
-    ``dof_per_particle``, ``n_translational``, ``n_quartic``, ``missing_contacts``, the dataset
+    ``dof_per_particle``, ``n_translational``, ``n_quartic``, ``n_single_flat``, ``n_balanced``,
+    ``missing_contacts``, the dataset
     ``translational_fraction`` and the group ``stability/profiles``)."""
     c = spec.dynamical.contacts
     packing = spec.dynamical.packing
@@ -112,6 +116,7 @@ def save_modes(out, source, spec, stab, vectors=False) -> Path:
                  source=str(source), dim=spec.dim, n=spec.dynamical.n_total, n_kept=c.n_kept,
                  shape=packing.shape.spec(packing.dim), dof_per_particle=packing.dof_per_particle,
                  n_translational=spec.dynamical.n_translational, n_quartic=stab.n_quartic,
+                 n_single_flat=stab.n_single_flat, n_balanced=c.n_balanced,
                  missing_contacts=max(-c.excess_contacts, 0),
                  n_floaters=c.n_floaters, n_contacts=c.n_contacts, n_overlapping=c.n_overlapping,
                  n_near_contact=c.n_near_contact, isostatic_count=c.isostatic_count,
@@ -143,6 +148,9 @@ def _save_profiles(g, profiles, vectors: bool) -> None:
     g["behaviours"] = np.array([p.behaviour for p in profiles], dtype=h5py.string_dtype())
     g["regimes"] = np.array([p.regime for p in profiles], dtype=h5py.string_dtype())
     g["translational_fraction"] = np.array([p.translational_fraction for p in profiles])
+    g["participation"] = np.array([p.participation for p in profiles])
+    g["quartic_straight"] = np.array([p.quartic_straight for p in profiles])
+    g["quartic_relaxed"] = np.array([p.quartic_relaxed for p in profiles])
     g["deltas"] = np.array([p.deltas for p in profiles])
     g["delta_v"] = np.array([p.delta_v for p in profiles])
     if vectors:
