@@ -18,18 +18,22 @@ second derivatives depend on how rotations are parametrized (turning about one a
 other changes the mixed entries by +-tau_c / 2), so the spectrum is the physical one only at a
 force- and torque-balanced state. Translational invariance holds everywhere: M T = 0.
 
-Pair terms, each entering the rows of the two particles it couples:
-- disks/spheres: K_ij = V''(r) n n^T + V'(r)/r (I - n n^T) (tension term included).
+Pair terms: every contact's energy is V(s), s = r / sigma, so each shape provides s and its first
+and second derivatives in the pair's coordinates (``reduced_distances``) and the law is applied
+once (``pair_terms``: V' ds and V'' ds ds^T + V' d2s), each block entering the rows of the two
+particles it couples:
+- disks/spheres: ds = (n, -n) / sigma, d2s = (I - n n) / (r sigma), i.e. the pair stiffness
+  K_ij = V''(r) n n^T + V'(r)/r (I - n n^T) (tension term included; ``pair_stiffness``).
 - rigid bodies: every overlapping site pair s (body I) - t (body J) with separation
   dr = r_s - r_t and lever arms l = r_site - R_body; d dr = dx_I - dx_J + phi_I x l_s
-  - phi_J x l_t + 1/2 [phi_I x (phi_I x l_s) - phi_J x (phi_J x l_t)] to second order, so the
-  block is B^T K B + f . d^2 dr with B = d dr / d xi and f = V'(r) n.
-- ellipses/spheroids: V(s) with s = r / sigma_ij and s^2 = max_lambda F(lambda), F =
-  lambda (1 - lambda) r^T G^-1 r, G = (1 - lambda) A_i + lambda A_j, A = (a/2)^2 u u^T +
-  (b/2)^2 (I - u u^T) (Perram & Wertheim, J. Comput. Phys. 58, 409 (1985); the same sigma_ij as
-  ``jamflow.shapes.contact_distance``). Derivatives of F are matrix-calculus closed forms; the
-  maximum over lambda gives d^2 s^2 = F_qq - F_q,lambda F_lambda,q / F_lambda,lambda
-  (implicit lambda*; lambda = 1/2 is fixed for the cleaver/gaussian methods).
+  - phi_J x l_t + 1/2 [phi_I x (phi_I x l_s) - phi_J x (phi_J x l_t)] to second order, so with
+  B = d dr / d xi: ds = B^T n / sigma, d2s = (B^T (I - n n) B / r + n . d^2 dr) / sigma.
+- ellipses/spheroids: s^2 = max_lambda F(lambda), F = lambda (1 - lambda) r^T G^-1 r,
+  G = (1 - lambda) A_i + lambda A_j, A = (a/2)^2 u u^T + (b/2)^2 (I - u u^T) (Perram & Wertheim,
+  J. Comput. Phys. 58, 409 (1985); the same sigma_ij as ``jamflow.shapes.contact_distance``).
+  Derivatives of F are matrix-calculus closed forms; the maximum over lambda gives
+  d^2 s^2 = F_qq - F_q,lambda F_lambda,q / F_lambda,lambda (implicit lambda*; lambda = 1/2 is
+  fixed for the cleaver/gaussian methods).
 Floaters are removed before the matrix is built: they and all their contacts are dropped,
 the same network that ``Contacts`` counts.
 """
