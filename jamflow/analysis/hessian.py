@@ -133,6 +133,9 @@ class ReducedDistances(NamedTuple):
 
 def reduced_distances(packing: Packing) -> ReducedDistances:
     """Contacts in the order of ``overlapping_pairs`` (``overlapping_sites`` for rigid bodies)."""
+    if packing.box.walls or packing.fixed is not None or packing.gravity > 0:
+        raise ValueError("the dynamical matrix has no wall, gravity or fixed-particle terms yet; it covers periodic "
+                         "boxes (use jamflow.analysis.contacts for the contact count of walled packings)")
     return ReducedDistances(*_REDUCED[packing.shape.kind](packing, Coordinates.of(packing)))
 
 
