@@ -86,6 +86,21 @@ def test_relaxed_quartic_coefficient_obeys_the_self_stress_bound(ellipses):
     assert checked == 10
 
 
+def test_sparse_relaxed_solver_agrees_with_the_exact_one(ellipses, monkeypatch):
+    """Above DENSE_MAX unknowns the relaxed problem goes to scipy's sparse trf: the same held
+    coefficients (free dimer modes reach 2e-11..9e-11 of straight there, docs/modes-rotations.md)."""
+    from jamflow.analysis import quartic
+
+    spec = Spectrum().compute(ellipses[0])
+    null = spec.eigenvectors[:, np.abs(spec.eigenvalues) <= spec.e_min]
+    held = [pr for pr in Stability().compute(ellipses[0], spec).profiles if pr.behaviour == "quartic"]
+    monkeypatch.setattr(quartic, "DENSE_MAX", 0)
+    for pr in held:
+        straight, relaxed = quartic.quartic_coefficients(spec.dynamical.packing, pr.mode, null)
+        assert straight == pytest.approx(pr.quartic_straight, rel=1e-12)
+        assert relaxed == pytest.approx(pr.quartic_relaxed, rel=1e-6)
+
+
 def test_stored_ellipse_packings_are_at_onset(ellipses):
     assert len(ellipses) == 3
     for p in ellipses:

@@ -22,12 +22,13 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 from scipy.optimize import lsq_linear
+from scipy.sparse.linalg import LinearOperator
 
 from ..packing import Packing
 from .hessian import Coordinates, _local_index, law_derivatives, reduced_distances
 
 RELAXED_TOL = 1e-6  # relaxed / straight coefficient below which a zero mode is free to fourth order
-DENSE_MAX = 6000  # unknowns (coordinates + contacts) of the dense active-set solver
+DENSE_MAX = 1500  # unknowns (coordinates + contacts) up to which the exact dense active-set solver runs
 
 
 def quartic_coefficients(packing: Packing, mode: np.ndarray, null: np.ndarray | None = None) -> tuple[float, float]:
@@ -35,7 +36,8 @@ def quartic_coefficients(packing: Packing, mode: np.ndarray, null: np.ndarray | 
     unit mode): sum_c V''/2 min(0, b_c)^2 along the straight line, and its minimum over
     second-order path corrections eta orthogonal to the columns of ``null`` (orthonormal, the
     zero modes), min_eta sum_c V''/2 min(0, (C eta + b)_c)^2 (a bounded linear least-squares
-    problem, scipy's exact active-set ``bvls``; nan above DENSE_MAX unknowns)."""
+    problem: scipy's exact active-set ``bvls`` up to DENSE_MAX unknowns, its sparse ``trf``
+    above, which reaches free modes to relaxed / straight ~1e-10 instead of ~1e-28)."""
     red = reduced_distances(packing)
     if not len(red.s):
         return 0.0, 0.0
@@ -51,14 +53,19 @@ def quartic_coefficients(packing: Packing, mode: np.ndarray, null: np.ndarray | 
     p, n = len(b), coords.size
     rows = np.broadcast_to(np.arange(p)[:, None], index.shape)
     compat = sp.csr_matrix(((root[:, None] * red.ds).ravel(), (rows.ravel(), index.ravel())), shape=(p, n))
-    lower = np.concatenate([np.full(n, -np.inf), np.zeros(p)])
-    upper = np.full(n + p, np.inf)
-    if n + p > DENSE_MAX:
-        return straight, float("nan")  # too large for the dense solver: not computed
-    projected = compat.toarray()
-    if null is not None and null.shape[1]:
-        projected = projected - (projected @ null) @ null.T  # eta orthogonal to the zero modes
-    a = np.hstack([projected, -np.diag(root)])
-    res = lsq_linear(a, -root * b, bounds=(lower, upper), method="bvls", tol=1e-14)  # exact active set
-    relaxed = float(0.5 * np.sum((a @ res.x + root * b) ** 2))
+    null = np.zeros((n, 0)) if null is None else np.asarray(null, float)
+    bounds = (np.concatenate([np.full(n, -np.inf), np.zeros(p)]), np.full(n + p, np.inf))
+    if n + p <= DENSE_MAX:  # exact active-set solution
+        projected = compat.toarray()
+        projected -= (projected @ null) @ null.T  # eta orthogonal to the zero modes
+        a = np.hstack([projected, -np.diag(root)])
+        x = lsq_linear(a, -root * b, bounds=bounds, method="bvls", tol=1e-14).x
+        residual = a @ x + root * b
+    else:  # sparse trust-region reflective with the projection as an operator
+        cz = compat @ null
+        a = LinearOperator((p, n + p), matvec=lambda x: compat @ x[:n] - cz @ (null.T @ x[:n]) - root * x[n:],
+                           rmatvec=lambda y: np.concatenate([compat.T @ y - null @ (cz.T @ y), -root * y]))
+        x = lsq_linear(a, -root * b, bounds=bounds, method="trf", lsmr_tol="auto", tol=1e-12, max_iter=2000).x
+        residual = a.matvec(x) + root * b
+    relaxed = float(0.5 * np.sum(residual**2))
     return straight, min(relaxed, straight)
