@@ -4,7 +4,8 @@ several aspect ratios, each packing checked by the independent brute-force energ
 
     python benchmarks/ellipse_ensembles.py --alphas 1.2 1.6 2.0 --seeds 20 --n 128 --out docs/ellipse-ensembles.csv
     python benchmarks/ellipse_ensembles.py --engine lammps --seeds 5 --out docs/ellipse-ensembles-lammps.csv
-    python benchmarks/ellipse_ensembles.py --report docs/ellipse-ensembles.csv docs/ellipse-ensembles-lammps.csv
+    python benchmarks/ellipse_ensembles.py --report docs/ellipse-ensembles.csv docs/ellipse-ensembles-lammps.csv \
+        --packings /tmp/ellipses     # (the --keep directory of the runs, one subdirectory per engine)
 
 ``--engine numba`` jams with the compiled FIRE over translations and rotations (the default
 route), ``--engine lammps`` with LAMMPS damped dynamics (fix nve/asphere + fix langevin at T = 0
@@ -116,14 +117,30 @@ def stats(values):
     return statistics.mean(v), (statistics.stdev(v) / len(v) ** 0.5 if len(v) > 1 else float("nan")), len(v)
 
 
-def report(paths) -> None:
+def recount(rows, packings: Path) -> None:
+    """Contacts of the kept packings again with the current floater rules (in place): mean_z and
+    n_floaters with seed Figure 2.19's exception, mean_z_rule / n_floaters_rule with d_f + 1 only."""
+    from jamflow.io import load_packing
+
+    for r in rows:
+        p = load_packing(packings / r["engine"] / f"{r['engine']}-alpha{float(r['alpha']):g}-seed{r['seed']}.h5")
+        for suffix, contacts in (("", Contacts()), ("_rule", Contacts(balanced_exception=False))):
+            c = contacts.compute(p)
+            r["mean_z" + suffix], r["n_floaters" + suffix] = c.mean_z, c.n_floaters
+
+
+def report(paths, packings=None) -> None:
     rows = [r for p in paths for r in read_rows(Path(p))]
+    if packings:
+        recount(rows, Path(packings))
     groups = {}
     for r in rows:
         groups.setdefault((r["engine"], float(r["alpha"])), []).append(r)
+    rule = "mean_z_rule" in rows[0]
     print("| route | alpha | packings | <phi_J> +- s.e. | <z> +- s.e. (non-floaters) | floaters / N | "
-          "worst V (brute) | worst max F, max tau/d_k (brute, all particles) | median CPU s |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          + ("<z>, floaters / N (d_f + 1 rule only) | " if rule else "")
+          + "V (brute), min .. max | worst max F, max tau/d_k (brute, all particles) | median CPU s |")
+    print("|---|---|---|---|---|---|---|---|---|" + ("---|" if rule else ""))
     for (engine, alpha), g in sorted(groups.items(), key=lambda kv: (kv[0][1], kv[0][0])):
         phi, phi_se, k = stats(r["phi_j"] for r in g)
         z, z_se, _ = stats(r["mean_z"] for r in g)
@@ -132,8 +149,12 @@ def report(paths) -> None:
         f = max(float(r["brute_max_force"]) for r in g)
         t = max(float(r["brute_max_torque"]) for r in g)
         cpu = statistics.median(float(r["cpu_seconds"]) for r in g)
+        extra = ""
+        if rule:
+            z_rule = stats(r["mean_z_rule"] for r in g)[0]
+            extra = f"{z_rule:.3f}, {statistics.mean(int(r['n_floaters_rule']) / int(r['n']) for r in g):.3f} | "
         print(f"| {engine} | {alpha:g} | {k} | {phi:.4f} +- {phi_se:.4f} | {z:.3f} +- {z_se:.3f} | {floaters:.3f} | "
-              f"{min(v):.3e} .. {max(v):.3e} | {f:.1e}, {t:.1e} | {cpu:.0f} |")
+              f"{extra}{min(v):.3e} .. {max(v):.3e} | {f:.1e}, {t:.1e} | {cpu:.0f} |")
     chart(groups, Path("docs/ellipse-ensembles.png"))
 
 
@@ -176,11 +197,12 @@ def main() -> None:
     ap.add_argument("--n", type=int, default=128)
     ap.add_argument("--engine", choices=("numba", "lammps"), default="numba")
     ap.add_argument("--out", default="docs/ellipse-ensembles.csv")
-    ap.add_argument("--keep", default=None, help="directory to save every packing (HDF5)")
+    ap.add_argument("--keep", default=None, help="directory to save every packing (HDF5), one per engine")
     ap.add_argument("--report", nargs="+", default=None, metavar="CSV")
+    ap.add_argument("--packings", default=None, help="with --report: recount contacts of the packings kept here")
     args = ap.parse_args()
     if args.report:
-        report(args.report)
+        report(args.report, args.packings)
     else:
         run(args)
 

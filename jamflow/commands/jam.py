@@ -35,7 +35,9 @@ def add_arguments(p) -> None:
                    help=f"seed: the chapter's constant-increment bisection; fast: the same stopping rule with "
                         f"growing increments and Newton jumps (docs/speed.md). Default {DEFAULT_PROTOCOL}; "
                         "seed with --emit-deck (decks run the seed protocol)")
-    p.add_argument("--minimizer", choices=METHODS, default="fire", help="energy minimiser")
+    p.add_argument("--minimizer", choices=METHODS, default="fire",
+                   help="energy minimiser; ellipses/spheroids: fire (compiled engine, over positions and "
+                        "orientations) or md (LAMMPS damped dynamics with rotations; no LAMMPS minimiser turns them)")
     p.add_argument("--engine", choices=ENGINES, default="auto",
                    help="auto: the compiled engine (FIRE, in process) wherever it runs the scene, else LAMMPS "
                         "(docs/speed.md). The engines sum forces in different orders, so from one start they "
