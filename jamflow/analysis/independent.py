@@ -124,7 +124,8 @@ def independent_check(packing: Packing) -> IndependentCheck:
     every contact-distance method is checked against the exact sigma it approximates only if it
     is 'exact': this is the exact model)."""
     if packing.shape.kind != "ellipsoid":
-        raise ValueError(f"independent_check is for ellipses/spheroids, not {packing.shape.name(packing.dim)} particles")
+        raise ValueError(f"independent_check is for ellipses/spheroids, not {packing.shape.name(packing.dim)} "
+                         "particles")
     n, d = packing.n, packing.dim
     reach = packing.shape.reach(packing.diameters)
     i, j = candidate_pairs(packing, 2.0 * float(reach.max()))

@@ -225,7 +225,8 @@ class LammpsEngine:
         if not self._ellipsoids:
             return np.zeros((t.n, 0))
         torques = (state or self.state()).torques
-        return generalized_torques(self.orientations(), torques, t.dim, t.rotational_lengths, t.shape.rotation_mask(t.dim))
+        return generalized_torques(self.orientations(), torques, t.dim, t.rotational_lengths,
+                                   t.shape.rotation_mask(t.dim))
 
     def packing(self, **metadata) -> Packing:
         """The current configuration as a new Packing."""

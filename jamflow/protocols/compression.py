@@ -427,9 +427,11 @@ def _finish(engine, phi, result, rows, settings, start_time, version) -> JamResu
     state = engine.state()
     packing = engine.packing()
     if not result.converged:
+        tol = settings.minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness,
+                                                    packing.shape.force_tol_base)
         warnings.warn(f"final minimisation stopped by '{result.reason}' with max force {result.max_force:.2e} "
-                      f"(tolerance {settings.minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness, packing.shape.force_tol_base):.1e}); the packing is in "
-                      "the energy window but force balance is only as good as that max force", stacklevel=3)
+                      f"(tolerance {tol:.1e}); the packing is in the energy window but force balance is only as "
+                      "good as that max force", stacklevel=3)
     history = {k: np.array(v) for k, v in rows.items()}
     history["reason"] = history["reason"].astype("S")
     counters = engine.counters() if hasattr(engine, "counters") else {}

@@ -13,7 +13,11 @@ by numba; this module adds the per-pair control flow of its solvers:
   evaluation each listed pair starts from its last lambda (one or two Newton steps);
 - ``gaussian`` / ``cleaver``: lambda = 1/2;
 - ``linear`` / ``quadratic``: lambda from eq. 2.26 truncated, with its own derivative; where
-  the root leaves (-1/2, 1/2) lambda = 1/2, and the pair list's ``counters`` count it.
+  the root leaves (-1/2, 1/2), or gives a larger sigma than 1/2 does, lambda = 1/2
+  (``truncated_lambda``), and the pair list's ``counters`` count both.
+
+Before any solve, a listed pair at r >= sigma(1/2) (an upper bound of every method's sigma) is
+skipped: it cannot touch.
 
 For a pair energy V(s), s = r / sigma: the force on i is -V'(s) (r_hat / sigma - g_r / sigma^2)
 (g_r the tangential gradient of sigma in r_hat), the torque on i V'(s) r / sigma^2 (u_i x
@@ -30,9 +34,9 @@ from numba.extending import register_jitable
 
 from ...packing import Packing
 from ...pairs import candidate_pairs
-from ...shapes.contact_distance import (ENGINE_COUNTERS, METHODS, SAME_SIZE_RTOL, STEP_TOL, h_lambda_derivatives, jkl_2d, jlm_3d,
-                                        pw_h, pw_terms, quartic, quintic, root_partials_2d, root_partials_3d, sigma_partials,
-                                        truncated_lambda, truncated_root)
+from ...shapes.contact_distance import (ENGINE_COUNTERS, METHODS, SAME_SIZE_RTOL, STEP_TOL, h_lambda_derivatives,
+                                        jkl_2d, jlm_3d, pw_h, pw_terms, quartic, quintic, root_partials_2d,
+                                        root_partials_3d, sigma_partials, truncated_lambda, truncated_root)
 from . import jit
 from .laws import energy_force
 
@@ -51,6 +55,7 @@ MAX_ITER = 100
 for _algebra in (pw_terms, pw_h, sigma_partials, h_lambda_derivatives, jkl_2d, quartic, jlm_3d, quintic, truncated_root,
                  root_partials_2d, root_partials_3d, truncated_lambda):
     register_jitable(_algebra)
+
 
 class Pairs(NamedTuple):
     """Pairs i < j within the method's largest contact distance + skin (``_bound_sq``, from the
