@@ -343,3 +343,11 @@ def test_ellipse_deck_refuses_what_it_cannot_run():
         deck_variables(alpha=0.5)
     with pytest.raises(ValueError, match="linear spring"):
         deck_variables(potential="hertz")
+
+
+def test_plugin_refuses_triaxial_ellipsoids():
+    p = sample(3, 1.8, "mono", "exact", n=60)
+    with LammpsEngine(p) as eng:
+        eng.command("set atom 1 shape 1.8 1.0 1.2")
+        with pytest.raises(Exception, match="handles spheroids: every atom needs shape a b b"):
+            eng.evaluate()

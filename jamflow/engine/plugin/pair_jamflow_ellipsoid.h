@@ -127,8 +127,19 @@ inline void PairJamflowEllipsoid::init_style()
   if (round)
     error->all(FLERR, "Pair style jamflow/ellipsoid: every atom must be an ellipsoid (Ellipsoids section or set shape)");
   gather_props();
-  for (int i = 0; i < atom->nlocal; i++)
+  int bad_local = 0;    // spheroids only (shape a b b), unit quaternions
+  for (int i = 0; i < atom->nlocal; i++) {
+    const double *q = props_compute->array_atom[i];
+    const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    if (!(q[4] > 0.0 && q[5] > 0.0) || std::fabs(q[6] - q[5]) > 1e-12 * q[5] || std::fabs(norm - 1.0) > 1e-8)
+      bad_local = 1;
     amax_local = std::fmax(amax_local, std::fmax(std::sqrt(props[i][0]), std::sqrt(props[i][1])));
+  }
+  int bad = 0;
+  MPI_Allreduce(&bad_local, &bad, 1, MPI_INT, MPI_MAX, world);
+  if (bad)
+    error->all(FLERR, "Pair style jamflow/ellipsoid handles spheroids: every atom needs shape a b b (the second "
+                      "and third diameters equal) and a unit quaternion");
   double amax = 0.0;
   MPI_Allreduce(&amax_local, &amax, 1, MPI_DOUBLE, MPI_MAX, world);
   if (amax > cut_global * (1.0 + 1e-12))    // (a from sqrt(a^2): allow round-off)
