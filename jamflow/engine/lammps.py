@@ -299,10 +299,10 @@ class LammpsEngine:
         generalized torque component)``, one LAMMPS command per window."""
         s, lmp = settings, self.lmp
         md = s.method == "md"
-        reason = self.CAPABILITIES.reason(self.template, s.method, pressure=s.pressure is not None)
-        if reason:
-            raise ValueError(f"the LAMMPS engine cannot run {reason}")
         if self._ellipsoids:
+            reason = self.CAPABILITIES.reason(self.template, s.method, pressure=s.pressure is not None)
+            if reason:
+                raise ValueError(f"the LAMMPS engine cannot run {reason}")
             yield from self._rotating_session(s)
             return
         if s.pressure is not None:
