@@ -12,12 +12,12 @@ from __future__ import annotations
 
 import csv
 import sys
-import warnings
 from pathlib import Path
 
 import jamflow.protocols.compression as compression
 from jamflow.checks import check_packing, resolution
 from jamflow.minimize import MinimizerSettings
+from vtol_resolution import jam_quietly
 
 CSV = Path(__file__).resolve().parents[1] / "docs" / "spring-exponents.csv"
 COLUMNS = ["alpha", "protocol", "vtol", "status", "phi_j", "final_reason", "force_balance", "excess_contacts",
@@ -31,12 +31,9 @@ def one(alpha: float, protocol: str) -> dict:
     vtol = max(resolution(start, 1e-16, ftol).smallest_v_tol, 1e-16) * 1.5
     settings = make(v_tol=vtol, minimizer=MinimizerSettings(v_min=vtol))
     row = dict(alpha=alpha, protocol=protocol, vtol=f"{vtol:.2g}")
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            r = compression.jam(start=start, settings=settings)
-    except compression.JammingFailed as err:
-        return {**row, "status": f"JammingFailed: {str(err)[:80]}"}
+    r, failure = jam_quietly(start, settings)
+    if failure:
+        return {**row, "status": f"JammingFailed: {failure[:80]}"}
     c = check_packing(r.packing, r.energy_per_particle, None, vtol, ftol)
     return {**row, "status": "jammed", "phi_j": f"{r.phi_j:.10f}", "final_reason": r.history["reason"][-1].decode(),
             "force_balance": f"{c.force_ratio:.2g}", "excess_contacts": c.excess_contacts,

@@ -21,10 +21,10 @@ from jamflow.checks import check_packing, resolution
 from jamflow.minimize import MinimizerSettings
 
 CSV = Path(__file__).resolve().parents[1] / "docs" / "vtol-resolution.csv"
-COLUMNS = ["n", "potential", "seed", "vtol", "overlap_ratio", "force_ratio", "status", "passed", "force_balance",
-           "excess_contacts", "n_floaters", "v", "minimizations", "iterations"]
+COLUMNS = ["n", "potential", "seed", "vtol", "overlap_ratio", "force_ratio", "refused", "status", "passed",
+           "force_balance", "max_force", "excess_contacts", "n_floaters", "v", "minimizations", "iterations"]
 CASES = [(n, pot) for n in (64, 256) for pot in ("spring", "hertz")]
-VTOLS = [10.0**-k for k in range(16, 32, 2)]
+VTOLS = [10.0**-k for k in range(16, 28, 2)]  # from 1e-26 on no packing passes (every particle a floater)
 SEEDS = range(4)
 
 
@@ -33,21 +33,29 @@ def one(n, potential, seed, vtol) -> dict:
     start = compression.initial_packing(n, 2, "bi:1.4:0.5", potential, seed, settings.start_phi(2))
     res = resolution(start, vtol, settings.minimizer.resolved_force_tol(start.box, start.potential.contact_stiffness))
     row = dict(n=n, potential=potential, seed=seed, vtol=f"{vtol:g}", overlap_ratio=f"{res.overlap_ratio:.3g}",
-               force_ratio=f"{res.force_ratio:.3g}")
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            r = compression.jam(start=start, settings=settings)
-    except compression.JammingFailed as err:
-        return {**row, "status": f"JammingFailed: {str(err)[:60]}"}
+               force_ratio=f"{res.force_ratio:.3g}", refused=res.problem() is not None)
+    r, failure = jam_quietly(start, settings)
+    if failure:
+        return {**row, "status": f"JammingFailed: {failure[:60]}"}
     c = check_packing(r.packing, v_tol=vtol)
     return {**row, "status": "jammed", "passed": c.passed, "force_balance": f"{c.force_ratio:.2g}",
+            "max_force": f"{c.max_force:.2g}",
             "excess_contacts": c.excess_contacts, "n_floaters": c.n_floaters, "v": f"{c.energy_per_particle:.3g}",
             "minimizations": r.minimizations, "iterations": r.iterations}
 
 
+def jam_quietly(start, settings):
+    """(result, None) from compression.jam with warnings silenced, or (None, the JammingFailed message)."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return compression.jam(start=start, settings=settings), None
+    except compression.JammingFailed as err:
+        return None, str(err)
+
+
 def main() -> None:
-    compression.check_resolution = lambda packing, settings: None  # measure what the check would refuse
+    compression.check_resolution = lambda packing, settings: None  # measure what the check would refuse (column refused)
     with open(CSV, "w", newline="") as fh:
         out = csv.DictWriter(fh, COLUMNS)
         out.writeheader()

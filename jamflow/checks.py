@@ -87,13 +87,21 @@ class PackingChecks:
         return cls(**values)
 
 
+def shape_kind(packing) -> str:
+    """'sphere' for disks and spheres (packings without a shape model are disks/spheres)."""
+    return getattr(getattr(packing, "shape", None), "kind", "sphere")
+
+
 def check_packing(packing: Packing, energy_per_particle: float | None = None, max_force: float | None = None,
                   v_tol: float | None = None, ftol: float | None = None) -> PackingChecks:
-    """Window, force balance and contact count of ``packing``.
+    """Window, force balance and contact count of ``packing`` (disks and spheres: central
+    pair forces; other shapes also need torques, not checked here yet).
 
     ``energy_per_particle`` and ``max_force`` (the engine's values) are recomputed from the
     packing when None; ``v_tol`` None skips the window check; ``ftol`` is recorded only.
     """
+    if shape_kind(packing) != "sphere":
+        raise ValueError(f"the packing checks handle disks and spheres only, not {shape_kind(packing)} particles")
     energy, forces, magnitudes = _contact_forces(packing)
     v = energy / packing.n if energy_per_particle is None else float(energy_per_particle)
     fmax = float(np.abs(forces).max()) if max_force is None else float(max_force)

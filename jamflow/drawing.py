@@ -25,6 +25,7 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Polygon
 
 from .analysis.contacts import Contacts
+from .checks import shape_kind
 from .io import atomic_path
 from .packing import Packing
 from .pairs import overlapping_pairs
@@ -39,7 +40,7 @@ def _disks(centres, diameters, ax, **style):
                              offset_transform=ax.transData, **style)
 
 
-DRAWERS = {"disk": _disks}  # shape name -> function(centres, sizes, ax, **style) -> Collection
+DRAWERS = {"sphere": _disks}  # shape kind (jamflow.checks.shape_kind) -> function(centres, sizes, ax, **style)
 
 
 def draw_packing(packing: Packing, path, *, color_by: str = "z", slice_at: float = 0.5, q6_r_min: float | None = None,
@@ -60,7 +61,10 @@ def draw_packing(packing: Packing, path, *, color_by: str = "z", slice_at: float
     ax = fig.add_subplot()
     cell = Polygon(view.corners, closed=True, fill=False, lw=0.8, color="k")
     ax.add_patch(cell)
-    drawer = DRAWERS[getattr(packing, "shape", "disk")]
+    kind = shape_kind(packing)
+    if kind not in DRAWERS:
+        raise ValueError(f"jamflow draw cannot draw {kind} particles yet; it draws {', '.join(DRAWERS)}")
+    drawer = DRAWERS[kind]
     kept, floaters = ~contacts.floater[view.index], contacts.floater[view.index]
     centres, sizes, owner = view.images()
     body = drawer(centres[kept[owner]], sizes[kept[owner]], ax, array=values[view.index][owner][kept[owner]],

@@ -12,9 +12,12 @@ epsilon, pressures in epsilon / diameter^d)::
     /pressure_tensor (d, d) float64, virial part (athermal), if known
     /protocol               attrs: every protocol and minimiser parameter
     /history/<column> (M,)  one dataset per recorded column (phi, energy, pressure, ...)
+    /checks                 attrs: jamflow.checks.PackingChecks (if the writer checked it)
 
 Every file is written to a temporary sibling and renamed onto its name, so an interrupted
-run never leaves a half-written file.
+run never leaves a half-written file. Paths that are symlinks, device nodes, FIFOs or
+read-only files are refused unless forced (``check_writable``, ``replacing``); unreadable
+files give one-line ValueErrors naming the file (``open_hdf5``).
 """
 
 from __future__ import annotations

@@ -45,6 +45,8 @@ def run_jam(tmp_path, capsys, *args):
     (["--ftol", "1"], "force tolerance 1.0e\\+00.*--ftol\\) <="),  # was: traceback, "start from a lower phi0"
     (["--seed", "99999999999999999999999"], "seed must be an integer in \\[0, 2\\^63 - 1\\]"),  # was: result lost at save
     (["--n", "1000000000"], "needs about .* GB of memory"),  # was: grew to 24 GB, killed by the kernel
+    (["--potential", "spring:1.5"], "alpha = 1.5"),  # was: exit 0, net forces 0.4 of the contact forces
+    (["--potential", "spring:4"], "alpha = 4"),  # was: exit 0, net forces 7% of the contact forces
 ])
 def test_jam_refuses_before_work(tmp_path, capsys, monkeypatch, args, message):
     monkeypatch.setattr("jamflow.commands.jam.jam", lambda *a, **k: pytest.fail("work started"))
@@ -106,13 +108,16 @@ def test_lammps_failure_exits_4(tmp_path, capsys, monkeypatch):
     assert code == EXIT_LAMMPS and no_traceback(err) and "Lost atoms" in err and "diverged" in err
 
 
-def test_a_bad_cxx_exits_5_naming_it(tmp_path, capsys, monkeypatch):
-    """Was: 'no C++ compiler found' although g++ is installed, then 12x slower on lepton."""
+@pytest.mark.parametrize("cxx,message", [("/nonexistent/g++", "CXX=/nonexistent/g++ does not name an executable"),
+                                         ("false", "compiling the jamflow LAMMPS plugin failed")])
+def test_a_bad_cxx_exits_5_naming_it(tmp_path, capsys, monkeypatch, cxx, message):
+    """Was: 'no C++ compiler found' although g++ is installed, then 12x slower on lepton;
+    a compiler error was a RuntimeError traceback with exit 1."""
     monkeypatch.setenv("JAMFLOW_CACHE_DIR", str(tmp_path / "cache"))
-    monkeypatch.setenv("CXX", "/nonexistent/g++")
+    monkeypatch.setenv("CXX", cxx)
     code, err = run_jam(tmp_path, capsys, "--n", "16", "--potential", "hertz", "--engine", "lammps",
                         "--out", str(tmp_path / "x.h5"))
-    assert code == EXIT_PLUGIN and no_traceback(err) and "CXX=/nonexistent/g++ does not name an executable" in err
+    assert code == EXIT_PLUGIN and message in err and "Traceback" not in err
 
 
 def test_help_says_the_engines_differ(capsys):

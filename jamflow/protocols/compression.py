@@ -171,7 +171,7 @@ def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | 
     return compress(start, settings, observers=observers, engine=engine, engine_options=engine_options)
 
 
-BYTES_PER_PARTICLE = 4096  # peak memory of a jam run: measured 1.2-2.3 kB per particle at N = 131072 (docs/hardening.md)
+BYTES_PER_PARTICLE = 4096  # peak memory of a jam run: measured 1.1-2.2 kB per particle at N = 131072 (docs/hardening.md)
 MAX_SEED = 2**63 - 1  # seeds are stored as int64 in the packing file
 
 
