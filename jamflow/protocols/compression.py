@@ -307,7 +307,7 @@ def check_resolution(packing: Packing, settings: CompressionSettings) -> None:
     if isinstance(pot, Spring) and not low <= pot.alpha <= high:
         raise ValueError(f"spring exponent alpha = {pot.alpha:g}: jamflow's minimisers do not reach force balance "
                          f"for alpha outside [{low:g}, {high:g}] (measured for alpha = 1.5, 4, 6, 8, 10: net forces "
-                         "3-42% of the contact forces, docs/hardening.md); use spring, hertz or spring:ALPHA "
+                         "3-66% of the contact forces, docs/hardening.md); use spring, hertz or spring:ALPHA "
                          f"with {low:g} <= ALPHA <= {high:g}")
     ftol = settings.minimizer.resolved_force_tol(packing.box, pot.contact_stiffness)
     problem = resolution(packing, settings.v_tol, ftol).problem()
