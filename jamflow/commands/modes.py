@@ -14,9 +14,12 @@ from pathlib import Path
 import h5py
 import numpy as np
 
+import warnings
+
 from .. import __version__
 from ..analysis.modes import DensityOfStates, Spectrum, Stability
-from ..io import atomic_path, check_writable, load_packing
+from ..checks import check_packing
+from ..io import atomic_path, check_writable, load_packing, open_hdf5, read_checks, replacing
 
 SCHEMA, SCHEMA_VERSION = "jamflow.modes", 2  # v2 adds the shape, mode character and per-mode profiles
 
@@ -34,6 +37,8 @@ def add_arguments(p) -> None:
                    help="PNG to draw (default: PACKING.modes.png for one file, modes.png beside the first)")
     p.add_argument("--no-figure", action="store_true", help="do not draw the figure")
     p.add_argument("--save-vectors", action="store_true", help="also store all eigenvectors")
+    p.add_argument("--force", action="store_true",
+                   help="replace result or figure paths that are symlinks, devices or read-only files")
 
 
 def results_path(packing_path) -> Path:
@@ -53,19 +58,38 @@ def run(args) -> int:
     stability, dos = Stability(spectrum=spectrum), DensityOfStates(args.bins, args.omega_max)
     packings = [load_packing(f) for f in args.files]  # every input is read before any work
     outputs = [results_path(f) for f in args.files]
-    for out in outputs + ([] if args.no_figure else [figure_path(args)]):
-        check_writable(out)
-    rows = []
-    for path, packing, out in zip(args.files, packings, outputs):
-        spec = spectrum.compute(packing)
-        stab = stability.compute(packing, spec)
-        save_modes(out, path, spec, stab, vectors=args.save_vectors)
-        rows.append((spec, stab))
-        print(summary_line(path, spec, stab))
-    print(ensemble_summary([s for s, _ in rows], [st for _, st in rows]))
-    if not args.no_figure:
-        _draw(args, rows, dos)
+    written = outputs + ([] if args.no_figure else [figure_path(args)])
+    for out in written:
+        check_writable(out, args.force)
+    with replacing(written if args.force else []):
+        rows = [analyse(path, packing, out, spectrum, stability, args) for path, packing, out in
+                zip(args.files, packings, outputs)]
+        print(ensemble_summary([s for s, _ in rows], [st for _, st in rows]))
+        if not args.no_figure:
+            _draw(args, rows, dos)
     return 0
+
+
+def analyse(path, packing, out, spectrum, stability, args):
+    """Checks, spectrum and stability of one packing; writes its results file."""
+    checks = checked(path, packing)
+    spec = spectrum.compute(packing)
+    stab = stability.compute(packing, spec)
+    save_modes(out, path, spec, stab, vectors=args.save_vectors, checks=checks)
+    print(summary_line(path, spec, stab) + ("" if checks.force_balanced else "  [NOT FORCE BALANCED]"))
+    return spec, stab
+
+
+
+def checked(path, packing):
+    """Force balance (and window, if the file records V_tol) of a packing; warns when the
+    packing is not at an energy minimum, since its modes then describe no stable state."""
+    stored = read_checks(path)
+    checks = check_packing(packing, v_tol=stored.v_tol if stored else None)
+    if not checks.force_balanced:
+        warnings.warn(f"{path} is {checks.problems()[0]}: its spectrum and stability class describe a state that "
+                      "is not force balanced; minimise it first (jamflow jam)", stacklevel=2)
+    return checks
 
 
 def _draw(args, rows, dos):
@@ -105,11 +129,12 @@ def ensemble_summary(spectra, stabilities=()) -> str:
     return line
 
 
-def save_modes(out, source, spec, stab, vectors=False) -> Path:
+def save_modes(out, source, spec, stab, vectors=False, checks=None) -> Path:
     """Write one packing's results atomically (schema jamflow.modes v2: v1 plus ``shape``,
     ``dof_per_particle``, ``n_translational``, ``n_quartic``, ``n_single_flat``, ``n_balanced``,
-    ``missing_contacts``, the dataset
-    ``translational_fraction`` and the group ``stability/profiles``)."""
+    ``missing_contacts``, the dataset ``translational_fraction`` and the group
+    ``stability/profiles``); ``checks`` (a ``jamflow.checks.PackingChecks``) go to group
+    ``checks`` and root ``force_balanced``."""
     c = spec.dynamical.contacts
     packing = spec.dynamical.packing
     attrs = dict(schema=SCHEMA, schema_version=SCHEMA_VERSION, jamflow_version=__version__,
@@ -125,8 +150,12 @@ def save_modes(out, source, spec, stab, vectors=False) -> Path:
                  lowest_nonzero=spec.lowest_nonzero, classification=stab.label, behaviour=stab.behaviour,
                  power=stab.power, mode_eigenvalue=stab.mode_eigenvalue,
                  translation_residual=spec.translation_residual)
+    if checks is not None:
+        attrs["force_balanced"] = checks.force_balanced
     with atomic_path(out) as tmp, h5py.File(tmp, "w") as f:
         f.attrs.update(attrs)
+        if checks is not None:
+            f.create_group("checks").attrs.update(checks.as_attrs())
         f["floater"], f["z"], f["particles"] = c.floater, c.z, spec.dynamical.particles
         f["contacts"] = np.column_stack([c.i, c.j])
         f["eigenvalues"], f["frequencies"] = spec.eigenvalues, spec.frequencies
@@ -163,7 +192,7 @@ def _dataset(obj):
 
 def read_modes(path) -> dict:
     """Attributes and datasets of a results file as a flat dict (datasets as arrays)."""
-    with h5py.File(path, "r") as f:
+    with open_hdf5(path, "jamflow modes results file") as f:
         if f.attrs.get("schema") != SCHEMA:
             raise ValueError(f"{path} is not a jamflow modes results file")
         out = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
