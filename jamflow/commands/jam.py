@@ -48,19 +48,37 @@ def settings_from_args(args) -> CompressionSettings:
     return PROTOCOLS[protocol](phi0=args.phi0, dphi0=args.dphi0, v_tol=args.vtol, minimizer=minimizer)
 
 
-def run(args) -> int:
+def prepare(args):
+    """Validated settings and random start from parsed options, before any work."""
     settings = settings_from_args(args)
-    check_writable(args.out)
     start = initial_packing(args.n, args.dim, args.sizes, args.potential, args.seed, settings.start_phi(args.dim))
     engine_name(start, args.minimizer, args.engine)  # refuse --engine numba where it cannot run, before work
+    return settings, start
+
+
+def jam_from_args(args, observers=()):
+    """The jam that parsed options ask for (shared by ``jamflow jam`` and ``jamflow ensemble``)."""
+    settings, start = prepare(args)
+    return jam(start=start, settings=settings, observers=observers, engine=args.engine)
+
+
+def save_result(path, result, **run_info):
+    """Write a JamResult as a packing file; ``run_info`` (e.g. seconds) joins the protocol attributes."""
+    return save_packing(path, result.packing, energy_per_particle=result.energy_per_particle,
+                        pressure_tensor=result.pressure_tensor,
+                        protocol={**result.settings.as_dict(), "engine": result.engine, **run_info},
+                        history=result.history, lammps_version=result.lammps_version)
+
+
+def run(args) -> int:
+    check_writable(args.out)
     if args.emit_deck:
+        settings, start = prepare(args)
         return emit(args, start, settings)
     t0 = time.perf_counter()
     with CompressionProgress(disable=args.quiet) as progress:
-        result = jam(start=start, settings=settings, observers=[progress], engine=args.engine)
-    save_packing(args.out, result.packing, energy_per_particle=result.energy_per_particle,
-                 pressure_tensor=result.pressure_tensor, protocol={**settings.as_dict(), "engine": result.engine},
-                 history=result.history, lammps_version=result.lammps_version)
+        result = jam_from_args(args, observers=[progress])
+    save_result(args.out, result)
     print(f"{result.summary()}  -> {args.out} ({time.perf_counter() - t0:.2f} s)")
     return 0
 

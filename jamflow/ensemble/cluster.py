@@ -1,0 +1,65 @@
+"""The Dask engine: a local cluster over the machine's cores or an existing scheduler.
+
+Dask is imported here only, so ``jamflow jam`` never pays for it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import signal
+from pathlib import Path
+
+SCHEDULER_TIMEOUT = 5  # seconds to reach a scheduler before giving up with a clear error
+
+
+@contextlib.contextmanager
+def dask_client(workers: int | None = None, scheduler: str | None = None, client=None):
+    """A distributed.Client: ``client`` as given, connected to ``scheduler`` (an address such
+    as tcp://host:8786 or a scheduler JSON file from dask-mpi / dask scheduler --scheduler-file),
+    or a local cluster of ``workers`` single-threaded processes (default: all cores)."""
+    if client is not None:
+        yield client
+        return
+    from distributed import Client, LocalCluster
+
+    if scheduler is not None:
+        with _connect(Client, scheduler) as c:
+            yield c
+        return
+    for name in ("distributed", "distributed.nanny", "distributed.scheduler", "distributed.worker"):
+        logging.getLogger(name).setLevel(logging.ERROR)
+    # workers ignore SIGINT: a terminal Ctrl-C reaches the whole process group, and the client
+    # (not the workers) decides what an interrupt does; the disposition is inherited on spawn
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
+                               dashboard_address=None, silence_logs=logging.ERROR)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    try:
+        with Client(cluster) as c:
+            yield c
+    finally:
+        with contextlib.suppress(Exception):
+            cluster.close(timeout=10)
+
+
+def _connect(Client, scheduler: str):
+    kwargs = {"scheduler_file": scheduler} if Path(scheduler).is_file() else {"address": scheduler}
+    try:
+        return Client(timeout=SCHEDULER_TIMEOUT, **kwargs)
+    except (OSError, TimeoutError) as err:
+        raise ValueError(f"cannot reach the Dask scheduler at {scheduler} within {SCHEDULER_TIMEOUT} s ({err}); "
+                         "start one (dask scheduler) or check --scheduler") from None
+
+
+def workers_line(client, lost: int) -> str:
+    """One live line: workers connected, busy, lost so far."""
+    try:
+        processing = client.processing()
+    except Exception:  # scheduler gone: say so instead of failing the display
+        return "workers: scheduler not answering"
+    busy = sum(bool(keys) for keys in processing.values())
+    return f"workers: {len(processing)} connected, {busy} busy, {lost} lost"
