@@ -14,6 +14,7 @@ SUBCOMMANDS = {
     "analyze": ("jamflow.commands.analyze", "structure: g(r), S(k), Q6, G, correlation lengths"),
     "crosscheck": ("jamflow.commands.crosscheck", "run the LAMMPS deck and the Python controller from one start and compare"),
     "ensemble": ("jamflow.commands.ensemble", "many packings (seeds x N) on a Dask cluster into a resumable store"),
+    "onsets": ("jamflow.commands.onsets", "distribution of jamming onsets of an ensemble store: P(phi_J), W(N), nu"),
 }
 
 

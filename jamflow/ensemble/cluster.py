@@ -35,7 +35,7 @@ def dask_client(workers: int | None = None, scheduler: str | None = None, client
     previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
         cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=logging.ERROR)
+                               dashboard_address=":0", silence_logs=logging.ERROR)
     finally:
         signal.signal(signal.SIGINT, previous)
     try:

@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import errno
+import signal
+import threading
 import time
 import uuid
 from dataclasses import dataclass, field
@@ -13,6 +16,7 @@ from tqdm import tqdm
 
 from ..commands import jam as jam_command
 from .cluster import dask_client, workers_line
+from .checks import packing_row
 from .store import Store, Task, failure_row, write_failure
 
 TASK_KEYS = ("n", "seed", "out", "quiet", "emit_deck")  # set per task, not store parameters
@@ -94,17 +98,50 @@ def run_ensemble(out, seeds, n=(64,), *, workers=None, scheduler=None, client=No
                                 rows={**done, **failed})
         try:
             if todo:
-                with dask_client(workers, scheduler, client) as c:
-                    _run(c, store, fixed, todo, report, progress, on_result)
+                with dask_client(workers, scheduler, client) as c, _interrupt_flag() as interrupted:
+                    _run(c, store, fixed, todo, report, progress, on_result, interrupted)
         except KeyboardInterrupt:
             report.interrupted = True
         finally:
             store.remove_debris()
+            _collect_late(store, fixed, todo, report)
             _write_summary(store, report)
     return report
 
 
-def _run(client, store, fixed, todo, report, progress, on_result):
+@contextlib.contextmanager
+def _interrupt_flag():
+    """Ctrl-C sets a flag the run loop polls (a KeyboardInterrupt inside Dask's event loop
+    would print its tracebacks); a second Ctrl-C interrupts at once."""
+    flag = threading.Event()
+    if threading.current_thread() is not threading.main_thread():
+        yield flag
+        return
+
+    def handler(signum, frame):
+        if flag.is_set():
+            raise KeyboardInterrupt
+        flag.set()
+
+    previous = signal.signal(signal.SIGINT, handler)
+    try:
+        yield flag
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _collect_late(store, fixed, todo, report):
+    """Rows of packings that workers finished after the run stopped listening (interrupt, stop)."""
+    for task in todo:
+        if task.name not in report.rows and store.packing_path(task).exists():
+            try:
+                report.rows[task.name] = packing_row(store.packing_path(task), task, fixed)
+                report.made += 1
+            except (OSError, KeyError, ValueError):
+                pass  # an unreadable file is moved aside and redone by the next run
+
+
+def _run(client, store, fixed, todo, report, progress, on_result, interrupted):
     from distributed import wait
 
     todo = sorted(todo, key=lambda t: (-dict(t.point)["n"], t.seed))  # longest first balances the load
@@ -119,6 +156,9 @@ def _run(client, store, fixed, todo, report, progress, on_result):
     seen, last_write = set(), time.monotonic()
     try:
         while pending and not report.stopped:
+            if interrupted.is_set():
+                report.interrupted = True
+                break
             try:
                 finished = wait(pending, timeout=1.0, return_when="FIRST_COMPLETED").done
             except TimeoutError:
