@@ -30,12 +30,12 @@ def dask_client(workers: int | None = None, scheduler: str | None = None, client
         return
     for name in ("distributed", "distributed.nanny", "distributed.scheduler", "distributed.worker"):
         logging.getLogger(name).setLevel(logging.ERROR)
-    # workers ignore SIGINT: a terminal Ctrl-C reaches the whole process group, and the client
-    # (not the workers) decides what an interrupt does; the disposition is inherited on spawn
+    # workers ignore SIGINT (jamflow/ensemble/worker_setup.py): the disposition is inherited on spawn
     previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
         cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                               dashboard_address=":0", silence_logs=logging.ERROR)
+                               dashboard_address=":0", silence_logs=logging.ERROR,
+                               preload=["jamflow.ensemble.worker_setup"])
     finally:
         signal.signal(signal.SIGINT, previous)
     try:

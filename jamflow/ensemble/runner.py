@@ -98,7 +98,7 @@ def run_ensemble(out, seeds, n=(64,), *, workers=None, scheduler=None, client=No
                                 rows={**done, **failed})
         try:
             if todo:
-                with dask_client(workers, scheduler, client) as c, _interrupt_flag() as interrupted:
+                with _interrupt_flag() as interrupted, dask_client(workers, scheduler, client) as c:
                     _run(c, store, fixed, todo, report, progress, on_result, interrupted)
         except KeyboardInterrupt:
             report.interrupted = True
@@ -111,8 +111,8 @@ def run_ensemble(out, seeds, n=(64,), *, workers=None, scheduler=None, client=No
 
 @contextlib.contextmanager
 def _interrupt_flag():
-    """Ctrl-C sets a flag the run loop polls (a KeyboardInterrupt inside Dask's event loop
-    would print its tracebacks); a second Ctrl-C interrupts at once."""
+    """An Event set by Ctrl-C, which the run loop polls (a KeyboardInterrupt inside Dask's
+    event loop would print its tracebacks); a second Ctrl-C interrupts at once."""
     flag = threading.Event()
     if threading.current_thread() is not threading.main_thread():
         yield flag
