@@ -6,6 +6,7 @@ and the z_i distribution are averaged and one figure is drawn."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import h5py
@@ -13,13 +14,14 @@ import numpy as np
 
 from .. import __version__
 from ..analysis.modes import DensityOfStates, Spectrum, Stability
+from ..ensemble.parallel import add_engine_arguments, expand_inputs, map_files
 from ..io import atomic_path, check_writable, load_packing
 
 SCHEMA, SCHEMA_VERSION = "jamflow.modes", 1
 
 
 def add_arguments(p) -> None:
-    p.add_argument("files", nargs="+", metavar="PACKING.h5", help="packing files (jamflow jam --out)")
+    p.add_argument("files", nargs="+", metavar="PACKING.h5", help="packing files (jamflow jam --out) or ensemble store directories")
     p.add_argument("--e-min", type=float, default=1e-6, help="zero-mode threshold on eigenvalues (eps/diameter^2)")
     p.add_argument("--mass", type=float, default=None,
                    help="M in omega = sqrt(e/M); default N m with m = 1, as the seed defines it")
@@ -31,6 +33,7 @@ def add_arguments(p) -> None:
                    help="PNG to draw (default: PACKING.modes.png for one file, modes.png beside the first)")
     p.add_argument("--no-figure", action="store_true", help="do not draw the figure")
     p.add_argument("--save-vectors", action="store_true", help="also store all eigenvectors")
+    add_engine_arguments(p)
 
 
 def results_path(packing_path) -> Path:
@@ -46,23 +49,32 @@ def figure_path(args) -> Path:
 
 
 def run(args) -> int:
+    args.files = expand_inputs(args.files)  # a directory (ensemble store) stands for its packing files
     spectrum = Spectrum(e_min=args.e_min, mass=args.mass, method=args.method)
-    stability, dos = Stability(spectrum=spectrum), DensityOfStates(args.bins, args.omega_max)
-    packings = [load_packing(f) for f in args.files]  # every input is read before any work
-    outputs = [results_path(f) for f in args.files]
-    for out in outputs + ([] if args.no_figure else [figure_path(args)]):
+    dos = DensityOfStates(args.bins, args.omega_max)
+    for f in args.files:  # every input is read before any work
+        load_packing(f)
+    for out in [results_path(f) for f in args.files] + ([] if args.no_figure else [figure_path(args)]):
         check_writable(out)
-    rows = []
-    for path, packing, out in zip(args.files, packings, outputs):
-        spec = spectrum.compute(packing)
-        stab = stability.compute(packing, spec)
-        save_modes(out, path, spec, stab, vectors=args.save_vectors)
-        rows.append((spec, stab))
-        print(summary_line(path, spec, stab))
+    rows = map_files(analyse_file, args.files, spectrum, args.save_vectors, workers=args.workers,
+                     scheduler=args.scheduler, progress=len(args.files) > 1, desc="modes")
+    for line, _, _ in rows:
+        print(line)
+    rows = [(spec, stab) for _, spec, stab in rows]
     print(ensemble_summary([s for s, _ in rows]))
     if not args.no_figure:
         _draw(args, rows, dos)
     return 0
+
+
+def analyse_file(path, spectrum, save_vectors=False):
+    """One packing: spectrum, stability class, results file; the spectrum comes back without
+    eigenvectors (they stay in the results file with --save-vectors)."""
+    packing = load_packing(path)
+    spec = spectrum.compute(packing)
+    stab = Stability(spectrum=spectrum).compute(packing, spec)
+    save_modes(results_path(path), path, spec, stab, vectors=save_vectors)
+    return summary_line(path, spec, stab), replace(spec, eigenvectors=None), stab
 
 
 def _draw(args, rows, dos):
