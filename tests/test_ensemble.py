@@ -268,3 +268,24 @@ def test_file_holding_another_task_is_not_accepted(tmp_path, cluster):
     assert (report.made, len(report.corrupt)) == (2, 1)
     assert [int(read_attrs(p)["seed"]) for p in packings(out)] == [0, 1]
     assert np.isfinite(float(Store(out).read_summary()[0]["phi_j"]))
+
+
+def test_packings_on_two_mpi_ranks_each(tmp_path):
+    """--mpi-ranks 2: every task runs the controller on LAMMPS over 2 ranks (mpirun) and matches
+    the one-process LAMMPS packing of the same seed to round-off of phi."""
+    pytest.importorskip("mpi4py", reason="mpi4py not installed: pip install -e '.[mpi]'")
+    from distributed import Client
+
+    from jamflow import jam
+
+    with Client(processes=False, n_workers=1, threads_per_worker=1, dashboard_address=":0") as client:
+        report = run_ensemble(tmp_path / "s", "0:1", 32, client=client, progress=False, mpi_ranks=2, engine="lammps")
+    assert (report.made, report.errors) == (1, [])
+    row = Store(tmp_path / "s").read_summary()[0]
+    assert row["engine"] == "lammps" and row["balanced"] == "True"
+    assert float(row["phi_j"]) == pytest.approx(jam(n=32, seed=0, engine="lammps").phi_j, abs=1e-9)
+
+
+def test_mpi_ranks_need_the_lammps_engine(tmp_path):
+    with pytest.raises(ValueError, match="add --engine lammps"):
+        run_ensemble(tmp_path / "s", "0:1", 8, mpi_ranks=2)

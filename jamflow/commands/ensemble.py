@@ -24,6 +24,11 @@ def add_arguments(p) -> None:
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="use an existing Dask scheduler (tcp://HOST:PORT or a scheduler JSON file), e.g. from "
                         "dask-jobqueue or dask-mpi, instead of a local cluster")
+    p.add_argument("--wait-workers", type=float, default=60.0, metavar="SECONDS",
+                   help="with --scheduler: stop if no worker has joined after this long (batch queues: raise it)")
+    p.add_argument("--mpi-ranks", type=int, default=1, metavar="K",
+                   help="run each packing with LAMMPS on K MPI ranks (mpirun; needs --engine lammps and mpi4py); "
+                        "size --workers so that workers x K fits the cores")
     p.add_argument("--retry-failed", action="store_true", help="try recorded failed packings again")
     p.add_argument("--rebuild-summary", action="store_true",
                    help="only rebuild DIR/summary.csv from the files in DIR, then exit")
@@ -43,10 +48,12 @@ def run(args) -> int:
             raise ValueError(f"{args.out} is not an ensemble store (no ensemble.json)")
         print(f"summary -> {Store(args.out).rebuild_summary()}")
         return 0
-    own = {"seeds", "n", "out", "workers", "scheduler", "retry_failed", "rebuild_summary", "run", "command"}
+    own = {"seeds", "n", "out", "workers", "scheduler", "wait_workers", "mpi_ranks", "retry_failed", "rebuild_summary",
+           "run", "command"}
     options = {k: v for k, v in vars(args).items() if k not in own}
     report = run_ensemble(args.out, args.seeds, args.n, workers=args.workers, scheduler=args.scheduler,
-                          progress=not args.quiet, retry_failed=args.retry_failed, **options)
+                          progress=not args.quiet, retry_failed=args.retry_failed, wait_workers=args.wait_workers,
+                          mpi_ranks=args.mpi_ranks, **options)
     print(summary_text(report))
     if report.interrupted:
         print(f"jamflow ensemble: interrupted; {report.done_before + report.made} packings are in {report.directory}, "

@@ -56,10 +56,10 @@ def prepare(args):
     return settings, start
 
 
-def jam_from_args(args, observers=()):
+def jam_from_args(args, observers=(), engine_options=None):
     """The jam that parsed options ask for (shared by ``jamflow jam`` and ``jamflow ensemble``)."""
     settings, start = prepare(args)
-    return jam(start=start, settings=settings, observers=observers, engine=args.engine)
+    return jam(start=start, settings=settings, observers=observers, engine=args.engine, engine_options=engine_options)
 
 
 def save_result(path, result, **run_info):

@@ -12,13 +12,16 @@ import signal
 from pathlib import Path
 
 SCHEDULER_TIMEOUT = 5  # seconds to reach a scheduler before giving up with a clear error
+WAIT_WORKERS = 60.0  # default seconds to wait for a first worker of an existing scheduler
 
 
 @contextlib.contextmanager
-def dask_client(workers: int | None = None, scheduler: str | None = None, client=None):
+def dask_client(workers: int | None = None, scheduler: str | None = None, client=None,
+                wait_workers: float = WAIT_WORKERS):
     """A distributed.Client: ``client`` as given, connected to ``scheduler`` (an address such
     as tcp://host:8786 or a scheduler JSON file from dask-mpi / dask scheduler --scheduler-file),
-    or a local cluster of ``workers`` single-threaded processes (default: all cores)."""
+    or a local cluster of ``workers`` single-threaded processes (default: all cores). A
+    scheduler that has no worker after ``wait_workers`` seconds is an error."""
     if client is not None:
         yield client
         return
@@ -26,6 +29,12 @@ def dask_client(workers: int | None = None, scheduler: str | None = None, client
 
     if scheduler is not None:
         with _connect(Client, scheduler) as c:
+            try:
+                c.wait_for_workers(1, timeout=wait_workers)
+            except TimeoutError:
+                raise ValueError(f"the Dask scheduler at {scheduler} has no workers after {wait_workers:g} s; start "
+                                 "some (dask worker ADDRESS, cluster.scale() of dask-jobqueue, dask-mpi) or raise "
+                                 "--wait-workers") from None
             yield c
         return
     for name in ("distributed", "distributed.nanny", "distributed.scheduler", "distributed.worker"):

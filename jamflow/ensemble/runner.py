@@ -15,7 +15,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from ..commands import jam as jam_command
-from .cluster import dask_client, workers_line
+from .cluster import WAIT_WORKERS, dask_client, workers_line
 from .checks import packing_row
 from .store import Store, Task, failure_row, write_failure
 
@@ -74,13 +74,16 @@ def seed_range(seeds) -> range:
 
 
 def run_ensemble(out, seeds, n=(64,), *, workers=None, scheduler=None, client=None, progress=True,
-                 retry_failed=False, on_result=None, **jam_options) -> EnsembleReport:
+                 retry_failed=False, on_result=None, wait_workers=WAIT_WORKERS, mpi_ranks=1,
+                 **jam_options) -> EnsembleReport:
     """Make one packing per (N in ``n``, seed in ``seeds``) into the store ``out``.
 
     Finished packings are skipped, recorded failures too (unless ``retry_failed``). The
     engine is ``client`` (a distributed.Client), else the scheduler at ``scheduler``, else a
     local cluster of ``workers`` processes (default: all cores). ``on_result(task, row,
-    client)`` is called in this process after every finished task.
+    client)`` is called in this process after every finished task. A scheduler without a
+    worker after ``wait_workers`` seconds stops the run with an error. ``mpi_ranks`` > 1 runs
+    each packing with LAMMPS on that many MPI ranks (needs engine="lammps" and mpi4py).
     """
     seeds = seed_range(seeds)
     sizes = sorted({int(x) for x in ([n] if isinstance(n, int) else n)})
@@ -89,6 +92,9 @@ def run_ensemble(out, seeds, n=(64,), *, workers=None, scheduler=None, client=No
         raise ValueError("--workers sizes the local cluster; with --scheduler the cluster's own workers run the tasks")
     if workers is not None and workers < 1:
         raise ValueError(f"--workers must be at least 1, got {workers}")
+    _check_mpi(mpi_ranks, fixed["engine"])
+    if not wait_workers > 0:
+        raise ValueError(f"--wait-workers must be a positive number of seconds, got {wait_workers}")
     for size in sizes:  # every grid point is validated before any work
         jam_command.prepare(argparse.Namespace(**fixed, n=size, seed=seeds.start, emit_deck=None))
     tasks = [Task((("n", size),), seed) for size in sizes for seed in seeds]
@@ -98,8 +104,8 @@ def run_ensemble(out, seeds, n=(64,), *, workers=None, scheduler=None, client=No
                                 rows={**done, **failed})
         try:
             if todo:
-                with _interrupt_flag() as interrupted, dask_client(workers, scheduler, client) as c:
-                    _run(c, store, fixed, todo, report, progress, on_result, interrupted)
+                with _interrupt_flag() as interrupted, dask_client(workers, scheduler, client, wait_workers) as c:
+                    _run(c, store, fixed, todo, report, progress, on_result, interrupted, mpi_ranks)
         except KeyboardInterrupt:
             report.interrupted = True
         finally:
@@ -141,13 +147,13 @@ def _collect_late(store, fixed, todo, report):
                 pass  # an unreadable file is moved aside and redone by the next run
 
 
-def _run(client, store, fixed, todo, report, progress, on_result, interrupted):
+def _run(client, store, fixed, todo, report, progress, on_result, interrupted, mpi_ranks):
     from distributed import wait
 
     todo = sorted(todo, key=lambda t: (-dict(t.point)["n"], t.seed))  # longest first balances the load
     run_id = uuid.uuid4().hex[:8]
     futures = {client.submit(_make_packing, fixed, task, str(store.packing_path(task)), str(store.failure_path(task)),
-                             key=f"jam-{task.stem}-{run_id}", pure=False, priority=-k): task
+                             mpi_ranks, key=f"jam-{task.stem}-{run_id}", pure=False, priority=-k): task
                for k, task in enumerate(todo)}
     pending = set(futures)
     bar = tqdm(total=len(todo), desc="ensemble", unit="packing", disable=not progress, dynamic_ncols=True)
@@ -181,6 +187,20 @@ def _run(client, store, fixed, todo, report, progress, on_result, interrupted):
         client.cancel(list(pending))
         line.close()
         bar.close()
+
+
+def _check_mpi(ranks, engine):
+    if not (isinstance(ranks, int) and ranks >= 1):
+        raise ValueError(f"--mpi-ranks must be a positive integer, got {ranks!r}")
+    if ranks == 1:
+        return
+    if engine != "lammps":
+        raise ValueError(f"--mpi-ranks {ranks} runs LAMMPS on {ranks} ranks: add --engine lammps (the compiled "
+                         "engine is one process)")
+    import importlib.util
+
+    if importlib.util.find_spec("mpi4py") is None:
+        raise ValueError("--mpi-ranks needs mpi4py: pip install -e '.[mpi]'")
 
 
 def _make_packing(*args):
