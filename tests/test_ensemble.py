@@ -289,3 +289,10 @@ def test_packings_on_two_mpi_ranks_each(tmp_path):
 def test_mpi_ranks_need_the_lammps_engine(tmp_path):
     with pytest.raises(ValueError, match="add --engine lammps"):
         run_ensemble(tmp_path / "s", "0:1", 8, mpi_ranks=2)
+
+
+def test_jam_command_does_not_import_dask():
+    code = ("import sys, jamflow.cli; jamflow.cli.build_parser(); import jamflow.commands.jam, jamflow.ensemble; "
+            "print('distributed' in sys.modules, 'dask' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.stdout.split() == ["False", "False"], out.stderr
