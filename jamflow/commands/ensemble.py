@@ -16,7 +16,7 @@ REPLACED = {"n", "seed", "out", "emit_deck", "help"}  # jam options the ensemble
 
 
 def add_arguments(p) -> None:
-    p.add_argument("--seeds", required=True, metavar="A:B", help="seeds A to B-1, e.g. 0:200")
+    p.add_argument("--seeds", default=None, metavar="A:B", help="seeds A to B-1, e.g. 0:200 (required to run)")
     p.add_argument("--n", type=int, nargs="+", default=[64], metavar="N", help="number(s) of particles: a grid")
     p.add_argument("--out", required=True, metavar="DIR", help="store directory (created if missing)")
     p.add_argument("--workers", type=int, default=None,
@@ -48,6 +48,8 @@ def run(args) -> int:
             raise ValueError(f"{args.out} is not an ensemble store (no ensemble.json)")
         print(f"summary -> {Store(args.out).rebuild_summary()}")
         return 0
+    if args.seeds is None:
+        raise ValueError("--seeds A:B is required, e.g. --seeds 0:200 for seeds 0 to 199")
     own = {"seeds", "n", "out", "workers", "scheduler", "wait_workers", "mpi_ranks", "retry_failed", "rebuild_summary",
            "run", "command"}
     options = {k: v for k, v in vars(args).items() if k not in own}

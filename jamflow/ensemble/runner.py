@@ -40,10 +40,6 @@ class EnsembleReport:
     stopped: str = ""  # why the run stopped early (disk full, broken set-up)
     rows: dict = field(default_factory=dict)
 
-    @property
-    def complete(self) -> bool:
-        return self.done_before + self.made + self.failed == self.requested
-
 
 def jam_parameters(**options) -> dict:
     """The store parameters: ``jamflow jam``'s defaults updated with ``options`` (same names
