@@ -64,11 +64,18 @@ def _connect(Client, scheduler: str):
                          "start one (dask scheduler) or check --scheduler") from None
 
 
-def workers_line(client, lost: int) -> str:
-    """One live line: workers connected, busy, lost so far."""
+def workers_state(client) -> dict | None:
+    """{worker address: keys it is processing}, straight from the scheduler (not the client's
+    cached identity, which can lack the workers); None if the scheduler does not answer."""
     try:
-        processing = client.processing()
-    except Exception:  # scheduler gone: say so instead of failing the display
+        return client.processing()
+    except Exception:
+        return None
+
+
+def workers_line(processing: dict | None, lost: int) -> str:
+    """One live line: workers connected, busy, lost so far."""
+    if processing is None:
         return "workers: scheduler not answering"
     busy = sum(bool(keys) for keys in processing.values())
     return f"workers: {len(processing)} connected, {busy} busy, {lost} lost"

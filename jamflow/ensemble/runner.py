@@ -15,7 +15,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from ..commands import jam as jam_command
-from .cluster import WAIT_WORKERS, dask_client, workers_line
+from .cluster import WAIT_WORKERS, dask_client, workers_line, workers_state
 from .checks import packing_row
 from .store import Store, Task, failure_row, write_failure
 
@@ -155,7 +155,7 @@ def _run(client, store, fixed, todo, report, progress, on_result, interrupted, m
     bar = tqdm(total=len(todo), desc="ensemble", unit="packing", disable=not progress, dynamic_ncols=True)
     line = tqdm(bar_format="{desc}", position=1, disable=not progress, leave=False)
     bar.set_postfix_str(f"failed={report.failed}, done before={report.done_before}")
-    seen, last_write = set(), time.monotonic()
+    seen, last_write = set(), time.monotonic()  # worker addresses at the last poll
     try:
         while pending and not report.stopped:
             if interrupted.is_set():
@@ -173,8 +173,11 @@ def _run(client, store, fixed, todo, report, progress, on_result, interrupted, m
                     bar.update(1)
                     if on_result is not None:
                         on_result(futures[fut], row, client)
-            seen, report.workers_lost = _track_workers(client, seen, report.workers_lost)
-            line.set_description_str(workers_line(client, report.workers_lost))
+            processing = workers_state(client)
+            if processing is not None:  # a worker gone from the scheduler's list is lost (a restart has a new address)
+                report.workers_lost += len(seen - set(processing))
+                seen = set(processing)
+            line.set_description_str(workers_line(processing, report.workers_lost))
             bar.set_postfix_str(f"failed={report.failed}, errors={len(report.errors)}, done before={report.done_before}")
             if time.monotonic() - last_write > SUMMARY_EVERY:
                 _write_summary(store, report)
@@ -233,14 +236,6 @@ def _outcome(fut, task, store, fixed, report):
         report.stopped = (f"stopped: the first {len(report.errors)} tasks all raised an error, the last: "
                           f"{report.errors[-1]}")
     return None
-
-
-def _track_workers(client, seen: set, lost: int):
-    try:
-        now = set(client.scheduler_info().get("workers", {}))
-    except Exception:
-        return seen, lost
-    return now, lost + len(seen - now)
 
 
 def _write_summary(store, report):
