@@ -73,6 +73,11 @@ def test_store_made_by_other_parameters_is_refused(tmp_path):
         Store(tmp_path).open(jam_parameters(), ["n"])
     with pytest.raises(ValueError, match=r"--vtol 1e-16, this run asks 1e-15"):
         Store(tmp_path).open(jam_parameters(sizes="mono", vtol=1e-15), ["n"])
+    # an option jam gains later: accepted at its default, refused at another value
+    later = {**jam_parameters(sizes="mono"), "gamma": 0.0}
+    Store(tmp_path).open(later, ["n"], defaults={"gamma": 0.0}).close()
+    with pytest.raises(ValueError, match=r"--gamma 0.0, this run asks 0.1"):
+        Store(tmp_path).open({**later, "gamma": 0.1}, ["n"], defaults={"gamma": 0.0})
 
 
 def test_unwritable_directory_is_refused(tmp_path):

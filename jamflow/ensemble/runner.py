@@ -94,7 +94,7 @@ def run_ensemble(out, seeds, n=(64,), *, workers=None, scheduler=None, client=No
     for size in sizes:  # every grid point is validated before any work
         jam_command.prepare(argparse.Namespace(**fixed, n=size, seed=seeds.start, emit_deck=None))
     tasks = [Task((("n", size),), seed) for size in sizes for seed in seeds]
-    with Store(out).open(fixed, ["n"]) as store:
+    with Store(out).open(fixed, ["n"], defaults=jam_parameters()) as store:
         done, failed, todo, corrupt = store.classify(tasks, fixed, retry_failed)
         report = EnsembleReport(store.dir, len(tasks), len(done), 0, len(failed), corrupt=corrupt,
                                 rows={**done, **failed})

@@ -64,12 +64,13 @@ class Store:
         self._lock = None
 
     # -- opening -----------------------------------------------------------------------
-    def open(self, fixed: dict, axes: list[str]) -> "Store":
-        """Create or reopen the store for these parameters; refuse a store made by others."""
+    def open(self, fixed: dict, axes: list[str], defaults: dict | None = None) -> "Store":
+        """Create or reopen the store for these parameters; refuse a store made by others.
+        ``defaults``: the value of a parameter the store does not record (an option added later)."""
         self._make_directory()
         self._acquire_lock()
         try:
-            self._check_manifest(fixed, axes)
+            self._check_manifest(fixed, axes, defaults or {})
         except Exception:
             self.close()
             raise
@@ -109,7 +110,7 @@ class Store:
                               "use another --out") from None
         self._lock = fh
 
-    def _check_manifest(self, fixed: dict, axes: list[str]):
+    def _check_manifest(self, fixed: dict, axes: list[str], defaults: dict):
         path = self.dir / MANIFEST
         wanted = {"schema": SCHEMA, "schema_version": 1, "axes": list(axes), "parameters": fixed}
         if not path.exists():
@@ -126,7 +127,8 @@ class Store:
             raise ValueError(f"{self.dir} was made varying {', '.join(have['axes'])}; this run varies "
                              f"{', '.join(axes)}: use another --out or the same grid options")
         for key in sorted(set(have["parameters"]) | set(fixed)):
-            old, new = have["parameters"].get(key, fixed.get(key)), fixed.get(key, have["parameters"].get(key))
+            old = have["parameters"].get(key, defaults.get(key, fixed.get(key)))
+            new = fixed.get(key, have["parameters"].get(key))
             if old != new:
                 raise ValueError(f"{self.dir} was made with --{key.replace('_', '-')} {old}, this run asks "
                                  f"{new}: refusing to mix ensembles; use another --out or --{key.replace('_', '-')} {old}")
