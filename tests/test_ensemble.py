@@ -3,6 +3,7 @@
 import errno
 import glob
 import os
+import re
 import signal
 import socket
 import subprocess
@@ -230,7 +231,8 @@ def test_ctrl_c_then_rerun_gives_every_packing_once(tmp_path):
     assert 3 <= interrupted_with < 24
     done = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
-    assert f"24 of 24 packings ({24 - interrupted_with} made now, {interrupted_with} before)" in done.stdout
+    made, before = map(int, re.search(r"24 of 24 packings \((\d+) made now, (\d+) before\)", done.stdout).groups())
+    assert made + before == 24 and before >= interrupted_with  # a worker may finish its task as the cluster closes
     assert summary_seeds(out) == [(12, s) for s in range(24)] and len(packings(out)) == 24
 
 
