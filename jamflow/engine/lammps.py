@@ -11,6 +11,7 @@ Atoms have ids 1..N in packing order; everything extracted is returned in that o
 
 from __future__ import annotations
 
+import math
 import tempfile
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -25,6 +26,13 @@ from ..io import write_lammps_data
 from ..packing import Packing
 from .lammps_lib import new_lammps
 from .pair_styles import pair_setup
+from .plugin_build import load_plugin
+
+MD_DAMPING_FIXES = {"viscous": "viscous", "pairwise": "jamflow/damping"}  # fix style per md_damping
+# the energy samples of a damped-MD window (fix jf_vsamples) and their mean and rms deviation
+ENERGY_SAMPLE_VARIABLES = ("variable jf_pe equal pe", "variable jf_vmean equal ave(f_jf_vsamples)",
+                           "variable jf_vdev vector (f_jf_vsamples-v_jf_vmean)^2",
+                           "variable jf_vrms equal sqrt(ave(v_jf_vdev))")
 
 
 class LammpsError(RuntimeError):
@@ -180,11 +188,19 @@ class LammpsEngine:
 
     @contextmanager
     def minimizer_session(self, settings, ftol: float):
-        """Install the minimiser (FIRE 2.0 ``norm max``, CG ``line forcezero``, or ``fix nve``
-        + ``fix viscous``) and ``fix halt`` at V < V_min; yield ``window(steps) ->
-        (iterations, total energy, max force component)``, one LAMMPS command per window."""
+        """Install the minimiser (FIRE 2.0 ``norm max``, CG ``line forcezero``, or damped MD:
+        ``fix nve`` + ``fix viscous`` or ``fix jamflow/damping``) and ``fix halt`` at V < V_min;
+        yield ``window(steps) -> (iterations, total energy, max force component)``, one LAMMPS
+        command per window. Damped MD adds a fourth value: the relative rms fluctuation of the
+        energy sampled every ``md_sample_every`` steps inside the window (``fix vector``;
+        None with fewer than 2 samples). Its max force includes the damping force, except in a
+        window halted at V < V_min, where it is the potential's force at rest (``run 0`` at
+        v = 0): moving particles must not make a state below V_min look blown up."""
         s, lmp = settings, self.lmp
         md = s.method == "md"
+        if md and s.md_damping == "pairwise" and not load_plugin(lmp):
+            raise ValueError("md_damping 'pairwise' needs jamflow's LAMMPS plugin (fix jamflow/damping), which "
+                             "could not be built (warning above); install a C++ compiler or use md_damping 'viscous'")
         self.run_commands([
             f"timestep {(s.md_timestep if md else s.timestep):.17g}",
             "variable jf_epp equal pe/atoms",
@@ -196,18 +212,38 @@ class LammpsEngine:
             self.run_commands(["min_style cg", "min_modify norm max line forcezero"])
         else:
             self.run_commands(["velocity all set 0.0 0.0 0.0", "fix jf_nve all nve",
-                               f"fix jf_visc all viscous {s.damping:.17g}"])
+                               f"fix jf_damp all {MD_DAMPING_FIXES[s.md_damping]} {s.damping:.17g}",
+                               *ENERGY_SAMPLE_VARIABLES])
 
         def window(steps: int):
             before = lmp.extract_global("ntimestep")
+            if md:
+                self.command(f"fix jf_vsamples all vector {s.md_sample_every} v_jf_pe")
             self.command(f"run {steps}" if md else f"minimize 0.0 {ftol:.17g} {steps} {10 * steps}")
-            return (lmp.extract_global("ntimestep") - before, float(lmp.get_thermo("pe")),
-                    float(lmp.get_thermo("fmax")))
+            after = lmp.extract_global("ntimestep")
+            energy = float(lmp.get_thermo("pe"))
+            if not md:
+                return after - before, energy, float(lmp.get_thermo("fmax"))
+            fluctuation = self._energy_fluctuation(before, after, s.md_sample_every)
+            self.command("unfix jf_vsamples")
+            if energy / self.template.n < s.v_min:  # halted: the potential's force alone, at rest
+                self.run_commands(["velocity all set 0.0 0.0 0.0", "run 0"])
+            return after - before, energy, float(lmp.get_thermo("fmax")), fluctuation
 
         try:
             yield window
         finally:
             if self.lmp is not None:
-                self.run_commands([f"unfix {f}" for f in ["jf_halt"] + (["jf_nve", "jf_visc"] if md else [])])
+                self.run_commands([f"unfix {f}" for f in ["jf_halt"] + (["jf_nve", "jf_damp"] if md else [])])
                 if md:
                     self.command("velocity all set 0.0 0.0 0.0")
+
+    def _energy_fluctuation(self, before: int, after: int, every: int) -> float | None:
+        """<(V - <V>)^2>^(1/2) / <V> over the samples ``fix vector`` stored on the steps in
+        [before, after] that are multiples of ``every`` (seed section 2.1, step 3); None with
+        fewer than 2 samples, inf when <V> = 0. Two-pass in LAMMPS's own variables, so the
+        deck (lammps_inputs/jam.lmp) computes the same number."""
+        if after // every - (before + every - 1) // every + 1 < 2:
+            return None
+        mean = self.lmp.extract_variable("jf_vmean")
+        return self.lmp.extract_variable("jf_vrms") / mean if mean > 0 else math.inf
