@@ -148,7 +148,7 @@ if "${jf_ntypes} == 2" then "pair_coeff 1 2 $(1.0/(2*v_jf_s12^2):%.17g) $(v_jf_s
 neighbor ${skin} bin
 neigh_modify every 1 delay 0 check yes
 compute jf_press all pressure NULL virial
-thermo_style custom step pe c_jf_press[*] fmax
+thermo_style custom step pe c_jf_press[*] fmax ke
 thermo_modify norm no
 thermo 0
 if "${dim} == 2" then "fix jf_2d all enforce2d"
@@ -191,6 +191,9 @@ variable jf_pe equal pe
 variable jf_vmean equal ave(f_jf_vsamples)
 variable jf_vdev vector (f_jf_vsamples-v_jf_vmean)^2
 variable jf_vrms equal sqrt(ave(v_jf_vdev))
+variable jf_vx atom f_jf_vstore[1]
+variable jf_vy atom f_jf_vstore[2]
+variable jf_vz atom f_jf_vstore[3]
 variable jf_done internal 0
 variable jf_first internal 1
 variable jf_eprev internal 0
@@ -208,9 +211,12 @@ if "$(v_jf_md == 1 && floor(step/v_mdsample)-ceil(v_jf_before/v_mdsample)+1 >= 2
 if "${minimizer} == md" then "unfix jf_vsamples"
 variable jf_done internal $(v_jf_done+v_jf_ran)
 variable jf_e internal $(pe/atoms:%.17g)
-# md halted at V < V_min: the potential's force alone, at rest (as the controller measures it)
-if "$(v_jf_md == 1 && v_jf_e < v_vmin)" then "velocity all set 0.0 0.0 0.0" "run 0"
+# no-progress compares V + K per particle in md (damping can only lower it), V alone otherwise
+variable jf_et internal $(v_jf_e+v_jf_md*ke/atoms:%.17g)
+# md: the potential's force alone, at rest (run 0 at v = 0), then the velocities put back
+if "${minimizer} == md" then "fix jf_vstore all store/state 0 vx vy vz" "velocity all set 0.0 0.0 0.0" "run 0"
 variable jf_fm internal $(fmax:%.17g)
+if "${minimizer} == md" then "set group all vx v_jf_vx vy v_jf_vy vz v_jf_vz" "unfix jf_vstore"
 variable jf_reason string none
 variable jf_capped internal 0
 variable jf_conv internal 0
@@ -218,10 +224,10 @@ variable jf_vminstop internal 0
 if "$(v_jf_fm < v_jf_ftol)" then "variable jf_reason string force" "variable jf_conv internal 1" "jump SELF jf_min_done"
 if "$(v_jf_e < v_vmin)" then "variable jf_reason string energy-below-vmin" "variable jf_conv internal 1" "variable jf_vminstop internal 1" "jump SELF jf_min_done"
 if "$(v_jf_vm > 0 && v_jf_vr/(v_jf_vm+(v_jf_vm<=0)) < v_delta)" then "variable jf_reason string energy-steady" "jump SELF jf_min_done"
-if "$(v_jf_first == 0 && (v_jf_eprev-v_jf_e) < v_delta*v_jf_e && v_jf_fm > 0.5*v_jf_fmprev)" then "variable jf_reason string no-progress" "jump SELF jf_min_done"
+if "$(v_jf_first == 0 && (v_jf_eprev-v_jf_et) < v_delta*v_jf_et && v_jf_fm > 0.5*v_jf_fmprev)" then "variable jf_reason string no-progress" "jump SELF jf_min_done"
 if "$(v_jf_cg == 1 && v_jf_ran < v_jf_nsteps)" then "variable jf_reason string linesearch" "jump SELF jf_min_done"
 if "$(v_jf_done >= v_maxiter)" then "variable jf_reason string iteration-cap" "variable jf_capped internal 1" "jump SELF jf_min_done"
-variable jf_eprev internal $(v_jf_e:%.17g)
+variable jf_eprev internal $(v_jf_et:%.17g)
 variable jf_fmprev internal $(v_jf_fm:%.17g)
 variable jf_first internal 0
 jump SELF jf_window

@@ -22,7 +22,9 @@ Stopping rules, checked after every ``window`` iterations (LAMMPS runs the windo
    samples). Checked before ``no-progress``; reported as not converged by force, like it.
 4. ``no-progress``: over a whole window the relative energy decrease was below ``delta``
    (seed rule a, delta = 1e-16) and the max force did not halve: the round-off floor.
-   Reported as not converged by force; the protocol records it.
+   Reported as not converged by force; the protocol records it. For md the energy compared
+   is the mechanical energy V + K at the window ends, which damping can only lower: V alone
+   rises and falls as the dynamics trades it for kinetic energy (pairwise damping rings).
 5. ``linesearch``: CG's line search could not move (LAMMPS stopped early).
 6. ``iteration-cap``: ``max_iterations`` reached (not converged).
 7. ``blown-up``: non-finite energy or force, or V < V_min with a force no state at V < V_min
@@ -134,15 +136,17 @@ def minimize(engine, settings: MinimizerSettings) -> MinimizeResult:
     with engine.minimizer_session(settings, ftol) as run_window:
         while True:
             steps = min(settings.window, settings.max_iterations - done)
-            ran, energy_total, fmax, *fluctuation = run_window(steps)  # md adds the energy fluctuation
+            ran, energy_total, fmax, *md = run_window(steps)  # md adds (fluctuation, kinetic energy)
+            fluctuation, kinetic = md or (None, 0.0)
             done += ran
             energy = energy_total / n
+            mechanical = energy + kinetic / n  # V + K per particle: what damping can only lower
             reason = _stop_reason(settings, ftol, energy, fmax, energy_prev, fmax_prev, ran, steps, done,
-                                  fmax_at_vmin, fluctuation[0] if fluctuation else None)
+                                  fmax_at_vmin, fluctuation, mechanical)
             if reason:
                 return MinimizeResult(reason in CONVERGED_REASONS, reason, done, energy, fmax,
                                       time.perf_counter() - start)
-            energy_prev, fmax_prev = energy, fmax
+            energy_prev, fmax_prev = mechanical, fmax
 
 
 def _force_bound(packing, energy: float) -> float:
@@ -158,7 +162,11 @@ def _force_bound(packing, energy: float) -> float:
     return 10.0 * abs(pot.dv_dr(np.array([r]), sigma)[0])
 
 
-def _stop_reason(s, ftol, energy, fmax, energy_prev, fmax_prev, ran, steps, done, fmax_at_vmin, fluctuation=None):
+def _stop_reason(s, ftol, energy, fmax, energy_prev, fmax_prev, ran, steps, done, fmax_at_vmin, fluctuation=None,
+                 mechanical=None):
+    """The stop reason or None. ``energy_prev`` is the previous window's ``mechanical`` energy
+    (V + K per particle; V for the minimisers, where K = 0), which no-progress compares."""
+    mechanical = energy if mechanical is None else mechanical
     if not (math.isfinite(energy) and math.isfinite(fmax)) or (energy < s.v_min and fmax > fmax_at_vmin):
         return "blown-up"
     if fmax < ftol:
@@ -167,7 +175,7 @@ def _stop_reason(s, ftol, energy, fmax, energy_prev, fmax_prev, ran, steps, done
         return "energy-below-vmin"
     if fluctuation is not None and fluctuation < s.delta:
         return "energy-steady"
-    if math.isfinite(energy_prev) and (energy_prev - energy) < s.delta * energy and fmax > 0.5 * fmax_prev:
+    if math.isfinite(energy_prev) and (energy_prev - mechanical) < s.delta * mechanical and fmax > 0.5 * fmax_prev:
         return "no-progress"
     if s.method == "cg" and ran < steps:
         return "linesearch"

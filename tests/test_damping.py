@@ -27,7 +27,7 @@ from jamflow.engine.reference import pair_damping_forces
 from jamflow.minimize import PAIRWISE_BDT_LIMIT, MinimizerSettings
 from jamflow.packing import Packing
 
-from test_plugin import random_config, rel
+from test_plugin import assert_lammps_rejects, random_config, rel
 
 pytestmark = pytest.mark.skipif(find_compiler() is None, reason="no C++ compiler to build the plugin")
 B = 0.7
@@ -256,14 +256,7 @@ BOX = ["units lj", "dimension 2", "atom_style sphere", "region b block 0 9 0 9 -
       "run 0"], "requires atom_style sphere"),
 ], ids=["negative", "missing", "ghost-velocities", "cutoff", "no-pair", "no-radius"])
 def test_fix_rejects_bad_setup(lines, message):
-    lmp = new_lammps()
-    try:
-        assert load_plugin(lmp)
-        with pytest.raises(Exception, match=message):
-            for line in lines:
-                lmp.command(line)
-    finally:
-        lmp.close()
+    assert_lammps_rejects(lines, message)
 
 
 def test_settings_check_the_pairwise_limit():

@@ -80,6 +80,10 @@ def test_energy_steady_is_the_md_fluctuation_rule():
     assert _stop_reason(s, 1e-14, 1.5e-16, 1e-15, 1.5e-16, 1e-12, 10, 10, 10, fmax_at_vmin=1e-6,
                         fluctuation=0.0) == "force"
     assert "energy-steady" not in CONVERGED_REASONS
+    # no-progress compares the mechanical energy V + K: V rising while K is dissipated is progress
+    rising_v = (1e-14, 1.6e-16, 1e-12, 2.0e-16, 1e-12, 10, 10, 10)
+    assert _stop_reason(s, *rising_v, fmax_at_vmin=1e-6, mechanical=1.7e-16) is None
+    assert _stop_reason(s, *rising_v, fmax_at_vmin=1e-6, mechanical=2.0e-16) == "no-progress"
 
 
 @pytest.mark.parametrize("damping", ["viscous", "pairwise"])
@@ -93,7 +97,8 @@ def test_md_window_reports_the_energy_fluctuation_of_its_samples(config, damping
     with LammpsEngine(p) as eng, eng.minimizer_session(s, 1e-30) as window:
         eng.command(f'fix check all print 10 "$(step) $(pe:%.17g)" file {log} screen no')
         before = eng.lmp.extract_global("ntimestep")
-        ran, energy, fmax, fluctuation = window(995)  # a window not aligned with the samples
+        ran, energy, fmax, fluctuation, kinetic = window(995)  # a window not aligned with the samples
+        v = eng._gather("v")  # the velocities, put back after the force was measured at rest
         one_sample = window(12)  # steps 995-1007: only step 1000 sampled
         two_samples = window(13)  # steps 1007-1020: 1010 and 1020
     steps, pe = np.loadtxt(log, unpack=True)
@@ -102,3 +107,4 @@ def test_md_window_reports_the_energy_fluctuation_of_its_samples(config, damping
     expected = np.std(pe[inside]) / np.mean(pe[inside])
     assert fluctuation == pytest.approx(expected, rel=1e-9) and fluctuation > 1e-6  # relaxing: V changes
     assert before == 0 and one_sample[3] is None and two_samples[3] is not None
+    assert kinetic == pytest.approx(0.5 * np.sum(v**2), rel=1e-12) and kinetic > 0

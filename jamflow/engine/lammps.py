@@ -29,10 +29,15 @@ from .pair_styles import pair_setup
 from .plugin_build import load_plugin
 
 MD_DAMPING_FIXES = {"viscous": "viscous", "pairwise": "jamflow/damping"}  # fix style per md_damping
-# the energy samples of a damped-MD window (fix jf_vsamples) and their mean and rms deviation
+# the energy samples of a damped-MD window (fix jf_vsamples), their mean and rms deviation, and
+# the stored velocities (fix jf_vstore)
 ENERGY_SAMPLE_VARIABLES = ("variable jf_pe equal pe", "variable jf_vmean equal ave(f_jf_vsamples)",
                            "variable jf_vdev vector (f_jf_vsamples-v_jf_vmean)^2",
-                           "variable jf_vrms equal sqrt(ave(v_jf_vdev))")
+                           "variable jf_vrms equal sqrt(ave(v_jf_vdev))",
+                           *(f"variable jf_v{c} atom f_jf_vstore[{k}]" for k, c in enumerate("xyz", 1)))
+# a damped-MD window's force measured at rest, then its velocities put back exactly
+AT_REST = ("fix jf_vstore all store/state 0 vx vy vz", "velocity all set 0.0 0.0 0.0", "run 0")
+RESTORE_VELOCITIES = ("set group all vx v_jf_vx vy v_jf_vy vz v_jf_vz", "unfix jf_vstore")
 
 
 class LammpsError(RuntimeError):
@@ -122,7 +127,7 @@ class LammpsEngine:
             *pair_setup(packing, self.lmp),
             f"neighbor {skin:g} bin", "neigh_modify every 1 delay 0 check yes",
             "compute jf_press all pressure NULL virial",
-            "thermo_style custom step pe c_jf_press[*] fmax", "thermo_modify norm no", "thermo 0",
+            "thermo_style custom step pe c_jf_press[*] fmax ke", "thermo_modify norm no", "thermo 0",
         ])
         if dim == 2:
             self.command("fix jf_2d all enforce2d")
@@ -191,11 +196,14 @@ class LammpsEngine:
         """Install the minimiser (FIRE 2.0 ``norm max``, CG ``line forcezero``, or damped MD:
         ``fix nve`` + ``fix viscous`` or ``fix jamflow/damping``) and ``fix halt`` at V < V_min;
         yield ``window(steps) -> (iterations, total energy, max force component)``, one LAMMPS
-        command per window. Damped MD adds a fourth value: the relative rms fluctuation of the
+        command per window. Damped MD adds two values: the relative rms fluctuation of the
         energy sampled every ``md_sample_every`` steps inside the window (``fix vector``;
-        None with fewer than 2 samples). Its max force includes the damping force, except in a
-        window halted at V < V_min, where it is the potential's force at rest (``run 0`` at
-        v = 0): moving particles must not make a state below V_min look blown up."""
+        None with fewer than 2 samples) and the total kinetic energy at its end. Its max force is the potential's alone, evaluated at
+        rest (``run 0`` at v = 0, then the velocities are put back, so the trajectory does not
+        change): the total force includes the damping, which cancels the potential force of a
+        particle creeping at terminal velocity F / b (the default viscous run then stopped by
+        'force' at a reference max force of 1e-11) and makes a moving state below V_min look
+        blown up."""
         s, lmp = settings, self.lmp
         md = s.method == "md"
         if md and s.md_damping == "pairwise" and not load_plugin(lmp):
@@ -224,11 +232,12 @@ class LammpsEngine:
             energy = float(lmp.get_thermo("pe"))
             if not md:
                 return after - before, energy, float(lmp.get_thermo("fmax"))
+            kinetic = float(lmp.get_thermo("ke"))
             fluctuation = self._energy_fluctuation(before, after, s.md_sample_every)
-            self.command("unfix jf_vsamples")
-            if energy / self.template.n < s.v_min:  # halted: the potential's force alone, at rest
-                self.run_commands(["velocity all set 0.0 0.0 0.0", "run 0"])
-            return after - before, energy, float(lmp.get_thermo("fmax")), fluctuation
+            self.run_commands(["unfix jf_vsamples", *AT_REST])  # the potential's force alone
+            fmax = float(lmp.get_thermo("fmax"))
+            self.run_commands(RESTORE_VELOCITIES)
+            return after - before, energy, fmax, fluctuation, kinetic
 
         try:
             yield window
