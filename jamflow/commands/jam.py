@@ -12,7 +12,7 @@ import time
 from ..checks import check_packing
 from ..engine.base import ENGINES, engine_name
 from ..io import check_writable, replacing, save_packing
-from ..minimize import METHODS, MinimizerSettings
+from ..minimize import MD_DAMPINGS, METHODS, MinimizerSettings
 from ..protocols.compression import (DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, JammingFailed, check_resolution,
                                      initial_packing, jam)
 from ..progress import CompressionProgress
@@ -32,6 +32,7 @@ def add_arguments(p) -> None:
                         f"growing increments and Newton jumps (docs/speed.md). Default {DEFAULT_PROTOCOL}; "
                         "seed with --emit-deck (decks run the seed protocol)")
     p.add_argument("--minimizer", choices=METHODS, default="fire", help="energy minimiser")
+    add_md_damping_argument(p)
     p.add_argument("--engine", choices=ENGINES, default="auto",
                    help="auto: the compiled engine (FIRE, in process) wherever it runs the scene, else LAMMPS "
                         "(docs/speed.md). The engines sum forces in different orders, so from one start they "
@@ -64,12 +65,21 @@ def add_arguments(p) -> None:
                         "instead of running it; then: cd DIR && lmp -in DECK.lmp")
 
 
+def add_md_damping_argument(p) -> None:
+    p.add_argument("--md-damping", choices=MD_DAMPINGS, default="viscous",
+                   help="--minimizer md only: viscous (drag -b v on every particle) or pairwise (seed eq. 2.3: "
+                        "-b (v_ij . rhat) rhat on contacting pairs; docs/damped-md.md)")
+
+
 def settings_from_args(args) -> CompressionSettings:
     for name in ("phi0", "dphi0", "vtol"):
         value = getattr(args, name)
         if value is not None and (not math.isfinite(value) or value <= 0):
             raise ValueError(f"--{name} must be a finite positive number, got {value}")
-    minimizer = MinimizerSettings(method=args.minimizer, force_tol=args.ftol, v_min=args.vtol)
+    if args.md_damping != "viscous" and args.minimizer != "md":
+        raise ValueError(f"--md-damping {args.md_damping} applies to --minimizer md only, not {args.minimizer}")
+    minimizer = MinimizerSettings(method=args.minimizer, force_tol=args.ftol, v_min=args.vtol,
+                                  md_damping=args.md_damping)
     protocol = args.protocol or ("seed" if args.emit_deck else DEFAULT_PROTOCOL)
     return PROTOCOLS[protocol](phi0=args.phi0, dphi0=args.dphi0, v_tol=args.vtol, minimizer=minimizer)
 
