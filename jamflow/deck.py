@@ -31,7 +31,7 @@ from .protocols.compression import CompressionSettings
 from .sizes import parse_sizes
 
 DECK_NAME = "jam.lmp"
-OPTIONAL = ("data", "phi0", "ftol")
+OPTIONAL = ("data", "phi0", "ftol", "plugin")
 PROTOCOL_COLUMNS = ("step", "phi", "energy_per_particle", "pressure", "dphi", "iterations", "max_force", "reason")
 
 
@@ -63,7 +63,8 @@ def deck_variables(n: int = 256, dim: int = 2, sizes="bi:1.4:0.5", seed: int = 0
                   vtol=_num(settings.v_tol), dphi0=_num(settings.dphi0), minimizer=m.method, vmin=_num(m.v_min),
                   delta=_num(m.delta), window=m.window, maxiter=m.max_iterations, dt=_num(m.timestep),
                   mddt=_num(m.md_timestep),
-                  damping=_num(m.damping), maxsteps=settings.max_steps, skin=_num(0.3), out=str(out),
+                  damping=_num(m.damping), mddamping=m.md_damping, mdsample=m.md_sample_every,
+                  maxsteps=settings.max_steps, skin=_num(0.3), out=str(out),
                   walls="".join("xyz"[a] for a in parse_walls(walls, int(dim))) or "none")
     return {**values, **optional_values(settings, data, phi0)}
 
@@ -72,7 +73,7 @@ def checked_inputs(potential, sizes, settings: CompressionSettings) -> tuple[flo
     """(d2, fraction small) of mono/bi sizes; ValueError for what the decks cannot run (another
     potential, polydisperse sizes, the controller's protocol shortcuts)."""
     pot = parse_potential(potential) if isinstance(potential, str) else potential
-    if not (isinstance(pot, Spring) and pot.alpha == 2.0 and pot.epsilon == 1.0):
+    if not (pot.name == "spring" and pot.alpha == 2.0 and pot.epsilon == 1.0):
         raise ValueError(f"the deck runs the linear spring (alpha = 2, eps = 1) only, got {pot.spec}; "
                          "run other potentials with the Python controller (jamflow jam)")
     spec = parse_sizes(sizes) if isinstance(sizes, str) else sizes
@@ -86,11 +87,24 @@ def checked_inputs(potential, sizes, settings: CompressionSettings) -> tuple[flo
 def optional_values(settings: CompressionSettings, data=None, phi0: float | None = None) -> dict:
     """The deck's optional variables that are set (data, phi0, ftol), at full precision."""
     start_phi = phi0 if phi0 is not None else settings.phi0
-    force_tol = settings.minimizer.force_tol
+    m: MinimizerSettings = settings.minimizer
+    force_tol = m.force_tol
     optional = {"data": None if data is None else str(data),
                 "phi0": None if start_phi is None else repr(float(start_phi)),
-                "ftol": None if force_tol is None else repr(float(force_tol))}
+                "ftol": None if force_tol is None else repr(float(force_tol)),
+                "plugin": _plugin_path() if m.method == "md" and m.md_damping == "pairwise" else None}
     return {k: v for k, v in optional.items() if v is not None}
+
+
+def _plugin_path() -> str:
+    """The compiled jamflow plugin (fix jamflow/damping) that a pairwise-damping deck loads."""
+    from .engine.plugin_build import plugin_library
+
+    library = plugin_library()
+    if library is None:
+        raise ValueError("a deck with md_damping 'pairwise' loads jamflow's LAMMPS plugin, which needs a C++ "
+                         "compiler to build; install one or use md_damping 'viscous'")
+    return str(library)
 
 
 def _check_seed_protocol(settings: CompressionSettings) -> None:
@@ -112,10 +126,10 @@ def deck_text(variables: dict | None = None) -> str:
     return render(HEADER, BODY, deck_variables() if variables is None else variables)
 
 
-def render(header: str, body: str, variables: dict) -> str:
-    """A deck: ``header`` formatted with ``variables`` (OPTIONAL ones as extra lines), then ``body``."""
+def render(header: str, body: str, variables: dict, optional_keys=OPTIONAL) -> str:
+    """A deck: ``header`` formatted with ``variables`` (``optional_keys`` as extra lines), then ``body``."""
     values = dict(variables)
-    optional = "".join(f"variable {k:<9} index {values.pop(k)}\n" for k in OPTIONAL if k in values)
+    optional = "".join(f"variable {k:<9} index {values.pop(k)}\n" for k in optional_keys if k in values)
     return header.format(version=__version__, optional=optional, **{k: str(v) for k, v in values.items()}) + body
 
 
@@ -316,7 +330,7 @@ def run_pressure_deck(workdir, start: Packing, pressures, *, stress: str = "iso"
 
     values = start.species()[0]
     pot = start.potential
-    if not (isinstance(pot, Spring) and pot.alpha == 2.0 and pot.epsilon == 1.0) or len(values) > 2 or values[0] != 1.0:
+    if not (pot.name == "spring" and pot.alpha == 2.0 and pot.epsilon == 1.0) or len(values) > 2 or values[0] != 1.0:
         raise ValueError("the pressure deck runs the linear spring (eps = 1) with diameters 1 and one other")
     if start.box.walls or start.gravity > 0 or start.fixed is not None:
         raise ValueError("the pressure deck relaxes a periodic box (no walls, gravity or fixed particles)")

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from .box import Box
-from .deck import _num, checked_inputs, optional_values, render
+from .deck import OPTIONAL, _num, checked_inputs, optional_values, render
 from .io import atomic_path, write_lammps_data
 from .packing import Packing
 from .potentials import Potential, Spring
@@ -52,7 +52,9 @@ def deck_text(variables: dict | None = None) -> str:
     """The deck with ``variables`` (from ``deck_variables``) as its defaults."""
     from .deck_ellipsoids_script import BODY, HEADER
 
-    return render(HEADER, BODY, deck_variables() if variables is None else variables)
+    # the plugin is a required variable of this deck (an optional one of the disk deck)
+    return render(HEADER, BODY, deck_variables() if variables is None else variables,
+                  tuple(k for k in OPTIONAL if k != "plugin"))
 
 
 def write_deck(path, variables: dict | None = None) -> Path:

@@ -208,6 +208,10 @@ unfix jf_lang
 run 0
 variable jf_e internal $(pe/atoms:%.17g)
 variable jf_fm internal $(ternary(fmax>c_jf_gmax,fmax,c_jf_gmax):%.17g)
+# no-progress on V alone (the drag only lowers V + K, as in LammpsEngine's rotating session); no energy-steady rule
+variable jf_et internal $(v_jf_e:%.17g)
+variable jf_vm internal 0
+variable jf_vr internal 0
 fix jf_lang all langevin 0.0 0.0 $(1.0/v_damping:%.17g) 4928459 angmom 1.0
 if "${dim} == 2" then "unfix jf_2d" "fix jf_2d all enforce2d"
 """

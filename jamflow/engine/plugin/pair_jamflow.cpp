@@ -387,4 +387,5 @@ extern "C" void lammpsplugin_init(void *lmp, void *handle, void *regfunc)
                  "jamflow repulsive Lennard-Jones with sigma_ij = r_i + r_j", &create_rlj);
   register_style(instance, handle, reg, "jamflow/ellipsoid",
                  "jamflow spring / RLJ laws with the contact distance of ellipses and spheroids", &create_ellipsoid);
+  jamflow_register_fixes(lmp, handle, reg);    // fix jamflow/damping
 }
