@@ -24,6 +24,7 @@ from . import __version__
 
 SUBCOMMANDS = {
     "jam": ("jamflow.commands.jam", "jam particles at onset by isotropic compression"),
+    "anneal": ("jamflow.commands.anneal", "particle-shape annealing: grow the aspect ratio of a jammed packing step by step"),
     "modes": ("jamflow.commands.modes", "contacts, floaters, normal modes, D(omega) and stability class of packing files"),
     "analyze": ("jamflow.commands.analyze", "structure: g(r), S(k), Q6, G, correlation lengths"),
     "draw": ("jamflow.commands.draw", "draw a packing: particles to scale, contacts, floaters (PNG)"),
