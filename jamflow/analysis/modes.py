@@ -103,6 +103,38 @@ class SpectrumResult:
         return float(np.abs(m @ self.dynamical.translations()).max()) if m.shape[0] else 0.0
 
 
+@dataclass(frozen=True)
+class Branch:
+    """One branch of the sorted spectrum: its modes' count, frequency range sqrt(|e| / M) and
+    mean translational fraction."""
+
+    name: str
+    count: int
+    omega_low: float
+    omega_high: float
+    translational: float
+
+
+def branches(spec: SpectrumResult) -> list[Branch] | None:
+    """The three branches of the spectrum of particles that turn (seed Figure 2.17): 1 the
+    nontrivial zero modes (|e| <= e_min: the quartic modes at onset), 2 the nonzero modes that
+    are mostly rotational (translational fraction < 1/2), 3 the mostly translational ones. The d
+    trivial translations (the zero modes of largest translational fraction) are left out. None for
+    disks/spheres, or without eigenvectors or a complete spectrum."""
+    fraction = spec.translational_fraction
+    if not spec.dynamical.packing.shape.oriented or fraction is None or not spec.complete:
+        return None
+    zero = np.flatnonzero(np.abs(spec.eigenvalues) <= spec.e_min)
+    trivial = zero[np.argsort(fraction[zero])[len(zero) - spec.dim:]] if len(zero) >= spec.dim else zero
+    nonzero = spec.eigenvalues > spec.e_min
+    groups = (("1 zero", np.setdiff1d(zero, trivial)), ("2 rotational", np.flatnonzero(nonzero & (fraction < 0.5))),
+              ("3 translational", np.flatnonzero(nonzero & (fraction >= 0.5))))
+    omega = np.sqrt(np.abs(spec.eigenvalues) / spec.mass)
+    return [Branch(name, len(k), float(omega[k].min()) if len(k) else math.nan,
+                   float(omega[k].max()) if len(k) else math.nan,
+                   float(fraction[k].mean()) if len(k) else math.nan) for name, k in groups]
+
+
 class Spectrum:
     """Eigenvalues (and vectors) of the dynamical matrix.
 
