@@ -115,24 +115,39 @@ class Branch:
     translational: float
 
 
-def branches(spec: SpectrumResult) -> list[Branch] | None:
-    """The three branches of the spectrum of particles that turn (seed Figure 2.17): 1 the
-    nontrivial zero modes (|e| <= e_min: the quartic modes at onset), 2 the nonzero modes that
-    are mostly rotational (translational fraction < 1/2), 3 the mostly translational ones. The d
-    trivial translations (the zero modes of largest translational fraction) are left out. None for
-    disks/spheres, or without eigenvectors or a complete spectrum."""
+BRANCH_NAMES = ("1 zero", "2 rotational", "3 translational")
+
+
+def branch_labels(spec: SpectrumResult) -> np.ndarray | None:
+    """Per mode 1, 2 or 3, the branch of the spectrum of particles that turn (seed Figure 2.17):
+    1 the nontrivial zero modes (|e| <= e_min: the quartic modes at onset), 2 the nonzero modes
+    that are mostly rotational (translational fraction < 1/2), 3 the mostly translational ones;
+    0 for the d trivial translations (the zero modes of largest translational fraction). None
+    for disks/spheres, or without eigenvectors or a complete spectrum."""
     fraction = spec.translational_fraction
     if not spec.dynamical.packing.shape.oriented or fraction is None or not spec.complete:
         return None
-    zero = np.flatnonzero(np.abs(spec.eigenvalues) <= spec.e_min)
-    trivial = zero[np.argsort(fraction[zero])[len(zero) - spec.dim:]] if len(zero) >= spec.dim else zero
-    nonzero = spec.eigenvalues > spec.e_min
-    groups = (("1 zero", np.setdiff1d(zero, trivial)), ("2 rotational", np.flatnonzero(nonzero & (fraction < 0.5))),
-              ("3 translational", np.flatnonzero(nonzero & (fraction >= 0.5))))
-    omega = np.sqrt(np.abs(spec.eigenvalues) / spec.mass)
-    return [Branch(name, len(k), float(omega[k].min()) if len(k) else math.nan,
-                   float(omega[k].max()) if len(k) else math.nan,
-                   float(fraction[k].mean()) if len(k) else math.nan) for name, k in groups]
+    zero = np.abs(spec.eigenvalues) <= spec.e_min
+    labels = np.where(zero, 1, np.where(fraction < 0.5, 2, 3))
+    k = np.flatnonzero(zero)
+    labels[k[np.argsort(fraction[k])[max(len(k) - spec.dim, 0):]]] = 0
+    return labels
+
+
+def branches(spec: SpectrumResult) -> list[Branch] | None:
+    """The three branches (``branch_labels``) with their counts, frequency ranges and mean
+    translational fractions; None where there are no branches."""
+    labels = branch_labels(spec)
+    if labels is None:
+        return None
+    omega, fraction = np.sqrt(np.abs(spec.eigenvalues) / spec.mass), spec.translational_fraction
+    out = []
+    for b, name in enumerate(BRANCH_NAMES, 1):
+        k = labels == b
+        out.append(Branch(name, int(k.sum()), float(omega[k].min()) if k.any() else math.nan,
+                          float(omega[k].max()) if k.any() else math.nan,
+                          float(fraction[k].mean()) if k.any() else math.nan))
+    return out
 
 
 class Spectrum:
