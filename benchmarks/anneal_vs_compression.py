@@ -16,7 +16,6 @@ load. ``--report`` prints the table of docs/ellipses.md and draws docs/anneal.pn
 
 from __future__ import annotations
 
-import argparse
 import os
 import time
 from pathlib import Path
@@ -26,10 +25,9 @@ from tqdm import tqdm
 
 from jamflow import jam
 from jamflow.checks import check_packing
-from jamflow.io import atomic_path
 from jamflow.protocols.anneal import anneal
 
-from ellipse_ensembles import SIZES, read_rows, stats, write_rows  # (benchmarks/ is the script's directory)
+from ellipse_ensembles import SIZES, pyplot, read_rows, run_or_report, save_figure, stats, write_rows  # (benchmarks/ is the script's directory)
 
 COLUMNS = ["protocol", "dalpha", "seed", "n", "alpha", "phi_j", "mean_z", "n_floaters", "energy_per_particle",
            "max_force", "checks_passed", "cpu_seconds", "load"]
@@ -131,11 +129,7 @@ def paired(rows) -> None:
 
 
 def chart(groups, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
     styles = {"compression": dict(ls="--", marker="o"), "anneal 0.05": dict(ls="-", marker=None),
               "anneal 0.005": dict(ls="none", marker="D", ms=4)}
@@ -155,27 +149,19 @@ def chart(groups, path: Path) -> None:
         ax.legend(fontsize=8)
     fig.suptitle(f"2D bidisperse ellipses, N = {', '.join(n)}: shape annealing vs isotropic compression "
                  "(cf. seed Figure 2.18)")
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=120, format="png")
-    plt.close(fig)
+    save_figure(fig, path)
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+def add_arguments(ap) -> None:
     ap.add_argument("--n", type=int, default=64)
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--to", type=float, default=2.0)
     ap.add_argument("--dalpha", type=float, default=0.05)
     ap.add_argument("--compress", type=float, nargs="+", default=None, metavar="ALPHA",
                     help="jam by compression at these alphas instead of annealing")
-    ap.add_argument("--out", default="docs/anneal.csv")
-    ap.add_argument("--report", default=None, metavar="CSV")
-    args = ap.parse_args()
-    if args.report:
-        report(Path(args.report))
-    else:
-        run(args)
+
+def main() -> None:
+    run_or_report(__doc__, add_arguments, run, report, "docs/anneal.csv")
 
 
 if __name__ == "__main__":

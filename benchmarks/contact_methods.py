@@ -29,10 +29,9 @@ from tqdm import tqdm
 from jamflow import jam
 from jamflow.analysis.contacts import Contacts
 from jamflow.engine.reference import energy_forces_pressure
-from jamflow.io import atomic_path
 from jamflow.shapes import Ellipsoid
 
-from ellipse_ensembles import read_rows, write_rows  # (benchmarks/ is the script's directory)
+from ellipse_ensembles import pyplot, read_rows, save_figure, write_rows  # (benchmarks/ is the script's directory)
 
 MIXTURES = {"bi:1.4:0.6667": ("exact", "cleaver", "linear", "quadratic"),
             "mono": ("exact", "gaussian", "linear", "quadratic")}
@@ -101,11 +100,7 @@ def report(path) -> None:
 
 
 def chart(table, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
     colors = {"bi:1.4:0.6667": "C0", "mono": "C3"}
     for sizes, m, cpu, bphi, sphi, bz, sz in table:
@@ -118,10 +113,7 @@ def chart(table, path: Path) -> None:
         ax.set_xlabel("median CPU seconds per packing")
         ax.set_ylabel(f"paired bias {name}")
     fig.suptitle("contact-distance methods: same starts, 2D ellipses alpha = 2, N = 64 (mean +- s.e. over seeds)")
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=120, format="png")
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def main() -> None:

@@ -12,7 +12,6 @@ A file already in the CSV is skipped (the run resumes). CPU seconds are the proc
 
 from __future__ import annotations
 
-import argparse
 import os
 import re
 import time
@@ -24,9 +23,9 @@ from tqdm import tqdm
 from jamflow.analysis.modes import Spectrum, branches
 from jamflow.checks import check_packing
 from jamflow.commands.modes import analyse_file
-from jamflow.io import atomic_path, load_packing, read_checks
+from jamflow.io import load_packing, read_checks
 
-from ellipse_ensembles import read_rows, write_rows  # (benchmarks/ is the script's directory)
+from ellipse_ensembles import pyplot, read_rows, run_or_report, save_figure, write_rows  # (benchmarks/ is the script's directory)
 
 COLUMNS = ["file", "alpha", "seed", "n", "checks_passed", "problems", "in_window", "max_force", "n_kept",
            "n_contacts", "missing_contacts", "n_zero", "n_extra_zero", "n_negative", "n_quartic", "classification",
@@ -87,11 +86,7 @@ def report(path: Path) -> None:
 
 
 def chart(rows, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(5, 4.5))
     for alpha, marker in zip(sorted({float(r["alpha"]) for r in rows}), "osD^v"):
         g = [r for r in rows if float(r["alpha"]) == alpha and r["n_quartic"] != ""]
@@ -102,24 +97,16 @@ def chart(rows, path: Path) -> None:
     ax.set(xlabel=r"missing contacts $N' d_f - d + 1 - N_c$", ylabel="quartic modes (Delta V ~ delta^4)",
            title=f"2D bidisperse ellipses, N = {rows[0]['n']}")
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=120, format="png")
-    plt.close(fig)
+    save_figure(fig, path)
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+def add_arguments(ap) -> None:
     ap.add_argument("files", nargs="*", help="packing files (ellipse_ensembles.py --keep)")
-    ap.add_argument("--out", default="docs/ellipse-ensembles-modes.csv")
     ap.add_argument("--stability-seeds", type=int, default=5,
                     help="profile the quartic modes (jamflow modes' Stability) for seeds below this only")
-    ap.add_argument("--report", default=None, metavar="CSV")
-    args = ap.parse_args()
-    if args.report:
-        report(Path(args.report))
-    else:
-        run(args)
+
+def main() -> None:
+    run_or_report(__doc__, add_arguments, run, report, "docs/ellipse-ensembles-modes.csv")
 
 
 if __name__ == "__main__":

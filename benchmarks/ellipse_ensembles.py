@@ -111,6 +111,39 @@ def run(args) -> None:
         write_rows(out, rows)
 
 
+# ----- shared by the ellipse benchmarks ----------------------------------------------------------
+def pyplot():
+    """matplotlib.pyplot on the Agg backend."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def save_figure(fig, path: Path) -> None:
+    """Lay out, write atomically as PNG (120 dpi) and close ``fig``."""
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=120, format="png")
+    pyplot().close(fig)
+
+
+def run_or_report(doc: str, add_arguments, run, report, out: str) -> None:
+    """The command line of a results benchmark: options from ``add_arguments(parser)``, ``--out``
+    (default ``out``), ``--report CSV``: ``report(Path)`` instead of ``run(args)``."""
+    ap = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_arguments(ap)
+    ap.add_argument("--out", default=out)
+    ap.add_argument("--report", default=None, metavar="CSV")
+    args = ap.parse_args()
+    if args.report:
+        report(Path(args.report))
+    else:
+        run(args)
+
+
 # ----- report -------------------------------------------------------------------------------------
 def stats(values):
     v = [float(x) for x in values]
@@ -159,11 +192,7 @@ def report(paths, packings=None) -> None:
 
 
 def chart(groups, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
     for engine, marker in (("numba", "o"), ("lammps", "s")):
         keys = sorted(a for e, a in groups if e == engine)
@@ -184,10 +213,7 @@ def chart(groups, path: Path) -> None:
         ax.set_xlabel(r"aspect ratio $\alpha$")
         ax.legend(fontsize=8)
     fig.suptitle("2D bidisperse ellipses (2:1, a_l/a_s = 1.4), N = 128, isotropic compression")
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=120, format="png")
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def main() -> None:

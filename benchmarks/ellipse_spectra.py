@@ -13,7 +13,6 @@ the branch table of docs/ellipses.md and draws docs/ellipse-spectra.png.
 
 from __future__ import annotations
 
-import argparse
 import os
 import time
 from pathlib import Path
@@ -24,9 +23,8 @@ from tqdm import tqdm
 from jamflow import jam
 from jamflow.analysis.modes import Spectrum, branch_labels
 from jamflow.checks import check_packing
-from jamflow.io import atomic_path
 
-from ellipse_ensembles import SIZES, read_rows, write_rows  # (benchmarks/ is the script's directory)
+from ellipse_ensembles import SIZES, pyplot, read_rows, run_or_report, save_figure, write_rows  # (benchmarks/ is the script's directory)
 
 COLUMNS = ["alpha", "seed", "n", "n_kept", "phi_j", "mean_z", "checks_passed", "index", "x", "eigenvalue", "omega",
            "translational", "branch", "cpu_seconds", "load"]
@@ -80,11 +78,7 @@ def report(path: Path) -> None:
 
 
 def chart(rows, alphas, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
     colors = plt.cm.viridis(np.linspace(0, 0.9, len(alphas)))
     for a, c in zip(alphas, colors):
@@ -100,24 +94,16 @@ def chart(rows, alphas, path: Path) -> None:
     axes[0].legend(fontsize=7, markerscale=3)
     n = rows[0]["n"]
     fig.suptitle(f"2D bidisperse ellipses at onset, N = {n}, one packing per alpha (quartic modes: branch 1)")
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=120, format="png")
-    plt.close(fig)
+    save_figure(fig, path)
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+def add_arguments(ap) -> None:
     ap.add_argument("--alphas", type=float, nargs="+", default=[1.02, 1.06, 1.1, 1.2, 1.4, 1.8])
     ap.add_argument("--n", type=int, default=120)
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--out", default="docs/ellipse-spectra.csv")
-    ap.add_argument("--report", default=None, metavar="CSV")
-    args = ap.parse_args()
-    if args.report:
-        report(Path(args.report))
-    else:
-        run(args)
+
+def main() -> None:
+    run_or_report(__doc__, add_arguments, run, report, "docs/ellipse-spectra.csv")
 
 
 if __name__ == "__main__":
