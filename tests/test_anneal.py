@@ -96,3 +96,14 @@ def test_anneal_refuses_a_missing_input_and_a_walled_packing(tmp_path, capsys):
     assert main(["jam", "--quiet", "--n", "16", "--walls", "y", "--out", str(walled)]) == 0
     assert main(["anneal", str(walled), "--to", "1.5", "--dalpha", "0.1", "--out", str(out)]) == 2
     assert "periodic box" in capsys.readouterr().err and not out.exists()
+
+
+def test_cli_anneals_spheres_into_oblate_spheroids(tmp_path):
+    spheres, out = tmp_path / "spheres.h5", tmp_path / "oblate.h5"
+    assert main(["jam", "--quiet", "--dim", "3", "--n", "16", "--sizes", "mono", "--seed", "1", "--out", str(spheres)]) == 0
+    assert main(["anneal", str(spheres), "--to", "0.9", "--dalpha", "0.05", "--quiet", "--out", str(out)]) == 0
+    steps = read_table(out, "anneal")
+    np.testing.assert_array_equal(steps["alpha"], [1.0, 0.95, 0.9])
+    assert np.all(steps["checks_passed"]) and load_packing(out).shape == Ellipsoid(0.9)
+    check = independent_check(load_packing(out))
+    assert check.max_force() < 1e-12 and check.max_generalized_torque() < 1e-12
