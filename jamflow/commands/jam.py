@@ -9,7 +9,8 @@ import time
 from ..engine.base import ENGINES, engine_name
 from ..io import check_writable, save_packing
 from ..minimize import METHODS, MinimizerSettings
-from ..protocols.compression import DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, initial_packing, jam
+from ..protocols.compression import (DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, at_shear_strain, initial_packing,
+                                     jam, with_accumulated_strain)
 from ..progress import CompressionProgress
 
 
@@ -35,6 +36,8 @@ def add_arguments(p) -> None:
     p.add_argument("--vtol", type=float, default=1e-16, help="energy window V_tol < V < 2 V_tol (per particle)")
     p.add_argument("--ftol", type=float, default=None, help="max force component tolerance (default scales with box)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the initial positions and sizes")
+    p.add_argument("--gamma", type=float, default=None,
+                   help="jam at this fixed Lees-Edwards shear strain (any finite value; seed section 2.2)")
     p.add_argument("--out", default="packing.h5", help="output HDF5 file")
     p.add_argument("--quiet", action="store_true", help="no progress display")
     p.add_argument("--emit-deck", default=None, metavar="DECK.lmp",
@@ -57,12 +60,16 @@ def run(args) -> int:
     check_writable(args.out)
     start = initial_packing(args.n, args.dim, args.sizes, args.potential, args.seed, settings.start_phi(args.dim),
                             args.shape)
+    if args.gamma is not None:
+        start = at_shear_strain(start, args.gamma)  # refuses a strain that is not finite
     engine_name(start, args.minimizer, args.engine)  # refuse --engine numba where it cannot run, before work
     if args.emit_deck:
         return emit(args, start, settings)
     t0 = time.perf_counter()
     with CompressionProgress(disable=args.quiet) as progress:
         result = jam(start=start, settings=settings, observers=[progress], engine=args.engine)
+    if args.gamma is not None:
+        result = with_accumulated_strain(result, args.gamma)
     save_packing(args.out, result.packing, energy_per_particle=result.energy_per_particle,
                  pressure_tensor=result.pressure_tensor, protocol={**settings.as_dict(), "engine": result.engine},
                  history=result.history, lammps_version=result.lammps_version)
