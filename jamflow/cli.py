@@ -13,6 +13,7 @@ SUBCOMMANDS = {
     "modes": ("jamflow.commands.modes", "contacts, floaters, normal modes, D(omega) and stability class of packing files"),
     "analyze": ("jamflow.commands.analyze", "structure: g(r), S(k), Q6, G, correlation lengths"),
     "shear": ("jamflow.commands.shear", "quasistatic shear of a packing at zero pressure (seed section 2.2)"),
+    "families": ("jamflow.commands.families", "geometric families of small disk packings under shear (Figure 2.7)"),
     "crosscheck": ("jamflow.commands.crosscheck", "run the LAMMPS deck and the Python controller from one start and compare"),
 }
 
