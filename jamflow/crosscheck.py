@@ -61,12 +61,16 @@ class CrossCheck:
             f"deck (lmp)  phi_J = {d.phi_j:.17g}  V = {d.energy_per_particle:.3e}  "
             f"{d.minimizations} minimisations  {d.seconds:.2f} s",
             f"phi_J difference (deck - controller) = {self.phi_j_difference:.3e}  (tolerance {self.tolerance:g})",
-            f"contacts: {self.contacts_both} in both, {self.contacts_only_controller} only in the controller's, "
-            f"{self.contacts_only_deck} only in the deck's",
-            f"largest displacement between the two packings = {self.max_displacement:.3e}",
+            *_closing_lines(self, history, "")])
+
+
+def _closing_lines(check, history: str, which: str) -> list[str]:
+    """The report lines on contacts, displacement, histories and the verdict."""
+    return [f"{which}contacts: {check.contacts_both} in both, {check.contacts_only_controller} only in the "
+            f"controller's, {check.contacts_only_deck} only in the deck's",
+            f"largest displacement between the two {'last ' if which else ''}packings = {check.max_displacement:.3e}",
             f"histories: {history}",
-            "AGREE" if self.agree else "DISAGREE",
-        ])
+            "AGREE" if check.agree else "DISAGREE"]
 
 
 def crosscheck(n: int = 32, dim: int = 2, sizes: str = "bi:1.4:0.5", seed: int = 0,
@@ -82,14 +86,20 @@ def crosscheck(n: int = 32, dim: int = 2, sizes: str = "bi:1.4:0.5", seed: int =
         raise ValueError(f"tolerance must be positive, got {tolerance}")
     start = initial_packing(n, dim, sizes, "spring", seed, settings.start_phi(dim))
     variables = deck_variables(n, dim, sizes, seed, settings, data="start.data", phi0=start.phi, out="deck")
+    deck = run_from(workdir, start, lambda where: run_deck(where, variables, lmp=lmp, ranks=ranks, timeout=timeout))
+    controller = compress(start, settings, engine="lammps")  # the deck runs LAMMPS: same engine
+    return compare(controller, deck, tolerance)
+
+
+def run_from(workdir, start: Packing, run):
+    """Write ``start`` as start.data into ``workdir`` (default: a temporary directory, removed
+    afterwards) and return ``run(directory)``."""
     if workdir is not None and not Path(workdir).is_dir():
         raise ValueError(f"work directory {workdir} does not exist; create it first")
     with tempfile.TemporaryDirectory(prefix="jamflow-crosscheck-") as tmp:
         where = Path(workdir) if workdir is not None else Path(tmp)
         write_lammps_data(where / "start.data", start)
-        deck = run_deck(where, variables, lmp=lmp, ranks=ranks, timeout=timeout)
-    controller = compress(start, settings, engine="lammps")  # the deck runs LAMMPS: same engine
-    return compare(controller, deck, tolerance)
+        return run(where)
 
 
 def compare(controller: JamResult, deck: DeckResult, tolerance: float = 1e-8) -> CrossCheck:
@@ -167,12 +177,7 @@ class ShearCrossCheck:
             f"deck (lmp)  {len(d.static['phi_j']) - 1} steps, phi_J {d.static['phi_j'][0]:.12f} -> "
             f"{d.static['phi_j'][-1]:.12f}  {d.seconds:.2f} s",
             f"largest |phi_J difference| over the steps = {np.nanmax(np.abs(diff)):.3e}  (tolerance {self.tolerance:g})",
-            f"last step contacts: {self.contacts_both} in both, {self.contacts_only_controller} only in the "
-            f"controller's, {self.contacts_only_deck} only in the deck's",
-            f"largest displacement between the two last packings = {self.max_displacement:.3e}",
-            f"histories: {history}",
-            "AGREE" if self.agree else "DISAGREE",
-        ])
+            *_closing_lines(self, history, "last step ")])
 
 
 def crosscheck_shear(n: int = 10, dim: int = 2, sizes: str = "bi:1.4:0.5", seed: int = 0,
@@ -193,12 +198,8 @@ def crosscheck_shear(n: int = 10, dim: int = 2, sizes: str = "bi:1.4:0.5", seed:
     start = jam(n=n, dim=dim, sizes=sizes, seed=seed, gamma=gamma, engine="lammps",
                 settings=replace(settings, dphi0=CompressionSettings().dphi0)).packing
     variables = start_variables(start, dgamma, to, settings, data="start.data", out="path")
-    if workdir is not None and not Path(workdir).is_dir():
-        raise ValueError(f"work directory {workdir} does not exist; create it first")
-    with tempfile.TemporaryDirectory(prefix="jamflow-crosscheck-") as tmp:
-        where = Path(workdir) if workdir is not None else Path(tmp)
-        write_lammps_data(where / "start.data", start)
-        deck = run_shear_deck(where, variables, lmp=lmp, ranks=ranks, timeout=timeout)
+    deck = run_from(workdir, start,
+                    lambda where: run_shear_deck(where, variables, lmp=lmp, ranks=ranks, timeout=timeout))
     controller = shear(start, dgamma, to, settings, engine="lammps")
     return compare_shear(controller, deck, tolerance)
 

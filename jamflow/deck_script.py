@@ -9,6 +9,16 @@ the Python controller command for command, so the same start gives the same traj
 tests/test_decks.py checks it.
 """
 
+_MINIMIZER_VARIABLES = """variable minimizer index {minimizer:<12} # fire | cg | md (damped MD)
+variable vmin      index {vmin:<12} # stop a minimisation when V < V_min
+variable delta     index {delta:<12} # no-progress: energy decrease < delta V over a window
+variable window    index {window:<12} # iterations per minimize call between rule checks
+variable maxiter   index {maxiter:<12} # iteration cap per minimisation
+variable dt        index {dt:<12} # FIRE initial step
+variable mddt      index {mddt:<12} # damped-MD step
+variable damping   index {damping:<12} # md only: viscous drag b
+"""
+
 HEADER = """\
 # jamflow deck: jam N soft disks (dim 2) or spheres (dim 3) at onset by isotropic
 # compression (Schreck & O'Hern, seed chapter section 2.1) in the LAMMPS input language
@@ -38,15 +48,7 @@ variable fsmall    index {fsmall:<12} # fraction of small particles (random star
 variable seed      index {seed:<12} # random start: create_atoms seeds seed+1, seed+1000001
 variable vtol      index {vtol:<12} # energy window V_tol < V < 2 V_tol (per particle)
 variable dphi0     index {dphi0:<12} # initial packing-fraction increment
-variable minimizer index {minimizer:<12} # fire | cg | md (damped MD)
-variable vmin      index {vmin:<12} # stop a minimisation when V < V_min
-variable delta     index {delta:<12} # no-progress: energy decrease < delta V over a window
-variable window    index {window:<12} # iterations per minimize call between rule checks
-variable maxiter   index {maxiter:<12} # iteration cap per minimisation
-variable dt        index {dt:<12} # FIRE initial step
-variable mddt      index {mddt:<12} # damped-MD step
-variable damping   index {damping:<12} # md only: viscous drag b
-variable maxsteps  index {maxsteps:<12} # cap on minimisations
+""" + _MINIMIZER_VARIABLES + """variable maxsteps  index {maxsteps:<12} # cap on minimisations
 variable skin      index {skin:<12} # neighbour-list skin
 variable out       index {out:<12} # output prefix
 """
@@ -83,15 +85,7 @@ variable d1        index {d1:<12} # small diameter, type 1
 variable d2        index {d2:<12} # large diameter, type 2 (= d1: monodisperse)
 variable vtol      index {vtol:<12} # energy window V_tol < V < 2 V_tol (per particle)
 variable dphi0     index {dphi0:<12} # initial packing-fraction increment after each step
-variable minimizer index {minimizer:<12} # fire | cg | md (damped MD)
-variable vmin      index {vmin:<12} # stop a minimisation when V < V_min
-variable delta     index {delta:<12} # no-progress: energy decrease < delta V over a window
-variable window    index {window:<12} # iterations per minimize call between rule checks
-variable maxiter   index {maxiter:<12} # iteration cap per minimisation
-variable dt        index {dt:<12} # FIRE initial step
-variable mddt      index {mddt:<12} # damped-MD step
-variable damping   index {damping:<12} # md only: viscous drag b
-variable maxsteps  index {maxsteps:<12} # cap on minimisations of one bisection
+""" + _MINIMIZER_VARIABLES + """variable maxsteps  index {maxsteps:<12} # cap on minimisations of one bisection
 variable skin      index {skin:<12} # neighbour-list skin
 variable out       index {out:<12} # output prefix
 """
@@ -228,13 +222,7 @@ if "${dim} == 2" then "fix jf_2d all enforce2d"
 
 _JAM_STATE = r"""# ---- protocol state (seed steps 2-4); the cell the bisection scales is the start's ----
 variable jf_basephi internal $(v_phi0:%.17g)
-variable jf_lx0 internal $(lx:%.17g)
-variable jf_ly0 internal $(ly:%.17g)
-variable jf_lz0 internal $(lz:%.17g)
-variable jf_xy0 internal $(xy:%.17g)
-variable jf_tri internal $(v_jf_xy0 != 0)
-variable jf_x internal $(v_jf_xy0/v_jf_lx0:%.17g)
-variable jf_k internal $(floor(v_jf_x)+(v_jf_x-floor(v_jf_x)>=0.5))
+variable xy0 internal $(xy:%.17g)
 variable jf_iters internal 0
 variable jf_cg internal 0
 if "${minimizer} == cg" then "variable jf_cg internal 1"
@@ -243,9 +231,13 @@ variable jf_ret string jf_jammed
 """
 
 _BISECT = r"""
-# ---- the bisection at the fixed cell shape of (jf_lx0, jf_ly0, jf_lz0, jf_xy0) from phi = jf_basephi
-# (jamflow/protocols/compression.py bisect); ends with a jump to ${jf_ret} in the window ----
+# ---- the bisection from the current cell (jf_clx, jf_cly, jf_clz, jf_cxy: its shape is kept) and
+# phi = jf_basephi (jamflow/protocols/compression.py bisect); ends with a jump to ${jf_ret} in the window ----
 label jf_bisect
+variable jf_lx0 internal $(v_jf_clx:%.17g)
+variable jf_ly0 internal $(v_jf_cly:%.17g)
+variable jf_lz0 internal $(v_jf_clz:%.17g)
+variable jf_xy0 internal $(v_jf_cxy:%.17g)
 variable jf_phi internal $(v_jf_basephi:%.17g)
 variable jf_dphi internal $(v_dphi0:%.17g)
 variable jf_side internal 0
@@ -327,10 +319,12 @@ jump SELF jf_step_loop
 
 """
 
+_UNCONVERGED = r"""if "${jf_conv} == 0" then "print '# warning: final minimisation stopped by ${jf_reason} with max force $(v_jf_fm:%.2e) (tolerance $(v_jf_ftol:%.1e)): force balance is only that good' append ${jf_logtmp} screen yes"
+"""
+
 _JAM_SUCCESS = r"""# ---- success: the final packing as a data file, and the summary line ----
 label jf_jammed
-if "${jf_conv} == 0" then "print '# warning: final minimisation stopped by ${jf_reason} with max force $(v_jf_fm:%.2e) (tolerance $(v_jf_ftol:%.1e)): force balance is only that good' append ${jf_logtmp} screen yes"
-write_data ${out}.data.partial
+""" + _UNCONVERGED + r"""write_data ${out}.data.partial
 shell mv ${out}.data.partial ${out}.data
 print "# result phi_J $(v_jf_phi:%.17g) V $(v_jf_e:%.17g) P $(v_jf_p:%.17g) max_force $(v_jf_fm:%.17g) minimisations $(v_jf_step+1) iterations $(v_jf_iters) status jammed" append ${jf_logtmp} screen no
 shell mv ${jf_logtmp} ${jf_log}
@@ -339,20 +333,15 @@ quit 0
 
 """
 
-_SHEAR_PATH = r"""
+_SHEAR_START = r"""
 # ---- the shear path (jamflow/protocols/shear.py): step 0 brings the start into the window at its
 # own strain; step k shears x_i -> x_i + dgamma y_i (the cell's xy tilt to gamma_k l_y, seed eq. 2.4)
 # and runs the bisection at that fixed strain. The accumulated tilt xy0 of the start (the data file
 # holds the reduced one) sets gamma_0 = xy0 / l_y. ----
 if "${jf_autoxy} == 1" then "variable xy0 delete" "variable xy0 string $(xy:%.17g)"
-variable jf_clx internal $(lx:%.17g)
-variable jf_cly internal $(ly:%.17g)
-variable jf_clz internal $(lz:%.17g)
-variable jf_cxy internal $(v_xy0:%.17g)
-variable jf_tri internal $(v_jf_cxy != 0)
-variable jf_x internal $(v_jf_cxy/v_jf_clx:%.17g)
-variable jf_k internal $(floor(v_jf_x)+(v_jf_x-floor(v_jf_x)>=0.5))
-if "$(abs(v_jf_cxy-v_jf_k*v_jf_clx-xy) > 1e-12*v_jf_clx)" then "variable jf_bad string 'xy0 = ${xy0} does not fold to the data file tilt $(xy:%.17g): omit -var xy0 to start at the file tilt'" "jump SELF jf_fail"
+"""
+
+_SHEAR_PATH = r"""if "$(abs(v_jf_cxy-v_jf_k*v_jf_clx-xy) > 1e-12*v_jf_clx)" then "variable jf_bad string 'xy0 = ${xy0} does not fold to the data file tilt $(xy:%.17g): omit -var xy0 to start at the file tilt'" "jump SELF jf_fail"
 variable jf_g0 internal $(v_jf_cxy/v_jf_cly:%.17g)
 if "$((v_to-v_jf_g0)*v_dgamma <= 0)" then "variable jf_bad string 'dgamma = ${dgamma} does not move gamma from $(v_jf_g0:%.17g) towards to = ${to}'" "jump SELF jf_fail"
 variable jf_ratio internal $((v_to-v_jf_g0)/v_dgamma:%.17g)
@@ -375,15 +364,10 @@ variable jf_gk internal $(v_jf_g0:%.17g)
 label jf_shear_loop
 print "# shear step $(v_jf_sk) $(v_jf_gk:%.17g)" append ${jf_logtmp} screen no
 variable jf_basephi internal $(ternary(v_dim==2,v_vsum/(v_jf_clx*v_jf_cly),v_vsum/(v_jf_clx*v_jf_cly*v_jf_clz)):%.17g)
-variable jf_lx0 internal $(v_jf_clx:%.17g)
-variable jf_ly0 internal $(v_jf_cly:%.17g)
-variable jf_lz0 internal $(v_jf_clz:%.17g)
-variable jf_xy0 internal $(v_jf_cxy:%.17g)
 jump SELF jf_bisect
 
 label jf_static
-if "${jf_conv} == 0" then "print '# warning: final minimisation stopped by ${jf_reason} with max force $(v_jf_fm:%.2e) (tolerance $(v_jf_ftol:%.1e)): force balance is only that good' append ${jf_logtmp} screen yes"
-print "# static $(v_jf_sk) $(v_jf_gk:%.17g) $(v_jf_phi:%.17g) $(v_jf_e:%.17g) $(v_jf_p:%.17g) $(c_jf_press[4]:%.17g) $(v_jf_step+1) $(v_jf_iters)" append ${jf_logtmp} screen no
+""" + _UNCONVERGED + r"""print "# static $(v_jf_sk) $(v_jf_gk:%.17g) $(v_jf_phi:%.17g) $(v_jf_e:%.17g) $(v_jf_p:%.17g) $(c_jf_press[4]:%.17g) $(v_jf_step+1) $(v_jf_iters)" append ${jf_logtmp} screen no
 if "$(v_jf_sk >= v_steps)" then "jump SELF jf_path_done"
 variable jf_sk internal $(v_jf_sk+1)
 variable jf_gk internal $(ternary(v_jf_sk==v_steps,v_to,v_jf_g0+v_dgamma*v_jf_sk):%.17g)
@@ -403,6 +387,16 @@ shell mv ${jf_logtmp} ${jf_log}
 print "jamflow shear deck: ${steps} steps to gamma = $(v_jf_gk:%.6g), phi_J = $(v_jf_phi:%.12f)  -> ${out}.data, ${jf_log}"
 quit 0
 
+"""
+
+_CURRENT_CELL = r"""# ---- the current cell as the controller holds it: accumulated tilt xy0 (may exceed lx/2), the fold k
+# that reduces it into LAMMPS's range (Box.reduction), triclinic once any tilt was set ----
+variable jf_clx internal $(lx:%.17g)
+variable jf_cly internal $(ly:%.17g)
+variable jf_clz internal $(lz:%.17g)
+variable jf_cxy internal $(v_xy0:%.17g)
+variable jf_tri internal $(v_jf_cxy != 0)
+variable jf_k internal $(floor(v_jf_cxy/v_jf_clx)+(v_jf_cxy/v_jf_clx-floor(v_jf_cxy/v_jf_clx)>=0.5))
 """
 
 _FAIL = r"""label jf_fail
@@ -439,7 +433,7 @@ jump SELF ${jf_back}
 
 
 BODY = (_MIRROR_NOTE + _LOG_OPEN + _JAM_OPTIONS + _CHECKS + _SYSTEM + _RANDOM_START + _READ_DATA + _ATOMS_READY + _JAM_PHI + _POTENTIAL
-        + _JAM_STATE + _BISECT + _JAM_SUCCESS + _FAIL + _SETBOX)
+        + _JAM_STATE + _CURRENT_CELL + _BISECT + _JAM_SUCCESS + _FAIL + _SETBOX)
 
 SHEAR_BODY = (_MIRROR_NOTE + _LOG_OPEN + _SHEAR_OPTIONS + _CHECKS + _SHEAR_CHECKS_EXTRA + _SYSTEM + _READ_DATA + _ATOMS_READY
-              + _POTENTIAL + _SHEAR_PATH + _BISECT + _FAIL + _SETBOX)
+              + _POTENTIAL + _SHEAR_START + _CURRENT_CELL + _SHEAR_PATH + _BISECT + _FAIL + _SETBOX)
