@@ -14,6 +14,8 @@ from matplotlib.ticker import ScalarFormatter
 
 from ..io import atomic_path
 
+MAX_LABELS = 12
+
 
 def _save(fig, path) -> Path:
     with atomic_path(path) as tmp:
@@ -23,7 +25,8 @@ def _save(fig, path) -> Path:
 
 def shear_path_figure(path, columns: dict, title: str = "") -> Path:
     """Three panels against gamma: phi_J, Sigma = -P_xy, Sigma / P; steps where the contact
-    network changed are marked (red), with the numbers of contacts removed/added."""
+    network changed are marked (red), with the numbers of contacts removed/added when there
+    are at most MAX_LABELS of them."""
     fig = Figure(figsize=(7, 8), layout="constrained")
     FigureCanvasAgg(fig)
     axes = fig.subplots(3, 1, sharex=True)
@@ -36,7 +39,7 @@ def shear_path_figure(path, columns: dict, title: str = "") -> Path:
         for x in g[changed]:
             ax.axvline(x, color="tab:red", lw=0.5, alpha=0.4)
         ax.set_ylabel(label)
-    for k in np.flatnonzero(changed):
+    for k in np.flatnonzero(changed) if changed.sum() <= MAX_LABELS else ():
         axes[0].annotate(f"-{columns['n_removed'][k]}/+{columns['n_added'][k]}", (g[k], columns["phi_j"][k]),
                          textcoords="offset points", xytext=(3, 4), fontsize=7, color="tab:red")
     axes[-1].set_xlabel(r"shear strain $\gamma$")
