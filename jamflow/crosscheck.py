@@ -75,7 +75,7 @@ def _closing_lines(check, history: str, which: str) -> list[str]:
 
 def crosscheck(n: int = 32, dim: int = 2, sizes: str = "bi:1.4:0.5", seed: int = 0,
                settings: CompressionSettings | None = None, *, workdir=None, lmp=None, ranks: int = 1,
-               tolerance: float = 1e-8, timeout: float | None = None) -> CrossCheck:
+               tolerance: float = 1e-8, timeout: float | None = None, walls=None) -> CrossCheck:
     """Jam one random start twice, with the deck (``lmp``) and with the controller.
 
     ``workdir`` keeps the deck, start.data and the deck's outputs (default: a temporary
@@ -84,8 +84,9 @@ def crosscheck(n: int = 32, dim: int = 2, sizes: str = "bi:1.4:0.5", seed: int =
     settings = settings or CompressionSettings()
     if not tolerance > 0:
         raise ValueError(f"tolerance must be positive, got {tolerance}")
-    start = initial_packing(n, dim, sizes, "spring", seed, settings.start_phi(dim))
-    variables = deck_variables(n, dim, sizes, seed, settings, data="start.data", phi0=start.phi, out="deck")
+    start = initial_packing(n, dim, sizes, "spring", seed, settings.start_phi(dim), walls=walls)
+    variables = deck_variables(n, dim, sizes, seed, settings, data="start.data", phi0=start.phi, out="deck",
+                               walls=walls)
     deck = run_from(workdir, start, lambda where: run_deck(where, variables, lmp=lmp, ranks=ranks, timeout=timeout))
     controller = compress(start, settings, engine="lammps")  # the deck runs LAMMPS: same engine
     return compare(controller, deck, tolerance)
