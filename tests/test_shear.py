@@ -203,6 +203,12 @@ def test_bad_shear_strains_are_refused_before_work(dgamma, to, message):
         shear_strains(0.2, dgamma, to)
 
 
+def test_a_walled_packing_is_not_sheared():
+    walled = jam(n=16, seed=1, walls="y").packing
+    with pytest.raises(ValueError, match="takes part in no shear"):
+        shear(walled, 0.01, 0.1)
+
+
 def test_a_step_that_rearranges_everything_is_warned_with_the_count():
     start = jam(n=10, seed=1, gamma=0.2).packing
     with pytest.warns(UserWarning, match=r"rearranged the packing: \d+ of \d+ contacts removed and \d+ added"):
@@ -233,6 +239,19 @@ def test_shear_command_bad_input_one_line_error(tmp_path, capsys, args, message)
     capsys.readouterr()
     out = tmp_path / "run"
     assert main(["shear", str(packing), *args, "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("args,message", [
+    (["--gamma", "nan"], "finite"), (["--gamma", "inf"], "finite"),
+    (["--gamma", "0.2", "--walls", "y"], "takes part in no shear"),
+    (["--gamma", "0.2", "--pressure", "1e-4"], "use one of them"),
+])
+def test_jam_command_gamma_bad_input_one_line_error(tmp_path, capsys, args, message):
+    out = tmp_path / "x.h5"
+    assert main(["jam", "--n", "10", "--quiet", "--out", str(out), *args]) == 2
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
     assert not out.exists()

@@ -171,6 +171,7 @@ def shear(packing: Packing, dgamma: float, to: float, settings: CompressionSetti
     called after every step (progress bars). The start is first brought into the window at its
     own strain (one minimisation if it already is: a packing from ``jamflow jam``)."""
     strains = shear_strains(packing.box.shear_strain, dgamma, to)
+    packing.box.with_shear_strain(strains[1])  # a box that cannot be sheared (walls) is refused here, before work
     settings = settings or shear_protocol()
     sigma = _contact_distance(packing)
     start = time.perf_counter()
