@@ -4,7 +4,8 @@ richness estimate, and a small real sampling end to end."""
 import numpy as np
 import pytest
 
-from jamflow.analysis.families import convergence, join, matching_pairs, mirror_check, mirrored, richness
+from jamflow.analysis.families import (convergence, join, matching_pairs, mirror_by_sightings, mirror_check,
+                                      mirrored, richness)
 from jamflow.cli import main
 from jamflow.protocols.compression import at_shear_strain, compress, initial_packing, seed_protocol
 from jamflow.protocols.families import FamilySampling, sample, signature
@@ -52,6 +53,17 @@ def test_mirror_maps_gamma_to_one_minus_gamma_and_flips_the_stress_ratio():
     assert check.partner[fam.family[2]] == set() and check.matched() == 2 and check.unpaired == []
     with pytest.raises(ValueError, match="not symmetric"):
         mirrored(p, 0.003)
+
+
+def test_sightings_count_distinct_sampled_paths_and_bin_the_mirror_check():
+    rows = [(0, 0, 200, 0.80, 0.1, "a", 0), (1, 1, 200, 0.80, 0.1, "a", 0), (2, 2, 800, 0.80, -0.1, "a", 0),
+            (3, 3, 300, 0.70, 0.0, "b", 0)]
+    p = points(rows)
+    p["grid"] = np.zeros(4, int)
+    fam = join(p, 0.001)
+    assert list(fam.sightings()) == [2, 1, 1]  # families in order of first strain: 200, 300, 800
+    binned = mirror_by_sightings(fam, mirror_check(fam), [0, 1, 2])
+    assert binned[0] == ("1", 2, 1) and binned[1] == ("2", 1, 1)
 
 
 def test_richness_is_chao1_of_the_sampled_packings():

@@ -118,6 +118,12 @@ class Families:
     def count_in(self, lo: float, hi: float, min_strains: int = 1) -> int:
         return len(self.met_in(lo, hi, min_strains))
 
+    def sightings(self) -> np.ndarray:
+        """Per family, how many sampled packings' paths (distinct start and grid point) met it."""
+        pts = self.points
+        seen = np.unique(np.column_stack([self.family, pts["start"], pts["grid"]]), axis=0)
+        return np.bincount(seen[:, 0], minlength=self.count)
+
 
 def join(points: dict, step: float, gamma_min: float = 0.0, tol_phi: float = TOL_PHI, tol_mu: float = TOL_MU,
          starts: int | None = None) -> Families:
@@ -169,6 +175,19 @@ class MirrorCheck:
         whose mirror image lands elsewhere as well (pieces of one family the sampling did not
         join yet)."""
         return [f for f, v in self.partner.items() if v and (len(v) > 1 or self.partner[next(iter(v))] != {f})]
+
+
+def mirror_by_sightings(families: Families, check: MirrorCheck, among, bins=((1, 1), (2, 2), (3, 4), (5, None))):
+    """[(bin label, families of ``among`` in it, of them whose mirror image was found)]: a family
+    met by few paths is a rare one, whose mirror is rarely sampled too; for well-sampled families
+    the fraction should approach 1 if the families are symmetric about gamma = 1/2."""
+    seen = families.sightings()
+    out = []
+    for lo, hi in bins:
+        chosen = [f for f in among if seen[f] >= lo and (hi is None or seen[f] <= hi)]
+        label = f"{lo}" if lo == hi else (f">= {lo}" if hi is None else f"{lo}-{hi}")
+        out.append((label, len(chosen), check.matched(chosen)))
+    return out
 
 
 def mirror_check(families: Families, tol_phi: float = TOL_PHI, tol_mu: float = TOL_MU) -> MirrorCheck:

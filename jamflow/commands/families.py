@@ -13,7 +13,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from ..analysis.families import convergence, join, mirror_check, richness
+from ..analysis.families import convergence, join, mirror_by_sightings, mirror_check, richness
 from ..engine.base import ENGINES
 from ..io import atomic_path
 from ..protocols.families import FamilySampling, sample
@@ -95,6 +95,9 @@ def report(plan: FamilySampling, points: dict, failures: list, out: Path) -> Non
             met = families.met_in(lo, hi)
             print(f"mirror gamma -> 1 - gamma: {mirror.matched(met)} of the {len(met)} families met in [{lo:g}, {hi:g}] "
                   "land on a sampled family")
+        rows = mirror_by_sightings(families, mirror, families.met_in(0.5, 1.0))
+        print("  families met in [1/2, 1] by how many sampled paths: mirror found / families: "
+              + ", ".join(f"{label}: {found}/{total}" for label, total, found in rows))
         print(f"matched families that do not pair up one to one: {len(mirror.unpaired)}; worst |d phi_J| "
               f"{mirror.worst_phi:.1e}, |d Sigma/P| {mirror.worst_mu:.1e} over the matched points")
     print(f"{len(failures)} jams or paths failed (JammingFailed; listed in {out / 'points.h5'}, attribute failures)")
