@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
-from matplotlib.ticker import ScalarFormatter
+from matplotlib.ticker import NullFormatter, ScalarFormatter
 
 from ..io import atomic_path
 
@@ -48,27 +48,33 @@ def shear_path_figure(path, columns: dict, title: str = "") -> Path:
     return _save(fig, path)
 
 
-def families_figure(path, families, mirror_of=None, convergence=(), richness=None, title: str = "") -> Path:
-    """(a) phi_J(gamma) of every family (Figure 2.7), the dashed line at gamma = 1/2; (b) the
+def families_figure(path, families, mirror_of=None, convergence=(), richness=None, title: str = "",
+                    well_sampled: int = 2) -> Path:
+    """(a) phi_J(gamma) of every family (Figure 2.7), the dashed line at gamma = 1/2; families met
+    by >= ``well_sampled`` sampled paths in colour, the others thin grey; (b) the well-sampled
     families met in [0, 1/2] (black) with the mirror images gamma -> 1 - gamma of those met in
-    [1/2, 1] (red, dashed) when the sampling covers both halves; (c) distinct families against
+    [1/2, 1] (red, dashed), when the sampling covers both halves; (c) distinct families against
     the number of starts per grid point."""
     fig = Figure(figsize=(12, 8), layout="constrained")
     FigureCanvasAgg(fig)
     grid = fig.add_gridspec(2, 2)
     chart, half, count = fig.add_subplot(grid[0, :]), fig.add_subplot(grid[1, 0]), fig.add_subplot(grid[1, 1])
-    colors = [f"C{k % 10}" for k in range(families.count)]
+    seen = families.sightings()
     for f in range(families.count):
+        strong = seen[f] >= well_sampled
         for g, phi in _runs(*families.curve(f)[:2], families.step):
-            chart.plot(g, phi, lw=0.9, color=colors[f])
+            chart.plot(g, phi, lw=1.1 if strong else 0.4, color=f"C{f % 10}" if strong else "0.75",
+                       zorder=2 if strong else 1)
+            if not strong:
+                continue
             if g.min() <= 0.5 + 1e-9:
-                half.plot(g, phi, lw=0.8, color="k")
+                half.plot(g, phi, lw=0.9, color="k")
             if mirror_of is not None and g.max() >= 0.5 - 1e-9:
-                half.plot(1.0 - g, phi, lw=0.8, ls="--", color="tab:red")
+                half.plot(1.0 - g, phi, lw=0.9, ls="--", color="tab:red")
     chart.axvline(0.5, ls="--", color="0.4", lw=1)
     chart.set(xlabel=r"$\gamma$", ylabel=r"$\phi_J$", title=title or f"(a) {families.count} geometric families")
     half.set(xlim=(-0.01, 0.51), xlabel=r"$\gamma$", ylabel=r"$\phi_J$",
-             title="(b) families in [0, 1/2] (black) and mirrored from [1/2, 1] (red)")
+             title=f"(b) met by >= {well_sampled} paths: in [0, 1/2] (black), mirrored from [1/2, 1] (red)")
     if convergence:
         k, half_count, all_count = np.array(convergence).T
         count.plot(k, all_count, "o-", color="k", label="families met at any strain")
@@ -80,6 +86,7 @@ def families_figure(path, families, mirror_of=None, convergence=(), richness=Non
                   title="(c) convergence with the number of starts")
         for axis in (count.xaxis, count.yaxis):
             axis.set_major_formatter(ScalarFormatter())
+            axis.set_minor_formatter(NullFormatter())
         count.legend(fontsize=8)
     return _save(fig, path)
 
