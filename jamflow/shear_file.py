@@ -159,8 +159,9 @@ def load_family_points(path) -> tuple[dict, dict, list]:
 
 
 def save_family_table(out, plan, families, convergence, mirror, richness) -> Path:
-    """The family table (one dataset per column), each point's family, the count against the
-    number of starts, the mirror check and the richness estimate."""
+    """The family table (/table, one dataset per column), each point's family (/point_family),
+    phi_J(gamma) of every family (/curves: family, gamma, phi_j, phi_j_spread), the count against
+    the number of starts (/convergence), the mirror check and the richness estimate (attributes)."""
     rows = families.table()
     with atomic_path(out) as tmp, h5py.File(tmp, "w") as f:
         f.attrs.update(schema=FAMILY_SCHEMA, schema_version=FAMILY_SCHEMA_VERSION, jamflow_version=__version__,
@@ -173,6 +174,10 @@ def save_family_table(out, plan, families, convergence, mirror, richness) -> Pat
             values = [r[name] for r in rows]
             t[name] = np.array(values, dtype="S") if name == "signature" else np.array(values)
         f["point_family"] = families.family
+        curves = [(f_, g, phi, spread) for f_ in range(families.count) for g, phi, spread in zip(*families.curve(f_))]
+        c = f.create_group("curves")  # phi_J(gamma) of every family: one row per family and strain met
+        for k, name in enumerate(("family", "gamma", "phi_j", "phi_j_spread")):
+            c[name] = np.array([row[k] for row in curves], dtype=np.int64 if k == 0 else float)
         f["mirror_partner"] = np.array([min(mirror.partner[r["family"]], default=-1) for r in rows], dtype=np.int64)
         f["convergence"] = np.array(convergence, dtype=np.int64).reshape(-1, 3)  # K, met in [0, 1/2], met anywhere
     return Path(out)

@@ -105,6 +105,13 @@ def test_families_command_writes_table_points_and_chart(small, capsys):
         assert fam.curve(f)[2].max() < 1e-8
     for name in ("families.h5", "families.csv", "families.png"):
         assert (small / name).stat().st_size > 500
+    import h5py
+    with h5py.File(small / "families.h5", "r") as f:
+        curves = {k: v[...] for k, v in f["curves"].items()}
+        assert f.attrs["families"] == fam.count and len(f["table/family"]) == fam.count
+    g, phi, _ = fam.curve(0)
+    mine = curves["family"] == 0
+    assert np.allclose(curves["gamma"][mine], g) and np.array_equal(curves["phi_j"][mine], phi)
 
 
 def test_families_resume_adds_rounds_only(small, capsys):
