@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from jamflow.analysis.families import (convergence, join, matching_pairs, mirror_by_sightings, mirror_check,
-                                      mirrored, richness)
+                                      mirrored, richness, symmetric_strain)
 from jamflow.cli import main
 from jamflow.protocols.compression import at_shear_strain, compress, initial_packing, seed_protocol
 from jamflow.protocols.families import FamilySampling, sample, signature
@@ -55,6 +55,23 @@ def test_mirror_maps_gamma_to_one_minus_gamma_and_flips_the_stress_ratio():
         mirrored(p, 0.003)
 
 
+def test_a_reflected_twin_with_the_same_phi_and_stress_is_another_family():
+    p = points([(0, 0, 999, 0.80, 0.1, "a", 0), (1, 1, 999, 0.80, 0.1, "a", 0), (2, 2, 999, 0.80, 0.1, "a", 0)])
+    p["fabric_a"], p["fabric_b"] = np.array([0.12, 0.12, -0.12]), np.array([0.05, 0.05, 0.05])
+    fam = join(p, 0.001)
+    assert fam.count == 2 and fam.family[0] == fam.family[1] != fam.family[2]
+    m = mirrored(p, 0.001)
+    assert list(m["fabric_b"]) == [-0.05] * 3 and list(m["fabric_a"]) == [0.12, 0.12, -0.12]
+
+
+def test_no_joining_at_symmetric_strains():
+    """At gamma = 0, 1/2, 1 congruent packings of two families coincide: not joined there."""
+    p = points([(0, 0, 0, 0.80, 0.1, "a", 0), (1, 1, 0, 0.80, 0.1, "a", 0), (2, 2, 500, 0.8, 0.1, "a", 0),
+                (3, 3, 500, 0.8, 0.1, "a", 0), (4, 4, 501, 0.8, 0.1, "a", 0), (5, 5, 501, 0.8, 0.1, "a", 0)])
+    assert list(symmetric_strain(p["gamma"])) == [True, True, True, True, False, False]
+    assert join(p, 0.001).count == 5  # only the pair at 0.501 joins
+
+
 def test_sightings_count_distinct_sampled_paths_and_bin_the_mirror_check():
     rows = [(0, 0, 200, 0.80, 0.1, "a", 0), (1, 1, 200, 0.80, 0.1, "a", 0), (2, 2, 800, 0.80, -0.1, "a", 0),
             (3, 3, 300, 0.70, 0.0, "b", 0)]
@@ -67,8 +84,8 @@ def test_sightings_count_distinct_sampled_paths_and_bin_the_mirror_check():
 
 
 def test_richness_is_chao1_of_the_sampled_packings():
-    rows = [(k, k, 10 * k, 0.8 + 0.01 * k, 0.0, "a", 0) for k in range(5)]  # 5 families found once
-    rows += [(5, 5, 0, 0.8, 0.0, "a", 0), (6, 6, 60, 0.9, 0.0, "a", 0), (7, 7, 60, 0.9, 0.0, "a", 0)]
+    rows = [(k, k, 10 * k + 1, 0.8 + 0.01 * k, 0.0, "a", 0) for k in range(5)]  # 5 families found once
+    rows += [(5, 5, 1, 0.8, 0.0, "a", 0), (6, 6, 61, 0.9, 0.0, "a", 0), (7, 7, 61, 0.9, 0.0, "a", 0)]
     r = richness(join(points(rows), 0.001))
     # families 0 (found by starts 0 and 5) and the one at strain 60 (starts 6, 7) twice, four once
     assert (r["observed"], r["singletons"], r["doubletons"]) == (6, 4, 2)

@@ -9,10 +9,14 @@ one path with an unchanged contact network). What identifies a family:
    share their first segment;
 2. segments of different starts (labels differ) are one family when at some common strain
    (the same point gamma_min + m delta gamma of the lattice all paths step on) they have the
-   same signature, phi_J within ``tol_phi`` and Sigma / P within ``tol_mu``. Two packings of
-   one family at one strain differ only by where in the window V_tol < V < 2 V_tol they stopped
-   (phi_J to ~1e-10, Sigma / P to ~1e-6 at N = 10); distinct families with one signature were
-   measured >= 5e-7 apart in phi_J and >= 1e-3 in Sigma / P (docs/shear.md).
+   same signature, phi_J within ``tol_phi``, Sigma / P within ``tol_mu`` and the contact fabric
+   anisotropy within TOL_FABRIC. Two packings of one family at one strain differ only by where
+   in the window V_tol < V < 2 V_tol they stopped (phi_J to ~1e-9, Sigma / P to ~1e-5 at
+   N = 10); distinct families with one signature were measured >= 5e-7 apart in phi_J and
+   >= 1e-3 in Sigma / P away from gamma = k / 2 (docs/shear.md). Near integer gamma a family
+   and its reflection in the square cell's diagonal touch (same phi_J and Sigma / P at gamma = k,
+   separating quadratically): the fabric tells them apart (the reflection flips the sign of
+   <n_x^2 - n_y^2>), and the strains k / 2 themselves are left out (``symmetric_strain``).
 
 Families are the connected components (union-find). The mirror check maps every point at
 gamma to 1 - gamma (Sigma / P changes sign, Figure 2.4(c)) and asks which families land on
@@ -27,6 +31,7 @@ import numpy as np
 
 TOL_PHI = 1e-8
 TOL_MU = 1e-4
+TOL_FABRIC = 1e-3
 
 
 class _UnionFind:
@@ -51,9 +56,26 @@ def _text(values) -> np.ndarray:
     return np.array([v.decode() if isinstance(v, bytes) else str(v) for v in values])
 
 
+def symmetric_strain(gamma) -> np.ndarray:
+    """True at gamma = k / 2, where the square Lees-Edwards cell has symmetries beyond the
+    inversion (at integer gamma the diagonal reflection keeps phi_J and Sigma / P: a packing and
+    its reflection lie on two different families there; at half-integer gamma the mirror maps
+    the cell onto itself). Points there are not used to join families."""
+    twice = 2.0 * np.asarray(gamma, float)
+    return np.abs(twice - np.round(twice)) < 1e-9
+
+
+def same_fabric(a: dict, b: dict, p: int, q: int) -> bool:
+    """Fabric anisotropies within TOL_FABRIC (True for points sampled without them)."""
+    if "fabric_a" not in a or "fabric_a" not in b:
+        return True
+    return abs(a["fabric_a"][p] - b["fabric_a"][q]) <= TOL_FABRIC and abs(a["fabric_b"][p] - b["fabric_b"][q]) <= TOL_FABRIC
+
+
 def matching_pairs(a: dict, b: dict, tol_phi: float = TOL_PHI, tol_mu: float = TOL_MU):
     """Index pairs (p, q) of points of ``a`` and ``b`` at the same strain index with the same
-    signature, |phi_J difference| <= tol_phi and |mu difference| <= tol_mu."""
+    signature, |phi_J difference| <= tol_phi and |mu difference| <= tol_mu, away from the
+    symmetric strains (``symmetric_strain``)."""
     sig_a, sig_b = _text(a["signature"]), _text(b["signature"])
     key_a = np.char.add(np.char.add(a["strain_index"].astype(str), "|"), sig_a)
     key_b = np.char.add(np.char.add(b["strain_index"].astype(str), "|"), sig_b)
@@ -62,10 +84,11 @@ def matching_pairs(a: dict, b: dict, tol_phi: float = TOL_PHI, tol_mu: float = T
     for q in order:
         groups.setdefault(key_b[q], []).append(q)
     out = []
-    for p in range(len(key_a)):
+    for p in np.flatnonzero(~symmetric_strain(a["gamma"])):
         for q in groups.get(key_a[p], ()):
-            if abs(a["phi_j"][p] - b["phi_j"][q]) <= tol_phi and abs(a["mu"][p] - b["mu"][q]) <= tol_mu:
-                out.append((p, q))
+            if abs(a["phi_j"][p] - b["phi_j"][q]) <= tol_phi and abs(a["mu"][p] - b["mu"][q]) <= tol_mu \
+                    and same_fabric(a, b, p, q):
+                out.append((int(p), int(q)))
     return out
 
 
@@ -145,7 +168,8 @@ def join(points: dict, step: float, gamma_min: float = 0.0, tol_phi: float = TOL
 
 
 def mirrored(points: dict, step: float, gamma_min: float = 0.0) -> dict:
-    """The points mapped by the inversion gamma -> 1 - gamma (Sigma / P -> -Sigma / P)."""
+    """The points mapped by the inversion gamma -> 1 - gamma (Sigma / P and the fabric's
+    <2 n_x n_y> change sign)."""
     shift = (1.0 - 2 * gamma_min) / step  # gamma_min + m step -> 1 - gamma_min - m step
     if abs(shift - round(shift)) > 1e-6:
         raise ValueError(f"the strain lattice (gamma_min {gamma_min}, step {step}) is not symmetric about 1/2")
@@ -153,6 +177,8 @@ def mirrored(points: dict, step: float, gamma_min: float = 0.0) -> dict:
     out["strain_index"] = round(shift) - points["strain_index"]
     out["gamma"] = 1.0 - points["gamma"]
     out["mu"] = -points["mu"]
+    if "fabric_b" in points:
+        out["fabric_b"] = -points["fabric_b"]
     return out
 
 

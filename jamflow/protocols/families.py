@@ -4,8 +4,8 @@ On a grid of strains gamma_s (spacing Delta gamma), jam many random starts at ea
 (compression at fixed strain, ``jam(gamma=...)``) and follow each packing by quasistatic shear
 at zero pressure (``protocols.shear``) in n steps of delta gamma = Delta gamma / n to the
 neighbouring grid points gamma_{s+1} and gamma_{s-1}. Every static packing met on the way is a
-``point``: its strain, phi_J, the stress ratio Sigma / P, a contact-network signature that does
-not depend on particle labels, and the *segment* it belongs to -- the run of steps of one path
+``point``: its strain, phi_J, the stress ratio Sigma / P, the contact fabric anisotropy, a
+contact-network signature that does not depend on particle labels, and the *segment* it belongs to -- the run of steps of one path
 with an unchanged contact network (labels fixed along a path, so "unchanged" is exact).
 ``jamflow.analysis.families`` joins segments into families.
 
@@ -26,7 +26,7 @@ from .shear import shear, shear_protocol
 
 SEED_STRIDE = 100_000
 POINT_FIELDS = ("start", "grid", "direction", "step", "segment", "strain_index", "gamma", "phi_j", "mu",
-                "pressure", "n_contacts", "n_floaters", "signature")
+                "fabric_a", "fabric_b", "pressure", "n_contacts", "n_floaters", "signature")
 
 
 @dataclass(frozen=True)
@@ -126,10 +126,21 @@ def sample_start(plan: FamilySampling, s: int, k: int, first_segment: int) -> tu
     return points, failures
 
 
+def fabric(network) -> tuple[float, float]:
+    """(<n_x^2 - n_y^2>, <2 n_x n_y>) over the contacts' unit vectors n: the anisotropy of the
+    contact fabric, unchanged by relabelling, translation and inversion, changed by reflections
+    (x -> -x flips the second; the diagonal reflection of a square cell flips the first)."""
+    if network.n_contacts == 0:
+        return 0.0, 0.0
+    n = network.dr / np.linalg.norm(network.dr, axis=1)[:, None]
+    return float(np.mean(n[:, 0] ** 2 - n[:, 1] ** 2)), float(np.mean(2 * n[:, 0] * n[:, 1]))
+
+
 def _point(plan, k, s, direction, step, segment, st) -> dict:
+    fab_a, fab_b = fabric(st.network)
     return dict(start=k, grid=s, direction=direction, step=step, segment=segment,
                 strain_index=int(plan.strain_index(st.gamma)), gamma=st.gamma, phi_j=st.phi_j,
-                mu=st.shear_stress / st.jam.pressure, pressure=st.jam.pressure,
+                mu=st.shear_stress / st.jam.pressure, fabric_a=fab_a, fabric_b=fab_b, pressure=st.jam.pressure,
                 n_contacts=st.network.n_contacts, n_floaters=st.network.n_floaters,
                 signature=signature(st.network, st.packing.diameters))
 
