@@ -31,7 +31,7 @@ from .protocols.compression import CompressionSettings
 from .sizes import parse_sizes
 
 DECK_NAME = "jam.lmp"
-OPTIONAL = ("data", "phi0", "ftol")
+OPTIONAL = ("data", "phi0", "ftol", "plugin")
 PROTOCOL_COLUMNS = ("step", "phi", "energy_per_particle", "pressure", "dphi", "iterations", "max_force", "reason")
 
 
@@ -63,9 +63,9 @@ def deck_variables(n: int = 256, dim: int = 2, sizes="bi:1.4:0.5", seed: int = 0
                   walls="".join("xyz"[a] for a in parse_walls(walls, int(dim))) or "none")
     start_phi = phi0 if phi0 is not None else settings.phi0
     optional = {"data": None if data is None else str(data),
-                "phi0": None if start_phi is None else repr(float(start_phi)),
-                "ftol": None if settings.minimizer.force_tol is None else repr(float(settings.minimizer.force_tol))}
+                "phi0": None if start_phi is None else repr(float(start_phi))}
     values.update({k: v for k, v in optional.items() if v is not None})
+    values.update(optional_values(settings))
     return values
 
 
@@ -73,7 +73,7 @@ def system_values(sizes, potential) -> tuple[float, float]:
     """(large diameter d2, small fraction) of what the decks run: the linear spring (alpha 2,
     eps 1) with one or two diameters; ValueError otherwise."""
     pot = parse_potential(potential) if isinstance(potential, str) else potential
-    if not (isinstance(pot, Spring) and pot.alpha == 2.0 and pot.epsilon == 1.0):
+    if not (pot.name == "spring" and pot.alpha == 2.0 and pot.epsilon == 1.0):
         raise ValueError(f"the deck runs the linear spring (alpha = 2, eps = 1) only, got {pot.spec}; "
                          "run other potentials with the Python controller (jamflow jam)")
     spec = parse_sizes(sizes) if isinstance(sizes, str) else sizes
@@ -89,7 +89,27 @@ def protocol_values(settings: CompressionSettings) -> dict:
     m: MinimizerSettings = settings.minimizer
     return dict(vtol=_num(settings.v_tol), dphi0=_num(settings.dphi0), minimizer=m.method, vmin=_num(m.v_min),
                 delta=_num(m.delta), window=m.window, maxiter=m.max_iterations, dt=_num(m.timestep),
-                mddt=_num(m.md_timestep), damping=_num(m.damping), maxsteps=settings.max_steps, skin=_num(0.3))
+                mddt=_num(m.md_timestep), damping=_num(m.damping), mddamping=m.md_damping,
+                mdsample=m.md_sample_every, maxsteps=settings.max_steps, skin=_num(0.3))
+
+
+def optional_values(settings: CompressionSettings) -> dict:
+    """The minimiser's optional deck variables that are set (ftol; plugin for pairwise MD)."""
+    m: MinimizerSettings = settings.minimizer
+    optional = {"ftol": None if m.force_tol is None else repr(float(m.force_tol)),
+                "plugin": _plugin_path() if m.method == "md" and m.md_damping == "pairwise" else None}
+    return {k: v for k, v in optional.items() if v is not None}
+
+
+def _plugin_path() -> str:
+    """The compiled jamflow plugin (fix jamflow/damping) that a pairwise-damping deck loads."""
+    from .engine.plugin_build import plugin_library
+
+    library = plugin_library()
+    if library is None:
+        raise ValueError("a deck with md_damping 'pairwise' loads jamflow's LAMMPS plugin, which needs a C++ "
+                         "compiler to build; install one or use md_damping 'viscous'")
+    return str(library)
 
 
 def _check_seed_protocol(settings: CompressionSettings) -> None:
@@ -324,7 +344,7 @@ def run_pressure_deck(workdir, start: Packing, pressures, *, stress: str = "iso"
 
     values = start.species()[0]
     pot = start.potential
-    if not (isinstance(pot, Spring) and pot.alpha == 2.0 and pot.epsilon == 1.0) or len(values) > 2 or values[0] != 1.0:
+    if not (pot.name == "spring" and pot.alpha == 2.0 and pot.epsilon == 1.0) or len(values) > 2 or values[0] != 1.0:
         raise ValueError("the pressure deck runs the linear spring (eps = 1) with diameters 1 and one other")
     if start.box.walls or start.gravity > 0 or start.fixed is not None:
         raise ValueError("the pressure deck relaxes a periodic box (no walls, gravity or fixed particles)")

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .deck import (DeckFailed, PROTOCOL_COLUMNS, _num, check_workdir, lammps_error, protocol_values,
+from .deck import (DeckFailed, PROTOCOL_COLUMNS, _num, check_workdir, lammps_error, optional_values, protocol_values,
                    read_data_file, render, run_lmp, system_values)
 from .io import atomic_path, write_lammps_data
 from .packing import Packing
@@ -25,7 +25,7 @@ from .protocols.compression import CompressionSettings, seed_protocol
 from .protocols.shear import shear_strains
 
 SHEAR_DECK_NAME = "shear.lmp"
-SHEAR_OPTIONAL = ("xy0", "steps", "vsum", "ftol")
+SHEAR_OPTIONAL = ("xy0", "steps", "vsum", "ftol", "plugin")
 STATIC_COLUMNS = ("step", "gamma", "phi_j", "energy_per_particle", "pressure", "pxy", "minimizations", "iterations")
 
 
@@ -45,9 +45,9 @@ def shear_deck_variables(settings: CompressionSettings | None = None, *, dim: in
     values = dict(dim=int(dim), data=str(data), dgamma=_num(dgamma), to=_num(to), d1=1, d2=_num(d2),
                   **protocol_values(settings), out=str(out))
     optional = {"xy0": None if xy0 is None else repr(float(xy0)), "steps": None if steps is None else int(steps),
-                "vsum": None if vsum is None else repr(float(vsum)),
-                "ftol": None if settings.minimizer.force_tol is None else repr(float(settings.minimizer.force_tol))}
+                "vsum": None if vsum is None else repr(float(vsum))}
     values.update({k: v for k, v in optional.items() if v is not None})
+    values.update(optional_values(settings))
     return values
 
 

@@ -13,6 +13,7 @@ eps / diameter^d; S + 1 steps, step 0 the start)::
     /path/pressure_tensor (S+1, d, d)
     /path/n_contacts, n_floaters, n_removed, n_added, minimizations, iterations (S+1,) int
     /path/changed (S+1,) bool     contacts removed or added since the previous step
+    /path/checks_passed (S+1,) bool   the packing checks of jamflow.checks (jamflow shear writes it)
     /path/positions (S+1, N, d), /path/box (S+1, d, d)   the packing at every step
     /path/orientations (S+1, N) | (S+1, N, 4)             shapes that turn
     /contacts/pairs (M, 2), /contacts/offsets (S+2,)      step k: pairs[offsets[k]:offsets[k+1]]
@@ -60,11 +61,12 @@ def path_columns(path) -> dict:
     return out
 
 
-def save_shear_path(out, path, *, source: str = "") -> Path:
-    """Write a ``ShearPath`` atomically to the HDF5 file ``out``."""
+def save_shear_path(out, path, *, source: str = "", extra_columns: dict | None = None) -> Path:
+    """Write a ``ShearPath`` atomically to the HDF5 file ``out``; ``extra_columns`` (name ->
+    one value per step, e.g. ``checks_passed``) join /path."""
     first = path.steps[0].packing
     pot = first.potential
-    columns = path_columns(path)
+    columns = {**path_columns(path), **{k: np.asarray(v) for k, v in (extra_columns or {}).items()}}
     attrs = dict(
         schema=SCHEMA, schema_version=SCHEMA_VERSION, jamflow_version=__version__,
         lammps_version=str(path.steps[0].jam.lammps_version), source=str(source), dim=first.dim, n=first.n,

@@ -224,6 +224,7 @@ def test_shear_command_writes_the_path_and_the_figure(tmp_path, capsys):
     assert "in 5 steps" in text and "p.shear.h5" in text
     f = ShearFile(out / "p.shear.h5")
     assert f.columns["gamma"][-1] == 0.19 and f.attrs["dgamma"] == -0.002
+    assert f.columns["checks_passed"].all() and len(f.columns["checks_passed"]) == 6
     assert (out / "p.shear.png").stat().st_size > 10_000
 
 

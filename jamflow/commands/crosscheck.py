@@ -13,7 +13,7 @@ import sys
 from ..crosscheck import crosscheck, crosscheck_shear
 from ..deck import DeckFailed
 from ..minimize import METHODS
-from .jam import settings_from_args
+from .jam import add_md_damping_argument, settings_from_args
 
 
 def add_arguments(p) -> None:
@@ -22,6 +22,7 @@ def add_arguments(p) -> None:
     p.add_argument("--sizes", default="bi:1.4:0.5", help="mono | bi:RATIO:FRACTION_SMALL (the deck's sizes)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the start")
     p.add_argument("--minimizer", choices=METHODS, default="fire", help="energy minimiser")
+    add_md_damping_argument(p)
     p.add_argument("--phi0", type=float, default=None, help="initial packing fraction (default 0.80 in 2D, 0.55 in 3D)")
     p.add_argument("--dphi0", type=float, default=None,
                    help="initial packing-fraction increment (default 1e-4; --shear: 1e-6, after each step)")

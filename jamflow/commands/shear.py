@@ -10,6 +10,8 @@ import math
 import warnings
 from pathlib import Path
 
+import numpy as np
+
 from ..engine.base import ENGINES, engine_name
 from ..io import check_writable, load_packing
 from ..minimize import MinimizerSettings
@@ -78,7 +80,11 @@ def run(args) -> int:
         path = shear(packing, args.dgamma, args.to, settings, engine=args.engine, observers=[progress])
     for w in caught:
         print(f"jamflow shear: warning: {w.message}")
-    save_shear_path(data, path, source=args.packing)
+    passed = step_checks(path, settings)
+    if not passed.all():
+        print(f"jamflow shear: warning: {int((~passed).sum())} of {len(passed)} steps failed the packing checks "
+              f"(steps {np.flatnonzero(~passed).tolist()[:10]}; column checks_passed in the path file)")
+    save_shear_path(data, path, source=args.packing, extra_columns={"checks_passed": passed})
     print(f"{path.summary()}  -> {data}")
     if not args.no_figure:
         from ..analysis.plots_shear import shear_path_figure
@@ -96,3 +102,15 @@ def emit(args, packing, settings) -> int:
     print(f"wrote {deck} and {data}; run: cd {deck.parent} && lmp -in {deck.name}  "
           f"(writes {Path(args.packing).stem}.data and {Path(args.packing).stem}.protocol.txt)")
     return 0
+
+
+def step_checks(path, settings) -> np.ndarray:
+    """The packing checks of ``jamflow.checks`` (window, force balance, contact count) at every step."""
+    from ..checks import check_packing
+
+    out = []
+    for step in path.steps:
+        p, jam = step.packing, step.jam
+        ftol = settings.minimizer.resolved_force_tol(p.box, p.potential.contact_stiffness)
+        out.append(check_packing(p, jam.energy_per_particle, jam.max_force, settings.v_tol, ftol).passed)
+    return np.array(out, dtype=bool)

@@ -24,6 +24,7 @@ At a target pressure the box relaxes by ``fix box/relax`` (CG only, ``etol 0``).
 
 from __future__ import annotations
 
+import math
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
@@ -38,6 +39,18 @@ from ..packing import Packing
 from .base import Capabilities, State
 from .lammps_lib import new_lammps
 from .pair_styles import pair_setup, uses_harmonic_cut
+from .plugin_build import load_plugin
+
+MD_DAMPING_FIXES = {"viscous": "viscous", "pairwise": "jamflow/damping"}  # fix style per md_damping
+# the energy samples of a damped-MD window (fix jf_vsamples), their mean and rms deviation, and
+# the stored velocities (fix jf_vstore)
+ENERGY_SAMPLE_VARIABLES = ("variable jf_pe equal pe", "variable jf_vmean equal ave(f_jf_vsamples)",
+                           "variable jf_vdev vector (f_jf_vsamples-v_jf_vmean)^2",
+                           "variable jf_vrms equal sqrt(ave(v_jf_vdev))",
+                           *(f"variable jf_v{c} atom f_jf_vstore[{k}]" for k, c in enumerate("xyz", 1)))
+# a damped-MD window's force measured at rest, then its velocities put back exactly
+AT_REST = ("fix jf_vstore all store/state 0 vx vy vz", "velocity all set 0.0 0.0 0.0", "run 0")
+RESTORE_VELOCITIES = ("set group all vx v_jf_vx vy v_jf_vy vz v_jf_vz", "unfix jf_vstore")
 
 
 class LammpsError(RuntimeError):
@@ -121,7 +134,7 @@ class LammpsEngine:
             f"neighbor {skin:g} bin", "neigh_modify every 1 delay 0 check yes",
             *boundary_commands(packing),
             "compute jf_press all pressure NULL virial",
-            "thermo_style custom step pe c_jf_press[*] fmax", "thermo_modify norm no", "thermo 0",
+            "thermo_style custom step pe c_jf_press[*] fmax ke", "thermo_modify norm no", "thermo 0",
         ])
         if dim == 2:
             self.command("fix jf_2d all enforce2d")
@@ -223,15 +236,25 @@ class LammpsEngine:
 
     @contextmanager
     def minimizer_session(self, settings, ftol: float):
-        """Install the minimiser (FIRE 2.0 ``norm max``, CG ``line forcezero``, or ``fix nve``
-        + ``fix viscous``) and ``fix halt`` at V < V_min; yield ``window(steps) ->
-        (iterations, total energy, max force component, 0.0: no torques)``, one LAMMPS command
-        per window."""
+        """Install the minimiser (FIRE 2.0 ``norm max``, CG ``line forcezero``, or damped MD:
+        ``fix nve`` + ``fix viscous`` or ``fix jamflow/damping``) and ``fix halt`` at V < V_min;
+        yield ``window(steps) -> (iterations, total energy, max force component, 0.0: no
+        torques)``, one LAMMPS command per window. Damped MD adds two values: the relative rms
+        fluctuation of the energy sampled every ``md_sample_every`` steps inside the window
+        (``fix vector``; None with fewer than 2 samples) and the total kinetic energy at its end.
+        Its max force is the potential's alone, evaluated at rest (``run 0`` at v = 0, then the
+        velocities are put back, so the trajectory does not change): the total force includes
+        the damping, which cancels the potential force of a particle creeping at terminal
+        velocity F / b (the default viscous run then stopped by 'force' at a reference max force
+        of 1e-11) and makes a moving state below V_min look blown up."""
         s, lmp = settings, self.lmp
         md = s.method == "md"
         if s.pressure is not None:
             yield from self._relax_session(s, ftol)
             return
+        if md and s.md_damping == "pairwise" and not load_plugin(lmp):
+            raise ValueError("md_damping 'pairwise' needs jamflow's LAMMPS plugin (fix jamflow/damping), which "
+                             "could not be built (warning above); install a C++ compiler or use md_damping 'viscous'")
         n = "atoms" if self.template.fixed is None else str(self.template.n_mobile)
         self.run_commands([
             f"timestep {(s.md_timestep if md else s.timestep):.17g}",
@@ -244,21 +267,42 @@ class LammpsEngine:
             self.run_commands(["min_style cg", "min_modify norm max line forcezero"])
         else:
             self.run_commands(["velocity all set 0.0 0.0 0.0", "fix jf_nve all nve",
-                               f"fix jf_visc all viscous {s.damping:.17g}"])
+                               f"fix jf_damp all {MD_DAMPING_FIXES[s.md_damping]} {s.damping:.17g}",
+                               *ENERGY_SAMPLE_VARIABLES])
 
         def window(steps: int):
             before = lmp.extract_global("ntimestep")
+            if md:
+                self.command(f"fix jf_vsamples all vector {s.md_sample_every} v_jf_pe")
             self.command(f"run {steps}" if md else f"minimize 0.0 {ftol:.17g} {steps} {10 * steps}")
-            return (lmp.extract_global("ntimestep") - before, float(lmp.get_thermo("pe")),
-                    float(lmp.get_thermo("fmax")), 0.0)
+            after = lmp.extract_global("ntimestep")
+            energy = float(lmp.get_thermo("pe"))
+            if not md:
+                return after - before, energy, float(lmp.get_thermo("fmax")), 0.0
+            kinetic = float(lmp.get_thermo("ke"))
+            fluctuation = self._energy_fluctuation(before, after, s.md_sample_every)
+            self.run_commands(["unfix jf_vsamples", *AT_REST])  # the potential's force alone
+            fmax = float(lmp.get_thermo("fmax"))
+            self.run_commands(RESTORE_VELOCITIES)
+            return after - before, energy, fmax, 0.0, fluctuation, kinetic
 
         try:
             yield window
         finally:
             if self.lmp is not None:
-                self.run_commands([f"unfix {f}" for f in ["jf_halt"] + (["jf_nve", "jf_visc"] if md else [])])
+                self.run_commands([f"unfix {f}" for f in ["jf_halt"] + (["jf_nve", "jf_damp"] if md else [])])
                 if md:
                     self.command("velocity all set 0.0 0.0 0.0")
+
+    def _energy_fluctuation(self, before: int, after: int, every: int) -> float | None:
+        """<(V - <V>)^2>^(1/2) / <V> over the samples ``fix vector`` stored on the steps in
+        [before, after] that are multiples of ``every`` (seed section 2.1, step 3); None with
+        fewer than 2 samples, inf when <V> = 0. Two-pass in LAMMPS's own variables, so the
+        deck (lammps_inputs/jam.lmp) computes the same number."""
+        if after // every - (before + every - 1) // every + 1 < 2:
+            return None
+        mean = self.lmp.extract_variable("jf_vmean")
+        return self.lmp.extract_variable("jf_vrms") / mean if mean > 0 else math.inf
 
     def _relax_session(self, s, ftol: float):
         """``fix box/relax`` (iso / aniso / tri at the target pressure) with CG; the window returns

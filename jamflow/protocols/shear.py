@@ -28,7 +28,7 @@ from ..analysis.contacts import Contacts
 from ..engine.base import open_engine
 from ..packing import Packing
 from ..pairs import separations
-from .compression import CompressionSettings, JamResult, bisect, check_strain, fast_protocol
+from .compression import CompressionSettings, JamResult, bisect, check_resolution, check_strain, fast_protocol
 
 MAX_STEPS = 1_000_000
 REARRANGED_FRACTION = 0.5  # a first step that removes more than this fraction of the contacts is warned about
@@ -173,6 +173,7 @@ def shear(packing: Packing, dgamma: float, to: float, settings: CompressionSetti
     strains = shear_strains(packing.box.shear_strain, dgamma, to)
     packing.box.with_shear_strain(strains[1])  # a box that cannot be sheared (walls) is refused here, before work
     settings = settings or shear_protocol()
+    check_resolution(packing, settings)
     sigma = _contact_distance(packing)
     start = time.perf_counter()
     with open_engine(packing, settings.minimizer.method, engine, **(engine_options or {})) as sim:
