@@ -12,6 +12,7 @@ SUBCOMMANDS = {
     "jam": ("jamflow.commands.jam", "jam particles at onset by isotropic compression"),
     "modes": ("jamflow.commands.modes", "contacts, floaters, normal modes, D(omega) and stability class of packing files"),
     "analyze": ("jamflow.commands.analyze", "structure: g(r), S(k), Q6, G, correlation lengths"),
+    "moduli": ("jamflow.commands.moduli", "bulk and shear moduli: strain sweeps and the Hessian route"),
     "crosscheck": ("jamflow.commands.crosscheck", "run the LAMMPS deck and the Python controller from one start and compare"),
 }
 
