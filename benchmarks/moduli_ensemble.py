@@ -29,6 +29,7 @@ from tqdm import tqdm
 
 from jamflow.analysis.moduli import Moduli
 from jamflow.analysis.plots_moduli import family_figure, scaling_figure
+from jamflow.analysis.sweeps import SweepSettings
 from jamflow.commands.moduli import read_moduli, save_moduli
 from jamflow.io import load_packing, save_packing
 from jamflow.protocols.above import compress_above
@@ -133,21 +134,42 @@ def main() -> None:
     ap.add_argument("--dphi", type=float, nargs="+", default=list(DPHIS))
     ap.add_argument("--out", default="/tmp/jamflow-moduli")
     ap.add_argument("--docs", default=None, help="directory for the CSV files and figures (e.g. docs)")
+    ap.add_argument("--per-decade", type=int, default=2, help="sweep amplitudes per decade from 1e-9 to 1e-3")
+    ap.add_argument("--past-yield", type=int, default=2, help="sweep amplitudes measured beyond the first yield")
+    ap.add_argument("--report", action="store_true",
+                    help="only report: every cached result of this N in --out (each potential with its own DPHIs)")
     args = ap.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    moduli = Moduli()
-    jobs = [(pot, s, d) for pot in args.potentials for s in range(args.seeds) for d in args.dphi]
+    if not args.report:
+        moduli = Moduli(SweepSettings(tuple(np.geomspace(1e-9, 1e-3, 6 * args.per_decade + 1)),
+                                      past_yield=args.past_yield))
+        jobs = [(pot, s, d) for pot in args.potentials for s in range(args.seeds) for d in args.dphi]
+        for pot, seed, dphi in tqdm(jobs, desc="moduli", unit="packing", dynamic_ncols=True):
+            base = out / f"onset_{pot}_n{args.n}_s{seed}.h5"
+            onset(base, args.n, seed, pot)
+            path = out / f"above_{pot}_n{args.n}_s{seed}_d{dphi:g}.h5"
+            above(base, path, dphi)
+            result = path.with_name(path.stem + ".moduli.h5")
+            seconds = measure(path, result, dphi, moduli)
+            if seconds:
+                with open(out / "cpu_seconds.csv", "a") as fh:
+                    fh.write(f"{result.name},{seconds:.3f}\n")
+    report(collect(out, args.n), args)
+
+
+def collect(out: Path, n: int) -> list:
+    """One row per cached result of N particles (potential, seed, DPHI from the file name)."""
+    seconds = {}
+    if (out / "cpu_seconds.csv").exists():
+        for line in (out / "cpu_seconds.csv").read_text().split():
+            name, value = line.split(",")
+            seconds[name] = float(value)
     rows = []
-    for pot, seed, dphi in tqdm(jobs, desc="moduli", unit="packing", dynamic_ncols=True):
-        base = out / f"onset_{pot}_n{args.n}_s{seed}.h5"
-        onset(base, args.n, seed, pot)
-        path = out / f"above_{pot}_n{args.n}_s{seed}_d{dphi:g}.h5"
-        above(base, path, dphi)
-        result = path.with_name(path.stem + ".moduli.h5")
-        seconds = measure(path, result, dphi, moduli)
-        rows.append(row(pot, seed, dphi, read_moduli(result), seconds))
-    report(rows, args)
+    for path in sorted(out.glob(f"above_*_n{n}_s*_d*.moduli.h5")):
+        pot, _, seed, dphi = path.name[len("above_"):-len(".moduli.h5")].split("_")
+        rows.append(row(pot, int(seed[1:]), float(dphi[1:]), read_moduli(path), seconds.get(path.name, math.nan)))
+    return rows
 
 
 def report(rows, args) -> None:
@@ -177,15 +199,18 @@ def report(rows, args) -> None:
         writer.writerows(rows)
     with open(docs / f"moduli-scaling-{tag}.txt", "w") as fh:
         fh.write("\n".join(lines) + "\n")
+    seeds = len({r["seed"] for r in rows})
     scaling_figure(docs / f"moduli-scaling-{tag}.png", table, fits,
-                   title=f"2D bidisperse disks, N = {args.n}, {args.seeds} packings per point (sweep G, B)")
-    draw_family(args, docs / f"moduli-stress-strain-{tag}.png")
+                   title=f"2D bidisperse disks, N = {args.n}, {seeds} packings per point (sweep G, B)")
+    for pot in sorted({r["potential"] for r in rows}):
+        draw_family(args, pot, sorted({r["dphi"] for r in rows if r["potential"] == pot}),
+                    docs / f"moduli-stress-strain-{pot}-{tag}.png")
 
 
-def draw_family(args, path) -> None:
-    """Shear stress-strain of seed 0 at every DPHI (first potential)."""
-    pot, curves = args.potentials[0], {}
-    for dphi in args.dphi:
+def draw_family(args, pot, dphis, path) -> None:
+    """Shear stress-strain of seed 0 at every DPHI."""
+    curves = {}
+    for dphi in dphis:
         data = read_moduli(Path(args.out) / f"above_{pot}_n{args.n}_s0_d{dphi:g}.moduli.h5")
         curves[f"phi - phi_J = {dphi:g}"] = (data["shear/strain"], data["shear/response"], data["yield_strain"])
     family_figure(path, curves, title=f"{pot}, N = {args.n}, seed 0: shear stress against strain")

@@ -4,12 +4,13 @@ packings (orthogonal and tilted cells, both engines), the fit and yield logic on
 jam --above, the results file and bad input."""
 
 from dataclasses import replace
+from pathlib import Path
 
 import h5py
 import numpy as np
 import pytest
 
-from jamflow.analysis.elastic import HessianModuli, affine_terms, pair_terms
+from jamflow.analysis.elastic import HessianModuli, StrainTerms, affine_terms
 from jamflow.analysis.moduli import Moduli
 from jamflow.analysis.strains import BULK, SHEAR, STRAINS
 from jamflow.analysis.sweeps import SweepSettings, StrainSweep, _fit, roundoff_amplitude
@@ -83,11 +84,12 @@ def test_triangular_lattice_hessian_moduli_match_the_closed_form(potential):
     assert h.G_affine == pytest.approx(h.G, rel=1e-12) and h.B_affine == pytest.approx(h.B, rel=1e-12)  # no relaxation
 
 
-def test_unstressed_lattice_shear_modulus_is_sqrt3_k_over_4():
-    """Bonds at exactly r = sigma carry no force: G = sqrt(3) k / 4 with k = V'' = 1 (spring)."""
-    v1, v2 = 0.0, 1.0
-    area = np.sqrt(3) / 2
-    assert (3 / 8 * v2 + 9 / 8 * v1) / area == pytest.approx(np.sqrt(3) / 4, rel=1e-15)
+def test_nearly_unstressed_lattice_has_the_textbook_moduli():
+    """Bonds a hair inside contact (overlap 1e-9, k = V'' = 1): the central-force triangular
+    network's mu = sqrt(3) k / 4 and B = sqrt(3) k / 2 (e.g. Kittel; Maxwell-counted networks)."""
+    h = HessianModuli().compute(triangular_lattice(8, 8, 1 - 1e-9))
+    assert h.G == pytest.approx(np.sqrt(3) / 4, rel=1e-8)
+    assert h.B == pytest.approx(np.sqrt(3) / 2, rel=1e-8)
 
 
 @pytest.mark.parametrize("potential", [Spring(2.0), Spring(2.5)], ids=lambda p: p.spec)
@@ -105,27 +107,47 @@ def test_triangular_lattice_sweeps_match_the_closed_form(potential):
 
 # --- finite differences of the numpy reference ----------------------------------------------------
 
-@pytest.mark.parametrize("dim", [2, 3])
-@pytest.mark.parametrize("strain", STRAINS, ids=lambda s: s.kind)
-def test_affine_terms_are_derivatives_of_the_reference_energy(strain, dim):
-    """A = d^2 U / da^2 along x -> (I + a L) x (box too), and Xi = d/da of the gradient in the
-    reference coordinates, (I + a L)^T grad U, which off force balance is Xi + L^T grad U."""
-    p = perturbed_lattice(dim, seed=2)
-    lvel = strain.velocity(dim)
-    a, xi = affine_terms(pair_terms(p), strain)
+DATA = Path(__file__).parent / "data"
 
-    def strained(step):
+
+def compressed(name, factor):
+    p = load_packing(DATA / name)
+    return p.with_positions(p.positions * factor ** 0.5, box=p.box.scaled(factor ** 0.5))
+
+
+OFF_BALANCE = {  # overlaps 1e-3 .. 20 %, no contact within a finite-difference step of its edge
+    "disks": lambda: perturbed_lattice(2, seed=2), "spheres": lambda: perturbed_lattice(3, seed=2),
+    "ellipses": lambda: compressed("ellipse1.5_n16_s0.h5", 0.99),
+    "dimers": lambda: compressed("dimer2d_a1.5_n32_s0.h5", 0.99)}
+
+
+@pytest.mark.parametrize("name", sorted(OFF_BALANCE))
+@pytest.mark.parametrize("strain", STRAINS, ids=lambda s: s.kind)
+def test_affine_terms_are_derivatives_of_the_reference_energy(strain, name):
+    """A = d^2 U / da^2 along x -> (I + a L) x (box too, orientations carried unturned); Xi's
+    centre rows = d/da of the gradient in the reference coordinates, (I + a L)^T grad U, minus
+    L^T grad U (nonzero off balance); its rotation rows = -d/da of the generalized torques tau/d_k."""
+    p = OFF_BALANCE[name]()
+    dim, lvel = p.dim, strain.velocity(p.dim)
+    a, xi = affine_terms(StrainTerms.of(p), strain)
+
+    def reference(step):
         f = np.eye(dim) + step * lvel
-        return p.with_positions(p.positions @ f.T, box=p.box.with_h(f @ p.box.h))
+        return energy_forces_pressure(p.with_positions(p.positions @ f.T, box=p.box.with_h(f @ p.box.h)))
 
     step = 1e-5
-    energies = [energy_forces_pressure(strained(s)).energy for s in (-step, 0.0, step)]
+    energies = [reference(s).energy for s in (-step, 0.0, step)]
     assert (energies[0] - 2 * energies[1] + energies[2]) / step**2 == pytest.approx(a, rel=1e-5)
     step = 1e-6
-    grads = [-(energy_forces_pressure(strained(s)).forces) @ (np.eye(dim) + s * lvel) for s in (-step, step)]
+    low, high = reference(-step), reference(step)
+    grads = [-r.forces @ (np.eye(dim) + s * lvel) for r, s in ((low, -step), (high, step))]
     fd = ((grads[1] - grads[0]) / (2 * step)).ravel()
     balance = (-energy_forces_pressure(p).forces @ lvel).ravel()  # L^T g per particle
-    assert np.allclose(xi + balance, fd, rtol=0, atol=1e-6 * np.abs(fd).max())
+    n_t = p.n * dim
+    assert np.allclose(xi[:n_t] + balance, fd, rtol=0, atol=1e-6 * np.abs(fd).max())
+    if p.shape.oriented:
+        torque_fd = -(high.torques - low.torques) / (2 * step) / p.rotational_lengths[:, 0]
+        assert np.allclose(xi[n_t:], torque_fd, rtol=0, atol=1e-6 * np.abs(torque_fd).max())
 
 
 # --- the two routes on jammed packings ----------------------------------------------------------------
@@ -150,6 +172,25 @@ def test_sweeps_agree_with_the_hessian_in_a_tilted_cell(jammed):
     result = Moduli(SweepSettings(FEW)).compute(tilted)
     for strain in STRAINS:
         assert abs(result.agreement(strain)) < 1e-6, strain.kind
+
+
+def test_dimer_sweeps_agree_with_the_hessian_with_rotations():
+    """32 dimers at phi_J + 1e-3: the compiled FIRE relaxes centres and rotations, the Hessian
+    has the rotational coordinates; this packing's shear modulus is negative (residual shear
+    stress), both routes say so."""
+    p = compress_above(load_packing(DATA / "dimer2d_a1.5_n32_s0.h5"), 1e-3).packing
+    result = Moduli(SweepSettings((1e-8, 1e-7, 1e-6))).compute(p)
+    for strain in STRAINS:
+        assert abs(result.agreement(strain)) < 1e-6, strain.kind
+    assert result.hessian.n_negative == 0 and result.G < 0 < result.B
+
+
+def test_ellipses_have_a_hessian_but_no_sweep_engine_yet():
+    p = load_packing(DATA / "ellipse1.5_n16_s0.h5")
+    p = p.with_positions(p.positions * 0.999 ** 0.5, box=p.box.scaled(0.999 ** 0.5))
+    assert np.isfinite(HessianModuli().compute(p).B)
+    with pytest.raises(ValueError, match="no engine runs this scene"):
+        Moduli().check(p)
 
 
 def test_lammps_sweeps_match_the_compiled_engine(jammed):
@@ -253,7 +294,7 @@ def test_bad_sweep_settings(amps, match):
 
 # --- jam --above, the command and its file ------------------------------------------------------------
 
-def test_compress_above_reaches_phi_and_force_balance(jammed):
+def test_compress_above_reaches_phi_and_force_balance():
     onset = jam(n=32, seed=2)
     above = compress_above(onset.packing, 1e-4)
     assert above.packing.phi == pytest.approx(onset.phi_j + 1e-4, abs=1e-12)

@@ -12,7 +12,12 @@ strain -- each contact's block of H applied to the displacement L r_ij of its fi
 and H^+ the pseudo-inverse on the non-trivial subspace: the eigenvectors with |e| above
 ``zero_tol`` times the largest eigenvalue (the d uniform translations, exact null vectors that Xi
 does not excite, are left out). The relaxation is the non-affine displacement u = -H^+ Xi.
-``Strain.modulus_from_curvature`` turns U'' into G or B. Units: eps / diameter^d.
+``Strain.modulus_from_curvature`` turns U'' into G or B. Every shape: for particles that turn, H
+has the rotational coordinates d_k theta of ``hessian.Coordinates``, the affine strain moves the
+centres and carries the orientations unturned (as the engines' ``set_box`` does), and the rows of
+Xi on the rotations are the torque response. The pressure tensor comes from the same pair terms.
+The formula holds at force and torque balance (the term L^T grad U it drops is minus L^T times
+the net force on each particle). Units: eps / diameter^d.
 """
 
 from __future__ import annotations
@@ -23,45 +28,57 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from ..engine.reference import energy_forces_pressure
 from ..packing import Packing
-from ..pairs import overlapping_pairs
-from .contacts import Contacts, remove_floaters
-from .hessian import hessian, pair_stiffness
+from ..pairs import overlapping_pairs, overlapping_sites
+from .hessian import Coordinates, DynamicalMatrix, _local_index, pair_terms
 from .strains import BULK, SHEAR, Strain
 
 ZERO_TOL = 1e-10  # |e| <= ZERO_TOL * max e: a zero mode (round-off of e is ~1e-16 max e)
 
 
 @dataclass(frozen=True)
-class PairTerms:
-    """Each contact's Hessian block in its local coordinates [x_i (d), x_j (d)] and where those
-    coordinates sit in the dynamical matrix."""
+class StrainTerms:
+    """Each contact's energy derivatives in its local coordinates [x_i (d), x_j (d), rot_i, rot_j]
+    (``hessian.pair_terms``), where those coordinates sit in the dynamical matrix, and the
+    separation of the two particles' centres."""
 
     rows: np.ndarray  # (P, L) global rows of each pair's local coordinates
+    gradient: np.ndarray  # (P, L) eps / diameter
     blocks: np.ndarray  # (P, L, L) eps / diameter^2
     separations: np.ndarray  # (P, d) centre separations r_i - r_j, diameters
     size: int  # rows of the dynamical matrix
 
+    @classmethod
+    def of(cls, packing: Packing) -> "StrainTerms":
+        terms = pair_terms(packing)
+        coords = Coordinates.of(packing)
+        return cls(_local_index(coords, terms.i, terms.j), terms.gradient, terms.hessian,
+                   centre_separations(packing), coords.size)
 
-def pair_terms(packing: Packing) -> PairTerms:
-    """Contact blocks of disks and spheres, K_ij = V'' n n^T + V'/r (I - n n^T) (``hessian``)."""
-    if packing.shape.kind != "sphere":
-        raise ValueError(f"the Hessian moduli of {packing.shape.name(packing.dim)} particles need the dynamical matrix "
-                         "with rotational coordinates, which jamflow.analysis.hessian does not have yet; the strain "
-                         "sweeps measure them (jamflow moduli --no-hessian)")
-    i, j, dr, r, sigma = overlapping_pairs(packing)
-    d = packing.dim
-    k = pair_stiffness(packing.potential, dr, r, sigma)
-    blocks = np.concatenate([np.concatenate([k, -k], 2), np.concatenate([-k, k], 2)], 1)
-    rows = np.concatenate([i[:, None] * d + np.arange(d), j[:, None] * d + np.arange(d)], axis=1)
-    return PairTerms(rows, blocks, dr, packing.n * d)
+    def pressure_tensor(self, volume: float) -> np.ndarray:
+        """P_ab = -V^-1 sum r_a dV/dr_b (seed eq. 2.34, the virial with centre separations)."""
+        d = self.separations.shape[1]
+        return -np.einsum("pa,pb->ab", self.separations, self.gradient[:, :d]) / volume
 
 
-def affine_terms(terms: PairTerms, strain: Strain) -> tuple[float, np.ndarray]:
-    """(A, Xi): the affine curvature and the force response to the strain's velocity L."""
+def centre_separations(packing: Packing) -> np.ndarray:
+    """(P, d) r_i - r_j between the centres of every contact of ``hessian.pair_terms`` (same
+    order; for rigid bodies one row per overlapping site pair, the image the sites touch in)."""
+    if packing.shape.kind != "rigid":
+        return overlapping_pairs(packing)[2]
+    _, _, s, t, dr, _, _ = overlapping_sites(packing)
+    shape, d = packing.shape, packing.dim
+    world = shape.world_sites(packing.positions, packing.orientations, packing.diameters).reshape(-1, d)
+    lever = world - np.repeat(packing.positions, shape.n_sites, axis=0)
+    return dr - lever[s] + lever[t]
+
+
+def affine_terms(terms: StrainTerms, strain: Strain) -> tuple[float, np.ndarray]:
+    """(A, Xi): the affine curvature and the force response to the strain's velocity L: each
+    contact's block applied to the displacement L r_ij of its first particle's centre
+    (orientations are carried along unturned)."""
     d = terms.separations.shape[1]
-    v = terms.separations @ strain.velocity(d).T  # (P, d): L r_ij, the displacement of particle i
+    v = terms.separations @ strain.velocity(d).T  # (P, d)
     response = np.einsum("pab,pb->pa", terms.blocks[:, :, :d], v)  # (P, L)
     xi = np.bincount(terms.rows.ravel(), weights=response.ravel(), minlength=terms.size)
     return float(np.einsum("pa,pa->", v, response[:, :d])), xi
@@ -75,7 +92,7 @@ class HessianModuliResult:
     B: float
     G_affine: float  # without the non-affine relaxation (upper bounds)
     B_affine: float
-    pressure_tensor: np.ndarray  # (d, d) of the floater-free packing (numpy reference)
+    pressure_tensor: np.ndarray  # (d, d) of the floater-free packing, from the same pair terms
     n_kept: int  # particles after floater removal
     n_contacts: int
     n_extra_zero: int  # zero modes beyond the d translations
@@ -92,22 +109,20 @@ class HessianModuliResult:
 
 class HessianModuli:
     """``zero_tol``: relative threshold of the pseudo-inverse (``ZERO_TOL``); ``contacts``: the
-    floater search (a ``Contacts``)."""
+    floater search (a ``Contacts``; default that of ``DynamicalMatrix``)."""
 
-    def __init__(self, zero_tol: float = ZERO_TOL, contacts: Contacts | None = None):
+    def __init__(self, zero_tol: float = ZERO_TOL, contacts=None):
         if not (np.isfinite(zero_tol) and 0 < zero_tol < 1):
             raise ValueError(f"zero_tol must lie in (0, 1), got {zero_tol!r}")
         self.zero_tol = float(zero_tol)
-        self.contacts = contacts or Contacts()
+        self.matrix = DynamicalMatrix(contacts=contacts)
 
     def compute(self, packing: Packing) -> HessianModuliResult:
-        if packing.box.walls or packing.fixed is not None or packing.gravity > 0:
-            raise ValueError("the moduli are measured in periodic boxes; this packing has walls, fixed particles "
-                             "or gravity")
-        kept = remove_floaters(packing, self.contacts.compute(packing))
-        terms = pair_terms(kept)
-        ptensor = energy_forces_pressure(kept).pressure_tensor
-        evals, evecs = scipy.linalg.eigh(hessian(kept).toarray())
+        dyn = self.matrix.compute(packing)  # refuses walls, gravity and fixed particles
+        kept = dyn.packing
+        terms = StrainTerms.of(kept)
+        ptensor = terms.pressure_tensor(kept.box.volume)
+        evals, evecs = scipy.linalg.eigh(dyn.matrix.toarray())
         tol = self.zero_tol * max(float(np.abs(evals).max()), np.finfo(float).tiny)
         live = np.abs(evals) > tol
         n_zero = int(np.sum(~live))

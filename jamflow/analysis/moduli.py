@@ -10,8 +10,9 @@
 
 ``Moduli.check`` refuses, before any work, a packing the moduli are not defined for (walls,
 gravity or fixed particles; V below the seed's V_min = 1e-16, i.e. not jammed; every particle a
-floater) and a sweep whose smallest amplitude lies below the round-off scale of the response
-(``sweeps.roundoff_amplitude``, from the Hessian moduli). The measurement is of the packing as
+floater; a scene no engine relaxes, e.g. ellipses before their compiled kernel) and a sweep
+whose smallest amplitude lies below the round-off scale of the response
+(``sweeps.roundoff_amplitude``, from the Hessian moduli of the input). The measurement is of the packing as
 it is: nothing is compressed or re-jammed (``jamflow jam --above`` makes the packings).
 """
 
@@ -23,24 +24,24 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..engine.base import engine_name
 from ..minimize import MinimizerSettings
 from ..packing import Packing
-from ..pairs import overlapping_pairs, overlapping_sites
 from .contacts import Contacts
 from .elastic import HessianModuli, HessianModuliResult
 from .strains import BULK, SHEAR, STRAINS
-from .sweeps import StrainSweep, SweepResult, SweepSettings, roundoff_amplitude
+from .sweeps import StrainSweep, SweepResult, SweepSettings, roundoff_amplitude, touching
 
 V_MIN = MinimizerSettings().v_min  # energy per particle below which a packing is not jammed (seed)
 
 
 @dataclass(frozen=True)
 class ModuliResult:
-    """Both sweeps, the Hessian route (None where it does not run) and the base state."""
+    """Both sweeps, the Hessian route and the base state."""
 
     shear: SweepResult
     bulk: SweepResult
-    hessian: HessianModuliResult | None
+    hessian: HessianModuliResult
     roundoff: dict  # modulus name -> round-off amplitude of its sweep
     phi: float
     energy_per_particle: float  # eps, of the input packing
@@ -60,11 +61,11 @@ class ModuliResult:
 
     @property
     def G_hessian(self) -> float:
-        return self.hessian.G if self.hessian else math.nan
+        return self.hessian.G
 
     @property
     def B_hessian(self) -> float:
-        return self.hessian.B if self.hessian else math.nan
+        return self.hessian.B
 
     @property
     def yield_strain(self) -> float:
@@ -80,8 +81,8 @@ class ModuliResult:
         return self.shear.base_response
 
     def agreement(self, strain) -> float:
-        """sweep / Hessian - 1 (NaN without the Hessian route)."""
-        return self.sweep(strain).modulus / self.hessian.modulus(strain) - 1.0 if self.hessian else math.nan
+        """sweep / Hessian - 1."""
+        return self.sweep(strain).modulus / self.hessian.modulus(strain) - 1.0
 
 
 class Moduli:
@@ -94,11 +95,12 @@ class Moduli:
         self.sweeps = sweeps or SweepSettings()
         self.engine, self.engine_options = engine, engine_options
         self.contacts = contacts or Contacts()
-        self.hessian = hessian or HessianModuli(contacts=self.contacts)
+        self.hessian = hessian or HessianModuli()
 
-    def check(self, packing: Packing) -> tuple[HessianModuliResult | None, dict, tuple]:
-        """Refuse what has no moduli, before any relaxation; returns the Hessian route (None where
-        it does not run yet), the round-off amplitudes and (energy per particle, contacts, floaters)."""
+    def check(self, packing: Packing) -> tuple[HessianModuliResult, dict, tuple]:
+        """Refuse what has no moduli or no engine to relax it, before any relaxation; returns the
+        Hessian route on the input, the round-off amplitudes and (energy per particle, contacts,
+        floaters)."""
         if packing.box.walls or packing.fixed is not None or packing.gravity > 0:
             raise ValueError("the moduli are measured in a periodic box: this packing has walls, fixed particles or "
                              "gravity (jam it without --walls / --gravity)")
@@ -110,11 +112,11 @@ class Moduli:
         if found.n_kept == 0:
             raise ValueError("every particle is a floater: the packing has no rigid contact network and no moduli; "
                              "compress it above onset first (jamflow jam --above 1e-4)")
+        engine_name(packing, (self.sweeps.minimizer or MinimizerSettings()).method, self.engine)  # who relaxes
         hessian = self._hessian(packing)
         roundoff = {}
         for strain in STRAINS:
-            scale = hessian.modulus(strain) if hessian else math.nan
-            roundoff[strain.modulus] = roundoff_amplitude(packing, scale) if math.isfinite(scale) else math.nan
+            roundoff[strain.modulus] = roundoff_amplitude(packing, hessian.modulus(strain))
             smallest = self.sweeps.amplitudes[0]
             if smallest < roundoff[strain.modulus]:
                 raise ValueError(f"the smallest {strain.kind} amplitude {smallest:g} is below the round-off scale "
@@ -123,14 +125,8 @@ class Moduli:
                                  f"{10 * roundoff[strain.modulus]:.0e} or above")
         return hessian, roundoff, (energy, int(len(found.i)), int(found.n_floaters))
 
-    def _hessian(self, packing: Packing) -> HessianModuliResult | None:
-        try:
-            result = self.hessian.compute(packing)
-        except ValueError as err:
-            if packing.shape.kind == "sphere":
-                raise
-            warnings.warn(f"{err}: only the sweeps are measured, and the round-off check is skipped", stacklevel=3)
-            return None
+    def _hessian(self, packing: Packing) -> HessianModuliResult:
+        result = self.hessian.compute(packing)
         if result.n_negative:
             warnings.warn(f"the dynamical matrix has {result.n_negative} negative eigenvalue(s): the packing is not at a "
                           "stable minimum, and its moduli are those of a saddle", stacklevel=3)
@@ -147,15 +143,11 @@ class Moduli:
         sweep = StrainSweep(self.sweeps, self.engine, self.engine_options)
         shear = sweep.compute(packing, SHEAR, observers)
         bulk = sweep.compute(shear.base, BULK, observers)  # the same base state (relaxed once more: ~0 iterations)
-        if hessian is not None:  # on the state the sweeps start from: the input relaxed at zero strain
-            hessian = self._hessian(shear.base)
+        hessian = self._hessian(shear.base)  # on the state the sweeps start from: the input relaxed at zero strain
         return ModuliResult(shear, bulk, hessian, roundoff, packing.phi, energy, n_contacts, n_floaters)
 
 
 def _energy_per_particle(packing: Packing) -> float:
     """Total pair energy / N from the overlapping pairs (sites for rigid bodies), eps."""
-    if packing.shape.kind == "rigid":
-        r, sigma = overlapping_sites(packing)[-2:]
-    else:
-        r, sigma = overlapping_pairs(packing)[-2:]
+    r, sigma = touching(packing)[2:]
     return float(np.sum(packing.potential.energy(r, sigma)) / packing.n) if len(r) else 0.0

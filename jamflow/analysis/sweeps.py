@@ -124,7 +124,7 @@ class SweepResult:
 def roundoff_amplitude(packing: Packing, modulus: float) -> float:
     """The strain at which the response change |M| a equals the response's floating-point error
     eps sqrt(N_c) k sigma L / V (module docstring). ``modulus`` M in eps / diameter^d."""
-    i, j, dr, r, sigma = overlapping_pairs(packing)
+    _, _, r, sigma = touching(packing)
     if not len(r):
         return math.inf
     stiffness = float(np.median(np.abs(packing.potential.d2v_dr2(r, sigma))))
@@ -191,15 +191,22 @@ def _relax(sim, base: Packing, strain: Strain, amplitude: float, minimizer, base
                 removed=removed, rattler=rattler)
 
 
+def touching(packing: Packing):
+    """(i, j, r, sigma) of every overlapping pair (of sites of different bodies for rigid bodies,
+    reported by body)."""
+    if packing.shape.kind == "rigid":
+        i, j, _, _, _, r, sigma = overlapping_sites(packing)
+    else:
+        i, j, _, r, sigma = overlapping_pairs(packing)
+    return i, j, r, sigma
+
+
 def _contact_set(packing: Packing, tol: float = NEAR_TOL) -> set:
     """Pairs (i < j) in firm contact: r < (1 - tol) sigma (for rigid bodies any of their site
     pairs). A pair within ``tol`` of touching carries a force at round-off level and may flicker
     at any strain (a rattler resting on a neighbour at r / sigma - 1 = -1e-16): it is no
     contact change (``Contacts`` counts such pairs as near-contacts, the same tolerance)."""
-    if packing.shape.kind == "rigid":
-        i, j, _, _, _, r, sigma = overlapping_sites(packing)
-    else:
-        i, j, _, r, sigma = overlapping_pairs(packing)
+    i, j, r, sigma = touching(packing)
     firm = r < (1.0 - tol) * sigma
     lo, hi = np.minimum(i, j)[firm], np.maximum(i, j)[firm]
     return set(zip(lo.tolist(), hi.tolist()))

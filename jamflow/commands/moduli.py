@@ -76,6 +76,8 @@ def run(args) -> int:
         with tqdm(total=moduli.total_relaxations(), desc=Path(path).name, unit="relax", disable=args.quiet,
                   dynamic_ncols=True) as bar:
             result = moduli.compute(packing, observers=[_progress(bar)], checked=checked)
+            bar.total = bar.n  # the sweeps stop a few amplitudes past a yield
+            bar.refresh()
         dphi = float(read_attrs(path).get("dphi_above", math.nan))
         save_moduli(out, path, packing, result, dphi, moduli)
         print(summary_line(path, result))
@@ -99,7 +101,7 @@ def summary_line(path, result) -> str:
     parts = []
     for strain in STRAINS:
         sweep = result.sweep(strain)
-        hess = result.hessian.modulus(strain) if result.hessian else math.nan
+        hess = result.hessian.modulus(strain)
         parts.append(f"{strain.modulus} = {sweep.modulus:.8e} +- {sweep.error:.1e} (Hessian {hess:.8e}, "
                      f"{result.agreement(strain):+.1e}; linear to {sweep.linear_max:.0e}, yield "
                      f"{sweep.yield_strain:.1e} {sweep.yield_reason or '-'})")
@@ -118,8 +120,8 @@ def save_moduli(out, source, packing, result, dphi_above, moduli) -> Path:
                  G=result.G, B=result.B, G_hessian=result.G_hessian, B_hessian=result.B_hessian,
                  yield_strain=result.yield_strain, yield_reason=result.shear.yield_reason,
                  bulk_yield_strain=result.bulk.yield_strain, bulk_yield_reason=result.bulk.yield_reason,
-                 G_affine=h.G_affine if h else math.nan, B_affine=h.B_affine if h else math.nan,
-                 n_extra_zero=h.n_extra_zero if h else -1, n_negative=h.n_negative if h else -1)
+                 G_affine=h.G_affine, B_affine=h.B_affine, n_extra_zero=h.n_extra_zero, n_negative=h.n_negative,
+                 lowest_eigenvalue=h.lowest_eigenvalue)
     for strain in STRAINS:
         sweep, m = result.sweep(strain), strain.modulus
         attrs.update({f"{m}_error": sweep.error, f"{m}_curvature": sweep.curvature, f"{m}_linear_max": sweep.linear_max,
