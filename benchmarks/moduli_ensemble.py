@@ -33,7 +33,7 @@ from jamflow.analysis.sweeps import SweepSettings
 from jamflow.commands.moduli import read_moduli, save_moduli
 from jamflow.io import load_packing, save_packing
 from jamflow.protocols.above import compress_above
-from jamflow.protocols.compression import jam
+from jamflow.protocols.compression import JammingFailed, jam
 
 DPHIS = (1e-6, 3e-6, 1e-5, 3e-5, 1e-4, 3e-4, 1e-3, 3e-3, 1e-2)
 PUBLISHED = {"spring": {"G": 0.5, "B": 0.0, "P": 1.0, "G/B": 0.5}, "hertz": {"G": 1.0, "B": 0.5, "P": 1.5, "G/B": 0.5}}
@@ -50,12 +50,22 @@ def onset(path: Path, n: int, seed: int, potential: str) -> None:
                  protocol=res.settings.as_dict(), history=res.history, lammps_version=res.lammps_version)
 
 
-def above(source: Path, path: Path, dphi: float) -> None:
+def above(source: Path, path: Path, dphi: float) -> bool:
+    """False if the compressed packing relaxed to an unjammed state (recorded in unjammed.csv)."""
+    failed = path.with_name("unjammed.csv")
     if path.exists():
-        return
-    res = compress_above(load_packing(source), dphi)
+        return True
+    if failed.exists() and path.name in failed.read_text().split():
+        return False
+    try:
+        res = compress_above(load_packing(source), dphi)
+    except JammingFailed:
+        with open(failed, "a") as fh:
+            fh.write(path.name + "\n")
+        return False
     save_packing(path, res.packing, energy_per_particle=res.energy_per_particle, pressure_tensor=res.pressure_tensor,
                  protocol={"source": str(source), "above_reason": res.minimization.reason}, dphi_above=dphi)
+    return True
 
 
 def measure(path: Path, out: Path, dphi: float, moduli: Moduli) -> float:
@@ -149,7 +159,8 @@ def main() -> None:
             base = out / f"onset_{pot}_n{args.n}_s{seed}.h5"
             onset(base, args.n, seed, pot)
             path = out / f"above_{pot}_n{args.n}_s{seed}_d{dphi:g}.h5"
-            above(base, path, dphi)
+            if not above(base, path, dphi):
+                continue
             result = path.with_name(path.stem + ".moduli.h5")
             seconds = measure(path, result, dphi, moduli)
             if seconds:

@@ -14,7 +14,8 @@ import time
 from ..engine.base import ENGINES, engine_name
 from ..io import check_writable, save_packing
 from ..minimize import METHODS, MinimizerSettings
-from ..protocols.compression import DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, initial_packing, jam
+from ..protocols.compression import (DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, JammingFailed,
+                                     initial_packing, jam)
 from ..progress import CompressionProgress
 from ..protocols.above import check_dphi, compress_above
 from ..walls import WALL_TYPES, wall_loads
@@ -122,7 +123,10 @@ def run(args) -> int:
 def save_above(args, result, settings, t0) -> int:
     """--above: compress the onset packing by DPHI, minimise, write that packing; the onset's
     phi_J and the minimisation's stop are in the protocol group, its history is the onset's."""
-    above = compress_above(result.packing, args.above, settings.minimizer, engine=args.engine)
+    try:
+        above = compress_above(result.packing, args.above, settings.minimizer, engine=args.engine)
+    except JammingFailed as err:
+        raise ValueError(f"{err} (onset phi_J = {result.phi_j:.10f}; nothing written)") from None
     protocol = {**settings.as_dict(), "engine": above.engine, "phi_onset": result.phi_j, "above_dphi": above.dphi,
                 "above_reason": above.minimization.reason, "above_iterations": above.minimization.iterations}
     wall_forces = wall_loads(above.packing) if above.packing.box.walls else None
