@@ -40,13 +40,13 @@ def _log_response(ax, sweep, hessian_modulus):
     strain = sweep.strain
     a, dr = sweep.strains, sweep.responses - sweep.base_response
     linear_max = sweep.linear_max
-    for sign, marker in ((1, "o"), (-1, "s")):
+    for sign, marker, size in ((1, "o", 7), (-1, "s", 4)):
         pick = np.sign(a) == sign
         x, y = np.abs(a[pick]), np.abs(dr[pick])
         inside = x <= (linear_max if np.isfinite(linear_max) else -1)
-        ax.loglog(x[inside], y[inside], marker, ms=5, color="C0" if sign > 0 else "C1",
+        ax.loglog(x[inside], y[inside], marker, ms=size, color="C0" if sign > 0 else "C1",
                   label=f"{'+' if sign > 0 else '-'}{strain.strain_name}, linear regime")
-        ax.loglog(x[~inside], y[~inside], marker, ms=5, mfc="none", color="C0" if sign > 0 else "C1",
+        ax.loglog(x[~inside], y[~inside], marker, ms=size, mfc="none", color="C0" if sign > 0 else "C1",
                   label=f"{'+' if sign > 0 else '-'}{strain.strain_name}, outside")
     grid = np.geomspace(np.abs(a[a != 0]).min(), np.abs(a).max(), 50)
     if np.isfinite(sweep.modulus):
@@ -84,6 +84,7 @@ def _linear_axes(ax, sweep):
             ax.axvline(s * sweep.yield_strain, color="C3", ls=":")
     ax.set(xlabel=sweep.strain.strain_name, ylabel=f"{sweep.strain.response_name} - {sweep.strain.response_name}_0",
            title="(d) shear stress-strain, linear axes")
+    ax.ticklabel_format(axis="both", style="sci", scilimits=(-2, 2))
     ax.legend(fontsize=7)
 
 
