@@ -30,6 +30,7 @@ SUBCOMMANDS = {
     "export": ("jamflow.commands.export", "write a packing for OVITO and other viewers (LAMMPS dump, extended XYZ)"),
     "shear": ("jamflow.commands.shear", "quasistatic shear of a packing at zero pressure (seed section 2.2)"),
     "families": ("jamflow.commands.families", "geometric families of small disk packings under shear (Figure 2.7)"),
+    "moduli": ("jamflow.commands.moduli", "bulk and shear moduli: strain sweeps and the Hessian route"),
     "crosscheck": ("jamflow.commands.crosscheck", "run the LAMMPS deck and the Python controller from one start and compare"),
     "ensemble": ("jamflow.commands.ensemble", "many packings (seeds x N) on a Dask cluster into a resumable store"),
     "onsets": ("jamflow.commands.onsets", "distribution of jamming onsets of an ensemble store: P(phi_J), W(N), nu"),

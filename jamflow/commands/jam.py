@@ -3,7 +3,9 @@ compression (seed section 2.1) and write the packing as HDF5 (schema: jamflow/io
 With --walls the box is bounded by walls on those axes (smooth or rough); with --gravity the
 particles settle on the floor instead; with --pressure the box relaxes to a target pressure
 (seed section 2.3, jamflow/walls.py, jamflow/protocols/gravity.py, pressure.py); with --gamma the
-periodic cell is sheared to that fixed Lees-Edwards strain (section 2.2, docs/shear.md)."""
+periodic cell is sheared to that fixed Lees-Edwards strain (section 2.2, docs/shear.md). With --above
+DPHI the onset packing is compressed affinely by DPHI and minimised again, and that packing is
+written (attribute dphi_above; the state jamflow moduli measures, seed section 4.5)."""
 
 from __future__ import annotations
 
@@ -17,7 +19,8 @@ from ..minimize import MD_DAMPINGS, METHODS, MinimizerSettings
 from ..protocols.compression import (DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, JammingFailed, at_shear_strain,
                                      check_resolution, initial_packing, jam, with_accumulated_strain)
 from ..progress import CompressionProgress
-from ..walls import WALL_TYPES
+from ..protocols.above import check_dphi, compress_above
+from ..walls import WALL_TYPES, wall_loads
 
 
 def add_arguments(p) -> None:
@@ -43,6 +46,9 @@ def add_arguments(p) -> None:
     p.add_argument("--vtol", type=float, default=1e-16, help="energy window V_tol < V < 2 V_tol (per particle)")
     p.add_argument("--ftol", type=float, default=None, help="max force component tolerance (default scales with box)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the initial positions and sizes")
+    p.add_argument("--above", type=float, default=None, metavar="DPHI",
+                   help="write the packing compressed from its onset by DPHI (phi_J -> phi_J + DPHI, affine) and "
+                        "minimised again (attribute dphi_above): the state jamflow moduli measures")
     p.add_argument("--walls", default=None, metavar="AXES",
                    help="walls on these axes (y, x,y, x,y,z): flat walls at both faces, the particles' own law at "
                         "contact distance a_i/2; periodic along the others; phi between the walls")
@@ -99,6 +105,12 @@ def check_boundary_args(args) -> None:
     if args.emit_deck and (args.pressure is not None or args.gravity or args.wall_type == "rough"):
         raise ValueError("--emit-deck writes the compression deck (smooth walls at most); the constant-pressure deck "
                          "is lammps_inputs/pressure.lmp")
+    above = getattr(args, "above", None)  # jamflow ensemble has no --above
+    if above is not None:
+        check_dphi(above, 0.0)  # not finite, not positive, >= 1: refused before any work
+        if args.pressure is not None or args.gravity or args.emit_deck:
+            raise ValueError("--above compresses the onset packing at a fixed box: it does not combine with "
+                             "--pressure, --gravity or --emit-deck")
 
 
 def prepare(args):
@@ -164,6 +176,8 @@ def run(args) -> int:
     t0 = time.perf_counter()
     with CompressionProgress(disable=args.quiet) as progress:
         result, checks = jam_from_args(args, observers=[progress])
+    if getattr(args, "above", None) is not None:
+        return save_above(args, result, t0)
     save_result(args.out, result, checks, args)
     print(f"{result.summary()}  -> {args.out} ({time.perf_counter() - t0:.2f} s)")
     return 0
@@ -183,6 +197,26 @@ def checked(result, minimizer, v_tol, out):
                             f"{'; '.join(checks.problems())} (final minimisation stopped by '{reason}'). Nothing "
                             f"was written to {out}; use {remedy}")
     return checks
+
+
+def save_above(args, result, t0) -> int:
+    """--above: compress the checked onset packing by DPHI, minimise, write that packing; the
+    onset's phi_J and the minimisation's stop are in the protocol group, its history is the onset's."""
+    settings = result.settings
+    try:
+        above = compress_above(result.packing, args.above, settings.minimizer, engine=args.engine)
+    except JammingFailed as err:
+        raise ValueError(f"{err} (onset phi_J = {result.phi_j:.10f}; nothing written)") from None
+    protocol = {**settings.as_dict(), "engine": above.engine, "phi_onset": result.phi_j, "above_dphi": above.dphi,
+                "above_reason": above.minimization.reason, "above_iterations": above.minimization.iterations}
+    wall_forces = wall_loads(above.packing) if above.packing.box.walls else None
+    with replacing([args.out] if getattr(args, "force", False) else []):
+        save_packing(args.out, above.packing, energy_per_particle=above.energy_per_particle,
+                     pressure_tensor=above.pressure_tensor, protocol=protocol, history=result.history,
+                     lammps_version=result.lammps_version, wall_forces=wall_forces, dphi_above=above.dphi)
+    print(result.summary())
+    print(f"{above.summary()}  -> {args.out} ({time.perf_counter() - t0:.2f} s)")
+    return 0
 
 
 def emit(args, start, settings) -> int:
