@@ -1,7 +1,7 @@
 """Affine remap against the secant predictor (issue 17, item 2), same seeds, same engine:
 iterations per phase, phi_J, CPU seconds, how many starts the secant made, the checks.
 
-    python benchmarks/predictor.py --n 256 --seeds 0 1 2 3 4 --out docs/predictor.csv
+    python benchmarks/predictor.py --n 256 --seeds 0 1 2 3 4 --max-change 0.05 1 --out docs/predictor.csv
 
 Phases of a run (from its history): ``compress`` the minimisations before the first jammed
 state, ``approach`` from there to the one before the final phi, ``final`` the minimisations
@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+import jamflow.protocols.predictor as predictor_module
 from jamflow.checks import check_packing
 from jamflow.protocols.compression import fast_protocol, jam
 
@@ -32,7 +33,8 @@ def phase_iterations(history: dict, v_tol: float) -> dict:
     return {"compress": int(its[:first].sum()), "approach": int(its[first:final].sum()), "final": int(its[final:].sum())}
 
 
-def run(n, dim, seed, predictor) -> dict:
+def run(n, dim, seed, predictor, max_change) -> dict:
+    predictor_module.MAX_NETWORK_CHANGE = max_change
     settings = fast_protocol(predictor=predictor)
     t0, c0 = time.perf_counter(), time.process_time()
     result = jam(n=n, dim=dim, seed=seed, settings=settings)
@@ -40,7 +42,7 @@ def run(n, dim, seed, predictor) -> dict:
     ftol = settings.minimizer.resolved_force_tol(result.packing.box, result.packing.potential.contact_stiffness)
     checks = check_packing(result.packing, result.energy_per_particle, None, settings.v_tol, ftol)
     predicted = result.history.get("predicted", np.zeros(0))
-    return {"n": n, "dim": dim, "seed": seed, "predictor": predictor, "phi_j": f"{result.phi_j:.10f}",
+    return {"n": n, "dim": dim, "seed": seed, "predictor": predictor, "max_change": max_change, "phi_j": f"{result.phi_j:.10f}",
             "iterations": result.iterations, **phase_iterations(result.history, settings.v_tol),
             "minimizations": result.minimizations, "secant_starts": int(np.sum(predicted)),
             "cpu_s": round(cpu, 3), "wall_s": round(wall, 3), "checks": checks.passed,
@@ -53,13 +55,16 @@ def main():
     ap.add_argument("--dim", type=int, default=2)
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3, 4])
     ap.add_argument("--predictors", nargs="+", default=["affine", "secant"])
+    ap.add_argument("--max-change", type=float, nargs="+", default=[predictor_module.MAX_NETWORK_CHANGE],
+                    help="contact-network change allowed by the secant check (1 = no check)")
     ap.add_argument("--out", default="docs/predictor.csv")
     args = ap.parse_args()
     jam(n=16, seed=0)  # numba's first call outside the timings
     out = Path(args.out)
     for seed in args.seeds:
-        for predictor in args.predictors:
-            row = run(args.n, args.dim, seed, predictor)
+        variants = [(p, c) for p in args.predictors for c in (args.max_change if p == "secant" else [0.0])]
+        for predictor, max_change in variants:
+            row = run(args.n, args.dim, seed, predictor, max_change)
             print(" ".join(f"{k}={v}" for k, v in row.items()), flush=True)
             new = not out.exists()
             with out.open("a", newline="") as fh:

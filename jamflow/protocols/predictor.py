@@ -38,8 +38,9 @@ class _Jammed:
 class SecantPredictor:
     """Remembers the last two jammed states of one compression and predicts the next start."""
 
-    def __init__(self, base_box, base_phi: float, dim: int, max_change: float = MAX_NETWORK_CHANGE):
-        self.base_box, self.base_phi, self.dim, self.max_change = base_box, base_phi, dim, max_change
+    def __init__(self, base_box, base_phi: float, dim: int, max_change: float | None = None):
+        self.base_box, self.base_phi, self.dim = base_box, base_phi, dim
+        self.max_change = MAX_NETWORK_CHANGE if max_change is None else max_change
         self.states: list[_Jammed] = []
 
     def _scale(self, phi: float) -> float:
