@@ -25,7 +25,6 @@ from ..engine.base import check_engine, open_engine
 from ..minimize import MinimizerSettings, MinimizeResult
 from ..packing import DENSEST_PHI, Packing, random_packing
 from ..potentials import POTENTIALS, Potential, Spring, parse_potential
-from .predictor import PREDICTORS, SecantPredictor
 from ..shapes.shape import parse_shape
 from ..sizes import SizeSpec, parse_sizes
 from ..walls import parse_walls, wall_loads, with_walls
@@ -54,7 +53,6 @@ class CompressionSettings:
     coarse_v_min: float | None = None  # before the first crossing, V below this counts as unjammed (speed-up)
     approach_force_rtol: float | None = None  # before the final approach: force tol = this x pressure (speed-up)
     coarse_force_tol: float = 1e-10  # force tolerance before the first crossing when approach_force_rtol is set
-    predictor: str = "affine"  # start of the next minimisation: affine remap or "secant" (jamflow.protocols.predictor)
     minimizer: MinimizerSettings = field(default_factory=MinimizerSettings)
 
     def __post_init__(self):
@@ -83,8 +81,6 @@ class CompressionSettings:
             raise ValueError(f"newton_ratio must be a finite number > 1, got {self.newton_ratio}")
         if self.max_steps < 1:
             raise ValueError("max_steps must be a positive integer")
-        if self.predictor not in PREDICTORS:
-            raise ValueError(f"predictor must be one of {', '.join(PREDICTORS)}, got {self.predictor!r}")
 
     def start_phi(self, dim: int, gravity: float = 0.0) -> float:
         """phi0, or the default start for this dimension (a looser one under gravity)."""
@@ -287,13 +283,9 @@ def compress(packing: Packing, settings: CompressionSettings, *, observers=(), e
     stepper = PhiStepper(settings, packing.potential.onset_exponent, mean_volume)
     rows = {c: [] for c in HISTORY_COLUMNS}
     phi, resumes = base_phi, 0
-    predictor = _predictor(packing, settings)
-    predicted = None  # positions of the next start (None: the affine remap)
     with open_engine(packing, settings.minimizer.method, engine, **(engine_options or {})) as sim:
         for step in range(settings.max_steps):
             sim.set_box(base_box.scaled((base_phi / phi) ** (1.0 / packing.dim)))
-            if predicted is not None:
-                sim.set_positions(predicted)
             minimizer = stepper.minimizer()
             result = sim.minimize(minimizer)
             if result.reason == "blown-up":
@@ -302,11 +294,6 @@ def compress(packing: Packing, settings: CompressionSettings, *, observers=(), e
                                     "damping x md_timestep well below 2")
             pressure = sim.state().pressure
             _record(rows, phi, result, pressure, stepper.last_step)
-            if predictor is not None:
-                rows.setdefault("predicted", []).append(predicted is not None)
-                jammed = result.converged and result.reason != "energy-below-vmin" and result.energy_per_particle > settings.v_tol
-                predictor.record(phi, sim.packing(), jammed)
-                predicted = None
             for observe in observers:
                 observe({"step": step, "phi": phi, "dphi": stepper.last_step, "result": result})
             v = result.energy_per_particle
@@ -324,22 +311,9 @@ def compress(packing: Packing, settings: CompressionSettings, *, observers=(), e
             if in_window:
                 return _finish(sim, phi, result, rows, settings, start_time, lammps_version())
             phi = stepper.next_phi(phi, v, pressure, unjammed=result.reason == "energy-below-vmin")
-            if predictor is not None:
-                predicted = predictor.predict(phi, packing)[1]
     raise JammingFailed(f"no packing in the window {settings.v_tol:g} < V < {2 * settings.v_tol:g} after "
                         f"{settings.max_steps} minimisations (last phi = {phi}); raise max_steps or check "
                         "the minimiser's stop reasons in the history")
-
-
-def _predictor(packing: Packing, settings: CompressionSettings) -> SecantPredictor | None:
-    """The secant predictor where asked and written for the scene (disks and spheres in a
-    periodic box); None: every start is the affine remap."""
-    if settings.predictor == "affine":
-        return None
-    if packing.shape.kind != "sphere" or packing.box.walls or packing.fixed is not None:
-        raise ValueError(f"predictor {settings.predictor} is written for disks and spheres in a periodic box; "
-                         "use predictor affine")
-    return SecantPredictor(packing.box, packing.phi, packing.dim)
 
 
 RLJ_MIN_START_RATIO = 0.9  # r/sigma below this: repulsive-LJ forces > ~1e2 eps/sigma, LAMMPS loses atoms
