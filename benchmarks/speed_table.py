@@ -5,6 +5,7 @@ same seeds and starts, with iterations per phase (compress / approach / final, a
 
     python benchmarks/speed_table.py --dim 2 --n 64 256 1024 --seeds 1 2 3 4 5 --handwritten 64 256 1024 --out docs/speed-table.csv
     python benchmarks/speed_table.py --dim 3 --sizes mono --n 512 --seeds 1 2 3 --handwritten 512 --out docs/speed-table.csv
+    python benchmarks/speed_table.py --chart docs/speed-table.csv --png docs/speed-2.png
 
 Whole process: ``python -m jamflow.cli jam ...`` wall and CPU (user + sys) seconds, imports
 and numba's cache load included. In process: ``jam()`` with a warm interpreter. Rows are
@@ -23,6 +24,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
 from predictor import phase_iterations
 from speed_vs_handwritten import handwritten_jam
 
@@ -67,6 +69,51 @@ def handwritten_row(n, dim, sizes, seed, tmp) -> dict:
             "final": "", "minimizations": m, "checks": "", "load": round(os.getloadavg()[0], 2)}
 
 
+PHASES = ("compress", "approach", "final")
+
+
+def chart(csv_path: str, png: str) -> None:
+    """Median CPU seconds per packing against N (jamflow in process and whole process, the
+    hand-written loop) and jamflow's median iterations per phase, one column per dimension."""
+    import statistics
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = list(csv.DictReader(open(csv_path)))
+    dims = sorted({int(r["dim"]) for r in rows})
+    fig, axes = plt.subplots(2, len(dims), figsize=(5.5 * len(dims), 8), squeeze=False)
+    for col, dim in enumerate(dims):
+        mine = [r for r in rows if int(r["dim"]) == dim]
+        ax = axes[0, col]
+        for method, key, label, marker in (("jamflow", "inprocess_cpu_s", "jamflow jam() in process", "o"),
+                                           ("jamflow", "process_cpu_s", "jamflow jam, whole process", "s"),
+                                           ("handwritten", "inprocess_cpu_s", "hand-written LAMMPS loop", "^")):
+            sizes = sorted({int(r["n"]) for r in mine if r["method"] == method and r[key]})
+            med = [statistics.median(float(r[key]) for r in mine if r["method"] == method and int(r["n"]) == n
+                                     and r[key]) for n in sizes]
+            if sizes:
+                ax.loglog(sizes, med, marker=marker, label=label)
+        ax.set(xlabel="N", ylabel="median CPU seconds per packing", title=f"{dim}D ({mine[0]['sizes']})")
+        ax.legend(fontsize=8)
+        ax = axes[1, col]
+        sizes = sorted({int(r["n"]) for r in mine if r["method"] == "jamflow"})
+        med = np.array([[statistics.median(int(r[phase]) for r in mine if r["method"] == "jamflow"
+                                           and int(r["n"]) == n) for n in sizes] for phase in PHASES], float)
+        share, bottom = med / med.sum(axis=0), np.zeros(len(sizes))
+        for phase, part in zip(PHASES, share):
+            ax.bar([str(n) for n in sizes], part, bottom=bottom, label=phase)
+            bottom += part
+        for k, total in enumerate(med.sum(axis=0)):
+            ax.text(k, 1.01, f"{total:,.0f}", ha="center", fontsize=8)
+        ax.set(xlabel="N", ylabel="share of the median FIRE iterations", ylim=(0, 1.1))
+        ax.legend(fontsize=8, loc="lower right")
+    fig.tight_layout()
+    fig.savefig(png, dpi=110)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--dim", type=int, default=2)
@@ -77,7 +124,11 @@ def main():
     ap.add_argument("--handwritten-seeds", type=int, nargs="*", default=None, help="seeds of the baseline (default all)")
     ap.add_argument("--process-max", type=int, default=1024, help="whole-process runs only up to this N")
     ap.add_argument("--out", default="docs/speed-table.csv")
+    ap.add_argument("--chart", default=None, metavar="CSV", help="only draw the chart of this CSV")
+    ap.add_argument("--png", default="docs/speed-2.png")
     args = ap.parse_args()
+    if args.chart:
+        return chart(args.chart, args.png)
     jam(n=16, seed=0)  # numba's cache load outside the in-process timings
     out = Path(args.out)
     with tempfile.TemporaryDirectory() as tmp:
