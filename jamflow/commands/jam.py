@@ -12,7 +12,6 @@ from __future__ import annotations
 import math
 import time
 
-from ..checks import check_packing
 from ..engine.base import ENGINES, engine_name
 from ..io import check_writable, replacing, save_packing
 from ..minimize import MD_DAMPINGS, METHODS, MinimizerSettings
@@ -186,6 +185,8 @@ def run(args) -> int:
 def checked(result, minimizer, v_tol, out):
     """The packing checks of a result; JammingFailed (nothing written) if any fails.
     ``v_tol`` None skips the energy-window check (piles under gravity, constant pressure)."""
+    from ..checks import check_packing  # imported here: its pair search (scipy.spatial) is not needed for --help
+
     packing = result.packing
     ftol = minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness)
     checks = check_packing(packing, result.energy_per_particle, None, v_tol, ftol)

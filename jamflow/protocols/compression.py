@@ -21,10 +21,8 @@ from dataclasses import asdict, dataclass, field, replace
 import numpy as np
 
 from ..box import AXES
-from ..checks import resolution
 from ..engine.base import check_engine, open_engine
 from ..minimize import MinimizerSettings, MinimizeResult
-from ..pairs import overlapping_pairs, overlapping_sites
 from ..packing import DENSEST_PHI, Packing, random_packing
 from ..potentials import POTENTIALS, Potential, Spring, parse_potential
 from ..shapes.shape import parse_shape
@@ -378,6 +376,8 @@ def _check_start(packing: Packing) -> None:
 
 def _deepest_overlap(packing: Packing) -> float:
     """Smallest r/sigma over overlapping pairs (of sites, for rigid bodies); 1.0 without overlaps."""
+    from ..pairs import overlapping_pairs, overlapping_sites  # here, like resolution: scipy.spatial loads lazily
+
     r, sigma = (overlapping_sites(packing) if packing.shape.kind == "rigid" else overlapping_pairs(packing))[-2:]
     return float((r / sigma).min()) if len(r) else 1.0
 
@@ -396,6 +396,8 @@ def check_resolution(packing: Packing, settings: CompressionSettings) -> None:
                          f"for alpha outside [{low:g}, {high:g}] (measured for alpha = 1.5, 4, 6, 8, 10: net forces "
                          "3-66% of the contact forces, docs/hardening.md); use spring, hertz or spring:ALPHA "
                          f"with {low:g} <= ALPHA <= {high:g}")
+    from ..checks import resolution  # imported here: the checks load scipy.spatial, not needed for --help
+
     ftol = settings.minimizer.resolved_force_tol(packing.box, pot.contact_stiffness)
     problem = resolution(packing, settings.v_tol, ftol).problem()
     if problem:
