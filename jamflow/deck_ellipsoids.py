@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from .box import Box
-from .deck import OPTIONAL, _num, checked_inputs, optional_values, render
+from .deck import OPTIONAL, _num, optional_values, protocol_values, render, start_values, system_values
 from .io import atomic_path, write_lammps_data
 from .packing import Packing
 from .potentials import Potential, Spring
@@ -37,15 +37,15 @@ def deck_variables(n: int = 64, dim: int = 2, alpha: float = 1.6, sizes="bi:1.4:
     settings = settings or CompressionSettings()
     shape = Ellipsoid(float(alpha), contact)
     shape.check(dim)
-    d2, fsmall = checked_inputs(potential, sizes, settings)
+    d2, fsmall = system_values(sizes, potential)
     shape.check_sizes(np.array([1.0, d2]), dim)
+    protocol = protocol_values(settings)  # refuses the controller's protocol shortcuts
     m = settings.minimizer
     values = dict(plugin=str(plugin or DEFAULT_PLUGIN), dim=int(dim), N=int(n), alpha=_num(alpha), contact=contact,
-                  d1=1, d2=_num(d2), fsmall=_num(fsmall), seed=int(seed), vtol=_num(settings.v_tol),
-                  dphi0=_num(settings.dphi0), vmin=_num(m.v_min), delta=_num(m.delta), window=m.window,
-                  maxiter=m.max_iterations, mddt=_num(m.md_timestep), damping=_num(m.rotating_damping),
-                  maxsteps=settings.max_steps, skin=_num(0.3), out=str(out))
-    return {**values, **optional_values(settings, data, phi0)}
+                  d1=1, d2=_num(d2), fsmall=_num(fsmall), seed=int(seed),
+                  **{k: protocol[k] for k in ("vtol", "dphi0", "vmin", "delta", "window", "maxiter", "mddt")},
+                  damping=_num(m.rotating_damping), maxsteps=protocol["maxsteps"], skin=protocol["skin"], out=str(out))
+    return {**optional_values(settings), **values, **start_values(settings, data, phi0)}
 
 
 def deck_text(variables: dict | None = None) -> str:
@@ -53,8 +53,8 @@ def deck_text(variables: dict | None = None) -> str:
     from .deck_ellipsoids_script import BODY, HEADER
 
     # the plugin is a required variable of this deck (an optional one of the disk deck)
-    return render(HEADER, BODY, deck_variables() if variables is None else variables,
-                  tuple(k for k in OPTIONAL if k != "plugin"))
+    return render(HEADER, BODY, tuple(k for k in OPTIONAL if k != "plugin"),
+                  deck_variables() if variables is None else variables)
 
 
 def write_deck(path, variables: dict | None = None) -> Path:

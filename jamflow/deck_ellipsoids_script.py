@@ -7,10 +7,10 @@ seed protocol (section 2.1), minimising as ``LammpsEngine`` does for ellipsoids 
 session: fix nve/asphere + fix langevin at T = 0 with angmom; forces and generalized torques
 measured without the drag) and stopping by ``jamflow.minimize``'s rules on both. The window's
 stopping rules and the bisection that follows each minimisation are the disk deck's own text
-(``deck_script.RULES``, ``deck_script.DECIDE``).
+(``deck_script.RULES``, ``deck_script.DECIDE``, ``JAM_SUCCESS``, ``FAIL``).
 """
 
-from .deck_script import DECIDE, LOG_AND_OPTIONS, RULES
+from .deck_script import DECIDE, FAIL, JAM_START_OPTIONS, JAM_SUCCESS, LOG_OPEN, RULES
 
 HEADER = """\
 # jamflow deck: jam N soft ellipses (dim 2) or spheroids (dim 3) at onset by isotropic
@@ -59,7 +59,7 @@ variable skin      index {skin:<12} # neighbour-list skin
 variable out       index {out:<12} # output prefix
 """
 
-_SETUP = "\n" + LOG_AND_OPTIONS + r"""print "# dim ${dim} N ${N} alpha ${alpha} contact ${contact} d1 ${d1} d2 ${d2} phi0 ${phi0} seed ${seed} vtol ${vtol} dphi0 ${dphi0} damping ${damping} ftol ${ftol} data ${data}" append ${jf_logtmp} screen no
+_SETUP = "\n" + LOG_OPEN + JAM_START_OPTIONS + r"""print "# dim ${dim} N ${N} alpha ${alpha} contact ${contact} d1 ${d1} d2 ${d2} phi0 ${phi0} seed ${seed} vtol ${vtol} dphi0 ${dphi0} damping ${damping} ftol ${ftol} data ${data}" append ${jf_logtmp} screen no
 
 # ---- check the parameters before any work ----
 if "${dim} != 2 && ${dim} != 3" then "variable jf_bad string 'dim must be 2 or 3'" "jump SELF jf_fail"
@@ -175,6 +175,7 @@ variable jf_laststep internal 0
 variable jf_iters internal 0
 variable jf_resumes internal 0
 variable jf_cg internal 0
+variable jf_ret string jf_jammed
 print "# step phi V P dphi iterations max_force reason" append ${jf_logtmp} screen no
 
 label jf_step_loop
@@ -226,4 +227,4 @@ variable jf_p internal $((c_jf_press[1]+c_jf_press[2]+ternary(v_dim==3,c_jf_pres
 print "$(v_jf_step) $(v_jf_phi:%.17g) $(v_jf_e:%.17g) $(v_jf_p:%.17g) $(v_jf_laststep:%.17g) $(v_jf_done) $(v_jf_fm:%.17g) ${jf_reason}" append ${jf_logtmp} screen no
 """
 
-BODY = _SETUP + RULES + _MINIMISATION_DONE + DECIDE
+BODY = _SETUP + RULES + _MINIMISATION_DONE + DECIDE + JAM_SUCCESS + FAIL

@@ -13,7 +13,9 @@ epsilon, pressures in epsilon / diameter^d)::
                                    walls (walled axes, "" | "y" | "x,y" | ...), wall_type
                                    ("" | "smooth" | "rough"), gravity (g, 0 without),
                                    target_pressure (NaN at fixed box), stress ("" | "iso" |
-                                   "aniso" | "tri")
+                                   "aniso" | "tri"), dphi_above (NaN, or the step by
+                                   which ``jamflow jam --above`` compressed the onset
+                                   packing: phi = phi_J + dphi_above)
     /positions  (N, d)      float64, Cartesian, wrapped into the cell
     /diameters  (N,)        float64, each particle's size scale (jamflow.packing)
     /box        (d, d)      float64, upper-triangular, columns = cell vectors (LAMMPS tilt)
@@ -151,12 +153,14 @@ def check_writable(path, force: bool = False) -> None:
 
 def save_packing(path, packing: Packing, *, energy_per_particle=None, pressure_tensor=None,
                  protocol: dict | None = None, history: dict | None = None, lammps_version=None,
-                 wall_forces=None, target_pressure=None, stress=None, checks=None, tables=None) -> Path:
+                 wall_forces=None, target_pressure=None, stress=None, checks=None,
+                 dphi_above=None, tables=None) -> Path:
     """Write ``packing`` (and optional results) atomically to the HDF5 file ``path``.
 
     ``wall_forces`` (d, 2, d): the force on each face (``jamflow.walls.wall_loads``).
     ``checks``: a ``jamflow.checks.PackingChecks``, stored as the attributes of group
-    ``checks``. ``tables``: {group: {name: column}}, more groups of datasets (e.g. ``anneal``)."""
+    ``checks``; ``dphi_above``: the compression above onset (``jamflow.protocols.above``).
+    ``tables``: {group: {name: column}}, more groups of datasets (e.g. ``anneal``)."""
     pot = packing.potential
     attrs = dict(
         schema=SCHEMA, schema_version=SCHEMA_VERSION, jamflow_version=__version__,
@@ -168,7 +172,7 @@ def save_packing(path, packing: Packing, *, energy_per_particle=None, pressure_t
         shape=json.dumps(packing.shape.attrs()), shape_spec=packing.shape.spec(packing.dim),
         gamma=packing.box.shear_strain,
         walls=packing.box.wall_spec, wall_type=wall_type(packing), gravity=float(packing.gravity),
-        target_pressure=_num(target_pressure), stress=str(stress or ""),
+        target_pressure=_num(target_pressure), stress=str(stress or ""), dphi_above=_num(dphi_above),
     )
     ptensor = None if pressure_tensor is None else np.asarray(pressure_tensor, float)
     attrs["pressure"] = math.nan if ptensor is None else float(np.trace(ptensor) / packing.dim)

@@ -21,10 +21,8 @@ from dataclasses import asdict, dataclass, field, replace
 import numpy as np
 
 from ..box import AXES
-from ..checks import resolution
 from ..engine.base import check_engine, open_engine
 from ..minimize import MinimizerSettings, MinimizeResult
-from ..pairs import candidate_pairs, overlapping_pairs, overlapping_sites
 from ..packing import DENSEST_PHI, Packing, random_packing
 from ..potentials import POTENTIALS, Potential, Spring, parse_potential
 from ..shapes.shape import parse_shape
@@ -170,7 +168,8 @@ class JammingFailed(RuntimeError):
 def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | Potential = "spring",
         seed: int = 0, settings: CompressionSettings | None = None, *, start: Packing | None = None,
         observers=(), engine: str = "auto", engine_options: dict | None = None, shape="disk",
-        walls=None, wall_type: str = "smooth", gravity: float = 0.0, contact: str = "exact") -> JamResult:
+        walls=None, wall_type: str = "smooth", gravity: float = 0.0, contact: str = "exact",
+        gamma: float | None = None) -> JamResult:
     """Jam N particles by isotropic compression; ``start`` overrides the random start.
 
     ``shape``: a ``--shape`` spec or shape object (``jamflow.shapes``; default disks/spheres);
@@ -181,6 +180,9 @@ def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | 
     compressing it (``jamflow.protocols.gravity``; needs walls on the last axis).
     A start of a potential that diverges at contact (repulsive LJ) with deep overlaps (the
     random one always) is first relaxed with the linear spring (``remove_overlaps``).
+    ``gamma``: jam at this fixed Lees-Edwards shear strain (seed section 2.2; any finite value,
+    the random start placed in the sheared cell, see ``at_shear_strain``); the packing's box
+    carries gamma as its accumulated strain (periodic cells only).
     ``observers`` are callables ``f(step: dict)`` called after every minimisation
     (progress bars, writers). ``engine``: "auto" (the compiled engine wherever it runs the
     scene, else LAMMPS), "lammps" or "numba" (``jamflow.engine.base``).
@@ -191,10 +193,17 @@ def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | 
         raise TypeError(f"settings must be a CompressionSettings, e.g. fast_protocol() or seed_protocol() from "
                         f"jamflow.protocols.compression, got {settings!r}")
     check_engine(engine)
+    if gamma is not None:
+        check_strain(gamma)
+        if start is not None:
+            raise ValueError("gamma sets the strain of the random start; a given start keeps its own box "
+                             "(shear it with start.box.with_shear_strain, or pass gamma=None)")
     random_start = start is None
     if random_start:
         start = initial_packing(n, dim, sizes, potential, seed, settings.start_phi(dim, gravity), shape, walls,
                                 wall_type, gravity, contact)
+        if gamma is not None:
+            start = at_shear_strain(start, gamma)
     elif not isinstance(start, Packing):
         raise TypeError(f"start must be a Packing (or None for a random start), got {type(start).__name__}")
     if start.potential.soft_start and (random_start or _deepest_overlap(start) < RLJ_MIN_START_RATIO):
@@ -203,8 +212,34 @@ def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | 
         from .gravity import settle
 
         return settle(start, settings.minimizer, observers=observers, engine=engine, engine_options=engine_options)
-    return compress(start, settings, observers=observers, engine=engine, engine_options=engine_options)
+    result = compress(start, settings, observers=observers, engine=engine, engine_options=engine_options)
+    return result if gamma is None else with_accumulated_strain(result, gamma)
 
+
+def check_strain(gamma) -> float:
+    """A finite shear strain as a float; ValueError otherwise."""
+    if isinstance(gamma, bool) or not isinstance(gamma, (int, float, np.integer, np.floating)) \
+            or not math.isfinite(gamma):
+        raise ValueError(f"shear strain gamma must be a finite number, got {gamma!r}")
+    return float(gamma)
+
+
+def at_shear_strain(packing: Packing, gamma: float) -> Packing:
+    """``packing`` (particles where they are, Cartesian) in the Lees-Edwards cell at strain
+    ``gamma`` of its cell, held as the reduced strain gamma - k (k the nearest integer, the
+    subtraction exact): cells at gamma and gamma + 1 are one lattice (seed Figure 2.4), so
+    strains that are exactly one apart as doubles run the same floating-point operations.
+    ``with_accumulated_strain`` gives the result its accumulated strain back."""
+    k = math.floor(check_strain(gamma) + 0.5)
+    box = packing.box.with_shear_strain(float(gamma) - k)
+    return packing.with_positions(box.wrap(packing.positions), box=box)
+
+
+def with_accumulated_strain(result: "JamResult", gamma: float) -> "JamResult":
+    """The result with its packing's box tilted to the accumulated strain ``gamma`` (xy = gamma
+    ly; the same lattice as the reduced cell it was jammed in, to round-off in the tilt)."""
+    packing = result.packing  # positions stay as the engine left them (inside the reduced cell)
+    return replace(result, packing=packing.with_positions(packing.positions, box=packing.box.with_shear_strain(gamma)))
 
 
 BYTES_PER_PARTICLE = 4096  # peak memory of a jam run: measured 1.1-2.2 kB per particle at N = 131072 (docs/hardening.md)
@@ -277,49 +312,57 @@ def remove_overlaps(packing: Packing, minimizer: MinimizerSettings, engine: str 
 def compress(packing: Packing, settings: CompressionSettings, *, observers=(), engine: str = "auto",
              engine_options=None) -> JamResult:
     """Run the compression/decompression bisection from ``packing`` (seed steps 2-4)."""
-    from ..engine.lammps_lib import lammps_version
-
     _check_start(packing)
     check_resolution(packing, settings)
     if packing.gravity > 0:
         raise ValueError("a packing under gravity is settled, not compressed: use jam(..., gravity=g) or "
                          "jamflow.protocols.gravity.settle")
+    with open_engine(packing, settings.minimizer.method, engine, **(engine_options or {})) as sim:
+        return bisect(sim, settings, observers=observers)
+
+
+def bisect(sim, settings: CompressionSettings, *, observers=()) -> JamResult:
+    """The bisection on an open engine from its current configuration and box, whose shape
+    (and shear strain) it keeps: every box is the current one scaled (seed steps 2-4). The
+    engine is left holding the jammed packing (the shear protocol continues from it)."""
+    from ..engine.lammps_lib import lammps_version
+
     start_time = time.perf_counter()
-    base_box, base_phi = packing.box, packing.phi
-    mean_volume = packing.phi * packing.box.volume / packing.n_mobile  # the volume phi counts, per mobile particle
-    stepper = PhiStepper(settings, packing.potential.onset_exponent, mean_volume)
+    current = sim.packing()  # phi and the volume it counts (walls: between them) of the current state
+    base_box, base_phi = current.box, current.phi
+    mean_volume = current.phi * current.box.volume / current.n_mobile  # the volume phi counts, per mobile particle
+    stepper = PhiStepper(settings, current.potential.onset_exponent, mean_volume)
     rows = {c: [] for c in HISTORY_COLUMNS}
     phi, resumes = base_phi, 0
-    with open_engine(packing, settings.minimizer.method, engine, **(engine_options or {})) as sim:
-        for step in range(settings.max_steps):
-            sim.set_box(base_box.scaled((base_phi / phi) ** (1.0 / packing.dim)))
-            minimizer = stepper.minimizer()
-            result = sim.minimize(minimizer)
-            if result.reason == "blown-up":
-                raise JammingFailed(f"the minimisation at phi = {phi:.10f} diverged (V = {result.energy_per_particle:.3g}, "
-                                    f"max force {result.max_force:.3g}): lower the timestep, or for damped MD use "
-                                    "damping x md_timestep well below 2")
-            pressure = sim.state().pressure
-            _record(rows, phi, result, pressure, stepper.last_step)
-            for observe in observers:
-                observe({"step": step, "phi": phi, "dphi": stepper.last_step, "result": result})
-            v = result.energy_per_particle
-            loose = minimizer.force_tol != settings.minimizer.force_tol
-            if loose and result.reason != "energy-below-vmin" and v < LOOSE_TRUST * settings.v_tol:
-                stepper.final_approach, stepper.last_step = True, 0.0  # too close to the window to trust
-                continue  # a loose minimum: polish it in place with the full tolerance
-            in_window = settings.v_tol < v < 2 * settings.v_tol and result.reason != "energy-below-vmin"
-            if in_window and result.reason == "iteration-cap" and resumes < WINDOW_RESUMES:
-                # not yet a minimum (near onset FIRE can creep off a saddle for 10^5-10^6
-                # iterations, docs/speed.md): keep minimising before the window decides
-                resumes += 1
-                stepper.last_step = 0.0
-                continue
-            if in_window:
-                jammed = _finish(sim, phi, result, rows, settings, start_time, lammps_version())
-                _warn_fallbacks(jammed)
-                return jammed
-            phi = stepper.next_phi(phi, v, pressure, unjammed=result.reason == "energy-below-vmin")
+    for step in range(settings.max_steps):
+        sim.set_box(base_box.scaled((base_phi / phi) ** (1.0 / current.dim)))
+        minimizer = stepper.minimizer()
+        result = sim.minimize(minimizer)
+        if result.reason == "blown-up":
+            raise JammingFailed(f"the minimisation at phi = {phi:.10f} diverged (V = {result.energy_per_particle:.3g}, "
+                                f"max force {result.max_force:.3g}): lower the timestep, or for damped MD use "
+                                "damping x md_timestep well below 2")
+        pressure = sim.state().pressure
+        _record(rows, phi, result, pressure, stepper.last_step)
+        for observe in observers:
+            observe({"step": step, "phi": phi, "dphi": stepper.last_step, "result": result})
+        v = result.energy_per_particle
+        loose = minimizer.force_tol != settings.minimizer.force_tol
+        if loose and result.reason != "energy-below-vmin" and v < LOOSE_TRUST * settings.v_tol:
+            stepper.final_approach, stepper.last_step = True, 0.0  # too close to the window to trust
+            continue  # a loose minimum: polish it in place with the full tolerance
+        in_window = settings.v_tol < v < 2 * settings.v_tol and result.reason != "energy-below-vmin"
+        if in_window and result.reason == "iteration-cap" and resumes < WINDOW_RESUMES:
+            # not yet a minimum (near onset FIRE can creep off a saddle for 10^5-10^6
+            # iterations, docs/speed.md): keep minimising before the window decides
+            resumes += 1
+            stepper.last_step = 0.0
+            continue
+        if in_window:
+            jammed = _finish(sim, phi, result, rows, settings, start_time, lammps_version())
+            _warn_fallbacks(jammed)
+            return jammed
+        phi = stepper.next_phi(phi, v, pressure, unjammed=result.reason == "energy-below-vmin")
     raise JammingFailed(f"no packing in the window {settings.v_tol:g} < V < {2 * settings.v_tol:g} after "
                         f"{settings.max_steps} minimisations (last phi = {phi}); raise max_steps or check "
                         "the minimiser's stop reasons in the history")
@@ -345,6 +388,8 @@ def _check_start(packing: Packing) -> None:
 
 def _deepest_overlap(packing: Packing) -> float:
     """Smallest r/sigma over overlapping pairs (of sites, for rigid bodies); 1.0 without overlaps."""
+    from ..pairs import overlapping_pairs, overlapping_sites  # here, like resolution: scipy.spatial loads lazily
+
     r, sigma = (overlapping_sites(packing) if packing.shape.kind == "rigid" else overlapping_pairs(packing))[-2:]
     return float((r / sigma).min()) if len(r) else 1.0
 
@@ -363,6 +408,8 @@ def check_resolution(packing: Packing, settings: CompressionSettings) -> None:
                          f"for alpha outside [{low:g}, {high:g}] (measured for alpha = 1.5, 4, 6, 8, 10: net forces "
                          "3-66% of the contact forces, docs/hardening.md); use spring, hertz or spring:ALPHA "
                          f"with {low:g} <= ALPHA <= {high:g}")
+    from ..checks import resolution  # imported here: the checks load scipy.spatial, not needed for --help
+
     ftol = settings.minimizer.resolved_force_tol(packing.box, pot.contact_stiffness, packing.shape.force_tol_base)
     problem = resolution(packing, settings.v_tol, ftol).problem()
     if problem:
@@ -372,6 +419,8 @@ def check_resolution(packing: Packing, settings: CompressionSettings) -> None:
 def _check_contact_range(packing: Packing) -> None:
     """sigma_ij depends on the direction r_hat = r_ij / |r_ij|, known to ~1e-16 L / |r_ij| in a box of
     side L; at r_ij = 0 it is undefined (the contact-distance solver would return NaN)."""
+    from ..pairs import candidate_pairs  # here, like resolution: scipy.spatial loads lazily
+
     reach = packing.shape.reach(packing.diameters)
     i, j = candidate_pairs(packing, 2.0 * float(reach.max()))
     r = np.linalg.norm(packing.box.minimum_image(packing.positions[i] - packing.positions[j]), axis=1)
