@@ -84,7 +84,7 @@ def compress_above(packing: Packing, dphi: float, minimizer: MinimizerSettings |
     if result.reason == "blown-up":
         raise RuntimeError(f"the minimisation at phi = {phi + dphi:.10f} diverged (V = {result.energy_per_particle:.3g}, "
                            f"max force {result.max_force:.3g}); lower the minimiser timestep")
-    if result.reason == "energy-below-vmin":
+    if result.energy_per_particle < minimizer.v_min:  # by either stop: a dilute relaxation can end at F = 0 exactly
         raise JammingFailed(f"the packing compressed by {dphi:g} relaxed to V = {result.energy_per_particle:.2e} < V_min: "
                             "the minimisation rearranged it into a packing that is not jammed at phi_J + dphi (its own "
                             "phi_J lies higher); use a smaller step, or another packing")
