@@ -350,6 +350,11 @@ def test_moduli_command_refuses_every_input_before_work(tmp_path, capsys):
     assert sorted(f.name for f in tmp_path.iterdir()) == ["good.h5", "loose.h5"]
     assert main(["moduli", str(good), "--min-amplitude", "1e-3", "--max-amplitude", "1e-6"]) == 2
     assert main(["moduli", str(tmp_path / "missing.h5")]) == 2
+    capsys.readouterr()
+    assert main(["moduli", str(good), "--min-amplitude", "1e-20", "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "below the round-off scale" in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert sorted(f.name for f in tmp_path.iterdir()) == ["good.h5", "loose.h5"]
 
 
 def test_lattice_file_round_trip_through_the_command(tmp_path):
