@@ -212,7 +212,8 @@ def report(rows, args) -> None:
         fh.write("\n".join(lines) + "\n")
     seeds = len({r["seed"] for r in rows})
     scaling_figure(docs / f"moduli-scaling-{tag}.png", table, fits,
-                   title=f"2D bidisperse disks, N = {args.n}, {seeds} packings per point (sweep G, B)")
+                   title=f"2D bidisperse disks, N = {args.n}, {seeds} packings per point (sweep G, B)",
+                   published=PUBLISHED)
     for pot in sorted({r["potential"] for r in rows}):
         draw_family(args, pot, sorted({r["dphi"] for r in rows if r["potential"] == pot}),
                     docs / f"moduli-stress-strain-{pot}-{tag}.png")
