@@ -61,12 +61,17 @@ def deck_variables(n: int = 256, dim: int = 2, sizes="bi:1.4:0.5", seed: int = 0
     values = dict(dim=int(dim), N=int(n), d1=1, d2=_num(d2), fsmall=_num(fsmall), seed=int(seed),
                   **protocol_values(settings), out=str(out),
                   walls="".join("xyz"[a] for a in parse_walls(walls, int(dim))) or "none")
+    values.update(start_values(settings, data, phi0))
+    values.update(optional_values(settings))
+    return values
+
+
+def start_values(settings: CompressionSettings, data=None, phi0: float | None = None) -> dict:
+    """The deck's start variables that are set (data file, phi0 at full precision)."""
     start_phi = phi0 if phi0 is not None else settings.phi0
     optional = {"data": None if data is None else str(data),
                 "phi0": None if start_phi is None else repr(float(start_phi))}
-    values.update({k: v for k, v in optional.items() if v is not None})
-    values.update(optional_values(settings))
-    return values
+    return {k: v for k, v in optional.items() if v is not None}
 
 
 def system_values(sizes, potential) -> tuple[float, float]:
@@ -192,16 +197,18 @@ def _walls_of(variables: dict) -> tuple:
 
 
 def run_deck(workdir, variables: dict | None = None, *, deck=None, lmp=None, ranks: int = 1,
-             timeout: float | None = None) -> DeckResult:
+             timeout: float | None = None, reader=None) -> DeckResult:
     """Run the deck with ``lmp`` in ``workdir``; raise DeckFailed unless it jammed.
 
     ``deck`` defaults to a fresh copy written into ``workdir``; ``variables`` become
-    ``-var`` arguments (paths in them are used as given, relative to ``workdir``).
+    ``-var`` arguments (paths in them are used as given, relative to ``workdir``);
+    ``reader(path) -> Packing`` reads the final data file (default ``read_data_file``; the ellipse
+    deck's is ``jamflow.deck_ellipsoids.read_ellipsoid_data``).
     """
     workdir = check_workdir(workdir)
     deck = Path(deck) if deck else write_deck(workdir / DECK_NAME)
     prefix, seconds, proc = run_lmp(workdir, deck, variables, "jammed", lmp, ranks, timeout)
-    return read_deck_result(prefix, seconds, proc, periodic=_walls_of(variables or {}))
+    return read_deck_result(prefix, seconds, proc, periodic=_walls_of(variables or {}), reader=reader)
 
 
 def check_workdir(workdir) -> Path:
@@ -226,7 +233,7 @@ def run_lmp(workdir: Path, deck: Path, variables, out_default: str, lmp=None, ra
     return workdir / out, time.perf_counter() - start, proc
 
 
-def read_deck_result(prefix, seconds: float = math.nan, proc=None, periodic=None) -> DeckResult:
+def read_deck_result(prefix, seconds: float = math.nan, proc=None, periodic=None, reader=None) -> DeckResult:
     """Read PREFIX.protocol.txt and PREFIX.data (``periodic``: per axis, False where the deck
     had walls); raise DeckFailed with the deck's reason."""
     prefix = Path(prefix)
@@ -236,7 +243,7 @@ def read_deck_result(prefix, seconds: float = math.nan, proc=None, periodic=None
     history, result = read_protocol(log)
     if result.get("status") != "jammed":
         raise DeckFailed(f"the deck did not jam: {result.get('message', 'no result line in ' + str(log))}")
-    packing = read_data_file(f"{prefix}.data", periodic=periodic)
+    packing = reader(f"{prefix}.data") if reader else read_data_file(f"{prefix}.data", periodic=periodic)
     return DeckResult(packing, float(result["phi_J"]), float(result["V"]), float(result["P"]),
                       float(result["max_force"]), history, seconds, prefix)
 

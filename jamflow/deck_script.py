@@ -113,7 +113,7 @@ _MIRROR_NOTE = r"""
 """
 
 
-_LOG_OPEN = r"""variable jf_log string ${out}.protocol.txt
+LOG_OPEN = r"""variable jf_log string ${out}.protocol.txt
 variable jf_logtmp string ${out}.protocol.txt.partial
 shell rm -f ${jf_logtmp}
 variable jf_hasdata internal $(is_defined(variable,data))
@@ -122,10 +122,13 @@ if "${jf_hasdata} == 0" then "variable data string none"
 if "${jf_autoftol} == 1" then "variable ftol string auto"
 """
 
-_JAM_OPTIONS = r"""print "# jamflow deck: isotropic compression to jamming onset (seed chapter section 2.1)" append ${jf_logtmp} screen no
+# the compression decks' log header and phi0 default (shared with the ellipse deck)
+JAM_START_OPTIONS = r"""print "# jamflow deck: isotropic compression to jamming onset (seed chapter section 2.1)" append ${jf_logtmp} screen no
 variable jf_autophi internal $(!is_defined(variable,phi0))
 if "${jf_autophi} == 1" then "variable phi0 string auto"
-print "# dim ${dim} N ${N} d1 ${d1} d2 ${d2} phi0 ${phi0} seed ${seed} vtol ${vtol} dphi0 ${dphi0} minimizer ${minimizer} ftol ${ftol} data ${data}" append ${jf_logtmp} screen no
+"""
+
+_JAM_OPTIONS = JAM_START_OPTIONS + r"""print "# dim ${dim} N ${N} d1 ${d1} d2 ${d2} phi0 ${phi0} seed ${seed} vtol ${vtol} dphi0 ${dphi0} minimizer ${minimizer} ftol ${ftol} data ${data}" append ${jf_logtmp} screen no
 
 """
 
@@ -276,7 +279,7 @@ print "# step phi V P dphi iterations max_force reason" append ${jf_logtmp} scre
 variable jf_ret string jf_jammed
 """
 
-_BISECT = r"""
+_BISECT_HEAD = r"""
 # ---- the bisection from the current cell (jf_clx, jf_cly, jf_clz, jf_cxy: its shape is kept) and
 # phi = jf_basephi (jamflow/protocols/compression.py bisect); ends with a jump to ${jf_ret} in the window ----
 label jf_bisect
@@ -345,7 +348,12 @@ variable jf_et internal $(v_jf_e+v_jf_md*ke/atoms:%.17g)
 if "${minimizer} == md" then "fix jf_vstore all store/state 0 vx vy vz" "velocity all set 0.0 0.0 0.0" "run 0"
 variable jf_fm internal $(fmax:%.17g)
 if "${minimizer} == md" then "set group all vx v_jf_vx vy v_jf_vy vz v_jf_vz" "unfix jf_vstore"
-variable jf_reason string none
+"""
+
+# the stopping rules of one window (jamflow/minimize.py). Shared with the ellipse deck, which sets
+# jf_e, jf_fm, jf_et (the energy no-progress compares) and jf_vm, jf_vr (the energy-steady rule's
+# mean and rms; 0 switches it off) before them
+RULES = r"""variable jf_reason string none
 variable jf_capped internal 0
 variable jf_conv internal 0
 variable jf_vminstop internal 0
@@ -360,12 +368,18 @@ variable jf_fmprev internal $(v_jf_fm:%.17g)
 variable jf_first internal 0
 jump SELF jf_window
 label jf_min_done
-unfix jf_halt
+"""
+
+_MINIMISATION_DONE = r"""unfix jf_halt
 if "${minimizer} == md" then "unfix jf_nve" "unfix jf_damp" "velocity all set 0.0 0.0 0.0"
 variable jf_iters internal $(v_jf_iters+v_jf_done)
 variable jf_p internal $((c_jf_press[1]+c_jf_press[2]+ternary(v_dim==3,c_jf_press[3],0))/v_dim:%.17g)
 print "$(v_jf_step) $(v_jf_phi:%.17g) $(v_jf_e:%.17g) $(v_jf_p:%.17g) $(v_jf_laststep:%.17g) $(v_jf_done) $(v_jf_fm:%.17g) ${jf_reason}" append ${jf_logtmp} screen no
+"""
 
+# resume a capped state in the window, decide the side, step phi (jumps to ${jf_ret} in the window);
+# shared with the ellipse deck
+DECIDE = r"""
 # ---- a state in the window cut off by the iteration cap is not yet a minimum: minimise it
 # again in place, at most 3 times a run (WINDOW_RESUMES in jamflow/protocols/compression.py) ----
 if "$(v_jf_capped == 1 && v_jf_e > v_vtol && v_jf_e < 2*v_vtol && v_jf_resumes < 3)" then "variable jf_resumes internal $(v_jf_resumes+1)" "variable jf_laststep internal 0" "variable jf_step internal $(v_jf_step+1)" "jump SELF jf_step_loop"
@@ -387,10 +401,12 @@ jump SELF jf_step_loop
 
 """
 
+_BISECT = _BISECT_HEAD + RULES + _MINIMISATION_DONE + DECIDE
+
 _UNCONVERGED = r"""if "${jf_conv} == 0" then "print '# warning: final minimisation stopped by ${jf_reason} with max force $(v_jf_fm:%.2e) (tolerance $(v_jf_ftol:%.1e)): force balance is only that good' append ${jf_logtmp} screen yes"
 """
 
-_JAM_SUCCESS = r"""# ---- success: the final packing as a data file, and the summary line ----
+JAM_SUCCESS = r"""# ---- success: the final packing as a data file, and the summary line ----
 label jf_jammed
 """ + _UNCONVERGED + r"""write_data ${out}.data.partial
 shell mv ${out}.data.partial ${out}.data
@@ -467,7 +483,7 @@ variable jf_tri internal $(v_jf_cxy != 0)
 variable jf_k internal $(floor(v_jf_cxy/v_jf_clx)+(v_jf_cxy/v_jf_clx-floor(v_jf_cxy/v_jf_clx)>=0.5))
 """
 
-_FAIL = r"""label jf_fail
+FAIL = r"""label jf_fail
 print "# result status failed: ${jf_bad}" append ${jf_logtmp} screen no
 shell mv ${jf_logtmp} ${jf_log}
 print "ERROR: jamflow deck: ${jf_bad}"
@@ -500,8 +516,8 @@ jump SELF ${jf_back}
 """
 
 
-BODY = (_MIRROR_NOTE + _LOG_OPEN + _JAM_OPTIONS + _CHECKS + _SYSTEM + _RANDOM_START + _READ_DATA + _ATOMS_READY + _JAM_PHI + _POTENTIAL
-        + _JAM_STATE + _CURRENT_CELL + _BISECT + _JAM_SUCCESS + _FAIL + _SETBOX)
+BODY = (_MIRROR_NOTE + LOG_OPEN + _JAM_OPTIONS + _CHECKS + _SYSTEM + _RANDOM_START + _READ_DATA + _ATOMS_READY + _JAM_PHI + _POTENTIAL
+        + _JAM_STATE + _CURRENT_CELL + _BISECT + JAM_SUCCESS + FAIL + _SETBOX)
 
-SHEAR_BODY = (_MIRROR_NOTE + _LOG_OPEN + _SHEAR_OPTIONS + _CHECKS + _SHEAR_CHECKS_EXTRA + _SYSTEM + _READ_DATA + _ATOMS_READY
-              + _POTENTIAL + _SHEAR_START + _CURRENT_CELL + _SHEAR_PATH + _BISECT + _FAIL + _SETBOX)
+SHEAR_BODY = (_MIRROR_NOTE + LOG_OPEN + _SHEAR_OPTIONS + _CHECKS + _SHEAR_CHECKS_EXTRA + _SYSTEM + _READ_DATA + _ATOMS_READY
+              + _POTENTIAL + _SHEAR_START + _CURRENT_CELL + _SHEAR_PATH + _BISECT + FAIL + _SETBOX)

@@ -154,12 +154,13 @@ def check_writable(path, force: bool = False) -> None:
 def save_packing(path, packing: Packing, *, energy_per_particle=None, pressure_tensor=None,
                  protocol: dict | None = None, history: dict | None = None, lammps_version=None,
                  wall_forces=None, target_pressure=None, stress=None, checks=None,
-                 dphi_above=None) -> Path:
+                 dphi_above=None, tables=None) -> Path:
     """Write ``packing`` (and optional results) atomically to the HDF5 file ``path``.
 
     ``wall_forces`` (d, 2, d): the force on each face (``jamflow.walls.wall_loads``).
     ``checks``: a ``jamflow.checks.PackingChecks``, stored as the attributes of group
-    ``checks``; ``dphi_above``: the compression above onset (``jamflow.protocols.above``)."""
+    ``checks``; ``dphi_above``: the compression above onset (``jamflow.protocols.above``).
+    ``tables``: {group: {name: column}}, more groups of datasets (e.g. ``anneal``)."""
     pot = packing.potential
     attrs = dict(
         schema=SCHEMA, schema_version=SCHEMA_VERSION, jamflow_version=__version__,
@@ -196,6 +197,10 @@ def save_packing(path, packing: Packing, *, energy_per_particle=None, pressure_t
             hist[name] = np.asarray(column)
         if checks is not None:
             f.create_group("checks").attrs.update(checks.as_attrs())
+        for group, columns in (tables or {}).items():
+            g = f.create_group(group)
+            for name, column in columns.items():
+                g[name] = np.asarray(column)
     return Path(path)
 
 
@@ -273,8 +278,13 @@ def shape_datasets(packing: Packing) -> dict:
 
 def read_history(path) -> dict:
     """The protocol history columns of a packing file as numpy arrays."""
-    with open_hdf5(path) as f:
-        return {k: v[...] for k, v in f["history"].items()}
+    return read_table(path, "history")
+
+
+def read_table(path, group: str) -> dict:
+    """The datasets of ``group`` in a packing file (``history``, ``anneal``) as numpy arrays."""
+    with open_hdf5(path) as f:  # a missing group: "incomplete jamflow packing file" naming it
+        return {k: v[...] for k, v in f[group].items()}
 
 
 def read_protocol(path) -> dict:

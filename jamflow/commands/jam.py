@@ -12,7 +12,6 @@ from __future__ import annotations
 import math
 import time
 
-from ..checks import check_packing
 from ..engine.base import ENGINES, engine_name
 from ..io import check_writable, replacing, save_packing
 from ..minimize import MD_DAMPINGS, METHODS, MinimizerSettings
@@ -20,6 +19,7 @@ from ..protocols.compression import (DEFAULT_PROTOCOL, PROTOCOLS, CompressionSet
                                      check_resolution, initial_packing, jam, with_accumulated_strain)
 from ..progress import CompressionProgress
 from ..protocols.above import check_dphi, compress_above
+from ..shapes.contact_distance import METHODS as METHODS_CONTACT
 from ..walls import WALL_TYPES, wall_loads
 
 
@@ -29,13 +29,20 @@ def add_arguments(p) -> None:
     p.add_argument("--sizes", default="bi:1.4:0.5",
                    help="mono | bi:RATIO:FRACTION_SMALL | poly-uniform:WIDTH | poly-normal:WIDTH | poly-lognormal:WIDTH")
     p.add_argument("--potential", default="spring", help="spring | hertz | spring:ALPHA | rlj")
-    p.add_argument("--shape", default="disk", help="particle shape: disk | sphere (the same: round particles); "
-                   "--sizes scales whole particles")
+    p.add_argument("--shape", default="disk", help="particle shape: disk | sphere (the same: round particles) | "
+                   "ellipse:ALPHA (2D, ALPHA = a/b >= 1) | spheroid:ALPHA (3D, ALPHA < 1 oblate); ALPHA = 1 is the "
+                   "disk/sphere. --sizes scales whole particles (b; a = ALPHA b)")
+    p.add_argument("--contact", choices=METHODS_CONTACT, default="exact",
+                   help="contact distance of ellipses/spheroids (seed section 2.3.2): exact (Perram-Wertheim), "
+                        "gaussian (equal sizes only), cleaver, linear, quadratic (3D: equal sizes only); "
+                        "docs/contact-distance.md")
     p.add_argument("--protocol", choices=sorted(PROTOCOLS), default=None,
                    help=f"seed: the chapter's constant-increment bisection; fast: the same stopping rule with "
                         f"growing increments and Newton jumps (docs/speed.md). Default {DEFAULT_PROTOCOL}; "
                         "seed with --emit-deck (decks run the seed protocol)")
-    p.add_argument("--minimizer", choices=METHODS, default="fire", help="energy minimiser")
+    p.add_argument("--minimizer", choices=METHODS, default="fire",
+                   help="energy minimiser; ellipses/spheroids: fire (compiled engine, over positions and "
+                        "orientations) or md (LAMMPS damped dynamics with rotations; no LAMMPS minimiser turns them)")
     add_md_damping_argument(p)
     p.add_argument("--engine", choices=ENGINES, default="auto",
                    help="auto: the compiled engine (FIRE, in process) wherever it runs the scene, else LAMMPS "
@@ -123,7 +130,7 @@ def prepare(args):
         raise ValueError("--gamma fixes the shear strain, --pressure relaxes the box: use one of them")
     start = initial_packing(args.n, args.dim, args.sizes, args.potential, args.seed,
                             settings.start_phi(args.dim, args.gravity), args.shape, args.walls, args.wall_type,
-                            args.gravity)
+                            args.gravity, args.contact)
     if gamma is not None:
         start = at_shear_strain(start, gamma)  # refuses a strain that is not finite, or walls with a shear
     if args.pressure is not None:
@@ -186,8 +193,10 @@ def run(args) -> int:
 def checked(result, minimizer, v_tol, out):
     """The packing checks of a result; JammingFailed (nothing written) if any fails.
     ``v_tol`` None skips the energy-window check (piles under gravity, constant pressure)."""
+    from ..checks import check_packing  # imported here: its pair search (scipy.spatial) is not needed for --help
+
     packing = result.packing
-    ftol = minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness)
+    ftol = minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness, packing.shape.force_tol_base)
     checks = check_packing(packing, result.energy_per_particle, None, v_tol, ftol)
     if not checks.passed:
         reason = result.history["reason"][-1].decode()
@@ -220,14 +229,20 @@ def save_above(args, result, t0) -> int:
 
 
 def emit(args, start, settings) -> int:
-    """--emit-deck: the deck and start data file, no LAMMPS run."""
+    """--emit-deck: the deck and start data file, no LAMMPS run (ellipses/spheroids: the ellipse
+    deck, lammps_inputs/jam-ellipses.lmp, which minimises by damped dynamics with rotations)."""
     from pathlib import Path
 
     from ..deck import emit_deck
+    from ..deck_ellipsoids import emit_deck as emit_ellipsoid_deck
 
+    kind = start.shape.kind
+    if kind not in ("sphere", "ellipsoid"):
+        raise ValueError(f"--emit-deck writes decks for disks/spheres and ellipses/spheroids, not {start.shape.name(start.dim)}")
     check_writable(args.emit_deck)
     check_writable(Path(args.emit_deck).with_name(Path(args.emit_deck).stem + ".start.data"))
-    deck, data = emit_deck(args.emit_deck, start, settings, out=Path(args.out).stem)
+    writer = emit_ellipsoid_deck if kind == "ellipsoid" else emit_deck
+    deck, data = writer(args.emit_deck, start, settings, out=Path(args.out).stem)
     print(f"wrote {deck} and {data}; run: cd {deck.parent} && lmp -in {deck.name}  "
           f"(writes {Path(args.out).stem}.data and {Path(args.out).stem}.protocol.txt)")
     return 0

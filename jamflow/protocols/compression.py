@@ -21,10 +21,8 @@ from dataclasses import asdict, dataclass, field, replace
 import numpy as np
 
 from ..box import AXES
-from ..checks import resolution
 from ..engine.base import check_engine, open_engine
 from ..minimize import MinimizerSettings, MinimizeResult
-from ..pairs import overlapping_pairs, overlapping_sites
 from ..packing import DENSEST_PHI, Packing, random_packing
 from ..potentials import POTENTIALS, Potential, Spring, parse_potential
 from ..shapes.shape import parse_shape
@@ -133,6 +131,7 @@ class JamResult:
     engine: str = "lammps"  # which engine minimised: "lammps" or "numba"
     max_torque: float = 0.0  # largest generalized torque component tau / d_k (0 for disks, spheres)
     wall_forces: np.ndarray | None = None  # (d, 2, d) force of the particles on each face (walled boxes)
+    counters: dict = field(default_factory=dict)  # what the engine's kernel counted (ellipsoids: fallbacks, ...)
 
     @property
     def pressure(self) -> float:
@@ -169,10 +168,13 @@ class JammingFailed(RuntimeError):
 def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | Potential = "spring",
         seed: int = 0, settings: CompressionSettings | None = None, *, start: Packing | None = None,
         observers=(), engine: str = "auto", engine_options: dict | None = None, shape="disk",
-        walls=None, wall_type: str = "smooth", gravity: float = 0.0, gamma: float | None = None) -> JamResult:
+        walls=None, wall_type: str = "smooth", gravity: float = 0.0, contact: str = "exact",
+        gamma: float | None = None) -> JamResult:
     """Jam N particles by isotropic compression; ``start`` overrides the random start.
 
-    ``shape``: a ``--shape`` spec or shape object (``jamflow.shapes``; default disks/spheres).
+    ``shape``: a ``--shape`` spec or shape object (``jamflow.shapes``; default disks/spheres);
+    ``sizes`` scale whole particles (an ellipse's b; a = ALPHA b). ``contact``: the contact-distance
+    method of ellipses/spheroids (exact, gaussian, cleaver, linear, quadratic).
     ``walls``: walled axes (``"y"``, ``"x,y"``, ...; ``jamflow.walls``) of ``wall_type``
     smooth or rough. ``gravity`` g > 0 settles the packing on the floor instead of
     compressing it (``jamflow.protocols.gravity``; needs walls on the last axis).
@@ -199,7 +201,7 @@ def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | 
     random_start = start is None
     if random_start:
         start = initial_packing(n, dim, sizes, potential, seed, settings.start_phi(dim, gravity), shape, walls,
-                                wall_type, gravity)
+                                wall_type, gravity, contact)
         if gamma is not None:
             start = at_shear_strain(start, gamma)
     elif not isinstance(start, Packing):
@@ -245,9 +247,9 @@ MAX_SEED = 2**63 - 1  # seeds are stored as int64 in the packing file
 
 
 def initial_packing(n, dim, sizes, potential, seed, phi0, shape="disk", walls=None, wall_type="smooth",
-                    gravity=0.0) -> Packing:
+                    gravity=0.0, contact="exact") -> Packing:
     """Validated random start (seed step 1), with walls and gravity if given; errors before any
-    engine work."""
+    engine work. ``contact``: the contact-distance method of ellipses/spheroids."""
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
         raise ValueError(f"n must be an integer >= 2, got {n!r}")
     if isinstance(dim, bool) or not isinstance(dim, (int, np.integer)) or dim not in (2, 3):
@@ -262,12 +264,14 @@ def initial_packing(n, dim, sizes, potential, seed, phi0, shape="disk", walls=No
     size_spec = parse_sizes(sizes) if isinstance(sizes, str) else sizes
     if not isinstance(size_spec, SizeSpec):
         raise TypeError(f"sizes must be a spec string such as 'bi:1.4:0.5' or a SizeSpec, got {sizes!r}")
-    particle = parse_shape(shape, int(dim))
+    particle = parse_shape(shape, int(dim), contact)
     axes = parse_walls(walls, int(dim))
     try:
         start = random_packing(int(n), int(dim), size_spec, phi0, int(seed), pot, particle)
     except ValueError as err:
-        raise ValueError(f"{err} (n = {n} is too small for these sizes)") from None
+        if "box too small" in str(err):
+            raise ValueError(f"{err} (n = {n} is too small for these sizes)") from None
+        raise
     return replace(with_walls(start, axes, wall_type), gravity=gravity)
 
 
@@ -355,7 +359,9 @@ def bisect(sim, settings: CompressionSettings, *, observers=()) -> JamResult:
             stepper.last_step = 0.0
             continue
         if in_window:
-            return _finish(sim, phi, result, rows, settings, start_time, lammps_version())
+            jammed = _finish(sim, phi, result, rows, settings, start_time, lammps_version())
+            _warn_fallbacks(jammed)
+            return jammed
         phi = stepper.next_phi(phi, v, pressure, unjammed=result.reason == "energy-below-vmin")
     raise JammingFailed(f"no packing in the window {settings.v_tol:g} < V < {2 * settings.v_tol:g} after "
                         f"{settings.max_steps} minimisations (last phi = {phi}); raise max_steps or check "
@@ -363,10 +369,14 @@ def bisect(sim, settings: CompressionSettings, *, observers=()) -> JamResult:
 
 
 RLJ_MIN_START_RATIO = 0.9  # r/sigma below this: repulsive-LJ forces > ~1e2 eps/sigma, LAMMPS loses atoms
+CONTACT_RANGE = 1e-6  # ellipsoids: r / (smallest possible sigma) below this leaves r_hat, hence sigma, imprecise
 
 
 def _check_start(packing: Packing) -> None:
-    """Refuse a repulsive-LJ start with deep overlaps before any work (seed step 1)."""
+    """Refuse before any work a start the engines cannot evaluate: ellipses/spheroids with centres so
+    close that the contact distance is undefined or imprecise, repulsive LJ with deep overlaps."""
+    if packing.shape.kind == "ellipsoid":
+        _check_contact_range(packing)
     if not packing.potential.soft_start:
         return
     deepest = _deepest_overlap(packing)
@@ -378,6 +388,8 @@ def _check_start(packing: Packing) -> None:
 
 def _deepest_overlap(packing: Packing) -> float:
     """Smallest r/sigma over overlapping pairs (of sites, for rigid bodies); 1.0 without overlaps."""
+    from ..pairs import overlapping_pairs, overlapping_sites  # here, like resolution: scipy.spatial loads lazily
+
     r, sigma = (overlapping_sites(packing) if packing.shape.kind == "rigid" else overlapping_pairs(packing))[-2:]
     return float((r / sigma).min()) if len(r) else 1.0
 
@@ -396,10 +408,40 @@ def check_resolution(packing: Packing, settings: CompressionSettings) -> None:
                          f"for alpha outside [{low:g}, {high:g}] (measured for alpha = 1.5, 4, 6, 8, 10: net forces "
                          "3-66% of the contact forces, docs/hardening.md); use spring, hertz or spring:ALPHA "
                          f"with {low:g} <= ALPHA <= {high:g}")
-    ftol = settings.minimizer.resolved_force_tol(packing.box, pot.contact_stiffness)
+    from ..checks import resolution  # imported here: the checks load scipy.spatial, not needed for --help
+
+    ftol = settings.minimizer.resolved_force_tol(packing.box, pot.contact_stiffness, packing.shape.force_tol_base)
     problem = resolution(packing, settings.v_tol, ftol).problem()
     if problem:
         raise ValueError(f"{problem} (N = {packing.n}, potential {pot.spec}, box side {packing.box.lengths.max():.3g})")
+
+
+def _check_contact_range(packing: Packing) -> None:
+    """sigma_ij depends on the direction r_hat = r_ij / |r_ij|, known to ~1e-16 L / |r_ij| in a box of
+    side L; at r_ij = 0 it is undefined (the contact-distance solver would return NaN)."""
+    from ..pairs import candidate_pairs  # here, like resolution: scipy.spatial loads lazily
+
+    reach = packing.shape.reach(packing.diameters)
+    i, j = candidate_pairs(packing, 2.0 * float(reach.max()))
+    r = np.linalg.norm(packing.box.minimum_image(packing.positions[i] - packing.positions[j]), axis=1)
+    shortest = packing.shape.axes(packing.diameters).min(axis=1)
+    ratio = r / (0.5 * (shortest[i] + shortest[j]))  # <= r / sigma_ij
+    if len(ratio) and ratio.min() < CONTACT_RANGE:
+        k = int(np.argmin(ratio))
+        raise ValueError(f"the start is too dense for the contact distance: particles {i[k]} and {j[k]} have centres "
+                         f"{r[k]:.3g} apart (r/sigma <= {ratio[k]:.2g} < {CONTACT_RANGE:g}), where the direction r_hat, "
+                         "and with it sigma_ij, is undefined or imprecise; use a lower phi0 or another seed, or "
+                         "separate the pair")
+
+
+def _warn_fallbacks(result: JamResult) -> None:
+    """Warn when a truncated contact distance (linear, quadratic) fell back to lambda = 1/2."""
+    fallbacks, evaluations = result.counters.get("fallbacks", 0), result.counters.get("approximate", 0)
+    if fallbacks:
+        warnings.warn(f"contact method {result.packing.shape.contact}: the truncated root left (0, 1) and lambda "
+                      f"fell back to 1/2 in {fallbacks} of {evaluations} contact evaluations "
+                      f"({100 * fallbacks / max(evaluations, 1):.2g} %) during this run; there sigma is Cleaver's "
+                      "(eq. 2.6), and it jumps where the root leaves. Use --contact exact to avoid it", stacklevel=3)
 
 
 class PhiStepper:
@@ -505,11 +547,14 @@ def _finish(engine, phi, result, rows, settings, start_time, version) -> JamResu
     state = engine.state()
     packing = engine.packing()
     if not result.converged:
+        tol = settings.minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness,
+                                                    packing.shape.force_tol_base)
         warnings.warn(f"final minimisation stopped by '{result.reason}' with max force {result.max_force:.2e} "
-                      f"(tolerance {settings.minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness):.1e}); the packing is in "
-                      "the energy window but force balance is only as good as that max force", stacklevel=3)
+                      f"(tolerance {tol:.1e}); the packing is in the energy window but force balance is only as "
+                      "good as that max force", stacklevel=3)
     history = {k: np.array(v) for k, v in rows.items()}
     history["reason"] = history["reason"].astype("S")
+    counters = engine.counters() if hasattr(engine, "counters") else {}
     return JamResult(packing, phi, result.energy_per_particle, state.pressure_tensor, result.max_force,
                      history, settings, time.perf_counter() - start_time, version, engine.name, result.max_torque,
-                     wall_loads(packing) if packing.box.walls else None)
+                     wall_loads(packing) if packing.box.walls else None, counters)
