@@ -305,6 +305,18 @@ def test_compress_above_reaches_phi_and_force_balance():
     assert above.dphi == 1e-4 and above.phi_onset == onset.packing.phi
 
 
+def test_compress_above_refuses_a_packing_that_relaxes_unjammed():
+    """A dilute start with overlaps (V > 0 but far below phi_J) relaxes to V < V_min after the step:
+    JammingFailed, not a packing 'above onset' with no contacts."""
+    from jamflow.packing import random_packing
+    from jamflow.sizes import parse_sizes
+    from jamflow.protocols.compression import JammingFailed
+
+    dilute = random_packing(32, 2, parse_sizes("bi:1.4:0.5"), phi=0.5, seed=0)
+    with pytest.raises(JammingFailed, match="not jammed at phi_J"):
+        compress_above(dilute, 1e-4)
+
+
 @pytest.mark.parametrize("value", ["-1e-4", "0", "nan", "inf", "1.5"])
 def test_jam_above_refuses_bad_steps_before_work(value, tmp_path, capsys):
     assert main(["jam", "--n", "32", f"--above={value}", "--out", str(tmp_path / "p.h5"), "--quiet"]) == 2
@@ -341,6 +353,11 @@ def test_moduli_command_refuses_every_input_before_work(tmp_path, capsys):
     assert sorted(f.name for f in tmp_path.iterdir()) == ["good.h5", "loose.h5"]
     assert main(["moduli", str(good), "--min-amplitude", "1e-3", "--max-amplitude", "1e-6"]) == 2
     assert main(["moduli", str(tmp_path / "missing.h5")]) == 2
+    capsys.readouterr()
+    assert main(["moduli", str(good), "--min-amplitude", "1e-20", "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "below the round-off scale" in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert sorted(f.name for f in tmp_path.iterdir()) == ["good.h5", "loose.h5"]
 
 
 def test_lattice_file_round_trip_through_the_command(tmp_path):

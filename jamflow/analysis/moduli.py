@@ -10,7 +10,7 @@
 
 ``Moduli.check`` refuses, before any work, a packing the moduli are not defined for (walls,
 gravity or fixed particles; V below the seed's V_min = 1e-16, i.e. not jammed; every particle a
-floater; a scene no engine relaxes, e.g. ellipses before their compiled kernel) and a sweep
+floater; a scene no engine relaxes) and a sweep
 whose smallest amplitude lies below the round-off scale of the response
 (``sweeps.roundoff_amplitude``, from the Hessian moduli of the input). The measurement is of the packing as
 it is: nothing is compressed or re-jammed (``jamflow jam --above`` makes the packings).

@@ -118,9 +118,10 @@ def family_figure(path, curves: dict, title: str = "") -> Path:
     return _save(fig, path)
 
 
-def scaling_figure(path, table: dict, fits: dict, title: str = "") -> Path:
+def scaling_figure(path, table: dict, fits: dict, title: str = "", published: dict | None = None) -> Path:
     """``table``: {potential: {quantity: (dphi, mean, standard error)}} for quantities G, B, P,
-    G/B; ``fits``: {(potential, quantity): (exponent, error, prefactor)}."""
+    G/B; ``fits``: {(potential, quantity): (exponent, error, prefactor)}; ``published``:
+    {potential: {quantity: exponent}}, drawn dashed through the data's geometric mean."""
     fig, axes = _new((11, 8.5), 2, 2)
     labels = {"G": "G", "B": "B", "P": "P", "G/B": "G / B"}
     for ax, quantity in zip(axes.ravel(), ("G", "B", "P", "G/B")):
@@ -132,6 +133,12 @@ def scaling_figure(path, table: dict, fits: dict, title: str = "") -> Path:
                 exponent, error, prefactor = fit
                 ax.plot(x, prefactor * x**exponent, "-", color=f"C{k}", lw=1,
                         label=f"{potential}: slope {exponent:.3f} +- {error:.3f}")
+            slope = (published or {}).get(potential, {}).get(quantity)
+            good = np.isfinite(y) & (y > 0)
+            if slope is not None and good.any():
+                x0, y0 = np.exp(np.mean(np.log(x[good]))), np.exp(np.mean(np.log(y[good])))
+                ax.plot(x, y0 * (x / x0) ** slope, "--", color=f"C{k}", lw=0.8, alpha=0.6,
+                        label=f"{potential}: published slope {slope:g}")
         ax.set(xscale="log", yscale="log", xlabel="phi - phi_J", ylabel=labels[quantity], title=labels[quantity])
         ax.legend(fontsize=7)
     fig.suptitle(title)

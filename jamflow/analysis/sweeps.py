@@ -52,7 +52,7 @@ NEAR_TOL = Contacts().near_tol  # |r / sigma - 1| below this: touching at round-
 
 def sweep_minimizer(packing: Packing) -> MinimizerSettings:
     """FIRE relaxing to the round-off floor: at the default tolerance (1e-14 eps/diameter) the
-    response of N = 256 disks errs by ~4e-15 eps/diameter^2, at the floor by ~4e-16 (docs/moduli.md)."""
+    response of N = 256 disks errs by ~4e-15 eps/diameter^2, at the floor by ~4e-16."""
     tol = MinimizerSettings().resolved_force_tol(packing.box, packing.potential.contact_stiffness)
     return MinimizerSettings(force_tol=FLOOR_FACTOR * tol, window=SWEEP_WINDOW, max_iterations=SWEEP_MAX_ITERATIONS)
 
