@@ -13,7 +13,13 @@
   repeated until nothing changes.
 - Shapes: ellipses/spheroids touch when r_ij < sigma_ij with the shape's contact distance;
   rigid bodies are in contact when any two of their sites overlap (one contact per pair of
-  bodies, however many site pairs touch).
+  bodies, however many site pairs touch); ``n_site_contacts`` counts the overlapping site pairs.
+- Concave bodies need more care than the convex rule d_f + 1: a rigid body whose contacts all
+  touch one of its sites turns freely about that site's centre, since every contact force passes
+  through it (the "rotational rattlers" of 2D dimers, Shiraishi, Mizuno, Ikeda, PRE 100, 012606
+  (2019)). Such bodies (``one_site``) keep their d_f + 1 contacts and are not floaters by the
+  convex rule, but have d_f - d free rotations (zero modes); ``free_rotations`` counts them and
+  ``isostatic_count - free_rotations`` is the isostatic count without them.
 - N' = N - N_f, N_c = contacts among non-floaters, <z> = 2 N_c / N',
   N_c,iso = N' d_f - d + 1 (d trivial translations subtracted, one added for phi); packings
   of particles that turn are generally hypostatic (N_c < N_c,iso, seed section 4.1).
@@ -27,7 +33,8 @@ import numpy as np
 from scipy.optimize import linprog
 
 from ..packing import Packing
-from ..pairs import candidate_pairs, contact_distances, particle_contacts, separations, site_packing
+from ..pairs import (candidate_pairs, contact_distances, overlapping_sites, particle_contacts, separations,
+                     site_packing)
 
 
 @dataclass(frozen=True)
@@ -42,6 +49,8 @@ class ContactsResult:
     n_overlapping: int  # overlapping pairs before floater removal
     n_near_contact: int  # pairs with |r/sigma - 1| < near_tol (diagnostic)
     dof: int | None = None  # d_f, degrees of freedom per particle (None: d, disks and spheres)
+    n_site_contacts: int | None = None  # rigid bodies: overlapping site pairs among non-floaters
+    one_site: np.ndarray | None = None  # rigid bodies (N,) bool: a non-floater whose contacts all touch one site
 
     @property
     def n_floaters(self) -> int:
@@ -77,6 +86,13 @@ class ContactsResult:
     def excess_contacts(self) -> int:
         """N_c - N_c,iso: 0 isostatic, > 0 hyperstatic, < 0 hypostatic."""
         return self.n_contacts - self.isostatic_count
+
+    @property
+    def free_rotations(self) -> int:
+        """Rotations left free by contacts that all touch one site: (d_f - d) per ``one_site`` body."""
+        if self.one_site is None:
+            return 0
+        return int(self.one_site.sum()) * ((self.dim if self.dof is None else self.dof) - self.dim)
 
     @property
     def is_isostatic(self) -> bool:
@@ -115,8 +131,20 @@ class Contacts:
         floater = find_floaters(packing.n, i, j, unit, need, half_space)
         keep = ~floater[i] & ~floater[j]
         z = np.bincount(i[keep], minlength=packing.n) + np.bincount(j[keep], minlength=packing.n)
+        sites = site_contacts(packing, floater) if packing.shape.kind == "rigid" else (None, None)
         return ContactsResult(i[keep], j[keep], floater, z, packing.dim, len(i),
-                              near_contact_count(packing, self.near_tol), d_f)
+                              near_contact_count(packing, self.near_tol), d_f, *sites)
+
+
+def site_contacts(packing: Packing, floater: np.ndarray) -> tuple[int, np.ndarray]:
+    """Rigid bodies: (overlapping site pairs among non-floaters, (N,) mask of non-floaters whose
+    contacts all touch one of their sites)."""
+    bi, bj, s, t, *_ = overlapping_sites(packing)
+    live = ~floater[bi] & ~floater[bj]
+    owner, site = np.concatenate([bi[live], bj[live]]), np.concatenate([s[live], t[live]])
+    touched = np.unique(np.column_stack([owner, site]), axis=0) if len(owner) else np.empty((0, 2), int)
+    n_touched = np.bincount(touched[:, 0], minlength=packing.n)
+    return int(live.sum()), ~floater & (n_touched == 1)
 
 
 def find_floaters(n: int, i, j, unit, need: int, half_space: bool = True) -> np.ndarray:

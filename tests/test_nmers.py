@@ -1,0 +1,226 @@
+"""Rigid n-mers (issue 14): the --shape specs nmer/dimer/trimer, their geometry against the
+definitions of jamflow.shapes.nmers, closed-form union volumes, the site masses LAMMPS needs,
+and the refusals of bad input."""
+
+import math
+
+import numpy as np
+import pytest
+
+from jamflow.cli import main
+from jamflow.shapes import SPHERE, RigidBody, parse_shape
+from jamflow.shapes.nmers import trimer_max_bend
+from jamflow.shapes.union import union_moments
+
+
+def extent(body: RigidBody, axis: np.ndarray) -> float:
+    """Length of the body's union along a unit axis (tip to tip)."""
+    along = body.sites @ axis
+    return float(np.max(along + 0.5 * body.site_diameters) - np.min(along - 0.5 * body.site_diameters))
+
+
+def end_axis(body: RigidBody, ends=(0, -1)) -> np.ndarray:
+    u = body.sites[ends[1]] - body.sites[ends[0]]
+    return u / np.linalg.norm(u)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("n,alpha", [(2, 1.2), (2, 2.0), (3, 1.5), (3, 3.0), (5, 4.2)])
+def test_linear_nmer_geometry(n, alpha, dim):
+    """N equal sites on a line, equally spaced, tip-to-tip length L = ALPHA D (D = 1)."""
+    body = parse_shape(f"nmer:{n}:{alpha}", dim)
+    assert body.n_sites == n and body.linear and np.all(body.site_diameters == 1.0)
+    x = np.sort(body.sites[:, 0])
+    assert np.allclose(np.diff(x), (alpha - 1) / (n - 1), rtol=1e-13)
+    assert extent(body, np.eye(dim)[0]) == pytest.approx(alpha, rel=1e-13)
+    assert body.dof(dim) == (3 if dim == 2 else 5)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("alpha,s", [(1.3, 0.5), (1.5, 0.7), (1.7, 0.7), (1.8, 1.0)])
+def test_asymmetric_dimer_geometry(alpha, s, dim):
+    """Sites D1 = 1 and D2 = S, tip-to-tip length ALPHA D1."""
+    body = parse_shape(f"dimer:{alpha}:{s}", dim)
+    assert sorted(body.site_diameters) == sorted([1.0, s])
+    assert extent(body, end_axis(body)) == pytest.approx(alpha, rel=1e-13)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("alpha,c", [(2.0, 0.3), (1.5, 0.2), (2.5, 0.1), (2.0, 0.0)])
+def test_bent_trimer_geometry(alpha, c, dim):
+    """Outer sites tip to tip L = ALPHA along their line, the middle site at height h = C L."""
+    body = parse_shape(f"trimer:{alpha}:{c}", dim)
+    outer, middle = body.sites[[0, 2]], body.sites[1]
+    axis = end_axis(body, (0, 2))
+    assert extent(RigidBody(outer, [1.0, 1.0], fused=False), axis) == pytest.approx(alpha, rel=1e-12)
+    foot = outer[0] + ((middle - outer[0]) @ axis) * axis
+    assert np.linalg.norm(middle - foot) == pytest.approx(c * alpha, abs=1e-13)
+    assert np.linalg.norm(foot - outer.mean(axis=0)) < 1e-13  # above the midpoint
+    assert body.dof(dim) == (3 if dim == 2 else (5 if c == 0 else 6))
+
+
+def lens_area(d, l):
+    """Overlap area of two disks of diameter d at centre distance l."""
+    r = d / 2
+    return 2 * r * r * math.acos(l / (2 * r)) - 0.5 * l * math.sqrt(4 * r * r - l * l)
+
+
+@pytest.mark.parametrize("alpha", [1.05, 1.5, 1.99, 2.0])
+def test_dimer_volumes_closed_form(alpha):
+    """Union of two unit disks / spheres at distance l = ALPHA - 1: 2 v - lens (spherical-cap
+    lens pi (4r + l)(2r - l)^2 / 12 in 3D)."""
+    l, r = alpha - 1.0, 0.5
+    area = 2 * math.pi / 4 - (lens_area(1.0, l) if l < 1 else 0.0)
+    volume = 2 * math.pi / 6 - math.pi * (4 * r + l) * (2 * r - l) ** 2 / 12
+    assert parse_shape(f"nmer:2:{alpha}", 2).volumes([1.0], 2)[0] == pytest.approx(area, rel=1e-13)
+    assert parse_shape(f"nmer:2:{alpha}", 3).volumes([1.0], 3)[0] == pytest.approx(volume, rel=1e-11)
+    assert parse_shape(f"nmer:2:{alpha}", 2).volumes([1.4], 2)[0] == pytest.approx(1.4**2 * area, rel=1e-13)
+
+
+def test_asymmetric_dimer_area_closed_form():
+    """Two disks of radii R, r at distance l: the lens is R^2 acos(..) + r^2 acos(..) - Heron."""
+    alpha, s = 1.5, 0.7
+    big, small, l = 0.5, 0.35, alpha - 0.5 - 0.35
+    lens = (big**2 * math.acos((l * l + big**2 - small**2) / (2 * l * big))
+            + small**2 * math.acos((l * l + small**2 - big**2) / (2 * l * small))
+            - 0.5 * math.sqrt((-l + big + small) * (l + big - small) * (l - big + small) * (l + big + small)))
+    area = math.pi * (big**2 + small**2) - lens
+    assert parse_shape(f"dimer:{alpha}:{s}", 2).volumes([1.0], 2)[0] == pytest.approx(area, rel=1e-13)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("spec", ["nmer:2:1.5", "nmer:4:3", "dimer:1.5:0.7", "dimer:1.2:0.4", "trimer:2:0.3",
+                                  "trimer:1.4:0.5"])
+def test_site_masses_put_the_site_centre_at_the_union_centre(spec, dim):
+    """LAMMPS's rigid-body centre (mass-weighted sites) must be jamflow's (the union's centre of
+    mass, the body-frame origin)."""
+    body = parse_shape(spec, dim)
+    m = body.site_masses
+    assert np.all(m > 0) and m.sum() == pytest.approx(1.0, abs=1e-14)
+    assert np.abs(m @ body.sites).max() < 1e-13
+    volume, first, _ = union_moments(body.sites, body.site_diameters)
+    assert np.abs(first / volume).max() < 1e-12  # the body frame's origin is the union's centre
+    if spec.startswith("nmer"):
+        assert np.allclose(m, 1.0 / body.n_sites)
+
+
+def test_alpha_one_is_the_disk():
+    assert parse_shape("nmer:3:1", 2) is SPHERE and parse_shape("dimer:1:0.5", 3) is SPHERE
+
+
+def test_touching_sites_are_one_body():
+    """ALPHA = N (and 1 + S): neighbouring sites touch at one point; the body is accepted and its
+    volume is the sum of its sites."""
+    assert parse_shape("nmer:2:2", 2).volumes([1.0], 2)[0] == pytest.approx(math.pi / 2, rel=1e-14)
+    assert parse_shape("dimer:1.7:0.7", 3).volumes([1.0], 3)[0] == pytest.approx(math.pi / 6 * (1 + 0.343), rel=1e-11)
+    c = trimer_max_bend(2.0)
+    assert parse_shape(f"trimer:2:{c!r}", 2).n_sites == 3
+    with pytest.raises(ValueError, match="do not overlap or touch"):
+        RigidBody([[0, 0], [1.001, 0]], [1, 1])
+
+
+@pytest.mark.parametrize("spec,match", [
+    ("nmer:1:1.5", r"integer N >= 2"), ("nmer:2.5:1.5", r"integer N >= 2"),
+    ("nmer:2:0.9", r"outside 1 < ALPHA <= 2"), ("nmer:3:3.2", r"outside 1 < ALPHA <= 3"),
+    ("dimer:1.5:1.2", r"D1 is the larger site"), ("dimer:1.5:0", r"S = D2/D1 must lie in \(0, 1\]"),
+    ("dimer:1.8:0.7", r"outside 1 < ALPHA <= 1 \+ S = 1.7"), ("dimer:0.9:0.7", r"outside 1 < ALPHA"),
+    ("trimer:2:0.5", r"above C_max\(2\) = 0.433013"), ("trimer:1:0.2", r"outside 1 < ALPHA <= 3"),
+    ("trimer:3.5:0", r"outside 1 < ALPHA <= 3"), ("trimer:2:-0.1", r"turned by 180 degrees; use trimer:2:0.1"),
+    ("trimer:2", "two parameters"), ("nmer:2:x", "must be numbers"), ("dimer:1.5:0.7:1", "two parameters"),
+    ("dimer:nan:0.5", "finite"), ("octamer:2", "unknown shape")])
+def test_bad_specs_name_the_allowed_range(spec, match):
+    with pytest.raises(ValueError, match=match):
+        parse_shape(spec, 2)
+
+
+def test_cli_refuses_a_bad_body_before_work(capsys, tmp_path):
+    code = main(["jam", "--shape", "dimer:2.5:0.5", "--n", "16", "--out", str(tmp_path / "p.h5"), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 2 and "1 < ALPHA <= 1 + S = 1.5" in err and len(err.strip().splitlines()) == 1
+    assert not any(tmp_path.iterdir())
+
+
+def _collinear_profile_integrals(centres, r):
+    """Area, volume and second moments of a union of equal disks/spheres centred on the x-axis,
+    by integrating its radius profile rho(x) = max_k sqrt(r^2 - (x - x_k)^2) (every section is
+    one interval / disk), adaptive quadrature between the breakpoints."""
+    from scipy.integrate import quad
+
+    def rho(x):
+        return np.sqrt(np.maximum(r * r - (x - centres) ** 2, 0.0)).max()
+
+    cuts = np.sort(np.concatenate([centres - r, centres + r, 0.5 * (centres[1:] + centres[:-1])]))
+    total = lambda f: sum(quad(f, a, b, epsabs=0, epsrel=1e-13, limit=200)[0] for a, b in zip(cuts[:-1], cuts[1:]))
+    return (total(lambda x: 2 * rho(x)), total(lambda x: 2 * x * x * rho(x)), total(lambda x: 2 * rho(x) ** 3 / 3),
+            total(lambda x: np.pi * rho(x) ** 2))
+
+
+@pytest.mark.parametrize("n,alpha", [(3, 1.5), (3, 2.2), (4, 2.0), (5, 3.0)])
+def test_union_moments_of_overlapping_collinear_sites(n, alpha):
+    """Sites that overlap beyond their neighbours (a triple overlap for ALPHA < 2 at N = 3): area,
+    second moments and volume against the integral of the union's radius profile. (A circle
+    whose covered arcs wrapped past 2 pi used to be measured wrongly: nmer:3:1.5 had area
+    1.3012 instead of 1.2801.)"""
+    x = np.arange(n) * (alpha - 1) / (n - 1)
+    x -= x.mean()
+    area, sxx, syy, volume = _collinear_profile_integrals(x, 0.5)
+    sites2 = np.column_stack([x, np.zeros(n)])
+    a, first, second = union_moments(sites2, np.ones(n))
+    assert a == pytest.approx(area, rel=1e-12)
+    assert np.abs(first).max() < 1e-13
+    assert second[0, 0] == pytest.approx(sxx, rel=1e-12) and second[1, 1] == pytest.approx(syy, rel=1e-12)
+    v, _, _ = union_moments(np.column_stack([sites2, np.zeros(n)]), np.ones(n))
+    assert v == pytest.approx(volume, rel=1e-10)
+    assert parse_shape(f"nmer:{n}:{alpha}", 2).linear  # principal axes found along the line
+
+
+def test_bent_trimer_area_against_a_grid():
+    """A bent trimer (every pair overlaps): area and centre of mass on a 3001^2 grid."""
+    body = parse_shape("trimer:1.6:0.35", 2)
+    g = np.linspace(-1.2, 1.2, 3001)
+    xx, yy = np.meshgrid(g, g)
+    inside = np.zeros_like(xx, bool)
+    for (x, y), d in zip(body.sites, body.site_diameters):
+        inside |= (xx - x) ** 2 + (yy - y) ** 2 < (d / 2) ** 2
+    cell = (g[1] - g[0]) ** 2
+    assert body.volumes([1.0], 2)[0] == pytest.approx(inside.sum() * cell, rel=2e-4)
+    assert abs((xx * inside).sum() * cell) < 1e-4 and abs((yy * inside).sum() * cell) < 1e-4
+
+
+def _one_lobe_packing(left_touch: bool):
+    """Dimer 0 (sites at -+0.25 on x) touched by 4 radial dimers on its right site only (contact
+    directions -93, -31, 31, 93 degrees; overlap 0.01), or one of them moved onto its left site."""
+    from jamflow.box import Box
+    from jamflow.packing import Packing
+
+    angles = np.radians([-93.0, -31.0, 31.0, 93.0])
+    u = np.column_stack([np.cos(angles), np.sin(angles)])
+    centres = np.array([0.25, 0.0]) + 1.24 * u
+    if left_touch:
+        centres[0] = np.array([-0.25, 0.0]) + 1.24 * np.array([0.0, -1.0])
+        angles[0] = -np.pi / 2
+    pos = np.vstack([[0.0, 0.0], centres]) + 10.0
+    return Packing(pos, np.ones(5), Box.cube(20.0, 2), shape=parse_shape("nmer:2:1.5", 2),
+                   orientations=np.concatenate([[0.0], angles]))
+
+
+def test_bodies_touched_on_one_site_have_a_free_rotation():
+    """Four contacts (d_f + 1) all on one site of a dimer: not a floater by the convex rule, but
+    it turns freely about that site (every contact force passes through its centre)."""
+    from jamflow.analysis.contacts import Contacts
+    from jamflow.engine.reference import energy_forces_pressure
+
+    p = _one_lobe_packing(False)
+    c = Contacts(min_contacts=1).compute(p)
+    assert c.n_contacts == 4 and c.n_site_contacts == 4 and c.z[0] == 4 and c.n_floaters == 0
+    assert c.one_site.all() and c.free_rotations == 5  # the neighbours touch with one site too
+    # the free rotation: turning body 0 about its right site's centre changes no overlap
+    pivot = np.array([10.25, 10.0])
+    turn = lambda a: p.with_positions(np.vstack([pivot + np.array([-0.25 * np.cos(a), -0.25 * np.sin(a)]),
+                                                 p.positions[1:]]),
+                                      orientations=np.concatenate([[a], p.orientations[1:]]))
+    e0 = energy_forces_pressure(p).energy
+    assert energy_forces_pressure(turn(0.05)).energy == pytest.approx(e0, rel=1e-13)
+    assert Contacts().compute(p).n_floaters == 5  # d_f + 1 = 4: the neighbours (1 contact) go, then body 0
+    q = Contacts(min_contacts=1).compute(_one_lobe_packing(True))
+    assert q.n_contacts == 4 and not q.one_site[0] and q.one_site[1:].all() and q.free_rotations == 4
