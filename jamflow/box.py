@@ -9,7 +9,15 @@ The cell is an upper-triangular matrix ``h`` whose *columns* are the cell vector
 
 which is exactly LAMMPS's restricted triclinic cell (``xy``, ``xz``, ``yz`` are tilt
 *lengths*). The shear strain of Lees-Edwards boundaries is ``gamma = xy / ly``
-(seed eq. 2.4). freud and HOOMD use dimensionless tilts ``xy / ly``; see ``to_freud``.
+(seed eq. 2.4, Figure 2.4). freud and HOOMD use dimensionless tilts ``xy / ly``; see ``to_freud``.
+
+``h`` may hold any tilt: it is the *accumulated* cell of a shear run (gamma = 3.7 is a
+different strain history from gamma = 0.7, but the same lattice). ``reduced()`` is the same
+lattice with the tilts folded into LAMMPS's range (xy, xz in [-lx/2, lx/2), yz in
+[-ly/2, ly/2)); the lattice-dependent operations (``wrap``, ``minimum_image``, ``widths``)
+and the cell handed to LAMMPS and freud use the reduced cell, so they do not depend on how
+the strain was reached.
+See docs/shear-cell.md.
 """
 
 from __future__ import annotations
@@ -86,10 +94,43 @@ class Box:
 
     @property
     def widths(self) -> np.ndarray:
-        """Perpendicular distances between opposite faces; a pair cutoff must stay
-        below half the smallest one for the minimum image to be unique."""
-        inv = np.linalg.inv(self.h)
+        """Perpendicular distances between opposite faces of the reduced cell; a pair cutoff
+        must stay below half the smallest one for the minimum image to be unique."""
+        inv = np.linalg.inv(self.reduced().h)
         return 1.0 / np.linalg.norm(inv, axis=1)
+
+    # the lattice ------------------------------------------------------------------------
+    def reduction(self) -> tuple["Box", np.ndarray]:
+        """(reduced box, integer U) with ``reduced.h == h @ U``: the same lattice with its tilts
+        folded into LAMMPS's range, half-open: -lx/2 <= xy, xz < lx/2 and -ly/2 <= yz < ly/2.
+
+        Folds in LAMMPS's order (``fix deform`` flip): yz by the second cell vector (which
+        also shifts xz by the current xy), then xz and xy by the first. U is upper-unitriangular,
+        so the reduced cell of a lattice is unique (a tilt of +l/2 folds to -l/2).
+        Returns ``self`` and the identity when the tilts are already in range.
+        """
+        d = self.dim
+        fold = np.eye(d, dtype=np.int64)
+        if d == 3:
+            fold[:, 2] -= _folds(self.h[1, 2], self.h[1, 1]) * fold[:, 1]
+            fold[:, 2] -= _folds((self.h @ fold)[0, 2], self.h[0, 0]) * fold[:, 0]
+        fold[:, 1] -= _folds(self.h[0, 1], self.h[0, 0]) * fold[:, 0]
+        if np.array_equal(fold, np.eye(d, dtype=np.int64)):
+            return self, fold
+        return Box(self.h @ fold), fold
+
+    def reduced(self) -> "Box":
+        """The same lattice with tilts folded into LAMMPS's range (see ``reduction``)."""
+        return self.reduction()[0]
+
+    def is_same_lattice(self, other: "Box", tol: float = 1e-9) -> bool:
+        """True if both cells generate the same lattice: ``other.h = h @ M`` with M an
+        integer matrix of determinant +-1 (entries integral to ``tol``)."""
+        if other.dim != self.dim:
+            return False
+        m = np.linalg.solve(self.h, other.h)
+        whole = np.round(m)
+        return bool(np.all(np.abs(m - whole) <= tol) and abs(round(np.linalg.det(whole))) == 1)
 
     # transformations ----------------------------------------------------------------
     def scaled(self, factor: float) -> "Box":
@@ -109,43 +150,59 @@ class Box:
         return np.asarray(fractional, float) @ self.h.T
 
     def wrap(self, positions: np.ndarray) -> np.ndarray:
-        """Positions mapped into the primary cell [0, 1)^d in fractional coordinates."""
-        s = self.to_fractional(positions)
-        return self.to_cartesian(s - np.floor(s))
+        """Positions mapped into the primary reduced cell: fractional coordinates of
+        ``reduced().h`` in [0, 1)^d (LAMMPS's cell; the same as ``h``'s when no fold is needed)."""
+        cell = self.reduced()
+        s = cell.to_fractional(positions)
+        return cell.to_cartesian(s - np.floor(s))
 
     def minimum_image(self, dr: np.ndarray) -> np.ndarray:
-        """Shortest periodic image of separation vectors ``dr`` (..., d).
+        """Shortest periodic image of separation vectors ``dr`` (..., d), from the reduced cell.
 
-        Orthogonal cells: rounding. Tilted cells: rounds in fractional coordinates, then
-        checks the 3^d neighbouring images, so it is exact in strongly tilted cells too.
+        Orthogonal reduced cells: rounding. Tilted ones: rounds in fractional coordinates,
+        then checks the 3^d neighbouring images. Exact for every vector whose shortest image
+        is below half the smallest width (rounding alone finds it: |s_k| <= |dr| / width_k),
+        i.e. for every interacting pair of a valid Packing; beyond that the best of the 3^d
+        candidates (exact against brute force in the tested cells, tilts up to several lx).
         """
         dr = np.asarray(dr, float)
-        if not self.is_triclinic:  # rounding is exact for orthogonal cells
-            lengths = self.lengths
+        cell = self.reduced()
+        if not cell.is_triclinic:  # rounding is exact for orthogonal cells
+            lengths = cell.lengths
             return dr - lengths * np.round(dr / lengths)
-        s = self.to_fractional(dr.reshape(-1, self.dim))
-        base = self.to_cartesian(s - np.round(s))
-        shifts = self.to_cartesian(np.array(list(product((-1, 0, 1), repeat=self.dim)), float))
+        s = cell.to_fractional(dr.reshape(-1, self.dim))
+        base = cell.to_cartesian(s - np.round(s))
+        shifts = cell.to_cartesian(np.array(list(product((-1, 0, 1), repeat=self.dim)), float))
         candidates = base[:, None, :] + shifts[None, :, :]
         best = np.argmin(np.einsum("nkd,nkd->nk", candidates, candidates), axis=1)
         return candidates[np.arange(len(base)), best].reshape(dr.shape)
 
     # external conventions -------------------------------------------------------------
     def to_lammps(self) -> dict:
-        """Bounds for LAMMPS ``region prism`` / ``create_box`` with the origin at 0."""
-        lx, ly = self.h[0, 0], self.h[1, 1]
-        lz = self.h[2, 2] if self.dim == 3 else 1.0
-        xy, xz, yz = self.tilts
+        """Bounds for LAMMPS ``region prism`` / ``create_box`` / ``change_box`` with the origin
+        at 0: the *reduced* cell (LAMMPS's tilt range; the accumulated strain is not in it)."""
+        cell = self.reduced()
+        lx, ly = cell.h[0, 0], cell.h[1, 1]
+        lz = cell.h[2, 2] if self.dim == 3 else 1.0
+        xy, xz, yz = cell.tilts
         return dict(xlo=0.0, xhi=lx, ylo=0.0, yhi=ly, zlo=-0.5 * lz if self.dim == 2 else 0.0,
                     zhi=0.5 * lz if self.dim == 2 else lz, xy=xy, xz=xz, yz=yz)
 
     def to_freud(self):
-        """A ``freud.box.Box`` (dimensionless tilts)."""
+        """A ``freud.box.Box`` of the reduced cell (dimensionless tilts)."""
         import freud
 
-        lx, ly = self.h[0, 0], self.h[1, 1]
-        xy, xz, yz = self.tilts
+        cell = self.reduced()
+        lx, ly = cell.h[0, 0], cell.h[1, 1]
+        xy, xz, yz = cell.tilts
         if self.dim == 2:
             return freud.box.Box(Lx=lx, Ly=ly, xy=xy / ly, is2D=True)
-        lz = self.h[2, 2]
+        lz = cell.h[2, 2]
         return freud.box.Box(Lx=lx, Ly=ly, Lz=lz, xy=xy / ly, xz=xz / lz, yz=yz / lz)
+
+
+def _folds(tilt: float, length: float) -> int:
+    """Whole cell lengths n with tilt / length - n in [-1/2, 1/2)."""
+    x = tilt / length
+    n = np.floor(x)
+    return int(n) + int(x - n >= 0.5)

@@ -214,11 +214,11 @@ def write_lammps_data(path, packing: Packing) -> Path:
         lines += ["", "Ellipsoids", ""]
         lines += [f"{k + 1} {a[k]:.17g} {b[k]:.17g} {b[k]:.17g} {_row(quat[k])}" for k in range(n)]
     else:
-        shape, box_ = packing.shape, packing.box
-        sites = shape.world_sites(box_.wrap(packing.positions), packing.orientations, packing.diameters)
+        shape, cell = packing.shape, packing.box.reduced()  # image flags count cells of the box LAMMPS holds
+        sites = shape.world_sites(packing.box.wrap(packing.positions), packing.orientations, packing.diameters)
         flat = sites.reshape(-1, packing.dim)
-        image = np.floor(box_.to_fractional(flat)).astype(int)
-        inside = _xyz(flat - box_.to_cartesian(image))
+        image = np.floor(cell.to_fractional(flat)).astype(int)
+        inside = _xyz(flat - cell.to_cartesian(image))
         image = image if packing.dim == 3 else np.column_stack([image, np.zeros(len(image), int)])
         mass = np.tile(shape.site_masses, n)
         density = mass / (np.pi * site_d.ravel() ** 3 / 6.0)
@@ -255,9 +255,10 @@ def to_universe(packing: Packing):
     _, types = packing.species()
     u.add_TopologyAttr("types", [str(t + 1) for t in types])
     u.add_TopologyAttr("radii", packing.diameters / 2.0)
-    h = packing.box.h if packing.dim == 3 else np.diag([*np.diag(packing.box.h), 1.0])
+    cell = packing.box.reduced().h  # the same lattice with the tilt folded in, as MDAnalysis expects
+    h = cell if packing.dim == 3 else np.diag([*np.diag(cell), 1.0])
     if packing.dim == 2:
-        h[0, 1] = packing.box.h[0, 1]
+        h[0, 1] = cell[0, 1]
     pos = packing.box.wrap(packing.positions)
     u.atoms.positions = pos if packing.dim == 3 else np.column_stack([pos, np.zeros(packing.n)])
     u.dimensions = triclinic_box(*h.T)

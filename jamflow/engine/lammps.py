@@ -65,7 +65,9 @@ class LammpsEngine:
         self.commands: list[str] = []
         self.lmp = new_lammps(args=args, comm=comm)
         self._tmp = tempfile.TemporaryDirectory(prefix="jamflow-")
-        self.box = packing.box
+        self.box = packing.box  # the accumulated cell; LAMMPS holds its reduced form
+        self._fold = packing.box.reduction()[1]  # box.h @ _fold = the cell LAMMPS holds
+        self._triclinic = packing.box.is_triclinic  # LAMMPS box style (write_lammps_data's choice)
         try:
             self._setup(packing, skin)
         except Exception:
@@ -116,6 +118,8 @@ class LammpsEngine:
         ])
         if dim == 2:
             self.command("fix jf_2d all enforce2d")
+        if rigid:  # image flags that keep every body whole in the cell LAMMPS holds
+            self.set_positions(packing.positions, packing.orientations)
 
     # state ---------------------------------------------------------------------------------
     def _gather(self, name: str) -> np.ndarray:
@@ -173,28 +177,59 @@ class LammpsEngine:
 
     # box changes -------------------------------------------------------------------------------
     def set_box(self, box: Box) -> None:
-        """Deform the cell affinely (atoms remapped) to ``box``; origin stays at 0. Rigid bodies:
-        their centres move affinely and the bodies keep their shape."""
+        """Deform the cell affinely (atoms remapped) to ``box``, which may carry any accumulated
+        tilt; origin stays at 0. LAMMPS gets the reduced cell; when the reduction changes (a
+        tilt crosses +-l/2) the cell is flipped to the new reduced one after the affine step,
+        keeping positions, energy, stress and image flags (unwrapped coordinates) consistent.
+        Rigid bodies: their centres move affinely and each body's sites are put back around its
+        centre (a remap would scale the bodies); image flags restart from the placed sites."""
         if box.dim != self.box.dim:
             raise ValueError("cannot change the dimension of a running system")
-        bodies = None
-        if self.bodies is not None:
+        cell, fold = box.reduction()
+        if box.is_triclinic and not self._triclinic:
+            self.command("change_box all triclinic")
+            self._triclinic = True
+        if self.bodies is not None:  # rigid bodies: move the centres, put the sites back rigidly
             centres, orientations, _ = self.bodies.bodies(self._gather("x"), self.box)
-            bodies = (box.to_cartesian(self.box.to_fractional(centres)), orientations)
-        lo = box.to_lammps()
-        parts = [f"x final 0 {lo['xhi']:.17g}", f"y final 0 {lo['yhi']:.17g}"]
-        if box.dim == 3:
-            parts.append(f"z final 0 {lo['zhi']:.17g}")
-        if box.is_triclinic or self.box.is_triclinic:
-            if not self.box.is_triclinic:
-                self.command("change_box all triclinic")
-            parts.append(f"xy final {lo['xy']:.17g}")
-            if box.dim == 3:
-                parts += [f"xz final {lo['xz']:.17g}", f"yz final {lo['yz']:.17g}"]
-        self.command("change_box all " + " ".join(parts) + (" units box" if bodies else " remap units box"))
-        self.box = box
-        if bodies:
-            self.set_positions(*bodies)
+            self.command(self._change_box(cell) + " units box")
+            self.set_positions(box.to_cartesian(self.box.to_fractional(centres)), orientations)
+        elif np.array_equal(fold, self._fold):
+            self.command(self._change_box(cell) + " remap units box")
+        else:  # affine step in the old folding (the same deformation h' h^-1), then the flip
+            self.command(self._change_box(Box(box.h @ self._fold)) + " remap units box")
+            self._flip(cell, np.linalg.solve(fold, self._fold).round().astype(np.int64))
+        self.box, self._fold = box, fold
+
+    def _change_box(self, cell: Box) -> str:
+        """``change_box`` to ``cell``'s own bounds and tilts (cell must be what LAMMPS should hold)."""
+        h, dim = cell.h, cell.dim
+        parts = [f"x final 0 {h[0, 0]:.17g}", f"y final 0 {h[1, 1]:.17g}"]
+        if dim == 3:
+            parts.append(f"z final 0 {h[2, 2]:.17g}")
+        if self._triclinic:
+            xy, xz, yz = cell.tilts
+            parts.append(f"xy final {xy:.17g}")
+            if dim == 3:
+                parts += [f"xz final {xz:.17g}", f"yz final {yz:.17g}"]
+        return "change_box all " + " ".join(parts)
+
+    def _flip(self, cell: Box, relabel: np.ndarray) -> None:
+        """Switch to ``cell``, the same lattice as LAMMPS's current cell C with C = cell.h @ relabel,
+        without moving atoms. LAMMPS wraps the atoms into the new cell and adds the wrap k to
+        their image flags n, which still count cells of C; the unwrapped position x + C n is
+        kept by n' = k + relabel n (the wheel notes: a flip without this corrupts iy != 0)."""
+        before = self._images()
+        self.command(self._change_box(cell) + " units box")
+        wrapped_by = self._images() - before
+        full = np.eye(3, dtype=np.int64)
+        full[: cell.dim, : cell.dim] = relabel
+        images = wrapped_by + before @ full.T
+        self.lmp.scatter_atoms("image", 0, 3, np.ctypeslib.as_ctypes(images.astype(np.int32).ravel()))
+
+    def _images(self) -> np.ndarray:
+        """Image flags (N, 3) of every atom in id order (LAMMPS unpacks them for count 3)."""
+        raw = self.lmp.gather_atoms("image", 0, 3)
+        return np.ctypeslib.as_array(raw).reshape(-1, 3).astype(np.int64)
 
     # minimisation ------------------------------------------------------------------------------
     def minimize(self, settings=None):
