@@ -212,7 +212,7 @@ def test_bodies_touched_on_one_site_have_a_free_rotation():
 
     p = _one_lobe_packing(False)
     c = Contacts(min_contacts=1).compute(p)
-    assert c.n_contacts == 4 and c.n_site_contacts == 4 and c.z[0] == 4 and c.n_floaters == 0
+    assert c.n_contacts == c.n_site_contacts == c.n_body_contacts == 4 and c.z[0] == 4 and c.n_floaters == 0
     assert c.one_site.all() and c.free_rotations == 5  # the neighbours touch with one site too
     # the free rotation: turning body 0 about its right site's centre changes no overlap
     pivot = np.array([10.25, 10.0])
@@ -224,3 +224,17 @@ def test_bodies_touched_on_one_site_have_a_free_rotation():
     assert Contacts().compute(p).n_floaters == 5  # d_f + 1 = 4: the neighbours (1 contact) go, then body 0
     q = Contacts(min_contacts=1).compute(_one_lobe_packing(True))
     assert q.n_contacts == 4 and not q.one_site[0] and q.one_site[1:].all() and q.free_rotations == 4
+
+
+def test_side_by_side_dimers_touch_twice():
+    """Two parallel dimers 0.99 apart: two overlapping site pairs, two constraints (two contacts),
+    one touching pair of bodies."""
+    from jamflow.analysis.contacts import Contacts
+    from jamflow.box import Box
+    from jamflow.packing import Packing
+
+    p = Packing([[5.0, 5.0], [5.0, 5.99]], [1.0, 1.0], Box.cube(10.0, 2), shape=parse_shape("nmer:2:1.5", 2),
+                orientations=[0.0, np.pi])
+    c = Contacts(min_contacts=0).compute(p)
+    assert c.n_contacts == c.n_site_contacts == 2 and c.n_body_contacts == 1 and list(c.z) == [2, 2]
+    assert not c.one_site.any() and c.free_rotations == 0

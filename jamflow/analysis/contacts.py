@@ -11,13 +11,18 @@
   half-space rule is the disks' and spheres' only: for other shapes a contact's normal is not
   along the centre line. Removing a floater can make its neighbours floaters, so the test is
   repeated until nothing changes.
-- Shapes: ellipses/spheroids touch when r_ij < sigma_ij with the shape's contact distance;
-  rigid bodies are in contact when any two of their sites overlap (one contact per pair of
-  bodies, however many site pairs touch); ``n_site_contacts`` counts the overlapping site pairs.
+- Shapes: ellipses/spheroids touch when r_ij < sigma_ij with the shape's contact distance.
+  Rigid bodies touch site by site, and every overlapping pair of sites of two bodies is one
+  contact: one constraint, with its own normal through both site centres, so two bodies that
+  touch at two site pairs (side by side dimers) have two contacts (``i``, ``j`` list the bodies
+  of each; ``n_site_contacts`` = ``n_contacts``); ``n_body_contacts`` counts touching pairs of
+  bodies. Counting body pairs instead would undercount the constraints: in jammed 2D dimer
+  packings (alpha = 1.5, N = 128) <z> over body pairs is ~4.8 < d_f + 1 = 4 for so many bodies
+  that the floater cascade removes every body (docs/nmers.md).
 - Concave bodies need more care than the convex rule d_f + 1: a rigid body whose contacts all
   touch one of its sites turns freely about that site's centre, since every contact force passes
   through it (the "rotational rattlers" of 2D dimers, Shiraishi, Mizuno, Ikeda, PRE 100, 012606
-  (2019)). Such bodies (``one_site``) keep their d_f + 1 contacts and are not floaters by the
+  (2019)). Such bodies (``one_site``) can keep d_f + 1 contacts and are not floaters by the
   convex rule, but have d_f - d free rotations (zero modes); ``free_rotations`` counts them and
   ``isostatic_count - free_rotations`` is the isostatic count without them.
 - N' = N - N_f, N_c = contacts among non-floaters, <z> = 2 N_c / N',
@@ -33,8 +38,7 @@ import numpy as np
 from scipy.optimize import linprog
 
 from ..packing import Packing
-from ..pairs import (candidate_pairs, contact_distances, overlapping_sites, particle_contacts, separations,
-                     site_packing)
+from ..pairs import candidate_pairs, contact_distances, overlapping_sites, particle_contacts, separations, site_packing
 
 
 @dataclass(frozen=True)
@@ -49,7 +53,8 @@ class ContactsResult:
     n_overlapping: int  # overlapping pairs before floater removal
     n_near_contact: int  # pairs with |r/sigma - 1| < near_tol (diagnostic)
     dof: int | None = None  # d_f, degrees of freedom per particle (None: d, disks and spheres)
-    n_site_contacts: int | None = None  # rigid bodies: overlapping site pairs among non-floaters
+    n_site_contacts: int | None = None  # rigid bodies: overlapping site pairs among non-floaters (= n_contacts)
+    n_body_contacts: int | None = None  # rigid bodies: touching pairs of non-floater bodies
     one_site: np.ndarray | None = None  # rigid bodies (N,) bool: a non-floater whose contacts all touch one site
 
     @property
@@ -123,7 +128,11 @@ class Contacts:
         self.near_tol = float(near_tol)
 
     def compute(self, packing: Packing) -> ContactsResult:
-        i, j, dr = particle_contacts(packing)
+        rigid = packing.shape.kind == "rigid"
+        if rigid:  # one contact per overlapping site pair (module docstring)
+            i, j, s, t, dr, *_ = overlapping_sites(packing)
+        else:
+            i, j, dr = particle_contacts(packing)
         d_f = packing.dof_per_particle
         need = d_f + 1 if self.min_contacts is None else int(self.min_contacts)
         unit = dr / np.linalg.norm(dr, axis=1)[:, None]  # points from j to i
@@ -131,20 +140,20 @@ class Contacts:
         floater = find_floaters(packing.n, i, j, unit, need, half_space)
         keep = ~floater[i] & ~floater[j]
         z = np.bincount(i[keep], minlength=packing.n) + np.bincount(j[keep], minlength=packing.n)
-        sites = site_contacts(packing, floater) if packing.shape.kind == "rigid" else (None, None)
+        bodies = body_counts(packing.n, i[keep], j[keep], s[keep], t[keep], floater) if rigid else (None, None, None)
         return ContactsResult(i[keep], j[keep], floater, z, packing.dim, len(i),
-                              near_contact_count(packing, self.near_tol), d_f, *sites)
+                              near_contact_count(packing, self.near_tol), d_f, *bodies)
 
 
-def site_contacts(packing: Packing, floater: np.ndarray) -> tuple[int, np.ndarray]:
-    """Rigid bodies: (overlapping site pairs among non-floaters, (N,) mask of non-floaters whose
-    contacts all touch one of their sites)."""
-    bi, bj, s, t, *_ = overlapping_sites(packing)
-    live = ~floater[bi] & ~floater[bj]
-    owner, site = np.concatenate([bi[live], bj[live]]), np.concatenate([s[live], t[live]])
+def body_counts(n: int, i, j, s, t, floater) -> tuple[int, int, np.ndarray]:
+    """Rigid bodies, from the site contacts (bodies i, j; sites s, t) among non-floaters:
+    (site contacts, touching body pairs, (N,) mask of non-floaters whose contacts all touch one
+    of their sites)."""
+    pairs = np.unique(np.column_stack([i, j]), axis=0) if len(i) else np.empty((0, 2), int)
+    owner, site = np.concatenate([i, j]), np.concatenate([s, t])
     touched = np.unique(np.column_stack([owner, site]), axis=0) if len(owner) else np.empty((0, 2), int)
-    n_touched = np.bincount(touched[:, 0], minlength=packing.n)
-    return int(live.sum()), ~floater & (n_touched == 1)
+    n_touched = np.bincount(touched[:, 0], minlength=n)
+    return len(i), len(pairs), ~floater & (n_touched == 1)
 
 
 def find_floaters(n: int, i, j, unit, need: int, half_space: bool = True) -> np.ndarray:
