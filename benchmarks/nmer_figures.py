@@ -64,6 +64,44 @@ def save(fig, path: Path) -> None:
     plt.close(fig)
 
 
+def plot_bodies(path: Path) -> None:
+    """The bodies of the --shape specs with their reference lengths (chapter Figure 2.9 b-d)."""
+    from matplotlib.patches import Circle
+
+    from jamflow.shapes import parse_shape
+
+    specs = [("nmer:2:1.6", "nmer:2:1.6\nlinear dimer, alpha = L/D = 1.6"), ("nmer:3:2.4", "nmer:3:2.4\nlinear trimer, alpha = 2.4"),
+             ("dimer:1.5:0.6", "dimer:1.5:0.6\nasymmetric, alpha = L/D1, s = D2/D1"),
+             ("trimer:2:0.3", "trimer:2:0.3\nbent, alpha = L/D = 2, c = h/L = 0.3")]
+    fig, axes = plt.subplots(1, 4, figsize=(11, 2.8))
+    for ax, (spec, title) in zip(axes, specs):
+        body = parse_shape(spec, 2)
+        ends = np.argsort(body.sites[:, 0])[[0, -1]] if not spec.startswith("trimer") else [0, 2]
+        u = body.sites[ends[1]] - body.sites[ends[0]]
+        u /= np.linalg.norm(u)
+        turn = np.array([[u[0], u[1]], [-u[1], u[0]]])  # draw with the end-to-end line along x
+        sites = body.sites @ turn.T
+        sites -= 0.5 * (sites[ends[0]] + sites[ends[1]]) * np.array([1, 0]) + np.array([0, sites[ends[0], 1]])
+        for (x, y), d in zip(sites, body.site_diameters):
+            ax.add_patch(Circle((x, y), d / 2, facecolor="0.8", edgecolor="k", lw=0.8))
+        left = sites[:, 0] - body.site_diameters / 2
+        right = sites[:, 0] + body.site_diameters / 2
+        y0 = -0.75
+        ax.annotate("", (left.min(), y0), (right.max(), y0), arrowprops=dict(arrowstyle="<->", lw=0.8))
+        ax.text(0.5 * (left.min() + right.max()), y0 - 0.12, "L", ha="center", va="top", fontsize=9)
+        if spec.startswith("trimer"):
+            ax.annotate("", (sites[1, 0], 0.0), (sites[1, 0], sites[1, 1]), arrowprops=dict(arrowstyle="<->", lw=0.8))
+            ax.text(sites[1, 0] + 0.05, 0.5 * sites[1, 1], "h", fontsize=9)
+            ax.plot(sites[[0, 2], 0], [0, 0], "k:", lw=0.7)
+        ax.set_title(title, fontsize=8)
+        ax.set_aspect("equal")
+        ax.set_xlim(-1.6, 1.6)
+        ax.set_ylim(-1.1, 1.1)
+        ax.set_axis_off()
+    fig.tight_layout()
+    save(fig, path)
+
+
 def q6_table(q6_rows) -> list[tuple]:
     """(alpha, mean Q6, stderr, r_min, n) per alpha from the packing files."""
     out = []
@@ -177,6 +215,7 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default="docs/nmers")
     args = ap.parse_args(argv)
     out = Path(args.out)
+    plot_bodies(out / "bodies.png")
     if Path(args.q6).exists():
         q6_rows = rows(args.q6)
         table = q6_table(q6_rows)

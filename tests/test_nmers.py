@@ -238,3 +238,25 @@ def test_side_by_side_dimers_touch_twice():
     c = Contacts(min_contacts=0).compute(p)
     assert c.n_contacts == c.n_site_contacts == 2 and c.n_body_contacts == 1 and list(c.z) == [2, 2]
     assert not c.one_site.any() and c.free_rotations == 0
+
+
+def test_cli_jams_dimers_and_the_file_keeps_the_body(tmp_path, capsys):
+    from jamflow.engine.reference import energy_forces_pressure
+    from jamflow.io import load_packing, read_attrs
+
+    out = tmp_path / "d.h5"
+    assert main(["jam", "--shape", "dimer:1.6:0.8", "--n", "24", "--seed", "2", "--out", str(out), "--quiet"]) == 0
+    assert "max|tau/d|" in capsys.readouterr().out
+    p = load_packing(out)
+    body = parse_shape("dimer:1.6:0.8", 2)
+    assert p.shape == body and p.shape.label == "dimer:1.6:0.8"
+    attrs = read_attrs(out)
+    assert attrs["shape_spec"] == "dimer:1.6:0.8"
+    assert energy_forces_pressure(p).energy / p.n == pytest.approx(attrs["energy_per_particle"], rel=1e-6)
+    assert 1e-16 < attrs["energy_per_particle"] < 2e-16
+
+
+def test_cli_refuses_lammps_minimisers_for_bodies(tmp_path, capsys):
+    code = main(["jam", "--shape", "nmer:2:1.5", "--engine", "lammps", "--out", str(tmp_path / "p.h5"), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 2 and "minimizer fire for nmer:2:1.5 particles (it runs md for them)" in err

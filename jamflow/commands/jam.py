@@ -19,13 +19,18 @@ def add_arguments(p) -> None:
     p.add_argument("--sizes", default="bi:1.4:0.5",
                    help="mono | bi:RATIO:FRACTION_SMALL | poly-uniform:WIDTH | poly-normal:WIDTH | poly-lognormal:WIDTH")
     p.add_argument("--potential", default="spring", help="spring | hertz | spring:ALPHA | rlj")
-    p.add_argument("--shape", default="disk", help="particle shape: disk | sphere (the same: round particles); "
+    p.add_argument("--shape", default="disk", help="particle shape: disk | sphere (the same: round particles) | "
+                   "ellipse:ALPHA | spheroid:ALPHA | rigid n-mers of fused sites (docs/nmers.md): nmer:N:ALPHA "
+                   "(linear, ALPHA = L/D), dimer:ALPHA:S (asymmetric, S = D2/D1), trimer:ALPHA:C (bent, C = h/L); "
                    "--sizes scales whole particles")
     p.add_argument("--protocol", choices=sorted(PROTOCOLS), default=None,
                    help=f"seed: the chapter's constant-increment bisection; fast: the same stopping rule with "
                         f"growing increments and Newton jumps (docs/speed.md). Default {DEFAULT_PROTOCOL}; "
                         "seed with --emit-deck (decks run the seed protocol)")
-    p.add_argument("--minimizer", choices=METHODS, default="fire", help="energy minimiser")
+    p.add_argument("--minimizer", choices=METHODS, default="fire",
+                   help="energy minimiser; rigid bodies in LAMMPS: md (damped rigid-body dynamics)")
+    p.add_argument("--damping", type=float, default=MinimizerSettings().damping,
+                   help="md only: drag coefficient (sqrt(m eps)/diameter); rigid bodies: damping time 1/DAMPING")
     p.add_argument("--engine", choices=ENGINES, default="auto",
                    help="auto: the compiled engine (FIRE, in process) wherever it runs the scene, else LAMMPS "
                         "(docs/speed.md). The engines sum forces in different orders, so from one start they "
@@ -47,7 +52,7 @@ def settings_from_args(args) -> CompressionSettings:
         value = getattr(args, name)
         if value is not None and (not math.isfinite(value) or value <= 0):
             raise ValueError(f"--{name} must be a finite positive number, got {value}")
-    minimizer = MinimizerSettings(method=args.minimizer, force_tol=args.ftol, v_min=args.vtol)
+    minimizer = MinimizerSettings(method=args.minimizer, force_tol=args.ftol, v_min=args.vtol, damping=args.damping)
     protocol = args.protocol or ("seed" if args.emit_deck else DEFAULT_PROTOCOL)
     return PROTOCOLS[protocol](phi0=args.phi0, dphi0=args.dphi0, v_tol=args.vtol, minimizer=minimizer)
 
