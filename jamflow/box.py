@@ -18,21 +18,30 @@ lattice with the tilts folded into LAMMPS's range (xy, xz in [-lx/2, lx/2), yz i
 and the cell handed to LAMMPS and freud use the reduced cell, so they do not depend on how
 the strain was reached.
 See docs/shear-cell.md.
+
+Walls (seed section 2.3): an axis that is not ``periodic`` is bounded by flat walls at its
+faces, x_a = 0 and x_a = L_a; separations along it are direct (no image) and positions are
+not wrapped along it. A walled axis can take part in no tilt: a shear across a wall has no
+periodic image to act on, and a tilted face is no flat axis-aligned wall.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from itertools import product
 
 import numpy as np
 
+AXES = "xyz"
+
 
 @dataclass(frozen=True)
 class Box:
-    """An upper-triangular periodic cell; ``h`` columns are the cell vectors."""
+    """An upper-triangular cell; ``h`` columns are the cell vectors; ``periodic`` per axis
+    (None: every axis periodic; False: walls at both faces of that axis)."""
 
     h: np.ndarray
+    periodic: tuple | None = None
 
     def __post_init__(self):
         h = np.array(self.h, dtype=float)
@@ -44,22 +53,31 @@ class Box:
             raise ValueError("Box h-matrix must be upper-triangular (LAMMPS restricted triclinic)")
         if np.any(np.diag(h) <= 0):
             raise ValueError(f"Box side lengths must be positive, got {np.diag(h)}")
+        periodic = (True,) * len(h) if self.periodic is None else tuple(bool(p) for p in self.periodic)
+        if len(periodic) != len(h):
+            raise ValueError(f"periodic needs one flag per axis ({len(h)}), got {self.periodic!r}")
+        for a, b in zip(*np.triu_indices(len(h), 1)):
+            if h[a, b] != 0 and not (periodic[a] and periodic[b]):
+                axis = AXES[a] if not periodic[a] else AXES[b]
+                raise ValueError(f"walls on {axis} with a sheared box (tilt {AXES[a]}{AXES[b]} = {h[a, b]:g}): a "
+                                 f"walled axis takes part in no shear; remove the walls on {axis} or the shear")
         h.setflags(write=False)
         object.__setattr__(self, "h", h)
+        object.__setattr__(self, "periodic", periodic)
 
     # construction -----------------------------------------------------------------
     @classmethod
-    def cube(cls, length: float, dim: int) -> "Box":
+    def cube(cls, length: float, dim: int, periodic=None) -> "Box":
         """Square (2D) or cubic (3D) box of side ``length``."""
-        return cls(np.eye(dim) * float(length))
+        return cls(np.eye(dim) * float(length), periodic)
 
     @classmethod
-    def from_lammps(cls, dim: int, lengths, tilts=(0.0, 0.0, 0.0)) -> "Box":
+    def from_lammps(cls, dim: int, lengths, tilts=(0.0, 0.0, 0.0), periodic=None) -> "Box":
         """From LAMMPS side lengths (lx, ly[, lz]) and tilt lengths (xy, xz, yz)."""
         xy, xz, yz = tilts
         if dim == 2:
-            return cls([[lengths[0], xy], [0.0, lengths[1]]])
-        return cls([[lengths[0], xy, xz], [0.0, lengths[1], yz], [0.0, 0.0, lengths[2]]])
+            return cls([[lengths[0], xy], [0.0, lengths[1]]], periodic)
+        return cls([[lengths[0], xy, xz], [0.0, lengths[1], yz], [0.0, 0.0, lengths[2]]], periodic)
 
     # properties -------------------------------------------------------------------
     @property
@@ -77,6 +95,20 @@ class Box:
         if self.dim == 2:
             return float(self.h[0, 1]), 0.0, 0.0
         return float(self.h[0, 1]), float(self.h[0, 2]), float(self.h[1, 2])
+
+    @property
+    def walls(self) -> tuple[int, ...]:
+        """The walled (non-periodic) axes."""
+        return tuple(a for a, p in enumerate(self.periodic) if not p)
+
+    @property
+    def wall_spec(self) -> str:
+        """The walled axes as ``--walls`` writes them ("" without walls, "y", "x,y")."""
+        return ",".join(AXES[a] for a in self.walls)
+
+    def image_offsets(self):
+        """Cell offsets m in {-1, 0, 1}^d of the neighbouring periodic images (0 along walls)."""
+        return product(*[(-1, 0, 1) if p else (0,) for p in self.periodic])
 
     @property
     def is_triclinic(self) -> bool:
@@ -117,7 +149,7 @@ class Box:
         fold[:, 1] -= _folds(self.h[0, 1], self.h[0, 0]) * fold[:, 0]
         if np.array_equal(fold, np.eye(d, dtype=np.int64)):
             return self, fold
-        return Box(self.h @ fold), fold
+        return replace(self, h=self.h @ fold), fold
 
     def reduced(self) -> "Box":
         """The same lattice with tilts folded into LAMMPS's range (see ``reduction``)."""
@@ -135,13 +167,17 @@ class Box:
     # transformations ----------------------------------------------------------------
     def scaled(self, factor: float) -> "Box":
         """Every cell vector multiplied by ``factor`` (isotropic compression < 1)."""
-        return Box(self.h * float(factor))
+        return replace(self, h=self.h * float(factor))
+
+    def with_h(self, h) -> "Box":
+        """Another cell matrix, the same periodicity (walls)."""
+        return replace(self, h=h)
 
     def with_shear_strain(self, gamma: float) -> "Box":
         """Same cell with the xy tilt set to ``gamma * ly``."""
         h = self.h.copy()
         h[0, 1] = gamma * h[1, 1]
-        return Box(h)
+        return replace(self, h=h)
 
     def to_fractional(self, positions: np.ndarray) -> np.ndarray:
         return np.linalg.solve(self.h, np.asarray(positions, float).T).T
@@ -151,10 +187,15 @@ class Box:
 
     def wrap(self, positions: np.ndarray) -> np.ndarray:
         """Positions mapped into the primary reduced cell: fractional coordinates of
-        ``reduced().h`` in [0, 1)^d (LAMMPS's cell; the same as ``h``'s when no fold is needed)."""
+        ``reduced().h`` in [0, 1)^d along the periodic axes (LAMMPS's cell; the same as ``h``'s
+        when no fold is needed); walled axes are left as they are."""
         cell = self.reduced()
         s = cell.to_fractional(positions)
-        return cell.to_cartesian(s - np.floor(s))
+        return cell.to_cartesian(s - np.floor(s) * self._periodic_mask)
+
+    @property
+    def _periodic_mask(self) -> np.ndarray:
+        return np.array(self.periodic, float)
 
     def minimum_image(self, dr: np.ndarray) -> np.ndarray:
         """Shortest periodic image of separation vectors ``dr`` (..., d), from the reduced cell.
@@ -164,15 +205,17 @@ class Box:
         is below half the smallest width (rounding alone finds it: |s_k| <= |dr| / width_k),
         i.e. for every interacting pair of a valid Packing; beyond that the best of the 3^d
         candidates (exact against brute force in the tested cells, tilts up to several lx).
+        Walled axes have no images: separations along them are direct.
         """
         dr = np.asarray(dr, float)
         cell = self.reduced()
+        mask = self._periodic_mask
         if not cell.is_triclinic:  # rounding is exact for orthogonal cells
             lengths = cell.lengths
-            return dr - lengths * np.round(dr / lengths)
+            return dr - lengths * np.round(dr / lengths) * mask
         s = cell.to_fractional(dr.reshape(-1, self.dim))
-        base = cell.to_cartesian(s - np.round(s))
-        shifts = cell.to_cartesian(np.array(list(product((-1, 0, 1), repeat=self.dim)), float))
+        base = cell.to_cartesian(s - np.round(s) * mask)
+        shifts = cell.to_cartesian(np.array(list(self.image_offsets()), float))
         candidates = base[:, None, :] + shifts[None, :, :]
         best = np.argmin(np.einsum("nkd,nkd->nk", candidates, candidates), axis=1)
         return candidates[np.arange(len(base)), best].reshape(dr.shape)
@@ -196,9 +239,12 @@ class Box:
         lx, ly = cell.h[0, 0], cell.h[1, 1]
         xy, xz, yz = cell.tilts
         if self.dim == 2:
-            return freud.box.Box(Lx=lx, Ly=ly, xy=xy / ly, is2D=True)
-        lz = cell.h[2, 2]
-        return freud.box.Box(Lx=lx, Ly=ly, Lz=lz, xy=xy / ly, xz=xz / lz, yz=yz / lz)
+            box = freud.box.Box(Lx=lx, Ly=ly, xy=xy / ly, is2D=True)
+        else:
+            lz = cell.h[2, 2]
+            box = freud.box.Box(Lx=lx, Ly=ly, Lz=lz, xy=xy / ly, xz=xz / lz, yz=yz / lz)
+        box.periodic = list(self.periodic) + [True] * (3 - self.dim)
+        return box
 
 
 def _folds(tilt: float, length: float) -> int:

@@ -71,7 +71,7 @@ class CrossCheck:
 
 def crosscheck(n: int = 32, dim: int = 2, sizes: str = "bi:1.4:0.5", seed: int = 0,
                settings: CompressionSettings | None = None, *, workdir=None, lmp=None, ranks: int = 1,
-               tolerance: float = 1e-8, timeout: float | None = None) -> CrossCheck:
+               tolerance: float = 1e-8, timeout: float | None = None, walls=None) -> CrossCheck:
     """Jam one random start twice, with the deck (``lmp``) and with the controller.
 
     ``workdir`` keeps the deck, start.data and the deck's outputs (default: a temporary
@@ -80,8 +80,9 @@ def crosscheck(n: int = 32, dim: int = 2, sizes: str = "bi:1.4:0.5", seed: int =
     settings = settings or CompressionSettings()
     if not tolerance > 0:
         raise ValueError(f"tolerance must be positive, got {tolerance}")
-    start = initial_packing(n, dim, sizes, "spring", seed, settings.start_phi(dim))
-    variables = deck_variables(n, dim, sizes, seed, settings, data="start.data", phi0=start.phi, out="deck")
+    start = initial_packing(n, dim, sizes, "spring", seed, settings.start_phi(dim), walls=walls)
+    variables = deck_variables(n, dim, sizes, seed, settings, data="start.data", phi0=start.phi, out="deck",
+                               walls=walls)
     if workdir is not None and not Path(workdir).is_dir():
         raise ValueError(f"work directory {workdir} does not exist; create it first")
     with tempfile.TemporaryDirectory(prefix="jamflow-crosscheck-") as tmp:

@@ -47,12 +47,15 @@ def _num(x) -> str:
 
 def deck_variables(n: int = 256, dim: int = 2, sizes="bi:1.4:0.5", seed: int = 0,
                    settings: CompressionSettings | None = None, *, potential: str | Potential = "spring",
-                   data=None, phi0: float | None = None, out: str = "jammed") -> dict:
+                   data=None, phi0: float | None = None, out: str = "jammed", walls=None) -> dict:
     """The deck's variables for a jamflow run; ValueError for what the deck cannot run.
 
     ``phi0`` overrides ``settings.phi0``; with ``data`` it should be the data file's
     packing fraction as jamflow computes it (``Packing.phi``), passed at full precision.
+    ``walls``: smooth walls on these axes (``"y"``, ``"x,y"``; ``jamflow.walls``).
     """
+    from .walls import parse_walls
+
     settings = settings or CompressionSettings()
     pot = parse_potential(potential) if isinstance(potential, str) else potential
     if not (isinstance(pot, Spring) and pot.alpha == 2.0 and pot.epsilon == 1.0):
@@ -69,7 +72,8 @@ def deck_variables(n: int = 256, dim: int = 2, sizes="bi:1.4:0.5", seed: int = 0
                   vtol=_num(settings.v_tol), dphi0=_num(settings.dphi0), minimizer=m.method, vmin=_num(m.v_min),
                   delta=_num(m.delta), window=m.window, maxiter=m.max_iterations, dt=_num(m.timestep),
                   mddt=_num(m.md_timestep),
-                  damping=_num(m.damping), maxsteps=settings.max_steps, skin=_num(0.3), out=str(out))
+                  damping=_num(m.damping), maxsteps=settings.max_steps, skin=_num(0.3), out=str(out),
+                  walls="".join("xyz"[a] for a in parse_walls(walls, int(dim))) or "none")
     start_phi = phi0 if phi0 is not None else settings.phi0
     optional = {"data": None if data is None else str(data),
                 "phi0": None if start_phi is None else repr(float(start_phi)),
@@ -143,6 +147,14 @@ def lmp_command(lmp=None, ranks: int = 1) -> list[str]:
     return [mpirun, "-np", str(ranks), exe]
 
 
+def _walls_of(variables: dict) -> tuple:
+    """The periodicity the deck's ``walls`` variable gives its box."""
+    walls, dim = str(variables.get("walls", "none")), int(variables.get("dim", 2))
+    if dim not in (2, 3):
+        return None  # the deck refuses it
+    return tuple("xyz"[a] not in walls.replace("none", "") for a in range(dim))
+
+
 def run_deck(workdir, variables: dict | None = None, *, deck=None, lmp=None, ranks: int = 1,
              timeout: float | None = None, shape=None) -> DeckResult:
     """Run the deck with ``lmp`` in ``workdir``; raise DeckFailed unless it jammed.
@@ -166,12 +178,13 @@ def run_deck(workdir, variables: dict | None = None, *, deck=None, lmp=None, ran
     start = time.perf_counter()
     proc = subprocess.run(args, cwd=workdir, env=lammps_env(), capture_output=True, text=True, timeout=timeout)
     seconds = time.perf_counter() - start
-    return read_deck_result(workdir / out, seconds, proc, shape)
+    return read_deck_result(workdir / out, seconds, proc, periodic=_walls_of(variables), shape=shape)
 
 
-def read_deck_result(prefix, seconds: float = math.nan, proc=None, shape=None) -> DeckResult:
-    """Read PREFIX.protocol.txt and PREFIX.data (bodies of ``shape`` if given); raise
-    DeckFailed with the deck's reason."""
+def read_deck_result(prefix, seconds: float = math.nan, proc=None, periodic=None, shape=None) -> DeckResult:
+    """Read PREFIX.protocol.txt and PREFIX.data (``periodic``: per axis, False where the deck
+    had walls; ``shape``: the rigid bodies of a body deck); raise DeckFailed with the deck's
+    reason."""
     prefix = Path(prefix)
     log = Path(f"{prefix}.protocol.txt")
     if not log.is_file():
@@ -179,7 +192,8 @@ def read_deck_result(prefix, seconds: float = math.nan, proc=None, shape=None) -
     history, result = read_protocol(log)
     if result.get("status") != "jammed":
         raise DeckFailed(f"the deck did not jam: {result.get('message', 'no result line in ' + str(log))}")
-    packing = read_data_file(f"{prefix}.data") if shape is None else read_body_data(f"{prefix}.data", shape)
+    packing = (read_data_file(f"{prefix}.data", periodic=periodic) if shape is None
+               else read_body_data(f"{prefix}.data", shape))
     return DeckResult(packing, float(result["phi_J"]), float(result["V"]), float(result["P"]),
                       float(result["max_force"]), history, seconds, prefix)
 
@@ -216,10 +230,11 @@ def read_protocol(path) -> tuple[dict, dict]:
 
 
 # --- LAMMPS data files at full precision ---------------------------------------------------------------
-def read_data_file(path, potential: Potential | None = None) -> Packing:
+def read_data_file(path, potential: Potential | None = None, periodic=None) -> Packing:
     """A packing from a LAMMPS data file of ``atom_style sphere`` (as ``write_data`` writes
     it), in float64 and atom-ID order, positions as written; the dimension is 2 when every
-    z is 0. (jamflow.analysis.readers goes through MDAnalysis, which keeps float32.)"""
+    z is 0; ``periodic`` per axis (data files do not say: False for walled axes).
+    (jamflow.analysis.readers goes through MDAnalysis, which keeps float32.)"""
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"no LAMMPS data file {path}")
@@ -229,7 +244,7 @@ def read_data_file(path, potential: Potential | None = None) -> Packing:
         raise ValueError(f"{path} has no 'Atoms # sphere' section; write it with atom_style sphere")
     table = np.array(_section_rows(lines, k, 7), dtype=float)
     table = table[np.argsort(table[:, 0])]
-    box, origin = _data_box(bounds, tilts, table[:, 6])
+    box, origin = _data_box(bounds, tilts, table[:, 6], periodic)
     positions = table[:, 4:4 + box.dim] - origin  # write_data writes them inside the cell
     meta = {"source": str(path)}
     return Packing(positions, table[:, 2], box, potential or Spring(), meta)
@@ -283,11 +298,11 @@ def _data_header(lines) -> tuple[dict, tuple, int]:
     return bounds, tilts, k
 
 
-def _data_box(bounds: dict, tilts: tuple, z: np.ndarray) -> tuple[Box, np.ndarray]:
+def _data_box(bounds: dict, tilts: tuple, z: np.ndarray, periodic=None) -> tuple[Box, np.ndarray]:
     """(box, origin) of a data file; the dimension is 2 when every z is 0."""
     dim = 2 if np.all(z == 0.0) else 3
     lengths = [bounds[a][1] - bounds[a][0] for a in "xyz"[:dim]]
-    return Box.from_lammps(dim, lengths, tilts), np.array([bounds[a][0] for a in "xyz"[:dim]])
+    return Box.from_lammps(dim, lengths, tilts, periodic), np.array([bounds[a][0] for a in "xyz"[:dim]])
 
 
 def _section_rows(lines, k: int, width: int) -> list:
@@ -309,14 +324,50 @@ def emit_deck(path, start: Packing, settings: CompressionSettings | None = None,
     directory: run it there). Returns (deck path, data path)."""
     path = Path(path)
     data = path.with_name(path.stem + ".start.data")
+    if start.fixed is not None or start.gravity > 0:
+        raise ValueError("the deck runs smooth walls at most: no rough walls (fixed particles) or gravity")
     variables = deck_variables(start.n, start.dim, start.metadata.get("sizes", "bi:1.4:0.5"),
                                start.metadata.get("seed", 0), settings, potential=start.potential,
-                               data=data.name, phi0=start.phi, out=out)
+                               data=data.name, phi0=start.phi, out=out, walls=start.box.walls)
     values = start.species()[0]
     if values[0] != 1.0:
         raise ValueError(f"the deck's small diameter is 1, got {values[0]}; rescale the packing")
     write_lammps_data(data, start)
     return write_deck(path, variables), data
+
+
+# --- the constant-pressure deck (lammps_inputs/pressure.lmp, written by hand) ------------------------
+PRESSURE_DECK_NAME = "pressure.lmp"
+PRESSURE_COLUMNS = ("target_pressure", "phi", "pressure", "pxy", "energy_per_particle", "iterations", "max_force")
+
+
+def run_pressure_deck(workdir, start: Packing, pressures, *, stress: str = "iso", lmp=None,
+                      out: str = "pressed", timeout: float | None = None) -> tuple[dict, Packing]:
+    """Run ``lammps_inputs/pressure.lmp`` from ``start`` (written as start.data in ``workdir``)
+    through the decreasing target ``pressures``; return (history, the packing at the last one).
+    Linear spring (eps = 1), one or two sizes with the small one 1, periodic box."""
+    from .engine.lammps_lib import lammps_env
+
+    values = start.species()[0]
+    pot = start.potential
+    if not (isinstance(pot, Spring) and pot.alpha == 2.0 and pot.epsilon == 1.0) or len(values) > 2 or values[0] != 1.0:
+        raise ValueError("the pressure deck runs the linear spring (eps = 1) with diameters 1 and one other")
+    if start.box.walls or start.gravity > 0 or start.fixed is not None:
+        raise ValueError("the pressure deck relaxes a periodic box (no walls, gravity or fixed particles)")
+    workdir = Path(workdir)
+    write_lammps_data(workdir / "start.data", start)
+    deck = default_deck_path().with_name(PRESSURE_DECK_NAME)
+    args = [*lmp_command(lmp), "-in", str(deck), "-log", f"{out}.lammps.log", "-screen", "none", "-nocite",
+            "-var", "dim", str(start.dim), "-var", "data", "start.data", "-var", "d2", _num(values[-1]),
+            "-var", "stress", stress, "-var", "out", out, "-var", "P", *[repr(float(p)) for p in pressures]]
+    proc = subprocess.run(args, cwd=workdir, env=lammps_env(), capture_output=True, text=True, timeout=timeout)
+    log = workdir / f"{out}.pressure.txt"
+    if proc.returncode != 0 or not log.is_file():
+        raise DeckFailed(f"the pressure deck failed: {_lammps_error(workdir / out, proc)}")
+    rows = np.array([ln.split() for ln in log.read_text().splitlines() if ln.strip() and not ln.startswith("#")],
+                    dtype=float).reshape(-1, len(PRESSURE_COLUMNS))
+    history = {name: rows[:, k] for k, name in enumerate(PRESSURE_COLUMNS)}
+    return history, read_data_file(workdir / f"{out}.data")
 
 
 def default_deck_path() -> Path:
@@ -326,4 +377,4 @@ def default_deck_path() -> Path:
 
 __all__ = ["DeckFailed", "DeckResult", "deck_text", "deck_variables", "write_deck", "run_deck",
            "read_deck_result", "read_protocol", "read_data_file", "read_body_data", "lmp_command", "emit_deck",
-           "default_deck_path"]
+           "default_deck_path", "run_pressure_deck"]

@@ -21,6 +21,9 @@ HEADER = """\
 # when jammed (V_tol < V < 2 V_tol), 1 when the protocol failed (reason in both logs).
 # Units: LJ with small diameter 1, epsilon 1, mass 1; V is the energy per particle.
 # Potential: V(r) = eps/2 (1 - r/sigma_ij)^2 for r < sigma_ij (pair_style harmonic/cut).
+# Walls (-var walls y, xy, ...; seed section 2.3): those axes are boundary f with smooth walls
+# at both faces, the same law at contact distance a/2 (fix wall/harmonic per size), and phi
+# is measured between them (jamflow/walls.py; jamflow jam --walls y --emit-deck FILE).
 # Optional variables (not set here):
 #   -var data FILE   start from FILE (atom_style sphere; type 1 diameter d1, type 2 d2)
 #   -var phi0 PHI    start packing fraction; default 0.80 (2D) / 0.55 (3D); with data,
@@ -46,6 +49,7 @@ variable damping   index {damping:<12} # md only: viscous drag b
 variable maxsteps  index {maxsteps:<12} # cap on minimisations
 variable skin      index {skin:<12} # neighbour-list skin
 variable out       index {out:<12} # output prefix
+variable walls     index {walls:<12} # none | x | y | z | xy | xz | yz | xyz: smooth walls on those axes
 """
 
 BODY = r"""
@@ -78,10 +82,19 @@ if "$(v_vmin > v_vtol)" then "variable jf_bad string 'vmin = ${vmin} is above vt
 variable jf_md internal 0
 if "${minimizer} == md" then "variable jf_md internal 1"
 if "$(v_jf_md == 1 && v_damping*v_mddt >= 2)" then "variable jf_bad string 'damped MD with damping x dt = $(v_damping*v_mddt) >= 2: the explicit drag -b v diverges (atoms fly off, V reads 0); use damping < 2/dt'" "jump SELF jf_fail"
+# walls: boundary f on the walled axes (jamflow/engine/lammps.py)
+variable jf_bx string p
+variable jf_by string p
+variable jf_bz string p
+if "${walls} == x || ${walls} == xy || ${walls} == xz || ${walls} == xyz" then "variable jf_bx string f"
+if "${walls} == y || ${walls} == xy || ${walls} == yz || ${walls} == xyz" then "variable jf_by string f"
+if "${walls} == z || ${walls} == xz || ${walls} == yz || ${walls} == xyz" then "variable jf_bz string f"
+if "${walls} != none && ${jf_bx} == p && ${jf_by} == p && ${jf_bz} == p" then "variable jf_bad string 'walls must be none, x, y, z, xy, xz, yz or xyz'" "jump SELF jf_fail"
+if "${dim} == 2 && ${jf_bz} == f" then "variable jf_bad string 'no walls on z in 2D'" "jump SELF jf_fail"
 
 units lj
 dimension ${dim}
-boundary p p p
+boundary ${jf_bx} ${jf_by} ${jf_bz}
 atom_style sphere
 atom_modify map array
 comm_modify vel yes
@@ -135,6 +148,23 @@ variable jf_s12 internal $(0.5*(v_d1+v_d2):%.17g)
 if "${jf_ntypes} == 2" then "pair_coeff 1 2 $(1.0/(2*v_jf_s12^2):%.17g) $(v_jf_s12:%.17g)" "pair_coeff 2 2 $(1.0/(2*v_d2^2):%.17g) $(v_d2:%.17g)"
 neighbor ${skin} bin
 neigh_modify every 1 delay 0 check yes
+# ---- smooth walls: E = K (a/2 - h)^2, K = 2 eps / a^2 = eps/2 (1 - h/(a/2))^2, one fix per size ----
+if "${walls} == none" then "jump SELF jf_walls_done"
+variable jf_k1 string $(2.0/v_d1^2:%.17g)
+variable jf_r1 string $(v_d1/2.0:%.17g)
+variable jf_k2 string $(2.0/v_d2^2:%.17g)
+variable jf_r2 string $(v_d2/2.0:%.17g)
+variable jf_w1 string ""
+variable jf_w2 string ""
+# the faces as equal-style variables of the box: an EDGE wall would stay where the box was
+if "${jf_bx} == f" then "variable jf_xlo equal xlo" "variable jf_xhi equal xhi" "variable jf_w1 string '${jf_w1}xlo v_jf_xlo ${jf_k1} 0.0 ${jf_r1} xhi v_jf_xhi ${jf_k1} 0.0 ${jf_r1} '" "variable jf_w2 string '${jf_w2}xlo v_jf_xlo ${jf_k2} 0.0 ${jf_r2} xhi v_jf_xhi ${jf_k2} 0.0 ${jf_r2} '"
+if "${jf_by} == f" then "variable jf_ylo equal ylo" "variable jf_yhi equal yhi" "variable jf_w1 string '${jf_w1}ylo v_jf_ylo ${jf_k1} 0.0 ${jf_r1} yhi v_jf_yhi ${jf_k1} 0.0 ${jf_r1} '" "variable jf_w2 string '${jf_w2}ylo v_jf_ylo ${jf_k2} 0.0 ${jf_r2} yhi v_jf_yhi ${jf_k2} 0.0 ${jf_r2} '"
+if "${jf_bz} == f" then "variable jf_zlo equal zlo" "variable jf_zhi equal zhi" "variable jf_w1 string '${jf_w1}zlo v_jf_zlo ${jf_k1} 0.0 ${jf_r1} zhi v_jf_zhi ${jf_k1} 0.0 ${jf_r1} '" "variable jf_w2 string '${jf_w2}zlo v_jf_zlo ${jf_k2} 0.0 ${jf_r2} zhi v_jf_zhi ${jf_k2} 0.0 ${jf_r2} '"
+group jf_w1 type 1
+fix jf_wall1 jf_w1 wall/harmonic ${jf_w1}units box
+fix_modify jf_wall1 energy yes virial yes
+if "${jf_ntypes} == 2" then "group jf_w2 type 2" "fix jf_wall2 jf_w2 wall/harmonic ${jf_w2}units box" "fix_modify jf_wall2 energy yes virial yes"
+label jf_walls_done
 compute jf_press all pressure NULL virial
 thermo_style custom step pe c_jf_press[*] fmax
 thermo_modify norm no

@@ -9,7 +9,11 @@ epsilon, pressures in epsilon / diameter^d)::
                                    shape (JSON: kind and parameters, e.g.
                                    {"kind": "ellipsoid", "alpha": 1.5, "contact": "exact"}),
                                    shape_spec (text, e.g. "ellipse:1.5"), gamma (shear strain
-                                   xy / ly of the box, accumulated)
+                                   xy / ly of the box, accumulated);
+                                   walls (walled axes, "" | "y" | "x,y" | ...), wall_type
+                                   ("" | "smooth" | "rough"), gravity (g, 0 without),
+                                   target_pressure (NaN at fixed box), stress ("" | "iso" |
+                                   "aniso" | "tri")
     /positions  (N, d)      float64, Cartesian, wrapped into the cell
     /diameters  (N,)        float64, each particle's size scale (jamflow.packing)
     /box        (d, d)      float64, upper-triangular, columns = cell vectors (LAMMPS tilt)
@@ -23,10 +27,15 @@ epsilon, pressures in epsilon / diameter^d)::
                             (major, minor for ellipses and prolate spheroids)
     /sites (N, S, d), /site_diameters (N, S)   rigid bodies: world positions and diameters
                                                of each body's sites
+    /fixed (N,)             uint8, 1 for fixed particles (rough walls: they sit on the faces)
+    /wall_forces (k, 2, d)  force of the particles on the lower and upper face of each of
+                            the k walled axes (in the order of the walls attribute)
+    /wall_pressure (k, 2)   outward normal component of wall_forces over the face area
     /protocol               attrs: every protocol and minimiser parameter
     /history/<column> (M,)  one dataset per recorded column (phi, energy, pressure, ...)
 
-Version 1 files (disks and spheres, no shape attributes) still load. The derived datasets
+Version 1 files (disks and spheres, no shape attributes) still load; files without the
+walls attributes and datasets (added within version 2) load as periodic packings. The derived datasets
 (directors, axes, sites, site_diameters) are written for other tools; loading rebuilds the
 packing from positions, diameters, orientations and the shape attribute.
 
@@ -52,6 +61,7 @@ from .box import Box
 from .packing import Packing
 from .potentials import potential_from_attrs
 from .shapes.shape import shape_from_attrs
+from .walls import face_pressures, parse_walls, wall_type
 
 SCHEMA = "jamflow.packing"
 SCHEMA_VERSION = 2
@@ -94,8 +104,10 @@ def check_writable(path) -> None:
 
 
 def save_packing(path, packing: Packing, *, energy_per_particle=None, pressure_tensor=None,
-                 protocol: dict | None = None, history: dict | None = None, lammps_version=None) -> Path:
-    """Write ``packing`` (and optional results) atomically to the HDF5 file ``path``."""
+                 protocol: dict | None = None, history: dict | None = None, lammps_version=None,
+                 wall_forces=None, target_pressure=None, stress=None) -> Path:
+    """Write ``packing`` (and optional results) atomically to the HDF5 file ``path``.
+    ``wall_forces`` (d, 2, d): the force on each face (``jamflow.walls.wall_loads``)."""
     pot = packing.potential
     attrs = dict(
         schema=SCHEMA, schema_version=SCHEMA_VERSION, jamflow_version=__version__,
@@ -106,6 +118,8 @@ def save_packing(path, packing: Packing, *, energy_per_particle=None, pressure_t
         created=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         shape=json.dumps(packing.shape.attrs()), shape_spec=packing.shape.spec(packing.dim),
         gamma=packing.box.shear_strain,
+        walls=packing.box.wall_spec, wall_type=wall_type(packing), gravity=float(packing.gravity),
+        target_pressure=_num(target_pressure), stress=str(stress or ""),
     )
     ptensor = None if pressure_tensor is None else np.asarray(pressure_tensor, float)
     attrs["pressure"] = math.nan if ptensor is None else float(np.trace(ptensor) / packing.dim)
@@ -118,6 +132,12 @@ def save_packing(path, packing: Packing, *, energy_per_particle=None, pressure_t
             f[name] = data
         if ptensor is not None:
             f["pressure_tensor"] = ptensor
+        if packing.fixed is not None:
+            f["fixed"] = packing.fixed.astype(np.uint8)
+        if wall_forces is not None and packing.box.walls:
+            loads = np.asarray(wall_forces, float)
+            f["wall_forces"] = loads[list(packing.box.walls)]
+            f["wall_pressure"] = face_pressures(packing.box, loads)
         f.create_group("protocol").attrs.update({k: _attr(v) for k, v in (protocol or {}).items()})
         hist = f.create_group("history")
         for name, column in (history or {}).items():
@@ -141,8 +161,12 @@ def load_packing(path) -> Packing:
         shape = shape_from_attrs(json.loads(_text(f.attrs.get("shape", '{"kind": "sphere"}'))))
         orientations = f["orientations"][...] if "orientations" in f else None
         meta = {"seed": int(f.attrs["seed"]), "sizes": str(f.attrs["sizes"]), "source": str(path)}
-        return Packing(f["positions"][...], f["diameters"][...], Box(f["box"][...]), pot, meta, shape,
-                       orientations)
+        h = f["box"][...]
+        walls = parse_walls(_text(f.attrs.get("walls", "")), len(h))
+        box = Box(h, tuple(a not in walls for a in range(len(h))))
+        fixed = f["fixed"][...].astype(bool) if "fixed" in f else None
+        return Packing(f["positions"][...], f["diameters"][...], box, pot, meta, shape, orientations, fixed,
+                       float(f.attrs.get("gravity", 0.0)))
 
 
 def shape_datasets(packing: Packing) -> dict:

@@ -24,6 +24,12 @@ Stopping rules, checked after every ``window`` iterations (LAMMPS runs the windo
 5. ``iteration-cap``: ``max_iterations`` reached (not converged).
 6. ``blown-up``: non-finite energy or force, or V < V_min with a force no state at V < V_min
    can have (``_force_bound``): the integration diverged (not converged).
+
+At a target ``pressure`` (constant stress, the box as a degree of freedom: compiled FIRE's box
+coordinates, LAMMPS ``fix box/relax`` with CG) the objective is the enthalpy U + P V: rule 1
+also requires every box force component below the force tolerance (so |P - P_target| <
+force_tol / (d L^(d-1)) isotropically), rule 3 watches the enthalpy, and rule 2 is off (a
+packing at P > 0 has U > 0 however small). Energies per particle count mobile particles only.
 """
 
 from __future__ import annotations
@@ -35,6 +41,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 METHODS = ("fire", "cg", "md")
+STRESS_MODES = ("iso", "aniso", "tri")  # box relaxation at a target pressure
 
 
 @dataclass(frozen=True)
@@ -50,6 +57,8 @@ class MinimizerSettings:
     timestep: float = 0.05  # FIRE initial step (0.1 diverges: docs/failure-modes.md), in sqrt(m diameter^2 / eps)
     md_timestep: float = 0.1  # damped-MD step
     damping: float = 0.3  # md only: drag coefficient b, in sqrt(m eps) / diameter
+    pressure: float | None = None  # target pressure (eps / diameter^d): the box relaxes to it; None: fixed box
+    stress: str = "iso"  # with pressure: iso | aniso (each P_aa) | tri (also the shear stresses -> 0)
 
     def __post_init__(self):
         if self.method not in METHODS:
@@ -66,6 +75,11 @@ class MinimizerSettings:
                              "damping < 2 / md_timestep, e.g. 0.3 with md_timestep 0.1")
         if self.max_iterations < 1 or self.window < 1:
             raise ValueError("max_iterations and window must be positive integers")
+        if self.pressure is not None and not (isinstance(self.pressure, (int, float)) and math.isfinite(self.pressure)
+                                              and self.pressure > 0):
+            raise ValueError(f"target pressure must be a finite positive number (eps/diameter^d), got {self.pressure!r}")
+        if self.stress not in STRESS_MODES:
+            raise ValueError(f"unknown stress mode {self.stress!r}; use one of {', '.join(STRESS_MODES)}")
 
     def resolved_force_tol(self, box, stiffness: float = 1.0) -> float:
         """The force tolerance; by default above the round-off floor ~ L * 1e-16 * stiffness."""
@@ -102,7 +116,7 @@ def minimize(engine, settings: MinimizerSettings) -> MinimizeResult:
     generalized torque component); the stopping rules are applied here, the same for every
     engine."""
     start = time.perf_counter()
-    n = engine.template.n
+    n = engine.template.n_mobile
     stiffness = engine.template.potential.contact_stiffness
     ftol = settings.resolved_force_tol(engine.box, stiffness)
     fmax_at_vmin = _force_bound(engine.template, n * settings.v_min)
@@ -117,6 +131,8 @@ def minimize(engine, settings: MinimizerSettings) -> MinimizeResult:
             reason = _stop_reason(settings, ftol, energy, worst, energy_prev, fmax_prev, ran, steps, done,
                                   fmax_at_vmin)
             if reason:
+                if settings.pressure is not None:  # report the potential energy, not the enthalpy
+                    energy = engine.state().energy / n
                 return MinimizeResult(reason in CONVERGED_REASONS, reason, done, energy, fmax,
                                       time.perf_counter() - start, gmax)
             energy_prev, fmax_prev = energy, worst
@@ -136,11 +152,12 @@ def _force_bound(packing, energy: float) -> float:
 
 
 def _stop_reason(s, ftol, energy, fmax, energy_prev, fmax_prev, ran, steps, done, fmax_at_vmin):
-    if not (math.isfinite(energy) and math.isfinite(fmax)) or (energy < s.v_min and fmax > fmax_at_vmin):
+    fixed_box = s.pressure is None
+    if not (math.isfinite(energy) and math.isfinite(fmax)) or (fixed_box and energy < s.v_min and fmax > fmax_at_vmin):
         return "blown-up"
     if fmax < ftol:
         return "force"
-    if energy < s.v_min:
+    if fixed_box and energy < s.v_min:
         return "energy-below-vmin"
     if math.isfinite(energy_prev) and (energy_prev - energy) < s.delta * energy and fmax > 0.5 * fmax_prev:
         return "no-progress"

@@ -9,6 +9,11 @@ Sizes: ``diameters[i]`` is particle i's scale: the diameter of a disk/sphere, th
 across-axis length b of an ellipse/spheroid, the scale factor of a rigid body's sites
 (``jamflow.shapes``). Orientations (``jamflow.shapes.rotations``): None for disks and
 spheres; (N,) angles in 2D, (N, 4) unit quaternions in 3D for every other shape.
+
+Boundaries (seed section 2.3, ``jamflow.walls``): the box's walled axes carry flat walls at
+their faces; ``fixed`` marks particles held in place (the particles of rough walls, which
+sit on the wall faces); ``gravity`` g pulls every mobile particle (mass 1) along -e_(d-1)
+onto the floor x_(d-1) = 0, which must be a wall.
 """
 
 from __future__ import annotations
@@ -44,6 +49,8 @@ class Packing:
     metadata: dict = field(default_factory=dict)
     shape: object = SPHERE
     orientations: np.ndarray | None = None
+    fixed: np.ndarray | None = None  # (N,) bool: held in place (rough-wall particles); None: none
+    gravity: float = 0.0  # g: force per (unit-mass) mobile particle along -e_(d-1), eps/diameter
 
     def __post_init__(self):
         pos = np.array(self.positions, dtype=float)
@@ -65,6 +72,7 @@ class Packing:
             object.__setattr__(self, "orientations", orient)
         elif self.orientations is not None:
             raise ValueError("disks and spheres have no orientations; pass orientations=None")
+        self._check_boundary(len(dia))
         if len(dia) and 4 * self.shape.reach(dia).max() >= self.box.widths.min():
             raise ValueError("box too small: the largest contact distance must stay below half "
                              "the box width for a unique minimum image; use more particles")
@@ -73,9 +81,37 @@ class Packing:
         object.__setattr__(self, "positions", pos)
         object.__setattr__(self, "diameters", dia)
 
+    def _check_boundary(self, n: int) -> None:
+        if self.fixed is not None:
+            fixed = np.array(self.fixed, dtype=bool)
+            if fixed.shape != (n,):
+                raise ValueError(f"fixed must be a boolean mask of shape ({n},), got {np.shape(self.fixed)}")
+            if fixed.all():
+                raise ValueError("every particle is fixed: nothing can move; mark only the wall particles fixed")
+            fixed.setflags(write=False)
+            object.__setattr__(self, "fixed", fixed if fixed.any() else None)
+        g = self.gravity
+        if not (isinstance(g, (int, float, np.floating)) and math.isfinite(g) and g >= 0):
+            raise ValueError(f"gravity must be a finite number >= 0 (eps/diameter per particle), got {g!r}")
+        object.__setattr__(self, "gravity", float(g))
+        if g > 0 and self.box.periodic[-1]:
+            floor = "yz"[self.box.dim - 2]
+            raise ValueError(f"gravity without a floor: gravity pulls along -{floor}, but {floor} is periodic; "
+                             f"add walls on {floor} (--walls {floor})")
+
     @property
     def n(self) -> int:
         return len(self.diameters)
+
+    @property
+    def mobile(self) -> np.ndarray:
+        """(N,) bool: particles that move (all but the fixed ones)."""
+        return np.ones(self.n, bool) if self.fixed is None else ~self.fixed
+
+    @property
+    def n_mobile(self) -> int:
+        """Particles that move: the N of energies per particle and of the contact count."""
+        return self.n if self.fixed is None else int(self.n - self.fixed.sum())
 
     @property
     def dim(self) -> int:
@@ -88,8 +124,14 @@ class Packing:
 
     @property
     def phi(self) -> float:
-        """Packing fraction: particle volume over box volume."""
-        return float(self.volumes.sum() / self.box.volume)
+        """Packing fraction: particle volume inside the box over the box volume, which with
+        walls is the volume between them (mobile particles count whole, fixed wall particles
+        by the fraction inside: ``jamflow.walls.inside_fraction``)."""
+        if self.fixed is None:
+            return float(self.volumes.sum() / self.box.volume)
+        from .walls import inside_fraction
+
+        return float((self.volumes * inside_fraction(self)).sum() / self.box.volume)
 
     @property
     def dof_per_particle(self) -> int:
@@ -120,8 +162,9 @@ class Packing:
     def subset(self, keep: np.ndarray, **metadata) -> "Packing":
         """The packing of particles ``keep`` (indices or mask), same box, shape and potential."""
         orient = None if self.orientations is None else self.orientations[keep]
+        fixed = None if self.fixed is None else self.fixed[keep]
         return replace(self, positions=self.positions[keep], diameters=self.diameters[keep],
-                       orientations=orient, metadata={**self.metadata, **metadata})
+                       orientations=orient, fixed=fixed, metadata={**self.metadata, **metadata})
 
     def scaled_to_phi(self, phi: float) -> "Packing":
         """Affine rescaling of box and positions to packing fraction ``phi``."""

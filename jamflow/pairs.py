@@ -5,7 +5,8 @@ strain of a Lees-Edwards cell; the search runs in the reduced cell), any box siz
 returns integer image vectors so engines can build exact separations
 ``x_i - x_j + h @ image`` without a second minimum-image pass. Orthogonal (reduced) cells use
 scipy's periodic cKDTree; tilted ones a cKDTree over the wrapped positions plus the ghost
-images that lie within ``rmax`` of the cell. See docs/shear-cell.md.
+images that lie within ``rmax`` of the cell. See docs/shear-cell.md. Walled axes
+(``Box.periodic``) have no images: the tree is not periodic along them and no ghost crosses them.
 """
 
 from __future__ import annotations
@@ -57,11 +58,12 @@ def neighbor_pairs(positions: np.ndarray, box: Box, rmax: float) -> tuple[np.nda
     if cell.is_triclinic:
         i, j, shift = _ghost_search(wrapped, cell, rmax)
     else:
-        wrapped = np.where(wrapped >= cell.lengths, 0.0, wrapped)  # cKDTree wants [0, L)
-        tree = cKDTree(wrapped, boxsize=cell.lengths)
+        periodic = np.array(cell.periodic)
+        wrapped = np.where(periodic & (wrapped >= cell.lengths), 0.0, wrapped)  # cKDTree wants [0, L)
+        tree = cKDTree(wrapped, boxsize=np.where(periodic, cell.lengths, 0.0))  # 0: no images (walls)
         pairs = tree.query_pairs(rmax, output_type="ndarray")
         i, j = pairs[:, 0], pairs[:, 1]
-        shift = -np.round((wrapped[i] - wrapped[j]) / cell.lengths).astype(np.int64)
+        shift = -np.round((wrapped[i] - wrapped[j]) / cell.lengths).astype(np.int64) * periodic
     # wrapped = x - cell.h @ n: fold the wrap offsets into the image, then express it in h's cells
     offset = np.round(cell.to_fractional(x - wrapped)).astype(np.int64)
     image = (offset[j] - offset[i] + shift) @ fold.T
@@ -82,7 +84,7 @@ def _ghost_search(wrapped: np.ndarray, cell: Box, rmax: float):
     s = cell.to_fractional(wrapped)
     reach = rmax / cell.widths * (1 + 1e-9) + 1e-12
     ghosts, owners, shifts = [], [], []
-    for m in product((-1, 0, 1), repeat=dim):
+    for m in cell.image_offsets():
         if not any(m):
             continue
         sm = s + np.array(m)

@@ -11,10 +11,11 @@ from jamflow.cli import SUBCOMMANDS, main
 from jamflow.commands import crosscheck as crosscheck_command
 from jamflow.crosscheck import compare, crosscheck
 from jamflow.deck import (DeckFailed, deck_text, deck_variables, default_deck_path, emit_deck, read_data_file,
-                          run_deck)
+                          run_deck, run_pressure_deck)
 from jamflow.engine.reference import energy_forces_pressure
 from jamflow.io import write_lammps_data
 from jamflow.protocols.compression import compress, fast_protocol, initial_packing
+from jamflow.protocols.pressure import PressureSettings, jam_at_pressure
 
 
 def assert_jammed(res, v_tol=1e-16):
@@ -188,3 +189,46 @@ def test_window_resume_mirrored_in_the_deck():
     assert len(resumed) == WINDOW_RESUMES
     assert res.first_difference is None and res.agree
     assert f"v_jf_resumes < {WINDOW_RESUMES}" in deck_text()
+
+
+@pytest.mark.parametrize("walls", ["y", "x,y"])
+def test_deck_with_walls_agrees_with_the_controller_bit_for_bit(walls):
+    """Smooth walls (fix wall/harmonic at the faces, boundary f): the deck and the controller's
+    LAMMPS engine send the same commands, so every minimisation agrees."""
+    check = crosscheck(32, 2, "bi:1.4:0.5", seed=3, walls=walls)
+    assert check.first_difference is None and check.phi_j_difference == 0.0 and check.same_contacts
+    assert check.deck.packing.box.walls == check.controller.packing.box.walls
+    ref = energy_forces_pressure(check.deck.packing)
+    assert np.max(np.abs(ref.forces)) < 1e-13  # the walls are where jamflow puts them: balanced by the reference
+    loads = check.controller.wall_pressures
+    assert np.all(loads > 0) and loads[-1] == pytest.approx([ref.pressure_tensor[1, 1]] * 2, rel=1e-5)
+
+
+@pytest.mark.parametrize("stress", ["iso", "tri"])
+def test_pressure_deck_agrees_with_the_controller_bit_for_bit(tmp_path, stress):
+    """lammps_inputs/pressure.lmp (fix box/relax + CG, etol 0) and jam_at_pressure on the LAMMPS
+    engine from one start: the same commands, the same minima at every pressure."""
+    start = initial_packing(32, 2, "bi:1.4:0.5", "spring", 5, 0.8)
+    pressures = (1e-4, 1e-5, 1e-6)
+    deck, packing = run_pressure_deck(tmp_path, start, pressures, stress=stress)
+    with pytest.warns(UserWarning, match="linesearch"):
+        ctrl = jam_at_pressure(start, PressureSettings(pressures, stress, MinimizerSettings(method="cg")),
+                               engine="lammps")
+    assert np.array_equal(deck["target_pressure"], pressures)
+    assert np.array_equal(deck["phi"], ctrl.history["phi"]) and np.array_equal(deck["iterations"], ctrl.history["iterations"])
+    # CG's line search can stall with the box off target (tri at 1e-4 here: 7.9% off, |F| 1e-3); never silently:
+    off = np.abs(deck["pressure"] / deck["target_pressure"] - 1) > 1e-6
+    assert np.all(ctrl.history["max_force"][off] > 1e-6) and not off[-1]
+    ref = energy_forces_pressure(packing)
+    assert abs(ref.pressure / 1e-6 - 1) < 1e-6 and np.max(np.abs(ref.forces)) < 1e-12
+    if stress == "tri":
+        assert np.all(np.abs(deck["pxy"][~off]) < 1e-8 * deck["target_pressure"][~off])  # shear stress relaxed
+
+
+def test_emit_deck_with_walls(tmp_path, capsys):
+    deck = tmp_path / "w.lmp"
+    assert main(["jam", "--n", "16", "--walls", "x,y", "--emit-deck", str(deck), "--out", str(tmp_path / "w.h5")]) == 0
+    assert "variable walls     index xy" in deck.read_text()
+    assert main(["jam", "--n", "16", "--walls", "y", "--wall-type", "rough", "--emit-deck", str(deck),
+                 "--out", str(tmp_path / "w.h5")]) == 2
+    assert "smooth walls at most" in capsys.readouterr().err

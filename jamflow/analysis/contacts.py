@@ -28,6 +28,15 @@
 - N' = N - N_f, N_c = contacts among non-floaters, <z> = 2 N_c / N',
   N_c,iso = N' d_f - d + 1 (d trivial translations subtracted, one added for phi); packings
   of particles that turn are generally hypostatic (N_c < N_c,iso, seed section 4.1).
+- Walls and gravity (``jamflow.walls``), following the same counting: a mobile particle
+  touching a smooth wall (h < a_i / 2) has a contact with it, whose direction is the wall
+  normal; contacts with fixed (rough-wall) particles are contacts. Walls and fixed particles
+  are never floaters and are no degrees of freedom: N' counts mobile non-floaters. The
+  trivial translations are those along periodic axes that nothing fixed pins (smooth walls
+  on y leave x; rough walls pin every axis), so N_c,iso = N' d_f - d_trivial + 1. Under
+  gravity the weight is a load, not a self-stress: no +1 (N_c,iso = N' d_f - d_trivial), and
+  in the floater test the weight acts as one more contact pressing from above (a disk
+  resting in a groove of two is stable), so it counts towards d_f + 1 and the half-space test.
 """
 
 from __future__ import annotations
@@ -56,36 +65,50 @@ class ContactsResult:
     n_site_contacts: int | None = None  # rigid bodies: overlapping site pairs among non-floaters (= n_contacts)
     n_body_contacts: int | None = None  # rigid bodies: touching pairs of non-floater bodies
     one_site: np.ndarray | None = None  # rigid bodies (N,) bool: a non-floater whose contacts all touch one site
+    wall_contacts: np.ndarray | None = None  # (N_w, 2): particle, face (2 a + side) of each smooth-wall contact
+    fixed: np.ndarray | None = None  # (N,) bool: fixed (wall) particles, never floaters, no degrees of freedom
+    trivial: int | None = None  # trivial translations (None: d, a periodic box)
+    loaded: bool = False  # under gravity: no +1 in the isostatic count
 
     @property
     def n_floaters(self) -> int:
         return int(self.floater.sum())
 
     @property
+    def _mobile(self) -> np.ndarray:
+        return np.ones(len(self.floater), bool) if self.fixed is None else ~self.fixed
+
+    @property
     def kept(self) -> np.ndarray:
-        """Indices of the non-floaters, in packing order."""
-        return np.flatnonzero(~self.floater)
+        """Indices of the mobile non-floaters, in packing order."""
+        return np.flatnonzero(~self.floater & self._mobile)
 
     @property
     def n_kept(self) -> int:
-        """N' = N - N_f."""
-        return int((~self.floater).sum())
+        """N' = N - N_f (mobile particles)."""
+        return int((~self.floater & self._mobile).sum())
+
+    @property
+    def n_wall_contacts(self) -> int:
+        """Contacts of non-floaters with smooth walls."""
+        return 0 if self.wall_contacts is None else len(self.wall_contacts)
 
     @property
     def n_contacts(self) -> int:
-        """N_c, contacts among non-floaters."""
-        return len(self.i)
+        """N_c, contacts among non-floaters (with fixed particles and walls included)."""
+        return len(self.i) + self.n_wall_contacts
 
     @property
     def mean_z(self) -> float:
-        """<z> = 2 N_c / N' (nan without non-floaters)."""
-        return 2.0 * self.n_contacts / self.n_kept if self.n_kept else float("nan")
+        """<z> = (sum of z over non-floaters) / N' (= 2 N_c / N' in a periodic box; nan without non-floaters)."""
+        return float(self.z[self.kept].sum()) / self.n_kept if self.n_kept else float("nan")
 
     @property
     def isostatic_count(self) -> int:
-        """N_c,iso = N' d_f - d + 1 (0 without non-floaters)."""
+        """N_c,iso = N' d_f - d_trivial + 1 (no +1 under gravity; 0 without non-floaters)."""
         d_f = self.dim if self.dof is None else self.dof
-        return self.n_kept * d_f - self.dim + 1 if self.n_kept else 0
+        trivial = self.dim if self.trivial is None else self.trivial
+        return self.n_kept * d_f - trivial + (0 if self.loaded else 1) if self.n_kept else 0
 
     @property
     def excess_contacts(self) -> int:
@@ -105,7 +128,7 @@ class ContactsResult:
 
     def z_distribution(self) -> tuple[np.ndarray, np.ndarray]:
         """(z values, fraction of non-floaters with that z), seed Figure 2.20."""
-        counts = np.bincount(self.z[~self.floater], minlength=1)
+        counts = np.bincount(self.z[self.kept], minlength=1)
         values = np.arange(len(counts))
         return values, counts / max(self.n_kept, 1)
 
@@ -129,20 +152,39 @@ class Contacts:
 
     def compute(self, packing: Packing) -> ContactsResult:
         rigid = packing.shape.kind == "rigid"
-        if rigid:  # one contact per overlapping site pair (module docstring)
+        if rigid:  # one contact per overlapping site pair (module docstring); bodies have no walls
             i, j, s, t, dr, *_ = overlapping_sites(packing)
         else:
             i, j, dr = particle_contacts(packing)
+        n = packing.n
+        if packing.fixed is not None:  # fixed particles do not interact with each other
+            live = ~(packing.fixed[i] & packing.fixed[j])
+            i, j, dr = i[live], j[live], dr[live]
         d_f = packing.dof_per_particle
         need = d_f + 1 if self.min_contacts is None else int(self.min_contacts)
         unit = dr / np.linalg.norm(dr, axis=1)[:, None]  # points from j to i
         half_space = self.half_space and packing.shape.kind == "sphere"
-        floater = find_floaters(packing.n, i, j, unit, need, half_space)
+        wall_i, wall_face, wall_unit = wall_contacts(packing)
+        load_i, load_unit = weight_contacts(packing)
+        virtual = n + 2 * packing.dim  # the faces, then the weight
+        anchored = np.zeros(virtual + 1, bool)
+        anchored[n:] = True
+        if packing.fixed is not None:
+            anchored[:n] = packing.fixed
+        floater = find_floaters(virtual + 1, np.concatenate([i, wall_i, load_i]),
+                                np.concatenate([j, n + wall_face, np.full(len(load_i), virtual)]),
+                                np.concatenate([unit, wall_unit, load_unit]), need, half_space, anchored)[:n]
         keep = ~floater[i] & ~floater[j]
-        z = np.bincount(i[keep], minlength=packing.n) + np.bincount(j[keep], minlength=packing.n)
-        bodies = body_counts(packing.n, i[keep], j[keep], s[keep], t[keep], floater) if rigid else (None, None, None)
+        wall_keep = ~floater[wall_i]
+        z = (np.bincount(i[keep], minlength=n) + np.bincount(j[keep], minlength=n)
+             + np.bincount(wall_i[wall_keep], minlength=n))
+        bounded = bool(packing.box.walls) or packing.gravity > 0 or packing.fixed is not None
+        trivial = 0 if packing.fixed is not None else sum(packing.box.periodic)
+        bodies = body_counts(n, i[keep], j[keep], s[keep], t[keep], floater) if rigid else (None, None, None)
         return ContactsResult(i[keep], j[keep], floater, z, packing.dim, len(i),
-                              near_contact_count(packing, self.near_tol), d_f, *bodies)
+                              near_contact_count(packing, self.near_tol), d_f, *bodies,
+                              wall_contacts=np.column_stack([wall_i[wall_keep], wall_face[wall_keep]]) if bounded else None,
+                              fixed=packing.fixed, trivial=trivial if bounded else None, loaded=packing.gravity > 0)
 
 
 def body_counts(n: int, i, j, s, t, floater) -> tuple[int, int, np.ndarray]:
@@ -156,18 +198,50 @@ def body_counts(n: int, i, j, s, t, floater) -> tuple[int, int, np.ndarray]:
     return len(i), len(pairs), ~floater & (n_touched == 1)
 
 
-def find_floaters(n: int, i, j, unit, need: int, half_space: bool = True) -> np.ndarray:
+def wall_contacts(packing: Packing):
+    """Mobile particles touching a smooth wall (h < a_i / 2, no tolerance): (particle, face
+    2 a + side, unit vector from the wall to the particle)."""
+    parts, faces, units = [], [], []
+    half, mobile = 0.5 * packing.diameters, packing.mobile
+    for a in packing.box.walls:
+        x = packing.positions[:, a]
+        for side, h in enumerate((x, packing.box.lengths[a] - x)):
+            touching = np.flatnonzero(mobile & (h < half))
+            normal = np.zeros((len(touching), packing.dim))
+            normal[:, a] = 1.0 if side == 0 else -1.0
+            parts.append(touching)
+            faces.append(np.full(len(touching), 2 * a + side))
+            units.append(normal)
+    if not parts:
+        return np.empty(0, int), np.empty(0, int), np.empty((0, packing.dim))
+    return np.concatenate(parts), np.concatenate(faces), np.concatenate(units)
+
+
+def weight_contacts(packing: Packing):
+    """Under gravity, the weight of each mobile particle as a contact pressing from above:
+    (particle, unit vector -e_(d-1) from the 'partner' to the particle)."""
+    if not packing.gravity:
+        return np.empty(0, int), np.empty((0, packing.dim))
+    idx = np.flatnonzero(packing.mobile)
+    unit = np.zeros((len(idx), packing.dim))
+    unit[:, -1] = -1.0
+    return idx, unit
+
+
+def find_floaters(n: int, i, j, unit, need: int, half_space: bool = True, anchored=None) -> np.ndarray:
     """Boolean mask of floaters, removed iteratively (see module docstring).
 
-    ``unit[p]`` is the unit vector from particle j[p] to particle i[p].
+    ``unit[p]`` is the unit vector from particle j[p] to particle i[p]; ``anchored`` nodes
+    (walls, fixed particles) are never floaters.
     """
     floater = np.zeros(n, bool)
+    free = np.ones(n, bool) if anchored is None else ~np.asarray(anchored, bool)
     while True:
         live = ~floater[i] & ~floater[j]
         z = np.bincount(i[live], minlength=n) + np.bincount(j[live], minlength=n)
-        bad = ~floater & (z < need)
+        bad = ~floater & free & (z < need)
         if half_space:
-            candidates = ~floater & ~bad & (z > 0)
+            candidates = ~floater & ~bad & free & (z > 0)
             bad |= candidates & ~spanning_mask(n, i[live], j[live], unit[live], candidates)
         if not bad.any():
             return floater

@@ -40,6 +40,9 @@ def hessian(packing: Packing) -> sp.csr_matrix:
     if packing.shape.kind != "sphere":
         raise ValueError(f"the dynamical matrix of {packing.shape.name(packing.dim)} particles needs rotational "
                          "coordinates, which jamflow.analysis.hessian does not have yet; it covers disks and spheres")
+    if packing.box.walls or packing.fixed is not None or packing.gravity > 0:
+        raise ValueError("the dynamical matrix has no wall, gravity or fixed-particle terms yet; it covers periodic "
+                         "boxes (use jamflow.analysis.contacts for the contact count of walled packings)")
     i, j, dr, r, sigma = overlapping_pairs(packing)
     d, n = packing.dim, packing.n
     k = pair_stiffness(packing.potential, dr, r, sigma)

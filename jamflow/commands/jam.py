@@ -1,5 +1,8 @@
 """Jam N particles (disks, spheres, or the shapes of ``--shape``) at onset by isotropic
-compression (seed section 2.1) and write the packing as HDF5 (schema: jamflow/io.py)."""
+compression (seed section 2.1) and write the packing as HDF5 (schema: jamflow/io.py).
+With --walls the box is bounded by walls on those axes (smooth or rough); with --gravity the
+particles settle on the floor instead; with --pressure the box relaxes to a target pressure
+(seed section 2.3, jamflow/walls.py, jamflow/protocols/gravity.py, pressure.py)."""
 
 from __future__ import annotations
 
@@ -11,6 +14,7 @@ from ..io import check_writable, save_packing
 from ..minimize import METHODS, MinimizerSettings
 from ..protocols.compression import DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, initial_packing, jam
 from ..progress import CompressionProgress
+from ..walls import WALL_TYPES
 
 
 def add_arguments(p) -> None:
@@ -40,6 +44,20 @@ def add_arguments(p) -> None:
     p.add_argument("--vtol", type=float, default=1e-16, help="energy window V_tol < V < 2 V_tol (per particle)")
     p.add_argument("--ftol", type=float, default=None, help="max force component tolerance (default scales with box)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the initial positions and sizes")
+    p.add_argument("--walls", default=None, metavar="AXES",
+                   help="walls on these axes (y, x,y, x,y,z): flat walls at both faces, the particles' own law at "
+                        "contact distance a_i/2; periodic along the others; phi between the walls")
+    p.add_argument("--wall-type", choices=WALL_TYPES, default="smooth",
+                   help="smooth: flat walls; rough: rows of fixed particles of the small diameter on the walls")
+    p.add_argument("--gravity", type=float, default=0.0, metavar="G",
+                   help="settle under gravity G (force per particle along -y in 2D, -z in 3D) on a floor: needs "
+                        "--walls y (2D) / z (3D); default phi0 0.5 (2D), 0.35 (3D)")
+    p.add_argument("--pressure", type=float, default=None, metavar="P",
+                   help="jam at target pressure P with the box as a degree of freedom (enthalpy minimisation), "
+                        "reached through decades from 1e-4; FIRE in the compiled engine, CG with fix box/relax in LAMMPS")
+    p.add_argument("--stress", choices=("iso", "aniso", "tri"), default="iso",
+                   help="with --pressure: iso (box shape kept), aniso (each P_aa = P), tri (shear stresses relaxed to "
+                        "0 too: the box tilts)")
     p.add_argument("--out", default="packing.h5", help="output HDF5 file")
     p.add_argument("--quiet", action="store_true", help="no progress display")
     p.add_argument("--emit-deck", default=None, metavar="DECK.lmp",
@@ -52,16 +70,35 @@ def settings_from_args(args) -> CompressionSettings:
         value = getattr(args, name)
         if value is not None and (not math.isfinite(value) or value <= 0):
             raise ValueError(f"--{name} must be a finite positive number, got {value}")
-    minimizer = MinimizerSettings(method=args.minimizer, force_tol=args.ftol, v_min=args.vtol, damping=args.damping)
+    minimizer = MinimizerSettings(method=args.minimizer, force_tol=args.ftol, v_min=args.vtol,
+                                  damping=getattr(args, "damping", MinimizerSettings().damping))  # crosscheck: none
     protocol = args.protocol or ("seed" if args.emit_deck else DEFAULT_PROTOCOL)
     return PROTOCOLS[protocol](phi0=args.phi0, dphi0=args.dphi0, v_tol=args.vtol, minimizer=minimizer)
 
 
+def check_boundary_args(args) -> None:
+    """Refuse bad --gravity / --pressure combinations before any work."""
+    if not math.isfinite(args.gravity) or args.gravity < 0:
+        raise ValueError(f"--gravity must be a finite number >= 0, got {args.gravity}")
+    if args.pressure is not None:
+        if not math.isfinite(args.pressure) or args.pressure <= 0:
+            raise ValueError(f"--pressure must be a finite positive number, got {args.pressure}")
+        if args.walls or args.gravity:
+            raise ValueError("--pressure relaxes a periodic box: it does not combine with --walls or --gravity")
+    if args.emit_deck and (args.pressure is not None or args.gravity or args.wall_type == "rough"):
+        raise ValueError("--emit-deck writes the compression deck (smooth walls at most); the constant-pressure deck "
+                         "is lammps_inputs/pressure.lmp")
+
+
 def run(args) -> int:
+    check_boundary_args(args)
     settings = settings_from_args(args)
     check_writable(args.out)
-    start = initial_packing(args.n, args.dim, args.sizes, args.potential, args.seed, settings.start_phi(args.dim),
-                            args.shape)
+    start = initial_packing(args.n, args.dim, args.sizes, args.potential, args.seed,
+                            settings.start_phi(args.dim, args.gravity), args.shape, args.walls, args.wall_type,
+                            args.gravity)
+    if args.pressure is not None:
+        return run_pressure(args, start, settings)
     engine_name(start, args.minimizer, args.engine)  # refuse --engine numba where it cannot run, before work
     if args.emit_deck:
         return emit(args, start, settings)
@@ -70,7 +107,25 @@ def run(args) -> int:
         result = jam(start=start, settings=settings, observers=[progress], engine=args.engine)
     save_packing(args.out, result.packing, energy_per_particle=result.energy_per_particle,
                  pressure_tensor=result.pressure_tensor, protocol={**settings.as_dict(), "engine": result.engine},
-                 history=result.history, lammps_version=result.lammps_version)
+                 history=result.history, lammps_version=result.lammps_version, wall_forces=result.wall_forces)
+    print(f"{result.summary()}  -> {args.out} ({time.perf_counter() - t0:.2f} s)")
+    return 0
+
+
+def run_pressure(args, start, settings) -> int:
+    """--pressure: the enthalpy minimisations of jamflow.protocols.pressure from the random start."""
+    from ..protocols.pressure import PressureSettings, check_pressure_start, jam_at_pressure, pressure_sequence
+
+    psettings = PressureSettings(pressure_sequence(args.pressure), args.stress, settings.minimizer)
+    check_pressure_start(start, psettings)
+    engine_name(start, args.minimizer, args.engine, pressure=True)
+    t0 = time.perf_counter()
+    with CompressionProgress(disable=args.quiet) as progress:
+        result = jam_at_pressure(start, psettings, observers=[progress], engine=args.engine)
+    save_packing(args.out, result.packing, energy_per_particle=result.energy_per_particle,
+                 pressure_tensor=result.pressure_tensor, protocol={**psettings.as_dict(), "engine": result.engine},
+                 history=result.history, lammps_version=result.lammps_version, target_pressure=args.pressure,
+                 stress=args.stress)
     print(f"{result.summary()}  -> {args.out} ({time.perf_counter() - t0:.2f} s)")
     return 0
 

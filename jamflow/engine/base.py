@@ -61,10 +61,19 @@ class Capabilities:
     tilted_boxes: bool = True
     mpi: bool = False
     options: frozenset = field(default_factory=frozenset)  # keyword options its constructor takes
+    boundaries: frozenset = field(default_factory=frozenset)  # of "walls", "fixed", "gravity" (disks, spheres)
+    box_methods: frozenset = field(default_factory=frozenset)  # minimisers that relax the box at a target pressure
     shape_methods: dict = field(default_factory=dict, hash=False)  # shape kind -> its minimisers, where fewer
 
-    def reason(self, packing, method: str = "fire", comm=None) -> str | None:
-        kind = packing.shape.kind
+    def reason(self, packing, method: str = "fire", comm=None, pressure: bool = False) -> str | None:
+        needs, kind = scene_boundaries(packing), packing.shape.kind
+        if needs and kind != "sphere":
+            return f"{' and '.join(sorted(needs))} with {packing.shape.name(packing.dim)} particles (written for disks and spheres)"
+        if needs - self.boundaries:
+            return f"{' and '.join(sorted(needs - self.boundaries))} (it runs {', '.join(sorted(self.boundaries)) or 'none'})"
+        if pressure and method not in self.box_methods:
+            return (f"a target pressure with minimizer {method} (it relaxes the box with "
+                    f"{', '.join(sorted(self.box_methods)) or 'no minimizer'})")
         if kind not in self.shapes:
             return f"{packing.shape.name(packing.dim)} particles (it runs {', '.join(sorted(self.shapes))})"
         if packing.potential.name not in self.potentials:
@@ -78,6 +87,18 @@ class Capabilities:
         if comm is not None and not self.mpi:
             return "an MPI communicator (it is serial)"
         return None
+
+
+def scene_boundaries(packing) -> set:
+    """What a packing needs beyond pairs in a periodic box: walls, fixed particles, gravity."""
+    needs = set()
+    if packing.box.walls:
+        needs.add("walls")
+    if packing.fixed is not None:
+        needs.add("fixed")
+    if packing.gravity > 0:
+        needs.add("gravity")
+    return needs
 
 
 class Engine(Protocol):
@@ -113,28 +134,29 @@ def engine_class(name: str):
     return LammpsEngine
 
 
-def engine_name(packing, method: str = "fire", engine: str = "auto", comm=None) -> str:
-    """'numba' or 'lammps' for this scene; ValueError if a forced engine cannot run it."""
+def engine_name(packing, method: str = "fire", engine: str = "auto", comm=None, pressure: bool = False) -> str:
+    """'numba' or 'lammps' for this scene (``pressure``: with the box relaxed at a target
+    pressure); ValueError if a forced engine cannot run it."""
     check_engine(engine)
     if engine != "auto":
-        reason = engine_class(engine).CAPABILITIES.reason(packing, method, comm)
+        reason = engine_class(engine).CAPABILITIES.reason(packing, method, comm, pressure)
         if reason:
             other = "lammps" if engine == "numba" else "numba"
             raise ValueError(f"engine {engine} cannot run {reason}; use engine {other} (or auto)")
         return engine
     for name in ("numba", "lammps"):
-        if engine_class(name).CAPABILITIES.reason(packing, method, comm) is None:
+        if engine_class(name).CAPABILITIES.reason(packing, method, comm, pressure) is None:
             return name
     raise ValueError(f"no engine runs this scene: compiled: "
-                     f"{engine_class('numba').CAPABILITIES.reason(packing, method, comm)}; lammps: "
-                     f"{engine_class('lammps').CAPABILITIES.reason(packing, method, comm)}")
+                     f"{engine_class('numba').CAPABILITIES.reason(packing, method, comm, pressure)}; lammps: "
+                     f"{engine_class('lammps').CAPABILITIES.reason(packing, method, comm, pressure)}")
 
 
-def open_engine(packing, method: str = "fire", engine: str = "auto", **options):
+def open_engine(packing, method: str = "fire", engine: str = "auto", pressure: bool = False, **options):
     """A new engine holding ``packing``. ``options`` go to the engine's constructor
     (LAMMPS: skin, comm, args; compiled: skin); an option the chosen engine does not take is
-    an error, not silently dropped."""
-    name = engine_name(packing, method, engine, options.get("comm"))
+    an error, not silently dropped. ``pressure``: the engine must relax the box with ``method``."""
+    name = engine_name(packing, method, engine, options.get("comm"), pressure)
     cls = engine_class(name)
     unknown = set(options) - cls.CAPABILITIES.options
     if unknown:

@@ -10,6 +10,19 @@ Atoms have ids 1..N in packing order; everything extracted is returned in that o
 Rigid bodies (``shape.kind == "rigid"``) are one atom per site, one molecule per body, relaxed
 by damped rigid-body dynamics only (``jamflow.engine.lammps_bodies``: LAMMPS's minimisers
 ignore ``fix rigid``); positions, forces and torques are then those of the bodies.
+
+Walls and gravity (``jamflow.walls``): walled axes are ``boundary f``; smooth walls are one
+``fix wall/harmonic`` per particle size on the mobile particles of that size, E = K (rc - h)^2
+with K = 2 eps / a^2, rc = a / 2, which is exactly eps/2 (1 - h/(a/2))^2, the linear spring at
+contact distance a/2 (so LAMMPS walls need the linear spring and a few discrete sizes; the
+compiled engine runs every law). The wall coordinates are equal-style variables of the box
+(``v_jf_ylo`` = ylo, ...): an ``EDGE`` wall stays where the box edge was when the fix was
+defined and would not follow ``change_box``. LAMMPS refuses a particle on or behind a wall
+("Particle on or inside fix wall surface"), which the soft law itself allows. Fixed particles
+are a group held by ``fix setforce 0 0 0`` whose mutual pairs are excluded from the neighbour
+list; gravity is ``fix addforce 0 -g 0`` (a constant force, whose energy g y LAMMPS adds itself;
+``fix gravity`` is ignored by ``minimize``). Each fix has ``fix_modify energy yes`` and the walls ``virial yes``.
+At a target pressure the box relaxes by ``fix box/relax`` (CG only, ``etol 0``).
 """
 
 from __future__ import annotations
@@ -29,7 +42,7 @@ from ..pairs import site_packing
 from .base import Capabilities, State
 from .lammps_bodies import RIGID_CHECK, RIGID_FIX, BodySites
 from .lammps_lib import new_lammps
-from .pair_styles import pair_setup
+from .pair_styles import pair_setup, uses_harmonic_cut
 
 
 class LammpsError(RuntimeError):
@@ -51,12 +64,17 @@ class LammpsEngine:
     CAPABILITIES = Capabilities(shapes=frozenset({"sphere", "rigid"}), potentials=frozenset({"spring", "rlj"}),
                                 methods=frozenset({"fire", "cg", "md"}), tilted_boxes=True, mpi=True,
                                 options=frozenset({"skin", "comm", "args"}),
+                                boundaries=frozenset({"walls", "fixed", "gravity"}), box_methods=frozenset({"cg"}),
                                 shape_methods={"rigid": frozenset({"md"})})
 
     def __init__(self, packing: Packing, *, skin: float = 0.3, comm=None, args=()):
         reason = self.CAPABILITIES.reason(packing, method="md" if packing.shape.kind == "rigid" else "fire", comm=comm)
         if reason:
             raise ValueError(f"the LAMMPS engine cannot run {reason} yet; use engine numba")
+        if packing.box.walls and not uses_harmonic_cut(packing):
+            raise ValueError(f"LAMMPS walls are fix wall/harmonic, the exact wall law only for the linear spring "
+                             f"with at most a few discrete sizes, not potential {packing.potential.spec} with "
+                             f"{len(packing.species()[0])} sizes; use engine numba")
         if packing.shape.kind == "rigid" and comm is not None:
             raise ValueError("the LAMMPS engine runs rigid bodies on one process only (not tested under MPI); "
                              "drop the communicator")
@@ -104,14 +122,16 @@ class LammpsEngine:
         data = Path(self._tmp.name) / "start.data"
         write_lammps_data(data, packing)
         dim, rigid = packing.dim, self.bodies is not None
+        boundary = " ".join("p" if p else "f" for p in packing.box.periodic) + (" p" if dim == 2 else "")
         self.run_commands([
-            "units lj", f"dimension {dim}", "boundary p p p",
+            "units lj", f"dimension {dim}", f"boundary {boundary}",
             "atom_style hybrid sphere molecular" if rigid else "atom_style sphere",
             "atom_modify map array", "comm_modify vel yes",
             f"read_data {data}", *([] if rigid else ["set atom * mass 1.0"]),  # site masses: the data file
             *pair_setup(site_packing(packing)[0] if rigid else packing, self.lmp),
             f"neighbor {skin:g} bin",
             "neigh_modify every 1 delay 0 check yes" + (" exclude molecule/intra all" if rigid else ""),
+            *boundary_commands(packing),
             # rigid bodies: the site pair virial, made molecular in state()
             f"compute jf_press all pressure NULL {'pair' if rigid else 'virial'}",
             "thermo_style custom step pe c_jf_press[*] fmax", "thermo_modify norm no", "thermo 0",
@@ -246,11 +266,15 @@ class LammpsEngine:
         generalized torque component (0.0 for spheres))``, one LAMMPS command per window."""
         s, lmp = settings, self.lmp
         md, rigid = s.method == "md", self.bodies is not None
+        if s.pressure is not None:
+            yield from self._relax_session(s, ftol)
+            return
         if rigid and not md:
             raise ValueError(f"LAMMPS's minimisers ignore rigid bodies; minimise them with method md, not {s.method}")
+        n = "atoms" if self.template.fixed is None else str(self.template.n_mobile)
         self.run_commands([
             f"timestep {(s.md_timestep if md else s.timestep):.17g}",
-            f"variable jf_epp equal pe/{self.template.n}" if rigid else "variable jf_epp equal pe/atoms",
+            f"variable jf_epp equal pe/{self.template.n if rigid else n}",
             f"fix jf_halt all halt 1 v_jf_epp < {s.v_min:.17g} error continue",
         ])
         if rigid:
@@ -296,3 +320,81 @@ class LammpsEngine:
             if max(state.max_force, gmax) < ftol or ran < chunk or done >= steps:
                 return done, state.energy, state.max_force, gmax
 
+    def _relax_session(self, s, ftol: float):
+        """``fix box/relax`` (iso / aniso / tri at the target pressure) with CG; the window returns
+        the enthalpy and, as its last entry, the largest box force of ``compiled.field`` (the same
+        generalized forces as the compiled engine, from LAMMPS's virial)."""
+        from .compiled.field import box_forces, make_field
+
+        if s.method != "cg":
+            raise ValueError(f"LAMMPS relaxes the box with fix box/relax, which runs with minimizer cg only, not "
+                             f"{s.method}; use --minimizer cg or the compiled engine (FIRE)")
+        if s.stress == "tri" and not self._triclinic:
+            self.command("change_box all triclinic")
+            self._triclinic = True
+        lmp = self.lmp
+        self.run_commands([f"timestep {s.timestep:.17g}", "min_style cg", "min_modify norm max line forcezero",
+                           f"fix jf_relax all box/relax {s.stress} {s.pressure:.17g} vmax 0.001"])
+
+        def window(steps: int):
+            before = lmp.extract_global("ntimestep")
+            self.command(f"minimize 0.0 {ftol:.17g} {steps} {10 * steps}")
+            self.box, self._fold = self._lammps_box(), np.eye(self.template.dim, dtype=np.int64)  # LAMMPS's own cell
+            state = self.state()
+            field = make_field(self.packing(), s.pressure, s.stress)
+            gb = np.zeros(len(field.basis))
+            box_forces(field, state.pressure_tensor * self.box.volume, gb)
+            return (lmp.extract_global("ntimestep") - before, state.energy + s.pressure * self.box.volume,
+                    state.max_force, float(np.abs(gb).max()))
+
+        try:
+            yield window
+        finally:
+            if self.lmp is not None:
+                self.command("unfix jf_relax")
+
+    def _lammps_box(self) -> Box:
+        """The current LAMMPS box (origin moved back to 0; box/relax changes it about its centre)."""
+        lo, hi, xy, yz, xz, _, _ = self.lmp.extract_box()
+        dim = self.template.dim
+        return Box.from_lammps(dim, [hi[k] - lo[k] for k in range(dim)], (xy, xz, yz), self.box.periodic)
+
+
+def _id_ranges(ids) -> str:
+    """'1:4 7 9:10' for the sorted atom ids given."""
+    ids = np.asarray(ids)
+    breaks = np.flatnonzero(np.diff(ids) != 1)
+    starts, ends = np.r_[ids[0], ids[breaks + 1]], np.r_[ids[breaks], ids[-1]]
+    return " ".join(f"{a}" if a == b else f"{a}:{b}" for a, b in zip(starts, ends))
+
+
+def boundary_commands(packing: Packing) -> list[str]:
+    """Fixed particles, smooth walls and gravity as LAMMPS commands (module docstring)."""
+    lines = []
+    mobile = "all"
+    if packing.fixed is not None:
+        lines += [f"group jf_fixed id {_id_ranges(np.flatnonzero(packing.fixed) + 1)}",
+                  "group jf_mobile subtract all jf_fixed", "neigh_modify exclude group jf_fixed jf_fixed",
+                  "fix jf_hold jf_fixed setforce 0.0 0.0 0.0"]
+        mobile = "jf_mobile"
+    if packing.box.walls:
+        values, types = packing.species()
+        eps = packing.potential.epsilon
+        lines += [f"variable jf_{'xyz'[ax]}{side} equal {'xyz'[ax]}{side}" for ax in packing.box.walls
+                  for side in ("lo", "hi")]
+        for t, a in enumerate(values):
+            if not np.any(packing.mobile & (types == t)):
+                continue
+            faces = " ".join(f"{'xyz'[ax]}{side} v_jf_{'xyz'[ax]}{side} {2 * eps / a**2:.17g} 0.0 {a / 2:.17g}"
+                             for ax in packing.box.walls for side in ("lo", "hi"))
+            if mobile == "all":
+                lines += [f"group jf_w{t + 1} type {t + 1}"]
+            else:  # (a group command adds to an existing group: intersect into a new one)
+                lines += [f"group jf_t{t + 1} type {t + 1}", f"group jf_w{t + 1} intersect jf_t{t + 1} {mobile}"]
+            lines += [f"fix jf_wall{t + 1} jf_w{t + 1} wall/harmonic {faces} units box",
+                      f"fix_modify jf_wall{t + 1} energy yes virial yes"]
+    if packing.gravity > 0:
+        force = ["0.0"] * 3
+        force[packing.dim - 1] = f"{-packing.gravity:.17g}"
+        lines += [f"fix jf_grav {mobile} addforce {' '.join(force)}", "fix_modify jf_grav energy yes"]
+    return lines

@@ -9,8 +9,11 @@ For a pair energy V(s), s = r_ij / sigma_ij(r_hat, u_i, u_j): the force on i is
 -V'(s) (r_hat / sigma - r grad_r sigma / sigma^2) (grad_r sigma = tangential gradient in r_hat
 over r), the torque on i is V'(s) r / sigma^2 (u_i x dsigma/du_i); for rigid bodies each site
 force acts at its site. Pressure tensor (seed eq. 2.34) P_ab = V^-1 sum_pairs r_ij,a f_ij,b with
-r_ij joining the particle centres. Units: energy eps, force eps/diameter, torque eps,
-pressure eps/diameter^d.
+r_ij joining the particle centres. Walls and gravity (disks and spheres, ``jamflow.walls``):
+the smooth walls' energy, forces and virial and the weight are added; fixed particles do not
+interact with each other and their forces are reported as zero (they are held), while the
+forces on them count in the loads on the wall faces. Units: energy eps, force eps/diameter,
+torque eps, pressure eps/diameter^d.
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ import numpy as np
 
 from ..packing import Packing
 from ..pairs import all_pairs, contact_distances, separations
+from ..walls import face_loads, gravity_terms, smooth_wall_terms
 
 
 @dataclass(frozen=True)
@@ -29,6 +33,7 @@ class ReferenceResult:
     forces: np.ndarray  # (N, d)
     pressure_tensor: np.ndarray  # (d, d), virial only (athermal)
     torques: np.ndarray | None = None  # (N,) in 2D, (N, 3) in 3D, world frame; None for spheres
+    wall_forces: np.ndarray | None = None  # (d, 2, d): force of the particles on each face (walled axes)
 
     @property
     def pressure(self) -> float:
@@ -57,6 +62,8 @@ def _reduced(pot, r, sigma):
 
 def _spheres(packing: Packing):
     i, j = all_pairs(packing.n)
+    if packing.fixed is not None:  # fixed particles do not interact with each other
+        i, j = i[~(packing.fixed[i] & packing.fixed[j])], j[~(packing.fixed[i] & packing.fixed[j])]
     dr = separations(packing, i, j)
     r = np.linalg.norm(dr, axis=1)
     sigma = contact_distances(packing, i, j)
@@ -110,9 +117,19 @@ _SHAPES = {"sphere": _spheres, "ellipsoid": _ellipsoids, "rigid": _bodies}
 
 def energy_forces_pressure(packing: Packing) -> ReferenceResult:
     """Direct sum over all pairs (of sites, for rigid bodies); for N up to a few thousand."""
+    bounded = bool(packing.box.walls) or packing.gravity > 0 or packing.fixed is not None
+    if bounded and packing.shape.kind != "sphere":
+        raise ValueError(f"walls, gravity and fixed particles are written for disks and spheres, not "
+                         f"{packing.shape.name(packing.dim)} particles")
     i, j, dr, fpair, energy, torques = _SHAPES[packing.shape.kind](packing)
     forces = np.zeros((packing.n, packing.dim))
     np.add.at(forces, i, fpair)
     np.add.at(forces, j, -fpair)
     virial = np.einsum("pa,pb->ab", dr, fpair)
-    return ReferenceResult(energy, forces, virial / packing.box.volume, torques)
+    if not bounded:
+        return ReferenceResult(energy, forces, virial / packing.box.volume, torques)
+    e_wall, f_wall, w_wall, smooth = smooth_wall_terms(packing)
+    e_grav, f_grav = gravity_terms(packing)
+    loads = face_loads(packing, smooth, forces)
+    forces = (forces + f_wall + f_grav) * packing.mobile[:, None]
+    return ReferenceResult(energy + e_wall + e_grav, forces, (virial + w_wall) / packing.box.volume, torques, loads)

@@ -4,7 +4,10 @@ Start from random positions (and orientations) at phi0; after each minimisation 
 V < V_tol, decompress if V > 2 V_tol, halve dphi whenever the state crosses from one
 side to the other, and stop when V_tol < V < 2 V_tol (V is the energy per particle).
 Box changes are affine (LAMMPS ``change_box ... remap``); the box is always set from
-the original one so phi carries no accumulated round-off.
+the original one so phi carries no accumulated round-off. With walls (``jamflow.walls``)
+the walls are the box faces and move with it, phi is measured between them, and the same
+bisection runs unchanged; under gravity ``jam`` settles the packing instead
+(``jamflow.protocols.gravity``).
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
+from ..box import AXES
 from ..engine.base import check_engine, open_engine
 from ..minimize import MinimizerSettings, MinimizeResult
 from ..pairs import overlapping_pairs, overlapping_sites
@@ -23,8 +27,10 @@ from ..packing import DENSEST_PHI, Packing, random_packing
 from ..potentials import Potential, Spring, parse_potential
 from ..shapes.shape import parse_shape
 from ..sizes import parse_sizes
+from ..walls import parse_walls, wall_loads, with_walls
 
 DEFAULT_PHI0 = {2: 0.80, 3: 0.55}
+GRAVITY_PHI0 = {2: 0.5, 3: 0.35}  # random starts under gravity: the settled pile stays clear of the ceiling
 NEWTON_FINAL_FACTOR = 3.0  # intermediate jumps stop at >= 3x the window's predicted distance from phi_J
 LOOSE_TRUST = 10.0  # a loosely minimised state decides its side only if V > 10 V_tol
 WINDOW_RESUMES = 3  # a state in the window cut off by the iteration cap is minimised again (at most 3 times a run)
@@ -76,8 +82,11 @@ class CompressionSettings:
         if self.max_steps < 1:
             raise ValueError("max_steps must be a positive integer")
 
-    def start_phi(self, dim: int) -> float:
-        return DEFAULT_PHI0.get(dim, math.nan) if self.phi0 is None else self.phi0
+    def start_phi(self, dim: int, gravity: float = 0.0) -> float:
+        """phi0, or the default start for this dimension (a looser one under gravity)."""
+        if self.phi0 is not None:
+            return self.phi0
+        return (GRAVITY_PHI0 if gravity else DEFAULT_PHI0).get(dim, math.nan)
 
     def as_dict(self) -> dict:
         out = {k: v for k, v in asdict(self).items() if k != "minimizer"}
@@ -121,6 +130,7 @@ class JamResult:
     lammps_version: int
     engine: str = "lammps"  # which engine minimised: "lammps" or "numba"
     max_torque: float = 0.0  # largest generalized torque component tau / d_k (0 for disks, spheres)
+    wall_forces: np.ndarray | None = None  # (d, 2, d) force of the particles on each face (walled boxes)
 
     @property
     def pressure(self) -> float:
@@ -134,10 +144,19 @@ class JamResult:
     def iterations(self) -> int:
         return int(np.sum(self.history["iterations"]))
 
+    @property
+    def wall_pressures(self) -> np.ndarray:
+        """(k, 2) pressure on the lower and upper face of each walled axis (``jamflow.walls``)."""
+        from ..walls import face_pressures
+
+        return face_pressures(self.packing.box, self.wall_forces) if self.wall_forces is not None else np.empty((0, 2))
+
     def summary(self) -> str:
         torque = f"  max|tau/d| = {self.max_torque:.1e}" if self.packing.shape.oriented else ""
+        walls = "".join(f"  P_wall {AXES[a]} = {lo:.3e} {hi:.3e}"
+                        for a, (lo, hi) in zip(self.packing.box.walls, self.wall_pressures))
         return (f"phi_J = {self.phi_j:.10f}  V = {self.energy_per_particle:.3e}  "
-                f"P = {self.pressure:.3e}  max|F| = {self.max_force:.1e}{torque}  "
+                f"P = {self.pressure:.3e}{walls}  max|F| = {self.max_force:.1e}{torque}  "
                 f"{self.minimizations} minimisations, {self.iterations} iterations ({self.engine}), {self.seconds:.2f} s")
 
 
@@ -147,10 +166,14 @@ class JammingFailed(RuntimeError):
 
 def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | Potential = "spring",
         seed: int = 0, settings: CompressionSettings | None = None, *, start: Packing | None = None,
-        observers=(), engine: str = "auto", engine_options: dict | None = None, shape="disk") -> JamResult:
+        observers=(), engine: str = "auto", engine_options: dict | None = None, shape="disk",
+        walls=None, wall_type: str = "smooth", gravity: float = 0.0) -> JamResult:
     """Jam N particles by isotropic compression; ``start`` overrides the random start.
 
     ``shape``: a ``--shape`` spec or shape object (``jamflow.shapes``; default disks/spheres).
+    ``walls``: walled axes (``"y"``, ``"x,y"``, ...; ``jamflow.walls``) of ``wall_type``
+    smooth or rough. ``gravity`` g > 0 settles the packing on the floor instead of
+    compressing it (``jamflow.protocols.gravity``; needs walls on the last axis).
     ``observers`` are callables ``f(step: dict)`` called after every minimisation
     (progress bars, writers). ``engine``: "auto" (the compiled engine wherever it runs the
     scene, else LAMMPS), "lammps" or "numba" (``jamflow.engine.base``).
@@ -158,14 +181,23 @@ def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | 
     settings = settings or PROTOCOLS[DEFAULT_PROTOCOL]()
     check_engine(engine)
     if start is None:
-        start = initial_packing(n, dim, sizes, potential, seed, settings.start_phi(dim), shape)
+        start = initial_packing(n, dim, sizes, potential, seed, settings.start_phi(dim, gravity), shape, walls,
+                                wall_type, gravity)
         if start.potential.soft_start:
             start = remove_overlaps(start, settings.minimizer, engine)
+    if start.gravity > 0:
+        from .gravity import settle
+
+        return settle(start, settings.minimizer, observers=observers, engine=engine, engine_options=engine_options)
     return compress(start, settings, observers=observers, engine=engine, engine_options=engine_options)
 
 
-def initial_packing(n, dim, sizes, potential, seed, phi0, shape="disk") -> Packing:
-    """Validated random start (seed step 1); errors before any engine work."""
+
+def initial_packing(n, dim, sizes, potential, seed, phi0, shape="disk", walls=None, wall_type="smooth",
+                    gravity=0.0) -> Packing:
+    """Validated random start (seed step 1), with walls and gravity if given; errors before any
+    engine work."""
+
     if not isinstance(n, (int, np.integer)) or n < 2:
         raise ValueError(f"n must be an integer >= 2, got {n!r}")
     if dim not in (2, 3):
@@ -178,10 +210,12 @@ def initial_packing(n, dim, sizes, potential, seed, phi0, shape="disk") -> Packi
     pot = parse_potential(potential) if isinstance(potential, str) else potential
     size_spec = parse_sizes(sizes) if isinstance(sizes, str) else sizes
     particle = parse_shape(shape, dim)
+    axes = parse_walls(walls, dim)
     try:
-        return random_packing(int(n), dim, size_spec, phi0, int(seed), pot, particle)
+        start = random_packing(int(n), dim, size_spec, phi0, int(seed), pot, particle)
     except ValueError as err:
         raise ValueError(f"{err} (n = {n} is too small for these sizes)") from None
+    return replace(with_walls(start, axes, wall_type), gravity=gravity)
 
 
 def remove_overlaps(packing: Packing, minimizer: MinimizerSettings, engine: str = "auto") -> Packing:
@@ -204,9 +238,13 @@ def compress(packing: Packing, settings: CompressionSettings, *, observers=(), e
     from ..engine.lammps_lib import lammps_version
 
     _check_start(packing)
+    if packing.gravity > 0:
+        raise ValueError("a packing under gravity is settled, not compressed: use jam(..., gravity=g) or "
+                         "jamflow.protocols.gravity.settle")
     start_time = time.perf_counter()
     base_box, base_phi = packing.box, packing.phi
-    stepper = PhiStepper(settings, packing.potential.onset_exponent, float(np.mean(packing.volumes)))
+    mean_volume = packing.phi * packing.box.volume / packing.n_mobile  # the volume phi counts, per mobile particle
+    stepper = PhiStepper(settings, packing.potential.onset_exponent, mean_volume)
     rows = {c: [] for c in HISTORY_COLUMNS}
     phi, resumes = base_phi, 0
     with open_engine(packing, settings.minimizer.method, engine, **(engine_options or {})) as sim:
@@ -358,4 +396,5 @@ def _finish(engine, phi, result, rows, settings, start_time, version) -> JamResu
     history = {k: np.array(v) for k, v in rows.items()}
     history["reason"] = history["reason"].astype("S")
     return JamResult(packing, phi, result.energy_per_particle, state.pressure_tensor, result.max_force,
-                     history, settings, time.perf_counter() - start_time, version, engine.name, result.max_torque)
+                     history, settings, time.perf_counter() - start_time, version, engine.name, result.max_torque,
+                     wall_loads(packing) if packing.box.walls else None)

@@ -3,7 +3,9 @@ packing's shape, in process, no LAMMPS.
 
 It runs every box (orthogonal or tilted: pairs carry their periodic image offsets, box changes
 are affine, x -> h' h^-1 x) on one core, minimises with FIRE only, and is measured against
-LAMMPS and the numpy reference in tests/test_engines.py and benchmarks/engines.py. The
+LAMMPS and the numpy reference in tests/test_engines.py and benchmarks/engines.py. Walls,
+gravity and fixed particles (disks and spheres) are the external field of ``compiled.field``;
+at a target pressure (``MinimizerSettings.pressure``) the box joins FIRE's coordinates. The
 interface is ``jamflow.engine.base.Engine``.
 """
 
@@ -17,6 +19,7 @@ from ...box import Box
 from ...packing import Packing
 from ..base import Capabilities, State
 from . import fire as kernels
+from .field import make_field
 from .kernels import BUILDERS
 
 
@@ -34,7 +37,8 @@ class CompiledEngine:
     name = "numba"
     CAPABILITIES = Capabilities(shapes=frozenset(BUILDERS), potentials=frozenset({"spring", "rlj"}),
                                 methods=frozenset({"fire"}), tilted_boxes=True, mpi=False,
-                                options=frozenset({"skin"}))
+                                options=frozenset({"skin"}), boundaries=frozenset({"walls", "fixed", "gravity"}),
+                                box_methods=frozenset({"fire"}))
 
     def __init__(self, packing: Packing, *, skin: float = 0.3):
         reason = self.CAPABILITIES.reason(packing)
@@ -56,6 +60,8 @@ class CompiledEngine:
         self._mask = np.array(packing.shape.rotation_mask(d), dtype=float)
         self._reach = np.asarray(packing.shape.reach(packing.diameters), float)
         self._virial = np.zeros((d, d))
+        self._field = make_field(packing)
+        self._gb = np.zeros(0)  # box-coordinate forces (constant stress only)
         self._energy = None
         self._pairs = None
         self._built_at = self._x.copy()
@@ -103,8 +109,8 @@ class CompiledEngine:
 
     def evaluate(self) -> State:
         """Energy, forces, torques and virial pressure tensor at the current configuration."""
-        self._energy = kernels.forces(self._model(), self._x, self._f, self._o, self._tau, self._g, self._dk,
-                                      self._mask, self._virial)
+        self._energy = kernels.forces(self._model(), self._field, self._x, self._f, self._o, self._tau, self._g,
+                                      self._dk, self._mask, self._virial, self._gb)
         return self.state()
 
     def state(self) -> State:
@@ -130,6 +136,7 @@ class CompiledEngine:
         else:
             self._x = self._x * (box.lengths / self.box.lengths)
         self.box = box
+        self._field.h[:] = box.h
         self._pairs, self._energy = None, None
 
     # minimisation -------------------------------------------------------------------------------------
@@ -141,25 +148,33 @@ class CompiledEngine:
 
     @contextmanager
     def minimizer_session(self, settings, ftol: float):
-        """Yield ``window(steps) -> (iterations, total energy, max force component, max
-        generalized torque component)``; each window restarts FIRE (v = 0, dt = timestep) like one
-        LAMMPS ``minimize`` command."""
+        """Yield ``window(steps) -> (iterations, objective, max force component, max generalized
+        torque or box force component)``; each window restarts FIRE (v = 0, dt = timestep) like
+        one LAMMPS ``minimize`` command. The objective is the total energy, or at a target
+        pressure the enthalpy U + P V with the box as coordinates (``compiled.field``)."""
         if settings.method != "fire":
             raise ValueError(f"the compiled engine runs FIRE only, not {settings.method}; use engine lammps")
         n = self.template.n
-        halt = settings.v_min * n
+        pressure = settings.pressure
+        halt = -np.inf if pressure is not None else settings.v_min * self.template.n_mobile
         half_skin_sq = (self.skin / 2) ** 2
+        if pressure is not None:
+            self._field = make_field(self.packing(), pressure, settings.stress)
+            self._gb = np.zeros(len(self._field.basis))
+            self._energy = None
 
         def window(steps: int):
             state = kernels.fire_state(settings.timestep)
-            v, w = np.zeros_like(self._x), np.zeros_like(self._g)
+            v, w, u = np.zeros_like(self._x), np.zeros_like(self._g), np.zeros_like(self._gb)
             done = 0
             while True:
-                ran, reason, energy = kernels.fire(self._model(), self._x, v, self._f, self._o, w, self._tau, self._g,
-                                                   self._dk, self._mask, self._virial, state, self._built_at,
-                                                   self._turned, self._reach, half_skin_sq, steps - done, ftol, halt)
+                ran, reason, energy = kernels.fire(self._model(), self._field, self._x, v, self._f, self._o, w,
+                                                   self._tau, self._g, self._dk, self._mask, self._virial, u, self._gb,
+                                                   state, self._built_at, self._turned, self._reach, half_skin_sq,
+                                                   steps - done, ftol, halt)
                 done += ran
                 self._energy = energy
+                self._sync_box()
                 if reason != kernels.REBUILD or done >= steps:
                     break
                 self._build_pairs()
@@ -167,7 +182,18 @@ class CompiledEngine:
                 self._build_pairs()
                 self.evaluate()
             fmax = float(np.abs(self._f).max()) if n else 0.0
-            gmax = float(np.abs(self._g).max()) if self._g.size else 0.0
-            return done, float(self._energy), fmax, gmax
+            gmax = max([0.0] + [float(np.abs(a).max()) for a in (self._g, self._gb) if a.size])
+            objective = float(self._energy) + (pressure * self.box.volume if pressure is not None else 0.0)
+            return done, objective, fmax, gmax
 
-        yield window
+        try:
+            yield window
+        finally:
+            if pressure is not None:  # back to a fixed box
+                self._field = make_field(self.packing())
+                self._gb = np.zeros(0)
+
+    def _sync_box(self) -> None:
+        """After box steps: the Box follows the field's cell matrix."""
+        if len(self._field.basis):
+            self.box = self.box.with_h(self._field.h.copy())

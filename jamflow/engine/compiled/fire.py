@@ -12,7 +12,13 @@ moves centres by dt v and turns each particle by the body-frame rotation dt w / 
 floating-point operations are those of the translational FIRE. Units: eps, diameter, unit
 mass (rotational inertia m d_k^2).
 
-The force/torque kernel comes from the pair list's type (``kernels.evaluate``).
+The force/torque kernel comes from the pair list's type (``kernels.evaluate``); beside it
+FIRE calls the external field (``field.external``: walls, gravity, fixed particles). At
+constant stress the box coordinates q (``field``: strain amplitudes times L, generalized
+forces -dH/dq) join the flat vector the same way as the rotations: one more block in the
+dot products and the velocity update, and a step that deforms the box (``field.deform``).
+Without walls, gravity, fixed particles or box coordinates the floating-point operations
+are those of the plain FIRE above.
 """
 
 from __future__ import annotations
@@ -22,6 +28,7 @@ import math
 import numpy as np
 
 from . import jit
+from .field import box_forces, deform, external
 from .kernels import evaluate
 from .rotation import generalized_torques, rotate
 
@@ -39,11 +46,15 @@ def fire_state(dt0: float) -> np.ndarray:
 
 
 @jit
-def forces(model, x, f, o, tau, g, dk, mask, virial):
-    """Evaluate the kernel and turn its torques into generalized forces g; return the energy."""
+def forces(model, fld, x, f, o, tau, g, dk, mask, virial, gb):
+    """Evaluate the kernel and the external field, turn torques into generalized forces g and
+    the virial into box forces gb; return the energy."""
     energy = evaluate(model, x, o, f, tau, virial)
+    energy += external(fld, x, f, virial)
     if g.shape[1] > 0:
         generalized_torques(o, tau, dk, mask, g)
+    if gb.shape[0] > 0:
+        box_forces(fld, virial, gb)
     return energy
 
 
@@ -59,25 +70,27 @@ def _turn(o, w, dk, factor, turned):
 
 
 @jit
-def fire(model, x, v, f, o, w, tau, g, dk, mask, virial, state, x_built, turned, reach, half_skin_sq,
+def fire(model, fld, x, v, f, o, w, tau, g, dk, mask, virial, ub, gb, state, x_built, turned, reach, half_skin_sq,
          max_steps, ftol, energy_halt):
     """Run up to ``max_steps`` FIRE 2.0 iterations in place; return (iterations, reason, energy).
 
     x, v, f: (N, d) positions, velocities, forces; o: orientations (N, 0 | 1 | 4); w, g: (N, r)
     rotational velocities and generalized torques, tau (N, r) world torques, dk (N, r) rotational
-    lengths, mask (r,) 1 for the body axes that are degrees of freedom. Stops on: every
-    particle's |f_i| and |g_i| below ftol (FORCE), energy < energy_halt (ENERGY_BELOW, like
-    LAMMPS ``fix halt``), a particle moved more than half the skin since the pair list was built
-    (REBUILD; rotations count as reach x angle turned), or max_steps (CAP).
+    lengths, mask (r,) 1 for the body axes that are degrees of freedom; fld the external field
+    (``field.Field``), ub, gb (k,) box-coordinate velocities and forces (k = 0: fixed box).
+    Stops on: every particle's |f_i| and |g_i| and every |gb_k| below ftol (FORCE), energy <
+    energy_halt (ENERGY_BELOW, like LAMMPS ``fix halt``), a particle moved more than half the
+    skin since the pair list was built (REBUILD; rotations count as reach x angle turned; box
+    steps move particles affinely, which this counts too), or max_steps (CAP).
     """
     n, d = x.shape
     r = w.shape[1]
-    m, mr = n * d, n * r
+    m, mr, mb = n * d, n * r, gb.shape[0]
     xs, vs, fs, x0 = x.reshape(m), v.reshape(m), f.reshape(m), x_built.reshape(m)  # flat views
     ws, gs = w.reshape(mr), g.reshape(mr)
     dt, fire_alpha = state[DT], state[ALPHA]
     dtmax, dtmin = TMAX * state[DT0], TMIN * state[DT0]
-    energy = forces(model, x, f, o, tau, g, dk, mask, virial)
+    energy = forces(model, fld, x, f, o, tau, g, dk, mask, virial, gb)
     for it in range(1, max_steps + 1):
         state[STEP] += 1.0
         step = state[STEP]
@@ -92,6 +105,11 @@ def fire(model, x, v, f, o, w, tau, g, dk, mask, virial, state, x_built, turned,
             vdotv += ws[k] * ws[k]
             fdotf += gs[k] * gs[k]
             vmax = max(vmax, abs(ws[k]))
+        for k in range(mb):
+            vdotf += ub[k] * gb[k]
+            vdotv += ub[k] * ub[k]
+            fdotf += gb[k] * gb[k]
+            vmax = max(vmax, abs(ub[k]))
         scale1, scale2 = 1.0, 0.0
         if vdotf > 0.0:
             scale1 = 1.0 - fire_alpha
@@ -111,15 +129,20 @@ def fire(model, x, v, f, o, w, tau, g, dk, mask, virial, state, x_built, turned,
             if mr > 0:
                 _turn(o, w, dk, -0.5 * dt, turned)
                 ws[:] = 0.0
+            if mb > 0:
+                deform(fld, model, x, ub, -0.5 * dt)
+                ub[:] = 0.0
             state[FLAG_V0] = 1.0
         restart = state[FLAG_V0] > 0.0
         if restart:  # v = 0: the step limit uses the velocity one step of dt would give
-            energy = forces(model, x, f, o, tau, g, dk, mask, virial)
+            energy = forces(model, fld, x, f, o, tau, g, dk, mask, virial, gb)
             vmax = 0.0
             for k in range(m):
                 vmax = max(vmax, abs(dt * fs[k]))
             for k in range(mr):
                 vmax = max(vmax, abs(dt * gs[k]))
+            for k in range(mb):
+                vmax = max(vmax, abs(dt * gb[k]))
         dtv = dt if dt * vmax <= DMAX else DMAX / vmax
         keep = 0.0 if restart else 1.0
         if vdotf > 0.0:
@@ -129,6 +152,8 @@ def fire(model, x, v, f, o, w, tau, g, dk, mask, virial, state, x_built, turned,
                 xs[k] += dtv * vk
             for k in range(mr):
                 ws[k] = scale1 * (dtv * gs[k] + keep * ws[k]) + scale2 * gs[k]
+            for k in range(mb):
+                ub[k] = scale1 * (dtv * gb[k] + keep * ub[k]) + scale2 * gb[k]
         else:
             for k in range(m):
                 vk = dtv * fs[k] + keep * vs[k]
@@ -136,9 +161,13 @@ def fire(model, x, v, f, o, w, tau, g, dk, mask, virial, state, x_built, turned,
                 xs[k] += dtv * vk
             for k in range(mr):
                 ws[k] = dtv * gs[k] + keep * ws[k]
+            for k in range(mb):
+                ub[k] = dtv * gb[k] + keep * ub[k]
         if mr > 0:
             _turn(o, w, dk, dtv, turned)
-        energy = forces(model, x, f, o, tau, g, dk, mask, virial)
+        if mb > 0:
+            deform(fld, model, x, ub, dtv)
+        energy = forces(model, fld, x, f, o, tau, g, dk, mask, virial, gb)
         state[FLAG_V0] = 0.0
         state[DT], state[ALPHA] = dt, fire_alpha
         fmax_sq, moved_sq = 0.0, 0.0  # one fused pass
@@ -156,6 +185,8 @@ def fire(model, x, v, f, o, w, tau, g, dk, mask, virial, state, x_built, turned,
                     mi = (math.sqrt(mi) + reach[i] * turned[i]) ** 2
             fmax_sq = max(fmax_sq, fi)
             moved_sq = max(moved_sq, mi)
+        for k in range(mb):
+            fmax_sq = max(fmax_sq, gb[k] * gb[k])
         if moved_sq > half_skin_sq:  # a pair may have come into reach unseen: rebuild first
             return it, REBUILD, energy
         if energy < energy_halt:

@@ -80,6 +80,8 @@ def build(packing: Packing, x: np.ndarray, skin: float) -> Pairs:
     sigma = 0.5 * (diameters[i] + diameters[j])
     dr = packing.box.minimum_image(x[i] - x[j])
     keep = np.einsum("ij,ij->i", dr, dr) < (sigma + skin) ** 2
+    if packing.fixed is not None:  # fixed (wall) particles do not interact with each other
+        keep &= ~(packing.fixed[i] & packing.fixed[j])
     i, j, sigma, dr = i[keep], j[keep], sigma[keep], dr[keep]
     shift = dr - (x[i] - x[j])
     return Pairs(i.astype(np.int64), j.astype(np.int64), np.ascontiguousarray(shift), sigma,

@@ -1,0 +1,71 @@
+"""Packings settled under gravity on a floor (seed section 2.3, "gravity [36]").
+
+From a random start in a box with walls on the last axis (the floor x_(d-1) = 0 and a
+ceiling at the top, periodic sides), minimise the total energy -- pairs, walls and g x_(d-1)
+per mobile particle -- until every particle is force balanced including its weight (the
+minimiser's force rule, ``jamflow.minimize``). No compression: the load sets the overlaps.
+The result's ``phi_j`` is the packing fraction of the pile, mobile particle volume over the
+floor area times the height of the highest particle top; the ceiling must carry no load
+(otherwise the start was too dense for the box: lower phi0). The pressure profile with
+height is ``jamflow.analysis.profile``. Units: g in eps/diameter per particle (unit mass).
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+
+import numpy as np
+
+from ..engine.base import open_engine
+from ..minimize import MinimizerSettings
+from ..packing import Packing
+from ..walls import wall_loads
+from .compression import HISTORY_COLUMNS, CompressionSettings, JamResult, JammingFailed, _record
+
+MAX_RESUMES = 3  # a settling cut off by the iteration cap or the no-progress rule is resumed (at most 3 times)
+
+
+def pile_fraction(packing: Packing) -> float:
+    """Mobile particle volume over (floor area x height of the highest particle top)."""
+    mobile = packing.mobile
+    top = float(np.max(packing.positions[mobile, -1] + 0.5 * packing.diameters[mobile]))
+    area = packing.box.volume / packing.box.lengths[-1]
+    return float(packing.volumes[mobile].sum() / (area * top))
+
+
+def settle(start: Packing, minimizer: MinimizerSettings | None = None, *, observers=(), engine: str = "auto",
+           engine_options=None) -> JamResult:
+    """Minimise ``start`` (with gravity and a floor) to force balance including the weights."""
+    from ..engine.lammps_lib import lammps_version
+
+    if start.gravity <= 0:
+        raise ValueError("settle needs gravity > 0 (Packing.gravity); compress packings without gravity")
+    minimizer = minimizer or MinimizerSettings()
+    t0 = time.perf_counter()
+    rows = {c: [] for c in HISTORY_COLUMNS}
+    with open_engine(start, minimizer.method, engine, **(engine_options or {})) as sim:
+        for step in range(MAX_RESUMES + 1):
+            result = sim.minimize(minimizer)
+            if result.reason == "blown-up":
+                raise JammingFailed(f"settling diverged (max force {result.max_force:.3g}): lower the timestep")
+            packing, state = sim.packing(), sim.state()
+            _record(rows, pile_fraction(packing), result, state.pressure, 0.0)
+            for observe in observers:
+                observe({"step": step, "phi": rows["phi"][-1], "dphi": 0.0, "result": result})
+            if result.converged:
+                break
+        name = sim.name
+    if not result.converged:
+        warnings.warn(f"settling stopped by '{result.reason}' with max force {result.max_force:.2e}: force balance "
+                      "is only as good as that", stacklevel=2)
+    loads = wall_loads(packing)
+    ceiling = loads[packing.dim - 1, 1, packing.dim - 1]
+    if ceiling != 0.0:
+        raise JammingFailed(f"the settled pile presses on the ceiling (force {ceiling:.3g}): the start is too dense "
+                            f"for the box; use a lower phi0 (phi0 = {start.phi:.3f} here)")
+    history = {k: np.array(v) for k, v in rows.items()}
+    history["reason"] = history["reason"].astype("S")
+    return JamResult(packing, pile_fraction(packing), result.energy_per_particle, state.pressure_tensor,
+                     result.max_force, history, CompressionSettings(phi0=start.phi, minimizer=minimizer),
+                     time.perf_counter() - t0, lammps_version(), name, result.max_torque, loads)

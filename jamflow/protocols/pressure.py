@@ -1,0 +1,203 @@
+"""Jamming at constant pressure: the box as a degree of freedom (seed section 2.3, "constant
+stress [35]"; the enthalpy-minimising definition of jamming, e.g. Dagois-Bohy et al., PRL 109,
+095703 (2012), which also relaxes the shear stress).
+
+From a start (a random one at phi0, or a given packing), minimise the enthalpy H = U + P V
+at each pressure of a decreasing sequence, each from the previous minimum: the compiled
+FIRE with box coordinates (``jamflow.engine.compiled.field``) or LAMMPS ``fix box/relax``
+with CG (``etol 0``). ``stress``: ``iso`` (the box keeps its shape), ``aniso`` (each P_aa =
+P), ``tri`` (also every shear stress relaxed to 0: the box tilts). Near jamming
+phi - phi_J ~ P^(1/(alpha-1)) (alpha the potential's onset exponent: P ~ dV/dphi), so
+phi_J is extrapolated from the two lowest pressures (``extrapolate_phi_j``); the phi at the
+lowest pressure is reported beside it.
+
+The lowest target float64 resolves (``pressure_floor``): a contact force ~ P a^(d-1) must
+stay ``FLOOR_MARGIN`` = 1000 times above the force round-off floor, i.e. the minimiser's
+force tolerance (~ 1e-14 max(1, L/20) k: ``MinimizerSettings.resolved_force_tol``); below it
+force balance is no longer resolved against the contact forces. For 2D bidisperse disks
+(mean diameter 1.2) that is P = 8.3e-12 up to L = 20 (N ~ 300), 1.6e-11 at N = 1024 and
+3.2e-11 at N = 4096: it grows with L.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import warnings
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..engine.base import open_engine
+from ..minimize import STRESS_MODES, MinimizerSettings
+from ..packing import Packing
+
+FLOOR_MARGIN = 1000.0
+DEFAULT_START_PRESSURE = 1e-4  # from a random start; starting higher raises phi_J (docs/walls-gravity-pressure.md)
+PRESSURE_COLUMNS = ("target_pressure", "phi", "pressure", "shear_stress", "energy_per_particle", "iterations",
+                    "max_force", "max_box_force", "converged")  # max_box_force: largest box (or torque) force component
+
+
+def pressure_sequence(target: float, start: float = DEFAULT_START_PRESSURE) -> tuple[float, ...]:
+    """Decades from ``start`` down to ``target`` (inclusive); just ``target`` if it is above ``start``."""
+    _check_pressure(target)
+    seq = []
+    p = start
+    while p > target * (1 + 1e-9):
+        seq.append(p)
+        p /= 10.0
+    return tuple(seq) + (float(target),)
+
+
+def _check_pressure(p) -> None:
+    if not (isinstance(p, (int, float, np.floating)) and math.isfinite(p) and p > 0):
+        raise ValueError(f"target pressure must be a finite positive number (eps/diameter^d), got {p!r}")
+
+
+@dataclass(frozen=True)
+class PressureSettings:
+    """A decreasing sequence of target pressures (eps / diameter^d) and how the box relaxes."""
+
+    pressures: tuple = (1e-4, 1e-5, 1e-6)
+    stress: str = "iso"
+    minimizer: MinimizerSettings = field(default_factory=MinimizerSettings)
+
+    def __post_init__(self):
+        pressures = tuple(float(p) for p in self.pressures) if np.ndim(self.pressures) else (float(self.pressures),)
+        if not pressures:
+            raise ValueError("give at least one target pressure")
+        for p in pressures:
+            _check_pressure(p)
+        if any(b >= a for a, b in zip(pressures, pressures[1:])):
+            raise ValueError(f"target pressures must decrease (each minimum starts the next), got {pressures}")
+        if self.stress not in STRESS_MODES:
+            raise ValueError(f"unknown stress mode {self.stress!r}; use one of {', '.join(STRESS_MODES)}")
+        object.__setattr__(self, "pressures", pressures)
+
+    def as_dict(self) -> dict:
+        return {"pressures": ",".join(repr(p) for p in self.pressures), "stress": self.stress,
+                **self.minimizer.as_dict()}
+
+
+def pressure_floor(packing: Packing, minimizer: MinimizerSettings) -> float:
+    """Lowest target pressure float64 resolves for this packing (module docstring)."""
+    ftol = minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness)
+    a = float(np.mean(packing.diameters))
+    return FLOOR_MARGIN * ftol / a ** (packing.dim - 1)
+
+
+def check_pressure_start(packing: Packing, settings: PressureSettings) -> None:
+    """Refuse what the constant-pressure protocol cannot run, before any work."""
+    if packing.box.walls or packing.gravity > 0 or packing.fixed is not None:
+        raise ValueError("constant pressure relaxes a periodic box: it runs without walls, gravity or fixed particles")
+    floor = pressure_floor(packing, settings.minimizer)
+    ftol = settings.minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness)
+    if min(settings.pressures) < floor:
+        raise ValueError(f"target pressure {min(settings.pressures):g} is below what float64 resolves at N = "
+                         f"{packing.n} (box side {packing.box.lengths.max():.3g}): contact forces ~ P a^(d-1) must "
+                         f"stay {FLOOR_MARGIN:g}x above the force round-off floor {ftol:.1e}, so P >= {floor:.1e}; "
+                         "choose a larger target pressure")
+
+
+def extrapolate_phi_j(pressures, phis, onset_exponent: float) -> float:
+    """phi_J from phi = phi_J + c P^beta, beta = 1 / (alpha - 1), through the two lowest pressures."""
+    order = np.argsort(pressures)
+    if len(order) < 2:
+        return float(np.asarray(phis)[order[0]])
+    (p1, f1), (p2, f2) = [(pressures[k], phis[k]) for k in order[:2]]
+    beta = 1.0 / (onset_exponent - 1.0)
+    x1, x2 = p1**beta, p2**beta
+    return float((f1 * x2 - f2 * x1) / (x2 - x1))
+
+
+@dataclass(frozen=True)
+class PressureResult:
+    """The packing at the lowest pressure and one history row per target pressure."""
+
+    packing: Packing
+    pressure_tensor: np.ndarray  # (d, d) at the last pressure
+    history: dict  # PRESSURE_COLUMNS (+ reason) -> array, one entry per target pressure
+    settings: PressureSettings
+    seconds: float
+    engine: str
+    lammps_version: int
+
+    @property
+    def phi(self) -> float:
+        """Packing fraction at the lowest target pressure."""
+        return float(self.history["phi"][-1])
+
+    @property
+    def phi_j(self) -> float:
+        """phi_J extrapolated to P -> 0 from the two lowest pressures."""
+        return extrapolate_phi_j(self.history["target_pressure"], self.history["phi"],
+                                 self.packing.potential.onset_exponent)
+
+    @property
+    def pressure(self) -> float:
+        return float(np.trace(self.pressure_tensor) / self.packing.dim)
+
+    @property
+    def energy_per_particle(self) -> float:
+        return float(self.history["energy_per_particle"][-1])
+
+    @property
+    def max_force(self) -> float:
+        return float(self.history["max_force"][-1])
+
+    @property
+    def iterations(self) -> int:
+        return int(np.sum(self.history["iterations"]))
+
+    def summary(self) -> str:
+        target = self.history["target_pressure"][-1]
+        shear = shear_stress(self.pressure_tensor)
+        return (f"P_target = {target:.3e}  P = {self.pressure:.6e} (rel. {self.pressure / target - 1:+.1e})  "
+                f"phi = {self.phi:.10f}  phi_J(P->0) = {self.phi_j:.10f}  shear stress {shear:.1e}  "
+                f"max|F| = {self.max_force:.1e}  {len(self.history['phi'])} pressures, {self.iterations} iterations "
+                f"({self.engine}), {self.seconds:.2f} s")
+
+
+def shear_stress(tensor: np.ndarray) -> float:
+    """Largest |P_ab|, a != b (the residual shear stress; Sigma = -P_xy in 2D, seed eq. 2.34)."""
+    t = np.asarray(tensor)
+    off = t - np.diag(np.diag(t))
+    return float(np.abs(off).max())
+
+
+def jam_at_pressure(start: Packing, settings: PressureSettings | None = None, *, observers=(), engine: str = "auto",
+                    engine_options=None) -> PressureResult:
+    """Minimise the enthalpy at each target pressure in turn, from ``start``."""
+    from ..engine.lammps_lib import lammps_version
+
+    settings = settings or PressureSettings()
+    check_pressure_start(start, settings)
+    t0 = time.perf_counter()
+    rows = {c: [] for c in PRESSURE_COLUMNS}
+    reasons = []
+    method = settings.minimizer.method
+    with open_engine(start, method, engine, pressure=True, **(engine_options or {})) as sim:
+        for step, target in enumerate(settings.pressures):
+            minimizer = replace(settings.minimizer, pressure=target, stress=settings.stress)
+            result = sim.minimize(minimizer)
+            state = sim.state()
+            packing = sim.packing()
+            values = (target, packing.phi, state.pressure, shear_stress(state.pressure_tensor),
+                      result.energy_per_particle, result.iterations, result.max_force, result.max_torque,
+                      result.converged)
+            for column, value in zip(PRESSURE_COLUMNS, values):
+                rows[column].append(value)
+            reasons.append(result.reason)
+            for observe in observers:
+                observe({"step": step, "phi": packing.phi, "dphi": 0.0, "result": result})
+            if result.reason == "blown-up":
+                raise RuntimeError(f"the minimisation at P = {target:g} diverged: lower the timestep")
+            if not result.converged:
+                warnings.warn(f"the minimisation at P = {target:g} stopped by '{result.reason}' (max force "
+                              f"{result.max_force:.2e}, box force {result.max_torque:.2e})", stacklevel=2)
+        name = sim.name
+    history = {k: np.array(v) for k, v in rows.items()}
+    history["reason"] = np.array(reasons).astype("S")
+    return PressureResult(packing, state.pressure_tensor, history, settings, time.perf_counter() - t0, name,
+                          lammps_version())
+
