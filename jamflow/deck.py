@@ -235,14 +235,7 @@ def read_data_file(path, potential: Potential | None = None, periodic=None) -> P
     it), in float64 and atom-ID order, positions as written; the dimension is 2 when every
     z is 0; ``periodic`` per axis (data files do not say: False for walled axes).
     (jamflow.analysis.readers goes through MDAnalysis, which keeps float32.)"""
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"no LAMMPS data file {path}")
-    lines = path.read_text().splitlines()
-    bounds, tilts, k = _data_header(lines)
-    if k == len(lines) or "sphere" not in lines[k]:
-        raise ValueError(f"{path} has no 'Atoms # sphere' section; write it with atom_style sphere")
-    table = np.array(_section_rows(lines, k, 7), dtype=float)
+    bounds, tilts, table = _atoms_table(path, "sphere", "sphere", 7)
     table = table[np.argsort(table[:, 0])]
     box, origin = _data_box(bounds, tilts, table[:, 6], periodic)
     positions = table[:, 4:4 + box.dim] - origin  # write_data writes them inside the cell
@@ -259,14 +252,7 @@ def read_body_data(path, shape, potential: Potential | None = None) -> Packing:
     (``shapes.rotations.fit_orientations``), scales the site diameters over the shape's."""
     from .shapes.rotations import fit_orientations
 
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"no LAMMPS data file {path}")
-    lines = path.read_text().splitlines()
-    bounds, tilts, k = _data_header(lines)
-    if k == len(lines) or "hybrid" not in lines[k]:
-        raise ValueError(f"{path} has no 'Atoms # hybrid' section; write it with atom_style hybrid sphere molecular")
-    table = np.array(_section_rows(lines, k, 11), dtype=float)
+    bounds, tilts, table = _atoms_table(path, "hybrid", "hybrid sphere molecular", 11)
     table = table[np.lexsort((table[:, 0], table[:, 7]))]  # by molecule, then atom id
     box, origin = _data_box(bounds, tilts, table[:, 4])
     dim, n_sites = box.dim, shape.n_sites
@@ -283,6 +269,18 @@ def read_body_data(path, shape, potential: Potential | None = None) -> Packing:
     centres = np.einsum("s,nsa->na", shape.site_masses, sites)
     orientations = fit_orientations(local, sites - centres[:, None, :], shape.site_masses)
     return Packing(box.wrap(centres), scale, box, potential or Spring(), {"source": str(path)}, shape, orientations)
+
+
+def _atoms_table(path, section: str, style: str, width: int) -> tuple[dict, tuple, np.ndarray]:
+    """(bounds, tilts, the first ``width`` columns of the 'Atoms # SECTION' rows) of a data file."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no LAMMPS data file {path}")
+    lines = path.read_text().splitlines()
+    bounds, tilts, k = _data_header(lines)
+    if k == len(lines) or section not in lines[k]:
+        raise ValueError(f"{path} has no 'Atoms # {section}' section; write it with atom_style {style}")
+    return bounds, tilts, np.array(_section_rows(lines, k, width), dtype=float)
 
 
 def _data_header(lines) -> tuple[dict, tuple, int]:

@@ -5,6 +5,7 @@ options, refusals) and minimisation with rotations."""
 
 import numpy as np
 import pytest
+from conftest import rel, tilted
 
 from jamflow import jam
 from jamflow.box import Box
@@ -45,15 +46,7 @@ def sample(model, dim, tilt=0.0, potential=None, n=None, seed=3):
     shape = factory(dim)
     p = random_packing(n, dim, parse_sizes("bi:1.4:0.5"), phi2 if dim == 2 else phi3, seed,
                        potential or Spring(2.5), shape or SPHERE)
-    if tilt:
-        h = p.box.h.copy()
-        h[0, 1] = tilt * h[1, 1]
-        p = p.with_positions(Box(h).to_cartesian(p.box.to_fractional(p.positions)), box=Box(h))
-    return p
-
-
-def rel(a, b):
-    return float(np.max(np.abs(np.asarray(a) - np.asarray(b))) / np.max(np.abs(b)))
+    return tilted(p, tilt) if tilt else p
 
 
 @pytest.mark.parametrize("tilt", [0.0, 0.37], ids=["orthogonal", "tilted"])

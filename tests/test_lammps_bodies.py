@@ -5,6 +5,7 @@ without rigid bodies are refused."""
 
 import numpy as np
 import pytest
+from conftest import rel, tilted
 
 from jamflow.box import Box
 from jamflow.engine.base import engine_name
@@ -24,15 +25,7 @@ SPECS = ["nmer:2:1.5", "nmer:2:2", "dimer:1.5:0.7", "trimer:2:0.3", "nmer:3:1.5"
 def bodies(spec, dim, phi=None, n=None, seed=3, tilt=0.0, potential=None, sizes="bi:1.4:0.5"):
     p = random_packing(n or (40 if dim == 2 else 100), dim, parse_sizes(sizes), phi or (0.95 if dim == 2 else 0.75),
                        seed, potential or Spring(), parse_shape(spec, dim))
-    if tilt:
-        h = p.box.h.copy()
-        h[0, 1] = tilt * h[1, 1]
-        p = p.with_positions(Box(h).to_cartesian(p.box.to_fractional(p.positions)), box=Box(h))
-    return p
-
-
-def rel(a, b):
-    return float(np.max(np.abs(np.asarray(a) - np.asarray(b))) / np.max(np.abs(b)))
+    return tilted(p, tilt) if tilt else p
 
 
 @pytest.mark.parametrize("tilt", [0.0, 0.37], ids=["orthogonal", "tilted"])
