@@ -31,7 +31,7 @@ from jamflow.engine.reference import energy_forces_pressure
 from jamflow.io import atomic_path, check_writable, save_packing
 from jamflow.minimize import MinimizerSettings
 from jamflow.protocols.compression import PROTOCOLS, compress, initial_packing
-from jamflow.shapes.rotations import generalized_torques
+from jamflow.checks import generalized_torques
 
 COLUMNS = ["shape", "dim", "n", "sizes", "engine", "minimizer", "damping", "seed", "phi_j", "v", "pressure",
            "max_force", "max_torque", "floaters", "contacts", "body_contacts", "one_site", "free_rotations",
@@ -49,12 +49,10 @@ def seeds(text: str) -> list[int]:
 
 def checked_row(packing, result, settings_row: dict, seed: int, cpu: float, path: Path) -> dict:
     """The independent checks of one jammed packing (see module docstring)."""
-    contacts = Contacts().compute(packing)
+    contacts = Contacts(count="sites").compute(packing)  # one constraint per site pair
     ref = energy_forces_pressure(packing)
     keep = ~contacts.floater
-    g = np.zeros((packing.n, 0)) if ref.torques is None else generalized_torques(
-        packing.orientations, ref.torques, packing.rotational_lengths, packing.shape.rotation_mask(packing.dim),
-        packing.dim)  # ALPHA = 1: disks/spheres, no rotations
+    g = np.zeros((packing.n, 0)) if ref.torques is None else generalized_torques(packing, ref.torques)
     return {**settings_row, "seed": seed, "phi_j": repr(result.phi_j), "v": result.energy_per_particle,
             "pressure": result.pressure, "max_force": float(np.abs(ref.forces[keep]).max(initial=0.0)),
             "max_torque": float(np.abs(g[keep]).max(initial=0.0)), "floaters": contacts.n_floaters,

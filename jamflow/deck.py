@@ -58,7 +58,7 @@ def deck_variables(n: int = 256, dim: int = 2, sizes="bi:1.4:0.5", seed: int = 0
 
     settings = settings or CompressionSettings()
     pot = parse_potential(potential) if isinstance(potential, str) else potential
-    if not (isinstance(pot, Spring) and pot.alpha == 2.0 and pot.epsilon == 1.0):
+    if not (pot.name == "spring" and pot.alpha == 2.0 and pot.epsilon == 1.0):
         raise ValueError(f"the deck runs the linear spring (alpha = 2, eps = 1) only, got {pot.spec}; "
                          "run other potentials with the Python controller (jamflow jam)")
     spec = parse_sizes(sizes) if isinstance(sizes, str) else sizes
@@ -348,7 +348,7 @@ def run_pressure_deck(workdir, start: Packing, pressures, *, stress: str = "iso"
 
     values = start.species()[0]
     pot = start.potential
-    if not (isinstance(pot, Spring) and pot.alpha == 2.0 and pot.epsilon == 1.0) or len(values) > 2 or values[0] != 1.0:
+    if not (pot.name == "spring" and pot.alpha == 2.0 and pot.epsilon == 1.0) or len(values) > 2 or values[0] != 1.0:
         raise ValueError("the pressure deck runs the linear spring (eps = 1) with diameters 1 and one other")
     if start.box.walls or start.gravity > 0 or start.fixed is not None:
         raise ValueError("the pressure deck relaxes a periodic box (no walls, gravity or fixed particles)")

@@ -33,6 +33,7 @@ epsilon, pressures in epsilon / diameter^d)::
     /wall_pressure (k, 2)   outward normal component of wall_forces over the face area
     /protocol               attrs: every protocol and minimiser parameter
     /history/<column> (M,)  one dataset per recorded column (phi, energy, pressure, ...)
+    /checks                 attrs: jamflow.checks.PackingChecks (if the writer checked it)
 
 Version 1 files (disks and spheres, no shape attributes) still load; files without the
 walls attributes and datasets (added within version 2) load as periodic packings. The derived datasets
@@ -40,16 +41,20 @@ walls attributes and datasets (added within version 2) load as periodic packings
 packing from positions, diameters, orientations and the shape attribute.
 
 Every file is written to a temporary sibling and renamed onto its name, so an interrupted
-run never leaves a half-written file.
+run never leaves a half-written file. Paths that are symlinks, device nodes, FIFOs or
+read-only files are refused unless forced (``check_writable``, ``replacing``); unreadable
+files give one-line ValueErrors naming the file (``open_hdf5``).
 """
 
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import datetime
 import json
 import math
 import os
+import stat
 import tempfile
 from pathlib import Path
 
@@ -67,18 +72,39 @@ SCHEMA = "jamflow.packing"
 SCHEMA_VERSION = 2
 
 
+_REPLACEABLE: contextvars.ContextVar[frozenset] = contextvars.ContextVar("jamflow_replaceable", default=frozenset())
+
+
 @contextlib.contextmanager
-def atomic_path(path):
-    """Yield a temporary path beside ``path``; rename it onto ``path`` only on success."""
+def replacing(paths):
+    """Within the block, writes may replace these paths even if they are symlinks, device
+    nodes, FIFOs or read-only files (the commands' ``--force``)."""
+    token = _REPLACEABLE.set(_REPLACEABLE.get() | {os.path.abspath(p) for p in paths})
+    try:
+        yield
+    finally:
+        _REPLACEABLE.reset(token)
+
+
+@contextlib.contextmanager
+def atomic_path(path, force: bool = False):
+    """Yield a temporary path beside ``path``; rename it onto ``path`` only on success.
+
+    An existing regular file keeps its permission bits. ``force`` (or ``replacing``):
+    replace a symlink, device node, FIFO or read-only file (refused otherwise)."""
     path = Path(path)
-    check_writable(path)
+    check_writable(path, force)
+    keep = path.is_file() and not path.is_symlink()
+    mode = path.stat().st_mode & 0o7777 if keep else 0o666 & ~_umask()
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
-    os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; give the file the usual permissions
     try:
+        os.chmod(tmp, mode | 0o200)  # mkstemp makes 0600; the owner writes it, then it gets the final mode
         yield Path(tmp)
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
+        if keep:
+            os.chmod(tmp, mode)
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):
@@ -91,8 +117,15 @@ def _umask() -> int:
     return mask
 
 
-def check_writable(path) -> None:
-    """Raise a clear error before any work starts if ``path`` cannot be written."""
+_KINDS = ((stat.S_ISCHR, "character device"), (stat.S_ISBLK, "block device"), (stat.S_ISFIFO, "FIFO (named pipe)"),
+          (stat.S_ISSOCK, "socket"))
+
+
+def check_writable(path, force: bool = False) -> None:
+    """Raise a clear ValueError before any work starts if ``path`` cannot or should not be
+    written: missing or read-only directory, a directory, and -- unless ``force`` -- a
+    symlink, a device node, FIFO or socket, or a read-only file (writing replaces the path
+    itself with a new regular file)."""
     path = Path(path)
     parent = path.parent if str(path.parent) else Path(".")
     if not parent.is_dir():
@@ -101,13 +134,29 @@ def check_writable(path) -> None:
         raise ValueError(f"cannot write {path}: directory {parent} is not writable; choose another --out")
     if path.is_dir():
         raise ValueError(f"cannot write {path}: it is a directory; give a file name such as packing.h5")
+    if force or os.path.abspath(path) in _REPLACEABLE.get() or not os.path.lexists(path):
+        return
+    if path.is_symlink():
+        raise ValueError(f"refusing to write {path}: it is a symbolic link (to {os.readlink(path)}) and writing "
+                         "would replace the link; give the target's path, or --force to replace the link")
+    mode = path.stat().st_mode
+    for test, kind in _KINDS:
+        if test(mode):
+            raise ValueError(f"refusing to write {path}: it is a {kind}, not a regular file, and writing would "
+                             "replace it; choose a file name, or --force to replace it")
+    if not mode & 0o222 or not os.access(path, os.W_OK):
+        raise ValueError(f"refusing to overwrite {path}: it is read-only; make it writable (chmod u+w), "
+                         "choose another name, or --force to replace it")
 
 
 def save_packing(path, packing: Packing, *, energy_per_particle=None, pressure_tensor=None,
                  protocol: dict | None = None, history: dict | None = None, lammps_version=None,
-                 wall_forces=None, target_pressure=None, stress=None) -> Path:
+                 wall_forces=None, target_pressure=None, stress=None, checks=None) -> Path:
     """Write ``packing`` (and optional results) atomically to the HDF5 file ``path``.
-    ``wall_forces`` (d, 2, d): the force on each face (``jamflow.walls.wall_loads``)."""
+
+    ``wall_forces`` (d, 2, d): the force on each face (``jamflow.walls.wall_loads``).
+    ``checks``: a ``jamflow.checks.PackingChecks``, stored as the attributes of group
+    ``checks``."""
     pot = packing.potential
     attrs = dict(
         schema=SCHEMA, schema_version=SCHEMA_VERSION, jamflow_version=__version__,
@@ -142,15 +191,47 @@ def save_packing(path, packing: Packing, *, energy_per_particle=None, pressure_t
         hist = f.create_group("history")
         for name, column in (history or {}).items():
             hist[name] = np.asarray(column)
+        if checks is not None:
+            f.create_group("checks").attrs.update(checks.as_attrs())
     return Path(path)
+
+
+@contextlib.contextmanager
+def open_hdf5(path, what: str = "jamflow packing file"):
+    """``h5py.File(path, "r")`` whose failures are one-line ValueErrors naming the file and
+    what is wrong with it: missing, empty, not HDF5, truncated or damaged, or lacking an
+    attribute or dataset that ``what`` needs (KeyError inside the block)."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no {what} {path}" if not path.exists() else f"{path} is not a file; give a {what}")
+    if path.stat().st_size == 0:
+        raise ValueError(f"{path} is empty (0 bytes), not a {what}; rerun the command that writes it")
+    if not h5py.is_hdf5(path):
+        raise ValueError(f"{path} is not an HDF5 file (no HDF5 signature), so not a {what}")
+    try:
+        f = h5py.File(path, "r")
+    except OSError as err:
+        raise ValueError(f"{path} is truncated or damaged ({_h5_reason(err)}); rerun the command that "
+                         "wrote it") from None
+    try:
+        with f:
+            yield f
+    except KeyError as err:
+        raise ValueError(f"{path} is an incomplete {what}: {_h5_reason(err)}") from None
+    except OSError as err:
+        raise ValueError(f"{path} is damaged ({_h5_reason(err)}); rerun the command that wrote it") from None
+
+
+def _h5_reason(err) -> str:
+    """h5py's message without its 'Unable to synchronously ...' wrapper."""
+    text = str(err.args[0] if err.args else err).strip("\"'")
+    return text.split("(", 1)[1].rstrip(")") if "(" in text else text
 
 
 def load_packing(path) -> Packing:
     """Read a jamflow HDF5 packing file (any schema version up to the current one)."""
     path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"no packing file {path}")
-    with h5py.File(path, "r") as f:
+    with open_hdf5(path) as f:
         schema = f.attrs.get("schema")
         if schema != SCHEMA:
             raise ValueError(f"{path} is not a jamflow packing file (schema {schema!r})")
@@ -162,11 +243,14 @@ def load_packing(path) -> Packing:
         orientations = f["orientations"][...] if "orientations" in f else None
         meta = {"seed": int(f.attrs["seed"]), "sizes": str(f.attrs["sizes"]), "source": str(path)}
         h = f["box"][...]
-        walls = parse_walls(_text(f.attrs.get("walls", "")), len(h))
-        box = Box(h, tuple(a not in walls for a in range(len(h))))
         fixed = f["fixed"][...].astype(bool) if "fixed" in f else None
-        return Packing(f["positions"][...], f["diameters"][...], box, pot, meta, shape, orientations, fixed,
-                       float(f.attrs.get("gravity", 0.0)))
+        try:
+            walls = parse_walls(_text(f.attrs.get("walls", "")), len(h))
+            box = Box(h, tuple(a not in walls for a in range(len(h))))
+            return Packing(f["positions"][...], f["diameters"][...], box, pot, meta, shape, orientations, fixed,
+                           float(f.attrs.get("gravity", 0.0)))
+        except ValueError as err:
+            raise ValueError(f"{path} holds an invalid packing: {err}") from None
 
 
 def shape_datasets(packing: Packing) -> dict:
@@ -186,14 +270,22 @@ def shape_datasets(packing: Packing) -> dict:
 
 def read_history(path) -> dict:
     """The protocol history columns of a packing file as numpy arrays."""
-    with h5py.File(path, "r") as f:
+    with open_hdf5(path) as f:
         return {k: v[...] for k, v in f["history"].items()}
 
 
 def read_attrs(path) -> dict:
     """Root attributes (phi, energy_per_particle, pressure, versions, ...) of a packing file."""
-    with h5py.File(path, "r") as f:
+    with open_hdf5(path) as f:
         return {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
+
+
+def read_checks(path):
+    """The ``jamflow.checks.PackingChecks`` stored in a packing file, or None if it has none."""
+    from .checks import PackingChecks
+
+    with open_hdf5(path) as f:
+        return PackingChecks.from_attrs(f["checks"].attrs) if "checks" in f else None
 
 
 def write_lammps_data(path, packing: Packing) -> Path:

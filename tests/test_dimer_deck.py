@@ -12,7 +12,7 @@ from jamflow.deck import DeckFailed, lmp_command, run_deck
 from jamflow.engine.lammps_lib import lammps_env
 from jamflow.engine.reference import energy_forces_pressure
 from jamflow.shapes import parse_shape
-from jamflow.shapes.rotations import generalized_torques
+from jamflow.checks import generalized_torques
 
 DECK = Path(__file__).resolve().parents[1] / "lammps_inputs" / "jam_dimers.lmp"
 
@@ -34,7 +34,7 @@ def test_dimer_deck_jams_rigid_dimers(tmp_path):
     res = run_deck(tmp_path, {"dim": dim, "N": n, "phi0": phi0, "dphi0": 0.001, "seed": 1}, deck=DECK, shape=shape)
     p = res.packing
     ref = energy_forces_pressure(p)
-    g = generalized_torques(p.orientations, ref.torques, p.rotational_lengths, shape.rotation_mask(dim), dim)
+    g = generalized_torques(p, ref.torques)
     assert p.n == n and 1e-16 < res.energy_per_particle < 2e-16
     assert ref.energy / n == pytest.approx(res.energy_per_particle, rel=1e-6)
     assert np.abs(ref.forces).max() < 1e-13 and np.abs(g).max() < 1e-13

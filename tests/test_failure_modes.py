@@ -81,11 +81,13 @@ def test_large_increment_overshoots_then_bisects_into_the_window():
     assert res.history["energy_per_particle"][1] > 1e-6  # the first step landed far above jamming
 
 
-def test_unresolvable_vtol_fails_clearly():
+def test_unresolvable_vtol_is_refused_before_work(monkeypatch):
     """V_tol = 1e-34 per particle: overlaps ~1e-17 diameters, below float64 resolution of
-    positions; the protocol stops with the resolution error instead of a packing."""
+    positions; refused before any minimisation (was: JammingFailed at float64 resolution
+    after 0.1 s), with the smallest resolvable V_tol."""
     settings = CompressionSettings(v_tol=1e-34, minimizer=MinimizerSettings(v_min=1e-34))
-    with pytest.raises(JammingFailed, match="float64 resolution"):
+    monkeypatch.setattr("jamflow.protocols.compression.open_engine", lambda *a, **k: pytest.fail("work started"))
+    with pytest.raises(ValueError, match="vtol 1e-34 is not resolvable.*round-off.*use vtol"):
         jam(n=16, dim=2, seed=5, settings=settings)
 
 

@@ -227,17 +227,19 @@ def test_bodies_touched_on_one_site_have_a_free_rotation():
 
 
 def test_side_by_side_dimers_touch_twice():
-    """Two parallel dimers 0.99 apart: two overlapping site pairs, two constraints (two contacts),
-    one touching pair of bodies."""
+    """Two parallel dimers 0.99 apart: two overlapping site pairs, two constraints (two contacts
+    with count="sites"), one touching pair of bodies."""
     from jamflow.analysis.contacts import Contacts
     from jamflow.box import Box
     from jamflow.packing import Packing
 
     p = Packing([[5.0, 5.0], [5.0, 5.99]], [1.0, 1.0], Box.cube(10.0, 2), shape=parse_shape("nmer:2:1.5", 2),
                 orientations=[0.0, np.pi])
-    c = Contacts(min_contacts=0).compute(p)
+    c = Contacts(min_contacts=0, count="sites").compute(p)
     assert c.n_contacts == c.n_site_contacts == 2 and c.n_body_contacts == 1 and list(c.z) == [2, 2]
     assert not c.one_site.any() and c.free_rotations == 0
+    b = Contacts(min_contacts=0).compute(p)  # the default counts touching pairs of bodies
+    assert b.n_contacts == b.n_body_contacts == 1 and b.n_site_contacts == 2
 
 
 def test_cli_jams_dimers_and_the_file_keeps_the_body(tmp_path, capsys):

@@ -11,20 +11,26 @@
   half-space rule is the disks' and spheres' only: for other shapes a contact's normal is not
   along the centre line. Removing a floater can make its neighbours floaters, so the test is
   repeated until nothing changes.
-- Shapes: ellipses/spheroids touch when r_ij < sigma_ij with the shape's contact distance.
-  Rigid bodies touch site by site, and every overlapping pair of sites of two bodies is one
-  contact: one constraint, with its own normal through both site centres, so two bodies that
-  touch at two site pairs (side by side dimers) have two contacts (``i``, ``j`` list the bodies
-  of each; ``n_site_contacts`` = ``n_contacts``); ``n_body_contacts`` counts touching pairs of
-  bodies. Counting body pairs instead would undercount the constraints: in jammed 2D dimer
-  packings (alpha = 1.5, N = 128) <z> over body pairs is ~4.8 < d_f + 1 = 4 for so many bodies
-  that the floater cascade removes every body (docs/nmers.md).
+- The exception of seed Figure 2.19: a particle that turns and has at least d + 1 but fewer
+  than d_f + 1 contacts is kept if its contact forces balance its force and torque (the
+  generalized force of its live contacts is below ``BALANCE_TOL`` times its largest contact
+  term). With three contacts on an ellipse this is the condition that their normals meet in
+  one point; such a particle carries load, and dropping it would leave its neighbours out of
+  balance (measured on 2D dimer packings: net forces as large as the contact forces). Periodic
+  packings without walls, gravity or fixed particles only.
+- Shapes: ellipses/spheroids touch when r_ij < sigma_ij with the shape's contact distance;
+  rigid bodies are in contact when any two of their sites overlap: by default one contact
+  per pair of bodies, however many site pairs touch (``count="bodies"``); with
+  ``count="sites"`` every overlapping site pair is one contact, the constraint count of the
+  dynamical matrix (each site pair is a point-point distance; two dimers touching at two site
+  pairs fix two coordinates), which ``DynamicalMatrix`` uses. For rigid bodies the result also
+  counts both: ``n_site_contacts`` and ``n_body_contacts`` among the non-floaters.
 - Concave bodies need more care than the convex rule d_f + 1: a rigid body whose contacts all
   touch one of its sites turns freely about that site's centre, since every contact force passes
   through it (the "rotational rattlers" of 2D dimers, Shiraishi, Mizuno, Ikeda, PRE 100, 012606
   (2019)). Such bodies (``one_site``) can keep d_f + 1 contacts and are not floaters by the
   convex rule, but have d_f - d free rotations (zero modes); ``free_rotations`` counts them and
-  ``isostatic_count - free_rotations`` is the isostatic count without them.
+  ``isostatic_count - free_rotations`` is the isostatic count without them (docs/nmers.md).
 - N' = N - N_f, N_c = contacts among non-floaters, <z> = 2 N_c / N',
   N_c,iso = N' d_f - d + 1 (d trivial translations subtracted, one added for phi); packings
   of particles that turn are generally hypostatic (N_c < N_c,iso, seed section 4.1).
@@ -47,7 +53,8 @@ import numpy as np
 from scipy.optimize import linprog
 
 from ..packing import Packing
-from ..pairs import candidate_pairs, contact_distances, overlapping_sites, particle_contacts, separations, site_packing
+from ..pairs import (candidate_pairs, contact_distances, overlapping_sites, particle_contacts, separations,
+                     site_packing)
 
 
 @dataclass(frozen=True)
@@ -62,13 +69,26 @@ class ContactsResult:
     n_overlapping: int  # overlapping pairs before floater removal
     n_near_contact: int  # pairs with |r/sigma - 1| < near_tol (diagnostic)
     dof: int | None = None  # d_f, degrees of freedom per particle (None: d, disks and spheres)
-    n_site_contacts: int | None = None  # rigid bodies: overlapping site pairs among non-floaters (= n_contacts)
-    n_body_contacts: int | None = None  # rigid bodies: touching pairs of non-floater bodies
-    one_site: np.ndarray | None = None  # rigid bodies (N,) bool: a non-floater whose contacts all touch one site
     wall_contacts: np.ndarray | None = None  # (N_w, 2): particle, face (2 a + side) of each smooth-wall contact
     fixed: np.ndarray | None = None  # (N,) bool: fixed (wall) particles, never floaters, no degrees of freedom
     trivial: int | None = None  # trivial translations (None: d, a periodic box)
     loaded: bool = False  # under gravity: no +1 in the isostatic count
+    balanced: np.ndarray | None = None  # (N,) bool: kept by the Figure 2.19 exception (None: not tested)
+    n_site_contacts: int | None = None  # rigid bodies: overlapping site pairs among non-floaters
+    n_body_contacts: int | None = None  # rigid bodies: touching pairs of non-floater bodies
+    one_site: np.ndarray | None = None  # rigid bodies (N,) bool: a non-floater whose contacts all touch one site
+
+    @property
+    def n_balanced(self) -> int:
+        """Non-floaters with fewer than d_f + 1 contacts whose contact forces balance them."""
+        return 0 if self.balanced is None else int(self.balanced.sum())
+
+    @property
+    def free_rotations(self) -> int:
+        """Rotations left free by contacts that all touch one site: (d_f - d) per ``one_site`` body."""
+        if self.one_site is None:
+            return 0
+        return int(self.one_site.sum()) * ((self.dim if self.dof is None else self.dof) - self.dim)
 
     @property
     def n_floaters(self) -> int:
@@ -116,13 +136,6 @@ class ContactsResult:
         return self.n_contacts - self.isostatic_count
 
     @property
-    def free_rotations(self) -> int:
-        """Rotations left free by contacts that all touch one site: (d_f - d) per ``one_site`` body."""
-        if self.one_site is None:
-            return 0
-        return int(self.one_site.sum()) * ((self.dim if self.dof is None else self.dof) - self.dim)
-
-    @property
     def is_isostatic(self) -> bool:
         return self.n_kept > 0 and self.excess_contacts == 0
 
@@ -139,9 +152,18 @@ class Contacts:
     ``min_contacts``: a particle with fewer is a floater (default d_f + 1).
     ``half_space``: also remove disks/spheres whose contacts all lie in one half-space.
     ``near_tol``: relative width of the near-contact diagnostic.
+    ``count``: rigid bodies only: "bodies" (one contact per touching pair of bodies) or "sites"
+    (one per overlapping site pair).
+    ``balanced_exception``: keep force-balanced particles that turn with d + 1 to d_f contacts
+    (seed Figure 2.19; only with the default ``min_contacts``, in periodic packings).
     """
 
-    def __init__(self, min_contacts: int | None = None, half_space: bool = True, near_tol: float = 1e-12):
+    def __init__(self, min_contacts: int | None = None, half_space: bool = True, near_tol: float = 1e-12,
+                 count: str = "bodies", balanced_exception: bool = True):
+        if count not in ("bodies", "sites"):
+            raise ValueError(f"count must be 'bodies' or 'sites' (how rigid-body contacts are counted), got {count!r}")
+        self.count = count
+        self.balanced_exception = bool(balanced_exception)
         if min_contacts is not None and (not isinstance(min_contacts, (int, np.integer)) or min_contacts < 0):
             raise ValueError(f"min_contacts must be a non-negative integer or None (d + 1), got {min_contacts!r}")
         if not (np.isfinite(near_tol) and near_tol >= 0):
@@ -151,11 +173,9 @@ class Contacts:
         self.near_tol = float(near_tol)
 
     def compute(self, packing: Packing) -> ContactsResult:
-        rigid = packing.shape.kind == "rigid"
-        if rigid:  # one contact per overlapping site pair (module docstring); bodies have no walls
-            i, j, s, t, dr, *_ = overlapping_sites(packing)
-        else:
-            i, j, dr = particle_contacts(packing)
+        sites = overlapping_sites(packing) if packing.shape.kind == "rigid" else None
+        i, j, dr = (site_contacts(packing, sites) if self.count == "sites" and sites is not None
+                    else particle_contacts(packing))
         n = packing.n
         if packing.fixed is not None:  # fixed particles do not interact with each other
             live = ~(packing.fixed[i] & packing.fixed[j])
@@ -171,31 +191,80 @@ class Contacts:
         anchored[n:] = True
         if packing.fixed is not None:
             anchored[:n] = packing.fixed
+        bounded = bool(packing.box.walls) or packing.gravity > 0 or packing.fixed is not None
+        test = self.balanced_exception and self.min_contacts is None and d_f > packing.dim and not bounded
+        wrenches = contact_wrenches(packing, i, j) if test else None  # no wall or weight contacts here
         floater = find_floaters(virtual + 1, np.concatenate([i, wall_i, load_i]),
                                 np.concatenate([j, n + wall_face, np.full(len(load_i), virtual)]),
-                                np.concatenate([unit, wall_unit, load_unit]), need, half_space, anchored)[:n]
+                                np.concatenate([unit, wall_unit, load_unit]), need, half_space, anchored,
+                                wrenches, packing.dim + 1)[:n]
         keep = ~floater[i] & ~floater[j]
         wall_keep = ~floater[wall_i]
         z = (np.bincount(i[keep], minlength=n) + np.bincount(j[keep], minlength=n)
              + np.bincount(wall_i[wall_keep], minlength=n))
-        bounded = bool(packing.box.walls) or packing.gravity > 0 or packing.fixed is not None
         trivial = 0 if packing.fixed is not None else sum(packing.box.periodic)
-        bodies = body_counts(n, i[keep], j[keep], s[keep], t[keep], floater) if rigid else (None, None, None)
+        balanced = (~floater & (z < need)) if test else None
+        bodies = body_counts(packing.n, sites, floater) if sites is not None else (None, None, None)
         return ContactsResult(i[keep], j[keep], floater, z, packing.dim, len(i),
-                              near_contact_count(packing, self.near_tol), d_f, *bodies,
-                              wall_contacts=np.column_stack([wall_i[wall_keep], wall_face[wall_keep]]) if bounded else None,
-                              fixed=packing.fixed, trivial=trivial if bounded else None, loaded=packing.gravity > 0)
+                              near_contact_count(packing, self.near_tol), d_f,
+                              np.column_stack([wall_i[wall_keep], wall_face[wall_keep]]) if bounded else None,
+                              packing.fixed, trivial if bounded else None, packing.gravity > 0, balanced, *bodies)
 
 
-def body_counts(n: int, i, j, s, t, floater) -> tuple[int, int, np.ndarray]:
-    """Rigid bodies, from the site contacts (bodies i, j; sites s, t) among non-floaters:
-    (site contacts, touching body pairs, (N,) mask of non-floaters whose contacts all touch one
-    of their sites)."""
-    pairs = np.unique(np.column_stack([i, j]), axis=0) if len(i) else np.empty((0, 2), int)
-    owner, site = np.concatenate([i, j]), np.concatenate([s, t])
+def site_contacts(packing: Packing, sites=None):
+    """(body_i, body_j, dr) for every overlapping pair of sites of different bodies (a pair of
+    bodies appears once per touching site pair; dr = centre separation); ``sites``: the
+    ``overlapping_sites`` of the packing, if already found."""
+    bi, bj, *_ = overlapping_sites(packing) if sites is None else sites
+    return bi, bj, separations(packing, bi, bj)
+
+
+def body_counts(n: int, sites, floater) -> tuple[int, int, np.ndarray]:
+    """Rigid bodies, from their overlapping site pairs (``overlapping_sites``) between
+    non-floaters: (site contacts, touching body pairs, (N,) mask of non-floaters whose contacts
+    all touch one of their sites)."""
+    bi, bj, s, t = sites[:4]
+    live = ~floater[bi] & ~floater[bj]
+    bi, bj, s, t = bi[live], bj[live], s[live], t[live]
+    pairs = np.unique(np.column_stack([bi, bj]), axis=0) if len(bi) else np.empty((0, 2), int)
+    owner, site = np.concatenate([bi, bj]), np.concatenate([s, t])
     touched = np.unique(np.column_stack([owner, site]), axis=0) if len(owner) else np.empty((0, 2), int)
     n_touched = np.bincount(touched[:, 0], minlength=n)
-    return len(i), len(pairs), ~floater & (n_touched == 1)
+    return len(bi), len(pairs), ~floater & (n_touched == 1)
+
+
+BALANCE_TOL = 1e-3  # |net generalized force| / largest contact term below which a particle is balanced
+
+
+def contact_wrenches(packing: Packing, i: np.ndarray, j: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(C, d_f) generalized forces (forces, torques tau_a / d_k) that each listed contact (i, j)
+    exerts on i and on j; a pair of rigid bodies listed once collects all its site pairs."""
+    from .hessian import pair_terms
+
+    terms = pair_terms(packing)
+    d, r = packing.dim, terms.gradient.shape[1] // 2 - packing.dim
+    on_i = -terms.gradient[:, np.r_[0:d, 2 * d:2 * d + r]]
+    on_j = -terms.gradient[:, np.r_[d:2 * d, 2 * d + r:2 * d + 2 * r]]
+    if len(terms.i) == len(i) and np.array_equal(terms.i, i) and np.array_equal(terms.j, j):
+        return on_i, on_j  # one term per contact (pairs of particles, or site pairs one by one)
+    keys = i.astype(np.int64) * packing.n + j  # bodies listed once per pair: sorted, unique
+    index = np.searchsorted(keys, terms.i.astype(np.int64) * packing.n + terms.j)
+    wi, wj = np.zeros((len(i), on_i.shape[1])), np.zeros((len(i), on_i.shape[1]))
+    np.add.at(wi, index, on_i)
+    np.add.at(wj, index, on_j)
+    return wi, wj
+
+
+def balanced_mask(n: int, i, j, wrenches) -> np.ndarray:
+    """Particles whose live contacts (i, j with generalized forces ``wrenches``) balance them."""
+    wi, wj = wrenches
+    net = np.zeros((n, wi.shape[1]))
+    np.add.at(net, i, wi)
+    np.add.at(net, j, wj)
+    scale = np.zeros(n)
+    np.maximum.at(scale, i, np.linalg.norm(wi, axis=1))
+    np.maximum.at(scale, j, np.linalg.norm(wj, axis=1))
+    return (scale > 0) & (np.linalg.norm(net, axis=1) <= BALANCE_TOL * scale)
 
 
 def wall_contacts(packing: Packing):
@@ -228,11 +297,14 @@ def weight_contacts(packing: Packing):
     return idx, unit
 
 
-def find_floaters(n: int, i, j, unit, need: int, half_space: bool = True, anchored=None) -> np.ndarray:
+def find_floaters(n: int, i, j, unit, need: int, half_space: bool = True, anchored=None, wrenches=None,
+                  fewest: int = 0) -> np.ndarray:
     """Boolean mask of floaters, removed iteratively (see module docstring).
 
     ``unit[p]`` is the unit vector from particle j[p] to particle i[p]; ``anchored`` nodes
-    (walls, fixed particles) are never floaters.
+    (walls, fixed particles) are never floaters. ``wrenches``: per-contact generalized forces
+    on i and j (``contact_wrenches``) for the Figure 2.19 exception, which keeps balanced
+    particles with ``fewest`` to ``need - 1`` contacts.
     """
     floater = np.zeros(n, bool)
     free = np.ones(n, bool) if anchored is None else ~np.asarray(anchored, bool)
@@ -240,6 +312,9 @@ def find_floaters(n: int, i, j, unit, need: int, half_space: bool = True, anchor
         live = ~floater[i] & ~floater[j]
         z = np.bincount(i[live], minlength=n) + np.bincount(j[live], minlength=n)
         bad = ~floater & free & (z < need)
+        if wrenches is not None and bad.any():
+            live_wrenches = (wrenches[0][live], wrenches[1][live])
+            bad &= ~((z >= fewest) & balanced_mask(n, i[live], j[live], live_wrenches))
         if half_space:
             candidates = ~floater & ~bad & free & (z > 0)
             bad |= candidates & ~spanning_mask(n, i[live], j[live], unit[live], candidates)

@@ -1,16 +1,25 @@
 """Normal modes, density of states and mechanical-stability class (seed chapter section 3).
 
+Every shape: the dynamical matrix is over xi = (centres, d_k theta) (``hessian``), so its
+d_f N' modes mix translations and rotations; ``SpectrumResult.translational_fraction`` is the
+share of each eigenvector in the centre coordinates (the mode character; 1 - it is rotational).
+
 - ``Spectrum``: eigenvalues e_i (eps / diameter^2) of the dynamical matrix over the
   non-floaters; dense for small systems, sparse shift-invert for the lowest modes of large
-  ones. |e_i| <= e_min (default 1e-6, seed ref. [28]) counts as zero; a periodic packing has
-  d trivial zero modes (uniform translations). Frequencies omega_i = sqrt(e_i / M) with
-  M = N m, m = 1 (the seed's definition, N including floaters), for e_i > e_min.
+  ones. |e_i| <= e_min (default 1e-6, seed ref. [28]) counts as zero; a periodic packing of any
+  shape has d trivial zero modes (uniform translations; periodic boundaries break rotational
+  invariance). Frequencies omega_i = sqrt(e_i / M) with M = N m, m = 1 (the seed's definition,
+  N including floaters), for e_i > e_min; unit mass and inertia m d_k^2, so xi has unit mass.
 - ``DensityOfStates``: D(omega) = (N(omega + d omega) - N(omega)) / d omega, modes per unit
-  frequency per packing, averaged over packings (seed Figure 2.16).
-- ``Stability``: mechanically stable (exactly d zero modes, none negative), locally stable
-  (extra zero modes, seed Figure 2.15b) or unstable (e_i < -e_min), with the evidence
-  Delta V(delta) = V(xi_0 + delta e_1) - V(xi_0) along the lowest nontrivial mode e_1 and the
-  power p of its symmetric part ~ delta^p (2 stable, 4 quartic, "flat" for a zero mode).
+  frequency per packing, averaged over packings (seed Figure 2.16); with eigenvectors also its
+  translational part (each mode weighted by its translational fraction).
+- ``Stability``: mechanically stable (exactly d zero modes, none negative), stable at quartic
+  order (every extra zero mode raises the energy as delta^4: hypostatic packings of ellipses
+  at onset, seed Figure 2.17), locally stable (other extra zero modes, seed Figure 2.15b) or
+  unstable (e_i < -e_min), with the evidence Delta V(delta) = V(xi_0 + delta e) - V(xi_0) along
+  the lowest nontrivial modes and the power p of its symmetric part ~ delta^p (2 stable,
+  4 quartic, "flat" for a floppy mode). Energy changes along a displacement:
+  ``jamflow.analysis.deformation``.
 """
 
 from __future__ import annotations
@@ -23,7 +32,8 @@ import scipy.linalg as sla
 import scipy.sparse.linalg as spla
 
 from ..packing import Packing
-from ..pairs import candidate_pairs, contact_distances, separations
+from . import quartic
+from .deformation import energy_change, network_amplitudes, opening_amplitude  # noqa: F401 (public here)
 from .hessian import DynamicalMatrix, DynamicalMatrixResult
 
 DENSE_MAX_DOF = 4096  # above this many degrees of freedom "auto" uses the sparse solver
@@ -77,6 +87,14 @@ class SpectrumResult:
     def frequencies(self) -> np.ndarray:
         """omega_i = sqrt(e_i / M) of the nonzero modes, ascending (units sqrt(eps/m)/diameter)."""
         return np.sqrt(self.nonzero / self.mass)
+
+    @property
+    def translational_fraction(self) -> np.ndarray | None:
+        """(m,) share of each eigenvector in the centre coordinates (None without vectors):
+        1 for every mode of disks and spheres, between 0 (purely rotational) and 1 otherwise."""
+        if self.eigenvectors is None:
+            return None
+        return self.dynamical.translational_fraction(self.eigenvectors)
 
     @property
     def translation_residual(self) -> float:
@@ -151,6 +169,12 @@ class DensityOfStatesResult:
     density: np.ndarray  # (bins,)
     n_packings: int
     n_modes: int  # nonzero modes over all packings
+    translational: np.ndarray | None = None  # (bins,) part of D carried by centre motion; None without vectors
+
+    @property
+    def rotational(self) -> np.ndarray | None:
+        """(bins,) part of D carried by rotations (D - translational)."""
+        return None if self.translational is None else self.density - self.translational
 
     @property
     def centers(self) -> np.ndarray:
@@ -177,30 +201,39 @@ class DensityOfStates:
         omegas = np.concatenate([s.frequencies for s in spectra])
         top = self.omega_max or (omegas.max() if len(omegas) else 1.0)
         edges = np.linspace(0.0, top, self.bins + 1)
+        norm = len(spectra) * np.diff(edges)
         counts, _ = np.histogram(omegas, edges)
-        return DensityOfStatesResult(edges, counts / (len(spectra) * np.diff(edges)), len(spectra), len(omegas))
+        translational = None
+        if all(s.eigenvectors is not None for s in spectra):
+            weights = np.concatenate([s.translational_fraction[s.eigenvalues > s.e_min] for s in spectra])
+            translational = np.histogram(omegas, edges, weights=weights)[0] / norm
+        return DensityOfStatesResult(edges, counts / norm, len(spectra), len(omegas), translational)
 
 
-# --- stability along the lowest nontrivial mode ---------------------------------------------
+# --- stability along the lowest nontrivial modes ---------------------------------------------
 
 STABLE, LOCALLY_STABLE, UNSTABLE = "mechanically stable", "locally stable", "unstable"
+QUARTIC_STABLE = "stable at quartic order"
+HARMONIC, BEYOND_OPENING = "harmonic", "beyond opening"  # the amplitude ranges (``ModeProfile.regime``)
 
 
 @dataclass(frozen=True)
-class StabilityResult:
-    """Class of a packing and the energy profile along its lowest nontrivial mode."""
+class ModeProfile:
+    """Energy profile Delta V(delta) along one nontrivial mode."""
 
-    label: str  # STABLE | LOCALLY_STABLE | UNSTABLE
-    n_zero: int  # |e| <= e_min, d trivial ones included
-    n_negative: int  # e < -e_min
-    mode_eigenvalue: float  # Rayleigh quotient of the mode, eps / diameter^2
-    mode: np.ndarray  # (d N',) unit vector orthogonal to the translations
+    eigenvalue: float  # Rayleigh quotient of the mode, eps / diameter^2
+    mode: np.ndarray  # (d_f N',) unit vector orthogonal to the translations
     deltas: np.ndarray  # amplitudes delta (diameters)
-    delta_v_plus: np.ndarray  # V(xi_0 + delta e_1) - V(xi_0), total, eps
-    delta_v_minus: np.ndarray  # V(xi_0 - delta e_1) - V(xi_0)
-    power: float  # slope of log|symmetric part| vs log delta (nan when flat)
+    delta_v_plus: np.ndarray  # V(xi_0 + delta e) - V(xi_0), total, eps
+    delta_v_minus: np.ndarray  # V(xi_0 - delta e) - V(xi_0)
+    power: float  # slope of log|symmetric part| vs log delta (zero modes: of the part beyond e delta^2/2; nan when flat)
     flat: bool  # symmetric part below e_min delta^2 / 2 at every delta
     sign: int  # sign of the symmetric part at the largest delta (-1: energy decreases)
+    regime: str  # HARMONIC (below the first contact opening) or BEYOND_OPENING (zero modes)
+    translational_fraction: float  # share of |e|^2 in the centre coordinates
+    participation: float  # 1 / sum_k w_k^2, w_k particle k's share of |e|^2: particles taking part (1 to N')
+    quartic_straight: float = float("nan")  # zero modes: fourth-order coefficient along the line (``quartic``)
+    quartic_relaxed: float = float("nan")  # ... and its minimum over curved paths; nan: not computed
 
     @property
     def delta_v(self) -> np.ndarray:
@@ -209,9 +242,12 @@ class StabilityResult:
 
     @property
     def behaviour(self) -> str:
-        """'flat', '[negative ]quadratic', '[negative ]quartic' or '[negative ]power P'."""
+        """'flat', '[negative ]quadratic', '[negative ]quartic' or '[negative ]power P'; a zero
+        mode whose relaxed fourth-order coefficient is positive is 'quartic' (``quartic``)."""
         if self.flat:
             return "flat"
+        if math.isfinite(self.quartic_relaxed):
+            return "quartic"
         prefix = "negative " if self.sign < 0 else ""
         for name, p in (("quadratic", 2.0), ("quartic", 4.0)):
             if abs(self.power - p) < 0.3:
@@ -219,50 +255,144 @@ class StabilityResult:
         return f"{prefix}power {self.power:.2f}"
 
 
+@dataclass(frozen=True)
+class StabilityResult:
+    """Class of a packing and the energy profiles along its lowest nontrivial modes; the
+    fields ``mode_eigenvalue`` ... ``sign`` describe the lowest one (``profiles[0]``)."""
+
+    label: str  # STABLE | QUARTIC_STABLE | LOCALLY_STABLE | UNSTABLE
+    n_zero: int  # |e| <= e_min, d trivial ones included
+    n_negative: int  # e < -e_min
+    mode_eigenvalue: float
+    mode: np.ndarray
+    deltas: np.ndarray
+    delta_v_plus: np.ndarray
+    delta_v_minus: np.ndarray
+    power: float
+    flat: bool
+    sign: int
+    profiles: tuple = ()  # ModeProfile per profiled mode, ascending eigenvalue
+
+    @property
+    def delta_v(self) -> np.ndarray:
+        return 0.5 * (self.delta_v_plus + self.delta_v_minus)
+
+    @property
+    def behaviour(self) -> str:
+        return self.profiles[0].behaviour
+
+    @property
+    def behaviours(self) -> list[str]:
+        return [p.behaviour for p in self.profiles]
+
+    @property
+    def n_quartic(self) -> int:
+        """Profiled modes whose energy rises as delta^4 (seed Figure 2.17, branch 1)."""
+        return sum(b == "quartic" for b in self.behaviours)
+
+    @property
+    def n_single_flat(self) -> int:
+        """Profiled flat modes carried by about one particle (participation < 1.5): a particle
+        free to move or turn alone, e.g. a dimer whose contacts all lie on one of its sites."""
+        return sum(p.flat and p.participation < 1.5 for p in self.profiles)
+
+
 class Stability:
     """Classify a packing (seed section 3) with the Delta V(delta) evidence.
 
-    ``deltas``: amplitudes (diameters) of the deformation xi_0 + delta e_1; None chooses
-    delta_open * logspace(-2, -0.5, 7), delta_open being the amplitude at which the first
-    contact would open or a near pair close (``opening_amplitude``): the harmonic regime.
-    For disks and spheres a linear deformation along a zero mode only lengthens contacts at
-    second order, so such a mode shows "flat" (or a negative stress term), never quartic.
-    ``spectrum``: the ``Spectrum`` used (its e_min is the zero threshold).
+    ``n_modes``: how many of the lowest nontrivial modes to profile; "zero" (default): every
+    nontrivial zero mode (|e| <= e_min) and the lowest nonzero one. ``deltas``: amplitudes
+    (diameters) of xi_0 + delta e, or None to choose them per mode: for nonzero modes the
+    harmonic regime delta_open * logspace(-2, -0.5, 7), delta_open being the amplitude at which
+    the contact network first changes (``opening_amplitude``); for zero modes the range
+    beyond it, top * logspace(-1.5, 0, 7) with top = min(0.1 delta_close, 0.03), delta_close the
+    amplitude at which a pair not in contact would touch (to second order). A zero mode's energy
+    shows there what holds it (its power is fitted to Delta V - e delta^2 / 2, the part beyond
+    its sub-threshold quadratic term): contacts that open (disks, spheres: "flat") or contacts that overlap at second
+    order, Delta V ~ delta^4 ("quartic": the just-touching limit of ellipse packings, seed
+    Figure 2.17). Moving along a mode moves centres by delta u and turns particles by
+    delta (d_k theta) / d_k. Class: unstable if any e < -e_min; mechanically stable if exactly
+    d zero modes; stable at quartic order if every extra zero mode was profiled and is quartic;
+    locally stable otherwise. ``spectrum``: the ``Spectrum`` used (its e_min is the threshold).
     """
 
-    def __init__(self, deltas=None, spectrum: Spectrum | None = None):
+    def __init__(self, deltas=None, spectrum: Spectrum | None = None, n_modes="zero", relaxed: bool = True):
         if deltas is not None:
             deltas = np.asarray(deltas, float)
             if deltas.ndim != 1 or len(deltas) < 2 or not np.all(np.isfinite(deltas) & (deltas > 0)):
                 raise ValueError("deltas must be at least two finite positive amplitudes (diameters)")
+        if n_modes != "zero" and not (isinstance(n_modes, (int, np.integer)) and n_modes >= 1):
+            raise ValueError(f"n_modes must be a positive integer or 'zero' (every zero mode), got {n_modes!r}")
         self.deltas = deltas
         self.spectrum = spectrum or Spectrum()
+        self.n_modes = n_modes
+        self.relaxed = bool(relaxed)
 
     def compute(self, packing: Packing, spectrum: SpectrumResult | None = None) -> StabilityResult:
         spec = spectrum or self.spectrum.compute(packing)
         if spec.eigenvectors is None:
             raise ValueError("Stability needs eigenvectors: use Spectrum(vectors=True)")
+        count = None if self.n_modes == "zero" else int(self.n_modes)
+        values, modes = lowest_nontrivial_modes(spec, count)
+        profiles = tuple(self.profile(spec, value, mode) for value, mode in zip(values, modes.T))
+        first = profiles[0]
+        return StabilityResult(self.classify(spec, profiles), spec.n_zero, spec.n_negative, first.eigenvalue,
+                               first.mode, first.deltas, first.delta_v_plus, first.delta_v_minus, first.power,
+                               first.flat, first.sign, profiles)
+
+    @staticmethod
+    def classify(spec: SpectrumResult, profiles) -> str:
+        if spec.n_negative:
+            return UNSTABLE
+        if spec.n_zero <= spec.dim:
+            return STABLE
+        zero = [p for p in profiles if abs(p.eigenvalue) <= spec.e_min]
+        if len(zero) == spec.n_extra_zero and all(p.behaviour == "quartic" for p in zero):
+            return QUARTIC_STABLE
+        return LOCALLY_STABLE
+
+    def profile(self, spec: SpectrumResult, value: float, mode: np.ndarray) -> ModeProfile:
         dyn = spec.dynamical
-        value, mode = lowest_nontrivial_mode(spec)
-        u = mode.reshape(-1, dyn.dim)
-        deltas = self.deltas if self.deltas is not None else opening_amplitude(dyn.packing, u) * np.logspace(-2, -0.5, 7)
-        plus = np.array([energy_change(dyn.packing, d * u) for d in deltas])
-        minus = np.array([energy_change(dyn.packing, -d * u) for d in deltas])
+        u, w = dyn.coordinates.split(mode)
+        zero = abs(value) <= spec.e_min
+        deltas = self.deltas
+        if deltas is None:
+            if zero:
+                closing = network_amplitudes(dyn.packing, u, w)[1]
+                deltas = min(0.1 * closing, 0.03) * np.logspace(-1.5, 0, 7)
+            else:
+                deltas = opening_amplitude(dyn.packing, u, w) * np.logspace(-2, -0.5, 7)
+        plus = np.array([energy_change(dyn.packing, d * u, d * w) for d in deltas])
+        minus = np.array([energy_change(dyn.packing, -d * u, -d * w) for d in deltas])
         sym = 0.5 * (plus + minus)
         flat = bool(np.all(np.abs(sym) <= 0.5 * spec.e_min * deltas**2))
-        power = float("nan") if flat else float(np.polyfit(np.log(deltas), np.log(np.abs(sym) + 1e-300), 1)[0])
-        label = UNSTABLE if spec.n_negative else (LOCALLY_STABLE if spec.n_zero > spec.dim else STABLE)
-        return StabilityResult(label, spec.n_zero, spec.n_negative, value, mode, deltas, plus, minus, power, flat,
-                               int(np.sign(sym[-1])))
+        straight = relaxed = float("nan")
+        if zero and self.relaxed:
+            null = spec.eigenvectors[:, np.abs(spec.eigenvalues) <= spec.e_min]
+            straight, relaxed = quartic.quartic_coefficients(dyn.packing, mode, null)
+            if math.isfinite(relaxed):
+                flat = bool(relaxed <= quartic.RELAXED_TOL * straight)  # free to fourth order
+        # a zero mode's quadratic part e delta^2 / 2 is below the threshold: fit what lies beyond it
+        beyond = sym - 0.5 * value * deltas**2 if zero else sym
+        power = float("nan") if flat else float(np.polyfit(np.log(deltas), np.log(np.abs(beyond) + 1e-300), 1)[0])
+        weight = np.sum(u**2, axis=1) + np.sum(w**2, axis=1)
+        return ModeProfile(value, mode, deltas, plus, minus, power, flat, int(np.sign(sym[-1])),
+                           BEYOND_OPENING if zero and self.deltas is None else HARMONIC,
+                           float(dyn.translational_fraction(mode)[0]), float(1.0 / np.sum(weight**2)),
+                           straight, relaxed)
 
 
-def lowest_nontrivial_mode(spec: SpectrumResult) -> tuple[float, np.ndarray]:
-    """Lowest mode orthogonal to the d translations: Rayleigh-Ritz on the eigenvectors up to
-    the first nonzero one (at least d + 1) with the translations projected out (a degenerate
-    zero-mode subspace can mix translations into the solver's vectors)."""
+def lowest_nontrivial_modes(spec: SpectrumResult, count: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The lowest modes orthogonal to the d translations, ascending: Rayleigh-Ritz on the
+    eigenvectors up to the first nonzero one (at least d + 1; ``count`` more if asked) with the
+    translations projected out (a degenerate zero-mode subspace can mix translations into the
+    solver's vectors). ``count`` None: every nontrivial mode up to the first nonzero one."""
     dyn = spec.dynamical
     t = dyn.translations()
-    m = min(max(spec.dim + 1, spec.n_negative + spec.n_zero + 1), spec.eigenvectors.shape[1])
+    m = max(spec.dim + 1, spec.n_negative + spec.n_zero + 1)
+    if count is not None:
+        m = max(m, spec.dim + count)
+    m = min(m, spec.eigenvectors.shape[1])
     v = spec.eigenvectors[:, :m]
     w = v - t @ (t.T @ v)
     basis, s, _ = np.linalg.svd(w, full_matrices=False)
@@ -270,54 +400,13 @@ def lowest_nontrivial_mode(spec: SpectrumResult) -> tuple[float, np.ndarray]:
     if basis.shape[1] == 0:
         raise ValueError("no nontrivial mode: the packing has no degrees of freedom beyond translations")
     values, coeffs = np.linalg.eigh(basis.T @ (dyn.matrix @ basis))
-    mode = basis @ coeffs[:, 0]
-    return float(values[0]), mode / np.linalg.norm(mode)
+    modes = basis @ coeffs
+    modes /= np.linalg.norm(modes, axis=0)
+    keep = len(values) if count is None else min(count, len(values))
+    return values[:keep], modes[:, :keep]
 
 
-def opening_amplitude(packing: Packing, u: np.ndarray) -> float:
-    """Smallest amplitude delta at which the contact network changes when every particle
-    moves by delta * u (diameters): a contact opens or a near pair closes to first order
-    (|sigma - r| / |rate|), or a contact opens at second order by motion perpendicular to it
-    (|du|^2 delta^2 / 2r reaching the overlap). Pairs up to 1.5 largest diameters are checked."""
-    i, j = candidate_pairs(packing, 1.5 * packing.diameters.max())
-    dr = separations(packing, i, j)
-    r = np.linalg.norm(dr, axis=1)
-    du = u[i] - u[j]
-    gap = np.abs(contact_distances(packing, i, j) - r)
-    rate = np.abs(np.einsum("pd,pd->p", dr, du)) / r
-    curvature = np.where(r < contact_distances(packing, i, j), np.einsum("pd,pd->p", du, du) / (2.0 * r), 0.0)
-    with np.errstate(divide="ignore"):
-        first = np.where(rate > 0, gap / rate, np.inf)
-        second = np.where(curvature > 0, np.sqrt(gap / curvature), np.inf)
-    smallest = float(np.min(np.minimum(first, second), initial=np.inf))
-    if not np.isfinite(smallest):
-        raise ValueError("the mode moves no pair: it is a rigid translation, not a nontrivial mode")
-    return smallest
-
-
-_GAUSS_T, _GAUSS_W = np.polynomial.legendre.leggauss(12)
-
-
-def energy_change(packing: Packing, displacement: np.ndarray) -> float:
-    """V(x + u) - V(x), total energy in eps, summed pair by pair.
-
-    Each pair's term is the integral of V'(s) from the old to the new distance (clipped at
-    sigma_ij), with the distance change computed from u as (2 r.du + du.du) / (r + r'),
-    so the result stays accurate when |u| is far below the overlaps, where subtracting two
-    total energies loses every digit. 12-point Gauss-Legendre: exact for alpha = 2.
-    """
-    u = np.asarray(displacement, float).reshape(packing.n, packing.dim)
-    reach = packing.diameters.max() + 2.0 * float(np.linalg.norm(u, axis=1).max())
-    i, j = candidate_pairs(packing, reach)
-    dr = separations(packing, i, j)
-    du = u[i] - u[j]
-    r = np.linalg.norm(dr, axis=1)
-    r_new = np.linalg.norm(dr + du, axis=1)
-    sigma = contact_distances(packing, i, j)
-    change = (2.0 * np.einsum("pd,pd->p", dr, du) + np.einsum("pd,pd->p", du, du)) / (r + r_new)
-    inside = (r < sigma) & (r_new < sigma)
-    lo = np.minimum(r, sigma)
-    length = np.where(inside, change, np.minimum(r_new, sigma) - lo)
-    nodes = lo[:, None] + length[:, None] * 0.5 * (_GAUSS_T[None, :] + 1.0)
-    slopes = packing.potential.dv_dr(nodes, sigma[:, None])
-    return float(np.sum(0.5 * length * (slopes @ _GAUSS_W)))
+def lowest_nontrivial_mode(spec: SpectrumResult) -> tuple[float, np.ndarray]:
+    """The lowest mode orthogonal to the d translations (``lowest_nontrivial_modes``)."""
+    values, modes = lowest_nontrivial_modes(spec, 1)
+    return float(values[0]), modes[:, 0]

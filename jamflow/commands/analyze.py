@@ -2,18 +2,22 @@
 discrete species), S(k), Q6 global/local, G, the g(r) - 1 envelope length and the q6
 correlation functions with their length. FILES are jamflow HDF5 packings or LAMMPS data /
 dump files (every dump frame counts as one packing); all of them form one ensemble.
-Results go to one HDF5 file (layout in docs/structure.md) and PNG plots."""
+Results go to one HDF5 file (layout in docs/structure.md) and PNG plots. Jamflow packings
+are checked for force balance first (a warning for each that is not at an energy minimum;
+order/force_balanced is 1, 0, or -1 for LAMMPS inputs, whose potential is unknown)."""
 
 from __future__ import annotations
 
 import math
+import warnings
 from pathlib import Path
 
 import h5py
 import numpy as np
 
 from .. import __version__
-from ..io import atomic_path, check_writable, load_packing
+from ..checks import check_packing
+from ..io import atomic_path, check_writable, load_packing, replacing
 from ..analysis.correlations import BondCorrelation, rdf_correlation_length
 from ..analysis.order import BondOrder, first_minimum, translational_order
 from ..analysis.plots_structure import (plot_bond_correlations, plot_bond_order_map, plot_order, plot_rdf,
@@ -22,6 +26,7 @@ from ..analysis.readers import packings_from_lammps
 from ..analysis.structure import MAX_SPECIES, RDF, StructureFactor, positive
 
 FORMATS = ("auto", "jamflow", "data", "dump")
+HDF5_SUFFIXES = (".h5", ".hdf5")
 
 
 def add_arguments(p) -> None:
@@ -37,6 +42,8 @@ def add_arguments(p) -> None:
     p.add_argument("--r-min", type=float, default=None,
                    help="Q6 neighbour cutoff, units of <sigma^2>^1/2 (default: first minimum of g(r))")
     p.add_argument("--q6-dr", type=float, default=0.1, help="bin width of the q6 correlation functions")
+    p.add_argument("--force", action="store_true",
+                   help="replace output or plot paths that are symlinks, devices or read-only files")
 
 
 def parse_diameters(text: str | None) -> dict | None:
@@ -60,8 +67,8 @@ def load_inputs(files, fmt: str, diameters, dim) -> tuple[list, list[str]]:
         raise FileNotFoundError(f"input file(s) not found: {', '.join(missing)}")
     packings, labels = [], []
     for name in files:
-        if fmt == "jamflow" or (fmt == "auto" and h5py.is_hdf5(name)):
-            packings.append(load_packing(name))
+        if fmt == "jamflow" or (fmt == "auto" and (h5py.is_hdf5(name) or Path(name).suffix.lower() in HDF5_SUFFIXES)):
+            packings.append(load_packing(name))  # a damaged .h5 gets load_packing's message, not a LAMMPS parser's
             labels.append(Path(name).name)
             continue
         frames = packings_from_lammps(name, None if fmt == "auto" else fmt, diameters=diameters, dim=dim)
@@ -94,11 +101,23 @@ def analyze(packings, labels, args) -> dict:
         "n_isolated": np.array([o.n_isolated for o in orders]),
         "phi": np.array([p.phi for p in packings]),
         "n": np.array([p.n for p in packings]),
+        "force_balanced": np.array([_force_balanced(p, label) for p, label in zip(packings, labels)], np.int8),
     }
     return dict(rdf=rdf, r_min=float(r_min), table=table, labels=labels,
                 G=translational_order(rdf, r_min), g_fit=rdf_correlation_length(rdf, r_min),
                 sk=StructureFactor(k_max=args.k_max).compute(packings),
                 corr=BondCorrelation(r_min=r_min, dr=args.q6_dr).compute(packings))
+
+
+def _force_balanced(packing, label) -> int:
+    """1 or 0 for a jamflow packing (warning when 0); -1 for a LAMMPS input (potential unknown)."""
+    if "coordinate_precision" in packing.metadata:  # read from a LAMMPS file (jamflow.analysis.readers)
+        return -1
+    checks = check_packing(packing)
+    if not checks.force_balanced:
+        warnings.warn(f"{label} is {checks.problems()[0]}; its structure is that of a state that is not force "
+                      "balanced", stacklevel=2)
+    return int(checks.force_balanced)
 
 
 def write_results(path, res: dict, files) -> None:
@@ -129,6 +148,9 @@ def write_results(path, res: dict, files) -> None:
             grp["r_points"], grp["y_points"] = fit.r_points, fit.y_points
 
 
+PLOT_SUFFIXES = ("q6map", "rdf", "sk", "q6corr", "order")
+
+
 def write_plots(directory: Path, stem: str, res: dict, first) -> list[Path]:
     """g(r), S(k), q6 correlations, order parameters; for 2D also the psi_6 map of the first packing."""
     title = f"{res['rdf'].n_packings} packing(s)"
@@ -149,16 +171,20 @@ def write_plots(directory: Path, stem: str, res: dict, first) -> list[Path]:
 def run(args) -> int:
     _check_numbers(args)
     diameters = parse_diameters(args.diameters)
-    check_writable(args.out)
+    check_writable(args.out, args.force)
     plots = Path(args.plots) if args.plots else Path(args.out).resolve().parent
     if not plots.is_dir():
         raise ValueError(f"--plots directory {plots} does not exist; create it first")
+    stem = Path(args.out).stem
+    for suffix in PLOT_SUFFIXES:
+        check_writable(plots / f"{stem}-{suffix}.png", args.force)
     packings, labels = load_inputs(args.files, args.format, diameters, args.dim)
     if len({p.dim for p in packings}) != 1:
         raise ValueError("the input files mix 2D and 3D packings; analyse them separately")
     res = analyze(packings, labels, args)
-    write_results(args.out, res, args.files)
-    written = write_plots(plots, Path(args.out).stem, res, packings[0])
+    with replacing([args.out, *(plots / f"{stem}-{s}.png" for s in PLOT_SUFFIXES)] if args.force else []):
+        write_results(args.out, res, args.files)
+        written = write_plots(plots, stem, res, packings[0])
     t = res["table"]
     print(f"{len(packings)} packing(s): r_min = {res['r_min']:.3f}  Q6 global = {t['Q6_global'].mean():.3f}  "
           f"Q6 local = {t['Q6_local'].mean():.3f}  G = {res['G'].G:.3g}  first peak g = {res['G'].g_max:.3g}  "

@@ -34,6 +34,10 @@ CXXFLAGS = ("-O2", "-fPIC", "-shared", "-std=c++17")
 _MONTHS = "Jan Feb Mar Apr May Jun Jul Aug Sep Oct Nov Dec".split()
 
 
+class PluginBuildError(RuntimeError):
+    """The plugin could not be built or loaded; the message names the cause and the remedy."""
+
+
 # cache location ----------------------------------------------------------------------------
 def cache_root() -> Path:
     """``$JAMFLOW_CACHE_DIR``, else ``$XDG_CACHE_HOME/jamflow``, else ``~/.cache/jamflow``."""
@@ -69,11 +73,17 @@ def library_path() -> Path:
 
 # compiler and headers -------------------------------------------------------------------------
 def find_compiler() -> list[str] | None:
-    """``$CXX`` (split like a shell word list) if it names an executable, else ``g++``/``c++``."""
+    """``$CXX`` (split like a shell word list), else ``g++``/``c++``; None if neither exists.
+    A ``$CXX`` that names no executable is an error (PluginBuildError), not a missing compiler."""
     cxx = os.environ.get("CXX", "").strip()
     if cxx:
         words = shlex.split(cxx)
-        return words if shutil.which(words[0]) else None
+        if shutil.which(words[0]):
+            return words
+        others = [found for found in map(shutil.which, ("g++", "c++")) if found]
+        hint = f"unset CXX to use {others[0]}" if others else "install one, e.g. `apt-get install g++`"
+        raise PluginBuildError(f"CXX={cxx} does not name an executable, so the jamflow LAMMPS plugin cannot be "
+                               f"built; {hint}, or set CXX to a C++ compiler")
     for name in ("g++", "c++"):
         found = shutil.which(name)
         if found:
@@ -146,8 +156,9 @@ def compile_plugin(compiler: list[str], target: Path, source: Path | None = None
         cmd = [*compiler, *flags, str(source), "-o", str(tmp)]
         done = subprocess.run(cmd, capture_output=True, text=True)
         if done.returncode != 0:
-            raise RuntimeError(f"compiling the jamflow LAMMPS plugin failed:\n  {shlex.join(cmd)}\n"
-                               f"{done.stderr.strip() or done.stdout.strip()}")
+            raise PluginBuildError(f"compiling the jamflow LAMMPS plugin failed:\n  {shlex.join(cmd)}\n"
+                                   f"{done.stderr.strip() or done.stdout.strip() or f'(exit status {done.returncode}, no output)'}\nFix the compiler or point CXX at "
+                                   "a working C++17 compiler (or unset CXX to use g++)")
     return target
 
 
@@ -156,7 +167,10 @@ def plugin_library() -> Path | None:
     when no C++ compiler is available."""
     target = library_path()
     if target.is_file():
-        return target
+        if _intact(target):
+            return target
+        warnings.warn(f"jamflow: the cached LAMMPS plugin {target} is damaged (not a complete shared library); "
+                      "rebuilding it", RuntimeWarning, stacklevel=2)
     compiler = find_compiler()
     if compiler is None:
         warnings.warn("jamflow: no C++ compiler found (looked for $CXX, g++, c++), so the jamflow "
@@ -164,7 +178,29 @@ def plugin_library() -> Path | None:
                       "which is exact but about 10x slower. Install one, e.g. `apt-get install g++`, "
                       "or set CXX.", RuntimeWarning, stacklevel=2)
         return None
-    return compile_plugin(compiler, target)
+    compile_plugin(compiler, target)
+    if not _intact(target):
+        raise PluginBuildError(f"the compiler wrote no complete shared library to {target}; delete "
+                               f"{target.parent} and check the compiler (CXX)")
+    return target
+
+
+def _intact(library: Path) -> bool:
+    """Is ``library`` a complete 64-bit ELF file? (Garbage, empty and truncated files are not:
+    the section header table, at the end of the file, must lie inside it.) LAMMPS itself only
+    warns on a ``plugin load`` of a damaged file and then rejects the pair style."""
+    try:
+        with open(library, "rb") as fh:
+            head = fh.read(64)
+        size = library.stat().st_size
+    except OSError:
+        return False
+    if len(head) < 64 or head[:4] != b"\x7fELF" or head[4] != 2:
+        return False
+    order = "little" if head[5] == 1 else "big"
+    table_end = int.from_bytes(head[0x28:0x30], order) + int.from_bytes(head[0x3A:0x3C], order) * int.from_bytes(
+        head[0x3C:0x3E], order)
+    return 0 < table_end <= size
 
 
 def load_plugin(lmp) -> bool:

@@ -1,7 +1,9 @@
 """All-pairs numpy reference: energy, forces, torques and the pressure tensor of every shape.
 
-Independent of the engines and of the cell search in ``jamflow.pairs``: it loops over every
-pair with the minimum image, so it serves as the second implementation in tests. It uses the
+Independent of the engines and, by default (``pairs="all"``), of the cell search in
+``jamflow.pairs``: it loops over every pair with the minimum image, so it serves as the second
+implementation in tests. ``pairs="near"`` takes the candidate pairs of the float64 cell search
+instead (the same formulas, for large packings: the packing checks use it). It uses the
 potential's own law (``jamflow.potentials``) and, for ellipsoids, the numpy contact distance
 and its gradient (``jamflow.shapes.contact_distance``).
 
@@ -23,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..packing import Packing
-from ..pairs import all_pairs, contact_distances, separations
+from ..pairs import all_pairs, candidate_pairs, contact_distances, separations, site_packing
 from ..walls import face_loads, gravity_terms, smooth_wall_terms
 
 
@@ -34,6 +36,7 @@ class ReferenceResult:
     pressure_tensor: np.ndarray  # (d, d), virial only (athermal)
     torques: np.ndarray | None = None  # (N,) in 2D, (N, 3) in 3D, world frame; None for spheres
     wall_forces: np.ndarray | None = None  # (d, 2, d): force of the particles on each face (walled axes)
+    contact_forces: np.ndarray | None = None  # |f| of every overlapping pair (of sites, for rigid bodies)
 
     @property
     def pressure(self) -> float:
@@ -60,8 +63,15 @@ def _reduced(pot, r, sigma):
     return np.where(inside, v, 0.0), np.where(inside, dv, 0.0)
 
 
-def _spheres(packing: Packing):
-    i, j = all_pairs(packing.n)
+def _pairs(packing: Packing, near: bool):
+    """Every pair i < j, or (near) the pairs the cell search finds within the largest contact distance."""
+    if not near:
+        return all_pairs(packing.n)
+    return candidate_pairs(packing, 2.0 * float(packing.shape.reach(packing.diameters).max()))
+
+
+def _spheres(packing: Packing, near: bool):
+    i, j = _pairs(packing, near)
     if packing.fixed is not None:  # fixed particles do not interact with each other
         i, j = i[~(packing.fixed[i] & packing.fixed[j])], j[~(packing.fixed[i] & packing.fixed[j])]
     dr = separations(packing, i, j)
@@ -72,10 +82,10 @@ def _spheres(packing: Packing):
     return i, j, dr, fpair, float(v.sum()), None
 
 
-def _ellipsoids(packing: Packing):
+def _ellipsoids(packing: Packing, near: bool):
     from ..shapes.contact_distance import contact_distance_gradient
 
-    i, j = all_pairs(packing.n)
+    i, j = _pairs(packing, near)
     dr = separations(packing, i, j)
     r = np.linalg.norm(dr, axis=1)
     r_hat = dr / r[:, None]
@@ -91,14 +101,14 @@ def _ellipsoids(packing: Packing):
     return i, j, dr, fpair, float(v.sum()), torques
 
 
-def _bodies(packing: Packing):
+def _bodies(packing: Packing, near: bool):
     shape, n, d = packing.shape, packing.n, packing.dim
     k = shape.n_sites
     world = shape.world_sites(packing.positions, packing.orientations, packing.diameters).reshape(-1, d)
     lever = world - np.repeat(packing.positions, k, axis=0)
     site_d = (packing.diameters[:, None] * shape.site_diameters[None, :]).ravel()
     body = np.repeat(np.arange(n), k)
-    s, t = all_pairs(n * k)
+    s, t = _pairs(site_packing(packing)[0], near) if near else all_pairs(n * k)
     s, t = s[body[s] != body[t]], t[body[s] != body[t]]
     dr = packing.box.minimum_image(world[s] - world[t])
     r = np.linalg.norm(dr, axis=1)
@@ -115,21 +125,27 @@ def _bodies(packing: Packing):
 _SHAPES = {"sphere": _spheres, "ellipsoid": _ellipsoids, "rigid": _bodies}
 
 
-def energy_forces_pressure(packing: Packing) -> ReferenceResult:
-    """Direct sum over all pairs (of sites, for rigid bodies); for N up to a few thousand."""
+def energy_forces_pressure(packing: Packing, pairs: str = "all") -> ReferenceResult:
+    """Direct sum over all pairs (of sites, for rigid bodies; ``pairs="all"``, for N up to a few
+    thousand) or over the pairs of the cell search (``pairs="near"``)."""
+    if pairs not in ("all", "near"):
+        raise ValueError(f"pairs must be 'all' or 'near', got {pairs!r}")
     bounded = bool(packing.box.walls) or packing.gravity > 0 or packing.fixed is not None
     if bounded and packing.shape.kind != "sphere":
         raise ValueError(f"walls, gravity and fixed particles are written for disks and spheres, not "
                          f"{packing.shape.name(packing.dim)} particles")
-    i, j, dr, fpair, energy, torques = _SHAPES[packing.shape.kind](packing)
+    i, j, dr, fpair, energy, torques = _SHAPES[packing.shape.kind](packing, pairs == "near")
     forces = np.zeros((packing.n, packing.dim))
     np.add.at(forces, i, fpair)
     np.add.at(forces, j, -fpair)
     virial = np.einsum("pa,pb->ab", dr, fpair)
+    magnitudes = np.linalg.norm(fpair, axis=1)
+    magnitudes = magnitudes[magnitudes > 0]
     if not bounded:
-        return ReferenceResult(energy, forces, virial / packing.box.volume, torques)
+        return ReferenceResult(energy, forces, virial / packing.box.volume, torques, contact_forces=magnitudes)
     e_wall, f_wall, w_wall, smooth = smooth_wall_terms(packing)
     e_grav, f_grav = gravity_terms(packing)
     loads = face_loads(packing, smooth, forces)
     forces = (forces + f_wall + f_grav) * packing.mobile[:, None]
-    return ReferenceResult(energy + e_wall + e_grav, forces, (virial + w_wall) / packing.box.volume, torques, loads)
+    return ReferenceResult(energy + e_wall + e_grav, forces, (virial + w_wall) / packing.box.volume, torques, loads,
+                           magnitudes)

@@ -13,6 +13,7 @@ bisection runs unchanged; under gravity ``jam`` settles the packing instead
 from __future__ import annotations
 
 import math
+import os
 import time
 import warnings
 from dataclasses import asdict, dataclass, field, replace
@@ -20,13 +21,14 @@ from dataclasses import asdict, dataclass, field, replace
 import numpy as np
 
 from ..box import AXES
+from ..checks import resolution
 from ..engine.base import check_engine, open_engine
 from ..minimize import MinimizerSettings, MinimizeResult
 from ..pairs import overlapping_pairs, overlapping_sites
 from ..packing import DENSEST_PHI, Packing, random_packing
-from ..potentials import Potential, Spring, parse_potential
+from ..potentials import POTENTIALS, Potential, Spring, parse_potential
 from ..shapes.shape import parse_shape
-from ..sizes import parse_sizes
+from ..sizes import SizeSpec, parse_sizes
 from ..walls import parse_walls, wall_loads, with_walls
 
 DEFAULT_PHI0 = {2: 0.80, 3: 0.55}
@@ -174,17 +176,26 @@ def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | 
     ``walls``: walled axes (``"y"``, ``"x,y"``, ...; ``jamflow.walls``) of ``wall_type``
     smooth or rough. ``gravity`` g > 0 settles the packing on the floor instead of
     compressing it (``jamflow.protocols.gravity``; needs walls on the last axis).
+    A start of a potential that diverges at contact (repulsive LJ) with deep overlaps (the
+    random one always) is first relaxed with the linear spring (``remove_overlaps``).
     ``observers`` are callables ``f(step: dict)`` called after every minimisation
     (progress bars, writers). ``engine``: "auto" (the compiled engine wherever it runs the
     scene, else LAMMPS), "lammps" or "numba" (``jamflow.engine.base``).
     """
-    settings = settings or PROTOCOLS[DEFAULT_PROTOCOL]()
+    if settings is None:
+        settings = PROTOCOLS[DEFAULT_PROTOCOL]()
+    if not isinstance(settings, CompressionSettings):
+        raise TypeError(f"settings must be a CompressionSettings, e.g. fast_protocol() or seed_protocol() from "
+                        f"jamflow.protocols.compression, got {settings!r}")
     check_engine(engine)
-    if start is None:
+    random_start = start is None
+    if random_start:
         start = initial_packing(n, dim, sizes, potential, seed, settings.start_phi(dim, gravity), shape, walls,
                                 wall_type, gravity)
-        if start.potential.soft_start:
-            start = remove_overlaps(start, settings.minimizer, engine)
+    elif not isinstance(start, Packing):
+        raise TypeError(f"start must be a Packing (or None for a random start), got {type(start).__name__}")
+    if start.potential.soft_start and (random_start or _deepest_overlap(start) < RLJ_MIN_START_RATIO):
+        start = remove_overlaps(start, settings.minimizer, engine)
     if start.gravity > 0:
         from .gravity import settle
 
@@ -193,29 +204,55 @@ def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | 
 
 
 
+BYTES_PER_PARTICLE = 4096  # peak memory of a jam run: measured 1.1-2.2 kB per particle at N = 131072 (docs/hardening.md)
+MAX_SEED = 2**63 - 1  # seeds are stored as int64 in the packing file
+
+
 def initial_packing(n, dim, sizes, potential, seed, phi0, shape="disk", walls=None, wall_type="smooth",
                     gravity=0.0) -> Packing:
     """Validated random start (seed step 1), with walls and gravity if given; errors before any
     engine work."""
-
-    if not isinstance(n, (int, np.integer)) or n < 2:
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
         raise ValueError(f"n must be an integer >= 2, got {n!r}")
-    if dim not in (2, 3):
-        raise ValueError(f"dim must be 2 or 3, got {dim!r}")
+    if isinstance(dim, bool) or not isinstance(dim, (int, np.integer)) or dim not in (2, 3):
+        raise ValueError(f"dim must be the integer 2 or 3, got {dim!r}")
     if not 0.0 < phi0 < DENSEST_PHI[dim]:
         raise ValueError(f"phi0 = {phi0} must lie in (0, {DENSEST_PHI[dim]:.4f}), below the densest "
                          f"packing of equal {'disks' if dim == 2 else 'spheres'}")
-    if not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
-    pot = parse_potential(potential) if isinstance(potential, str) else potential
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed <= MAX_SEED:
+        raise ValueError(f"seed must be an integer in [0, 2^63 - 1], got {seed!r}")
+    _check_memory(int(n))
+    pot = _potential(potential)
     size_spec = parse_sizes(sizes) if isinstance(sizes, str) else sizes
-    particle = parse_shape(shape, dim)
-    axes = parse_walls(walls, dim)
+    if not isinstance(size_spec, SizeSpec):
+        raise TypeError(f"sizes must be a spec string such as 'bi:1.4:0.5' or a SizeSpec, got {sizes!r}")
+    particle = parse_shape(shape, int(dim))
+    axes = parse_walls(walls, int(dim))
     try:
-        start = random_packing(int(n), dim, size_spec, phi0, int(seed), pot, particle)
+        start = random_packing(int(n), int(dim), size_spec, phi0, int(seed), pot, particle)
     except ValueError as err:
         raise ValueError(f"{err} (n = {n} is too small for these sizes)") from None
     return replace(with_walls(start, axes, wall_type), gravity=gravity)
+
+
+def _potential(potential) -> Potential:
+    if isinstance(potential, str):
+        return parse_potential(potential)
+    if not isinstance(potential, tuple(POTENTIALS.values())):
+        raise TypeError(f"potential must be a spec string (spring | hertz | spring:ALPHA | rlj) or a Spring or "
+                        f"RepulsiveLJ, got {potential!r}")
+    return potential
+
+
+def _check_memory(n: int) -> None:
+    """Refuse an N whose run cannot fit in this machine's memory, before allocating anything."""
+    try:
+        total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError, AttributeError):
+        return  # unknown on this platform
+    if n * BYTES_PER_PARTICLE > total:
+        raise ValueError(f"n = {n} needs about {n * BYTES_PER_PARTICLE / 1e9:.3g} GB of memory ({BYTES_PER_PARTICLE // 1024} kB "
+                         f"per particle), more than this machine's {total / 1e9:.3g} GB; use n <= {total // BYTES_PER_PARTICLE}")
 
 
 def remove_overlaps(packing: Packing, minimizer: MinimizerSettings, engine: str = "auto") -> Packing:
@@ -238,6 +275,7 @@ def compress(packing: Packing, settings: CompressionSettings, *, observers=(), e
     from ..engine.lammps_lib import lammps_version
 
     _check_start(packing)
+    check_resolution(packing, settings)
     if packing.gravity > 0:
         raise ValueError("a packing under gravity is settled, not compressed: use jam(..., gravity=g) or "
                          "jamflow.protocols.gravity.settle")
@@ -287,11 +325,37 @@ def _check_start(packing: Packing) -> None:
     """Refuse a repulsive-LJ start with deep overlaps before any work (seed step 1)."""
     if not packing.potential.soft_start:
         return
-    r, sigma = (overlapping_sites(packing) if packing.shape.kind == "rigid" else overlapping_pairs(packing))[-2:]
-    if len(r) and (r / sigma).min() < RLJ_MIN_START_RATIO:
-        raise ValueError(f"repulsive LJ from a start with overlap r/sigma = {(r / sigma).min():.3f} < "
+    deepest = _deepest_overlap(packing)
+    if deepest < RLJ_MIN_START_RATIO:
+        raise ValueError(f"repulsive LJ from a start with overlap r/sigma = {deepest:.3f} < "
                          f"{RLJ_MIN_START_RATIO}: forces diverge and LAMMPS loses atoms. Relax the start "
-                         "first (jamflow.protocols.compression.remove_overlaps) or let jam() make the start")
+                         "first (jamflow.protocols.compression.remove_overlaps), or pass it to jam(), which does")
+
+
+def _deepest_overlap(packing: Packing) -> float:
+    """Smallest r/sigma over overlapping pairs (of sites, for rigid bodies); 1.0 without overlaps."""
+    r, sigma = (overlapping_sites(packing) if packing.shape.kind == "rigid" else overlapping_pairs(packing))[-2:]
+    return float((r / sigma).min()) if len(r) else 1.0
+
+
+SPRING_ALPHA_RANGE = (2.0, 3.0)  # FIRE reaches force balance here; outside it did not (docs/hardening.md)
+
+
+def check_resolution(packing: Packing, settings: CompressionSettings) -> None:
+    """Refuse, before any work, what cannot end in a checked packing: a V_tol that float64
+    positions or the force tolerance cannot resolve at this N, box and potential
+    (``jamflow.checks.resolution``), or a spring exponent outside ``SPRING_ALPHA_RANGE``."""
+    pot = packing.potential
+    low, high = SPRING_ALPHA_RANGE
+    if pot.name == "spring" and not low <= pot.alpha <= high:
+        raise ValueError(f"spring exponent alpha = {pot.alpha:g}: jamflow's minimisers do not reach force balance "
+                         f"for alpha outside [{low:g}, {high:g}] (measured for alpha = 1.5, 4, 6, 8, 10: net forces "
+                         "3-66% of the contact forces, docs/hardening.md); use spring, hertz or spring:ALPHA "
+                         f"with {low:g} <= ALPHA <= {high:g}")
+    ftol = settings.minimizer.resolved_force_tol(packing.box, pot.contact_stiffness)
+    problem = resolution(packing, settings.v_tol, ftol).problem()
+    if problem:
+        raise ValueError(f"{problem} (N = {packing.n}, potential {pot.spec}, box side {packing.box.lengths.max():.3g})")
 
 
 class PhiStepper:
@@ -369,8 +433,15 @@ class PhiStepper:
         return phi - self.dphi
 
     def _check(self, phi, target):
-        if not 0.0 < target < 1.0:
-            raise JammingFailed(f"packing fraction left (0, 1) (next phi = {target}); start from a lower phi0")
+        if target >= 1.0:
+            raise JammingFailed(f"the compression reached phi = {phi:.4f} without any minimisation ending above "
+                                f"V_tol = {self.s.v_tol:g}: the minimiser's stops cannot see jamming with this "
+                                "potential and tolerances; use a larger vtol, a smaller force tolerance, or the "
+                                "seed protocol")
+        if target <= 0.0:
+            raise JammingFailed(f"the decompression reached phi = {phi:.4f} without any minimisation ending below "
+                                f"2 V_tol = {2 * self.s.v_tol:g}: the minimiser never removes the overlaps; use a "
+                                "smaller force tolerance or another minimizer")
         if abs(target - phi) < 4 * np.finfo(float).eps * phi:
             raise JammingFailed(
                 f"the increment {abs(target - phi):.3g} reached float64 resolution at phi = {phi:.15f} without V "

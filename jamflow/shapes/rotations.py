@@ -43,6 +43,39 @@ def directors(orientations: np.ndarray, dim: int) -> np.ndarray:
     return rotation_matrices(orientations, dim)[:, :, 0]
 
 
+def rotation_change(phi: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """exp(phi x) v - v for world rotation vectors phi ((N,) angles about z in 2D, (N, 3) in 3D)
+    and vectors v (N, d), by Rodrigues' formula with 1 - cos = 2 sin^2(phi/2): accurate relative
+    to the change itself for small phi (no cancellation against v)."""
+    v = np.asarray(v, float)
+    if v.shape[1] == 2:
+        angle = np.asarray(phi, float)
+        perp = np.column_stack([-v[:, 1], v[:, 0]])
+        return (-2.0 * np.sin(0.5 * angle) ** 2)[:, None] * v + np.sin(angle)[:, None] * perp
+    phi = np.asarray(phi, float)
+    angle = np.linalg.norm(phi, axis=1)
+    safe = np.where(angle > 0, angle, 1.0)
+    axis = phi / safe[:, None]
+    kv = np.cross(axis, v)
+    return np.sin(angle)[:, None] * kv + (2.0 * np.sin(0.5 * angle) ** 2)[:, None] * np.cross(axis, kv)
+
+
+def turned(orientations: np.ndarray, phi: np.ndarray, dim: int) -> np.ndarray:
+    """Orientations after turning each particle by the world rotation vector phi about its
+    centre: 2D theta + phi; 3D q' = exp(phi / 2) q (quaternion product), renormalised."""
+    if dim == 2:
+        return np.asarray(orientations, float) + np.asarray(phi, float)
+    q, phi = np.asarray(orientations, float), np.asarray(phi, float)
+    angle = np.linalg.norm(phi, axis=1)
+    half = np.where(angle > 0, np.sin(0.5 * angle) / np.where(angle > 0, angle, 1.0), 0.5)
+    bw, bv = np.cos(0.5 * angle), half[:, None] * phi
+    qw, qv = q[:, 0], q[:, 1:]
+    w = bw * qw - np.einsum("nk,nk->n", bv, qv)
+    v = bw[:, None] * qv + qw[:, None] * bv + np.cross(bv, qv)
+    out = np.column_stack([w, v])
+    return out / np.linalg.norm(out, axis=1, keepdims=True)
+
+
 def random_orientations(n: int, dim: int, rng: np.random.Generator) -> np.ndarray:
     """Uniformly random orientations: angles on [0, 2 pi) in 2D (directors uniform on the circle);
     Haar-uniform quaternions in 3D (directors uniform on the sphere; Shoemake's method)."""

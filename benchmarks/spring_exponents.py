@@ -1,0 +1,58 @@
+"""Which spring exponents alpha end in a checked packing (jamflow.checks): jam N = 32 bidisperse
+disks (seed 0) with spring:ALPHA at the smallest V_tol that jamflow.checks.resolution accepts
+(x 1.5, at least 1e-16) and check the packing. Basis of compression.SPRING_ALPHA_RANGE.
+
+    python benchmarks/spring_exponents.py fast 1.5 2 2.5 3 4 6 8    (rows to docs/spring-exponents.csv)
+    python benchmarks/spring_exponents.py seed 10                   (about 20 minutes)
+
+The refusal in compress() is switched off here, since this measures what it refuses.
+"""
+
+from __future__ import annotations
+
+import csv
+import sys
+from pathlib import Path
+
+import jamflow.protocols.compression as compression
+from jamflow.checks import check_packing, resolution
+from jamflow.minimize import MinimizerSettings
+from vtol_resolution import jam_quietly
+
+CSV = Path(__file__).resolve().parents[1] / "docs" / "spring-exponents.csv"
+COLUMNS = ["alpha", "protocol", "vtol", "status", "phi_j", "final_reason", "force_balance", "excess_contacts",
+           "minimizations", "iterations", "passed"]
+
+
+def one(alpha: float, protocol: str) -> dict:
+    make = compression.PROTOCOLS[protocol]
+    start = compression.initial_packing(32, 2, "bi:1.4:0.5", f"spring:{alpha}", 0, make().start_phi(2))
+    ftol = make().minimizer.resolved_force_tol(start.box, start.potential.contact_stiffness)
+    vtol = max(resolution(start, 1e-16, ftol).smallest_v_tol, 1e-16) * 1.5
+    settings = make(v_tol=vtol, minimizer=MinimizerSettings(v_min=vtol))
+    row = dict(alpha=alpha, protocol=protocol, vtol=f"{vtol:.2g}")
+    r, failure = jam_quietly(start, settings)
+    if failure:
+        return {**row, "status": f"JammingFailed: {failure[:80]}"}
+    c = check_packing(r.packing, r.energy_per_particle, None, vtol, ftol)
+    return {**row, "status": "jammed", "phi_j": f"{r.phi_j:.10f}", "final_reason": r.history["reason"][-1].decode(),
+            "force_balance": f"{c.force_ratio:.2g}", "excess_contacts": c.excess_contacts,
+            "minimizations": r.minimizations, "iterations": r.iterations, "passed": c.passed}
+
+
+def main(protocol: str, alphas: list[float]) -> None:
+    compression.check_resolution = lambda packing, settings: None  # measure what the check would refuse
+    new = not CSV.exists()
+    with open(CSV, "a", newline="") as fh:
+        out = csv.DictWriter(fh, COLUMNS)
+        if new:
+            out.writeheader()
+        for alpha in alphas:
+            row = one(alpha, protocol)
+            out.writerow(row)
+            fh.flush()
+            print(row, file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1], [float(a) for a in sys.argv[2:]])

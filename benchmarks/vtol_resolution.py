@@ -1,0 +1,72 @@
+"""Where V_tol stops being resolvable in float64: jam with ever smaller V_tol and check each
+packing (window, force balance, contact count; jamflow.checks) against the two ratios that
+jamflow.checks.resolution predicts before any work (typical window overlap / position
+round-off, window contact force / force tolerance).
+
+    python benchmarks/vtol_resolution.py            (writes docs/vtol-resolution.csv)
+
+The refusal in compress() is switched off here, since this measures what it refuses.
+Load-independent: iteration counts and pass/fail only, no timings.
+"""
+
+from __future__ import annotations
+
+import csv
+import sys
+import warnings
+from pathlib import Path
+
+import jamflow.protocols.compression as compression
+from jamflow.checks import check_packing, resolution
+from jamflow.minimize import MinimizerSettings
+
+CSV = Path(__file__).resolve().parents[1] / "docs" / "vtol-resolution.csv"
+COLUMNS = ["n", "potential", "seed", "vtol", "overlap_ratio", "force_ratio", "refused", "status", "passed",
+           "force_balance", "max_force", "excess_contacts", "n_floaters", "v", "minimizations", "iterations"]
+CASES = [(n, pot) for n in (64, 256) for pot in ("spring", "hertz")]
+VTOLS = [10.0**-k for k in range(16, 28, 2)]  # from 1e-26 on no packing passes (every particle a floater)
+SEEDS = range(4)
+
+
+def one(n, potential, seed, vtol) -> dict:
+    settings = compression.fast_protocol(v_tol=vtol, minimizer=MinimizerSettings(v_min=vtol))
+    start = compression.initial_packing(n, 2, "bi:1.4:0.5", potential, seed, settings.start_phi(2))
+    res = resolution(start, vtol, settings.minimizer.resolved_force_tol(start.box, start.potential.contact_stiffness))
+    row = dict(n=n, potential=potential, seed=seed, vtol=f"{vtol:g}", overlap_ratio=f"{res.overlap_ratio:.3g}",
+               force_ratio=f"{res.force_ratio:.3g}", refused=res.problem() is not None)
+    r, failure = jam_quietly(start, settings)
+    if failure:
+        return {**row, "status": f"JammingFailed: {failure[:60]}"}
+    c = check_packing(r.packing, v_tol=vtol)
+    return {**row, "status": "jammed", "passed": c.passed, "force_balance": f"{c.force_ratio:.2g}",
+            "max_force": f"{c.max_force:.2g}",
+            "excess_contacts": c.excess_contacts, "n_floaters": c.n_floaters, "v": f"{c.energy_per_particle:.3g}",
+            "minimizations": r.minimizations, "iterations": r.iterations}
+
+
+def jam_quietly(start, settings):
+    """(result, None) from compression.jam with warnings silenced, or (None, the JammingFailed message)."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return compression.jam(start=start, settings=settings), None
+    except compression.JammingFailed as err:
+        return None, str(err)
+
+
+def main() -> None:
+    compression.check_resolution = lambda packing, settings: None  # measure what the check would refuse (column refused)
+    with open(CSV, "w", newline="") as fh:
+        out = csv.DictWriter(fh, COLUMNS)
+        out.writeheader()
+        for n, pot in CASES:
+            for vtol in VTOLS:
+                for seed in SEEDS:
+                    row = one(n, pot, seed, vtol)
+                    out.writerow(row)
+                    fh.flush()
+                    print(row, file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()

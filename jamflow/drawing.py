@@ -1,0 +1,158 @@
+"""A packing as a picture (matplotlib Agg, PNG written atomically).
+
+Particles are drawn to scale in the periodic (possibly tilted) cell, with their periodic
+images clipped to the cell; contacts (overlapping pairs) as lines between centres whose
+width is proportional to the contact force |dV/dr|; floaters (``jamflow.analysis.contacts``)
+hatched grey; the others coloured by contact number z or by local bond order |Q6|
+(``jamflow.analysis.order``). Spheres are drawn as a *slice*: the cross-sections of the
+spheres cut by the plane at fractional height ``slice_at`` of the cell, with the contacts
+between cut spheres projected onto it.
+
+A new particle shape adds one function to ``DRAWERS`` that returns a matplotlib collection
+of the particles' outlines to scale (see ``_disks``).
+"""
+
+from __future__ import annotations
+
+from itertools import product
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.collections import EllipseCollection, LineCollection
+from matplotlib.colors import BoundaryNorm, Normalize
+from matplotlib.figure import Figure
+from matplotlib.patches import Polygon
+
+from .analysis.contacts import Contacts
+from .io import atomic_path
+from .packing import Packing
+from .pairs import overlapping_pairs
+
+COLOR_BY = ("z", "q6")
+MAX_LINE_WIDTH = 3.0  # points, for the largest contact force
+
+
+def _disks(centres, diameters, ax, **style):
+    """Disks (and sphere cross-sections) of the given diameters, in data units."""
+    return EllipseCollection(diameters, diameters, np.zeros(len(diameters)), units="xy", offsets=centres,
+                             offset_transform=ax.transData, **style)
+
+
+DRAWERS = {"sphere": _disks}  # shape kind (Packing.shape.kind) -> function(centres, sizes, ax, **style)
+
+
+def draw_packing(packing: Packing, path, *, color_by: str = "z", slice_at: float = 0.5, q6_r_min: float | None = None,
+                 title: str = "") -> Path:
+    """Write the picture of ``packing`` to the PNG ``path`` (see module docstring).
+
+    ``q6_r_min``: neighbour cutoff of the local Q6 in <sigma^2>^(1/2) (default: the first
+    minimum of g(r)); ``slice_at`` in [0, 1): the slice height of a 3D packing."""
+    if color_by not in COLOR_BY:
+        raise ValueError(f"color_by must be one of {', '.join(COLOR_BY)}, got {color_by!r}")
+    if not 0.0 <= slice_at < 1.0:
+        raise ValueError(f"slice_at must lie in [0, 1) (a fraction of the cell height), got {slice_at}")
+    view = _View(packing, slice_at)
+    contacts = Contacts().compute(packing)
+    values, label, norm = _colours(packing, contacts, color_by, q6_r_min)
+    fig = Figure(figsize=(7.2, 6.4), layout="constrained")
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    cell = Polygon(view.corners, closed=True, fill=False, lw=0.8, color="k")
+    ax.add_patch(cell)
+    kind = packing.shape.kind
+    if kind not in DRAWERS:
+        raise ValueError(f"jamflow draw cannot draw {kind} particles yet; it draws {', '.join(DRAWERS)}")
+    drawer = DRAWERS[kind]
+    kept, floaters = ~contacts.floater[view.index], contacts.floater[view.index]
+    centres, sizes, owner = view.images()
+    body = drawer(centres[kept[owner]], sizes[kept[owner]], ax, array=values[view.index][owner][kept[owner]],
+                  cmap="viridis", norm=norm, edgecolors="k", linewidths=0.3)
+    ghost = drawer(centres[floaters[owner]], sizes[floaters[owner]], ax, facecolors="0.85", edgecolors="0.4",
+                   linewidths=0.3, hatch="////")
+    lines, widths, fmax = view.contact_lines()
+    segments = LineCollection(lines, linewidths=widths, colors="crimson", capstyle="round")
+    for artist in (body, ghost, segments):
+        ax.add_collection(artist)
+        artist.set_clip_path(cell)
+    bar = fig.colorbar(body, ax=ax, label=label, shrink=0.8)
+    if isinstance(norm, BoundaryNorm):
+        bar.set_ticks(np.arange(norm.boundaries[0] + 0.5, norm.boundaries[-1]))
+    lo, hi = view.corners.min(0), view.corners.max(0)
+    ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), aspect="equal", xlabel="x (small diameters)",
+           ylabel="y (small diameters)")
+    ax.set_title(title or _caption(packing, contacts, fmax, view), fontsize=8)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=130)
+    return Path(path)
+
+
+def _caption(packing, contacts, fmax, view) -> str:
+    where = "" if packing.dim == 2 else f"3D slice at z = {view.slice_at:.2f} L_z (cross-sections), "
+    return (f"{where}N = {packing.n}, phi = {packing.phi:.6f}, {packing.potential.spec}\n"
+            f"N_c = {contacts.n_contacts} (isostatic {contacts.isostatic_count}), {contacts.n_floaters} floaters "
+            f"(hatched); line width ~ contact force (widest {fmax:.2e})")
+
+
+def _colours(packing, contacts, color_by, q6_r_min):
+    """Per-particle colour values, colour-bar label and norm."""
+    if color_by == "z":  # non-floaters have z >= d + 1
+        low, top = packing.dim + 1, max(int(contacts.z.max()), 2 * packing.dim + 2)
+        return contacts.z.astype(float), "contact number z", BoundaryNorm(np.arange(low - 0.5, top + 1.0), 256)
+    from .analysis.order import BondOrder
+
+    mags = BondOrder(r_min=q6_r_min).compute(packing).magnitudes
+    name = "|psi_6|" if packing.dim == 2 else "q_6"
+    return np.nan_to_num(mags), f"local bond order {name}", Normalize(0.0, 1.0)
+
+
+class _View:
+    """The 2D picture of a packing: the cell (or the slice through it), particle sizes in
+    it, and which particles appear (all in 2D, the cut ones in 3D)."""
+
+    def __init__(self, packing: Packing, slice_at: float):
+        self.packing, self.slice_at = packing, slice_at
+        h = packing.box.h
+        pos = packing.box.wrap(packing.positions)
+        if packing.dim == 2:
+            self.index, self.sizes, xy = np.arange(packing.n), packing.diameters, pos
+        else:
+            dz = (pos[:, 2] - slice_at * h[2, 2] + 0.5 * h[2, 2]) % h[2, 2] - 0.5 * h[2, 2]
+            radius = 0.5 * packing.diameters
+            self.index = np.flatnonzero(np.abs(dz) < radius)
+            self.sizes = 2.0 * np.sqrt(radius[self.index] ** 2 - dz[self.index] ** 2)
+            xy = pos[:, :2] - h[:2, 2] * (pos[:, 2:3] / h[2, 2])  # move along the third cell vector into the plane
+        self.h2 = h[:2, :2]
+        frac = np.linalg.solve(self.h2, xy.T).T % 1.0
+        self.xy = frac @ self.h2.T  # every particle wrapped into the 2D cell
+        self.corners = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float) @ self.h2.T
+
+    def images(self):
+        """Centres, sizes and owners (index into ``self.index``) of every periodic image
+        that reaches into the cell."""
+        xy, sizes = self.xy[self.index], self.sizes
+        reach = sizes.max(initial=0.0) / np.min(np.abs(np.diag(self.h2)))
+        centres, owners = [], []
+        for shift in product((-1, 0, 1), repeat=2):
+            moved = xy + np.array(shift, float) @ self.h2.T
+            frac = np.linalg.solve(self.h2, moved.T).T
+            near = np.all((frac > -reach) & (frac < 1 + reach), axis=1)
+            centres.append(moved[near])
+            owners.append(np.flatnonzero(near))
+        owner = np.concatenate(owners)
+        return np.concatenate(centres), sizes[owner], owner
+
+    def contact_lines(self):
+        """Segments (both periodic ends), line widths and the largest force drawn."""
+        i, j, dr, r, sigma = overlapping_pairs(self.packing)
+        if self.packing.dim == 3:
+            cut = np.zeros(self.packing.n, bool)
+            cut[self.index] = True
+            keep = cut[i] & cut[j]
+            i, j, dr, r, sigma = i[keep], j[keep], dr[keep], r[keep], sigma[keep]
+        force = np.abs(self.packing.potential.dv_dr(r, sigma))
+        fmax = float(force.max()) if len(force) else 0.0
+        widths = MAX_LINE_WIDTH * force / fmax if fmax > 0 else np.zeros(0)
+        start_i, start_j, step = self.xy[i], self.xy[j], dr[:, :2]
+        lines = np.concatenate([np.stack([start_i, start_i - step], 1), np.stack([start_j, start_j + step], 1)])
+        return lines, np.concatenate([widths, widths]), fmax

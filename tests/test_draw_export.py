@@ -1,0 +1,89 @@
+"""jamflow draw (pictures) and jamflow export (LAMMPS dump, extended XYZ for OVITO)."""
+
+import numpy as np
+import pytest
+
+from jamflow.analysis.readers import packings_from_lammps
+from jamflow.cli import main
+from jamflow.drawing import MAX_LINE_WIDTH, _View, draw_packing
+from jamflow.export import export_packing
+from jamflow.io import save_packing
+from jamflow.pairs import overlapping_pairs
+from jamflow.protocols.compression import jam
+
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.fixture(scope="module")
+def disks():
+    return jam(n=32, dim=2, seed=3).packing
+
+
+@pytest.fixture(scope="module")
+def spheres():
+    return jam(n=32, dim=3, sizes="mono", seed=1).packing
+
+
+def test_draw_command_writes_a_png(disks, tmp_path, capsys):
+    src = save_packing(tmp_path / "p.h5", disks)
+    assert main(["draw", str(src)]) == 0
+    assert (tmp_path / "p.png").read_bytes()[:8] == PNG
+    assert main(["draw", str(src), "-o", str(tmp_path / "q6.png"), "--color-by", "q6", "--q6-r-min", "1.35"]) == 0
+    assert (tmp_path / "q6.png").read_bytes()[:8] == PNG
+
+
+def test_contact_lines_are_proportional_to_force(disks):
+    lines, widths, fmax = _View(disks, 0.5).contact_lines()
+    i, j, dr, r, sigma = overlapping_pairs(disks)
+    force = np.abs(disks.potential.dv_dr(r, sigma))
+    assert len(lines) == 2 * len(i)  # both periodic ends of every contact
+    assert np.allclose(widths, MAX_LINE_WIDTH * np.tile(force, 2) / force.max(), rtol=1e-12)
+    assert fmax == force.max()
+    assert np.allclose(np.linalg.norm(lines[:, 1] - lines[:, 0], axis=1), np.tile(r, 2))  # centre to centre
+
+
+def test_sphere_slice_cuts_the_right_spheres(spheres, tmp_path):
+    view = _View(spheres, 0.3)
+    lz = spheres.box.h[2, 2]
+    z = spheres.box.wrap(spheres.positions)[:, 2]
+    dz = np.minimum(np.abs(z - 0.3 * lz), lz - np.abs(z - 0.3 * lz))
+    cut = np.flatnonzero(dz < 0.5 * spheres.diameters)
+    assert np.array_equal(view.index, cut)
+    assert np.allclose(view.sizes, 2 * np.sqrt(0.25 * spheres.diameters[cut] ** 2 - dz[cut] ** 2))
+    assert draw_packing(spheres, tmp_path / "s.png", slice_at=0.3).read_bytes()[:8] == PNG
+
+
+def test_draw_refuses_bad_options(disks, tmp_path):
+    with pytest.raises(ValueError, match="slice_at"):
+        draw_packing(disks, tmp_path / "x.png", slice_at=1.0)
+    with pytest.raises(ValueError, match="color_by"):
+        draw_packing(disks, tmp_path / "x.png", color_by="size")
+
+
+@pytest.mark.parametrize("which", ["disks", "spheres"])
+def test_lammps_dump_reads_back_through_mdanalysis(which, disks, spheres, tmp_path):
+    """Second reader: MDAnalysis (float32 coordinates) gets positions, radii and the box back."""
+    p = {"disks": disks, "spheres": spheres}[which]
+    path = export_packing(p, tmp_path / "p.dump", "lammps-dump")
+    (back,) = packings_from_lammps(path, dim=p.dim)
+    assert np.allclose(back.diameters, p.diameters, rtol=1e-6)
+    assert np.allclose(back.box.h, p.box.h, rtol=1e-6)
+    assert np.allclose(back.positions, p.box.wrap(p.positions), atol=1e-5)
+
+
+def test_extended_xyz_columns_and_lattice(disks, tmp_path):
+    lines = export_packing(disks, tmp_path / "p.xyz", "xyz").read_text().splitlines()
+    assert int(lines[0]) == disks.n and len(lines) == disks.n + 2
+    lattice = [float(v) for v in lines[1].split('Lattice="')[1].split('"')[0].split()]
+    assert np.array_equal(np.reshape(lattice, (3, 3))[:2, :2], disks.box.h.T) and 'pbc="T T F"' in lines[1]
+    assert "Properties=species:S:1:pos:R:3:radius:R:1" in lines[1]
+    rows = np.array([[float(v) for v in line.split()[1:]] for line in lines[2:]])
+    assert np.array_equal(rows[:, :2], disks.box.wrap(disks.positions)) and np.all(rows[:, 2] == 0)
+    assert np.array_equal(rows[:, 3], disks.diameters / 2)
+
+
+def test_export_command(disks, tmp_path, capsys):
+    src = save_packing(tmp_path / "p.h5", disks)
+    assert main(["export", str(src), "--format", "xyz"]) == 0 and (tmp_path / "p.xyz").is_file()
+    assert main(["export", str(src), "--format", "lammps-dump", "-o", str(tmp_path / "x.dump")]) == 0
+    assert (tmp_path / "x.dump").read_text().startswith("ITEM: TIMESTEP")

@@ -1,0 +1,314 @@
+"""Issue 18: the cases a new or careless user hit (docs/hardening.md has the catalogue).
+Each test names what happened before the fix. Rule: a user error is one line, exit 2, no
+traceback, before any work; a failure during work has its own exit code and a remedy;
+nothing on disk is damaged and no temporary file outlives the process."""
+
+import os
+import signal
+import stat
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+import jamflow
+from jamflow.cli import EXIT_JAMMING, EXIT_LAMMPS, EXIT_PLUGIN, EXIT_TERMINATED, main
+from jamflow.io import load_packing, read_attrs, read_checks, read_history, save_packing
+
+JAMFLOW = [sys.executable, "-m", "jamflow.cli"]
+
+
+def no_traceback(err: str) -> bool:
+    return "Traceback" not in err and len(err.strip().splitlines()) >= 1
+
+
+@pytest.fixture(scope="module")
+def packing_file(tmp_path_factory):
+    out = tmp_path_factory.mktemp("packing") / "p.h5"
+    assert main(["jam", "--n", "32", "--seed", "3", "--out", str(out), "--quiet"]) == 0
+    return out
+
+
+def run_jam(tmp_path, capsys, *args):
+    code = main(["jam", "--quiet", *args])
+    return code, capsys.readouterr().err
+
+
+# --- jam: what is refused before work -------------------------------------------------------
+@pytest.mark.parametrize("args,message", [
+    (["--vtol", "1e-30"], "vtol 1e-30 is not resolvable.*use vtol"),  # was: exit 0, a packing that is not jammed
+    (["--potential", "spring:10"], "alpha = 10.*2 <= ALPHA <= 3"),  # was: traceback, "start from a lower phi0"
+    (["--ftol", "1"], "force tolerance 1.0e\\+00.*--ftol\\) <="),  # was: traceback, "start from a lower phi0"
+    (["--seed", "99999999999999999999999"], "seed must be an integer in \\[0, 2\\^63 - 1\\]"),  # was: result lost at save
+    (["--n", "1000000000"], "needs about .* GB of memory"),  # was: grew to 24 GB, killed by the kernel
+    (["--potential", "spring:1.5"], "alpha = 1.5"),  # was: exit 0, net forces 0.4 of the contact forces
+    (["--potential", "spring:4"], "alpha = 4"),  # was: exit 0, net forces 7% of the contact forces
+])
+def test_jam_refuses_before_work(tmp_path, capsys, monkeypatch, args, message):
+    monkeypatch.setattr("jamflow.commands.jam.jam", lambda *a, **k: pytest.fail("work started"))
+    code, err = run_jam(tmp_path, capsys, *args, "--out", str(tmp_path / "x.h5"))
+    assert code == 2 and no_traceback(err) and len(err.strip().splitlines()) == 1
+    import re
+
+    assert re.search(message, err), err
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_jam_repulsive_lj_from_the_command_line(tmp_path, capsys, dim):
+    """Was: never worked (the CLI's start skipped the overlap removal)."""
+    out = tmp_path / "rlj.h5"
+    code, err = run_jam(tmp_path, capsys, "--potential", "rlj", "--dim", str(dim), "--n", "32" if dim == 2 else "16",
+                        "--out", str(out))
+    assert code == 0, err
+    p = load_packing(out)
+    assert p.potential.spec == "rlj" and read_checks(out).passed
+
+
+def test_jam_stores_its_checks(packing_file):
+    checks = read_checks(packing_file)
+    assert checks.passed and checks.in_window and checks.force_ratio < 1e-4 and checks.excess_contacts >= 0
+    assert checks.v_tol == 1e-16 and checks.energy_per_particle == read_attrs(packing_file)["energy_per_particle"]
+
+
+def test_a_packing_that_fails_its_checks_is_not_written(tmp_path, capsys, monkeypatch, packing_file):
+    """Was: written silently (spring:1.5: net forces 0.4 of the contact forces; vtol 1e-30)."""
+    good = jamflow.jam(n=32, seed=3)
+    squeezed = good.packing.scaled_to_phi(good.phi_j / 0.95**2)
+    fake = type(good)(**{**good.__dict__, "packing": squeezed})
+    monkeypatch.setattr("jamflow.commands.jam.jam", lambda *a, **k: fake)
+    out = tmp_path / "p.h5"
+    out.write_bytes(packing_file.read_bytes())
+    code, err = run_jam(tmp_path, capsys, "--n", "32", "--seed", "3", "--out", str(out))
+    assert code == EXIT_JAMMING and no_traceback(err)
+    assert "failed its checks: not at an energy minimum" in err and "not at an energy minimum" in err and "Nothing was written" in err
+    assert out.read_bytes() == packing_file.read_bytes()
+
+
+def test_jamming_failed_exits_3_with_its_remedy(tmp_path, capsys):
+    """Was: exit 1 with a traceback."""
+    code, err = run_jam(tmp_path, capsys, "--potential", "rlj", "--n", "16", "--phi0", "0.88",
+                        "--out", str(tmp_path / "x.h5"))
+    assert code == EXIT_JAMMING and no_traceback(err) and "phi0 is above jamming; use a lower phi0" in err
+
+
+def test_lammps_failure_exits_4(tmp_path, capsys, monkeypatch):
+    """Was: exit 1 with a traceback."""
+    from jamflow.engine.lammps import LammpsError
+
+    def fail(*a, **k):
+        raise LammpsError("run 0", "ERROR: Lost atoms: original 16 current 4")
+
+    monkeypatch.setattr("jamflow.commands.jam.jam", fail)
+    code, err = run_jam(tmp_path, capsys, "--n", "16", "--out", str(tmp_path / "x.h5"))
+    assert code == EXIT_LAMMPS and no_traceback(err) and "Lost atoms" in err and "diverged" in err
+
+
+@pytest.mark.parametrize("cxx,message", [("/nonexistent/g++", "CXX=/nonexistent/g++ does not name an executable"),
+                                         ("false", "compiling the jamflow LAMMPS plugin failed")])
+def test_a_bad_cxx_exits_5_naming_it(tmp_path, capsys, monkeypatch, cxx, message):
+    """Was: 'no C++ compiler found' although g++ is installed, then 12x slower on lepton;
+    a compiler error was a RuntimeError traceback with exit 1."""
+    monkeypatch.setenv("JAMFLOW_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setenv("CXX", cxx)
+    code, err = run_jam(tmp_path, capsys, "--n", "16", "--potential", "hertz", "--engine", "lammps",
+                        "--out", str(tmp_path / "x.h5"))
+    assert code == EXIT_PLUGIN and message in err and "Traceback" not in err
+
+
+def test_help_says_the_engines_differ(capsys):
+    """Was: README and --help implied the engines reach the same minima."""
+    with pytest.raises(SystemExit):
+        main(["jam", "--help"])
+    assert "different" in " ".join(capsys.readouterr().out.split())
+
+
+# --- output paths ---------------------------------------------------------------------------
+def special_paths(tmp_path):
+    """A device node (as root; else a FIFO), a symlink, a read-only file."""
+    node = tmp_path / "node"
+    if os.geteuid() == 0:
+        os.mknod(node, stat.S_IFCHR | 0o666, os.makedev(1, 3))  # like /dev/null
+    else:
+        os.mkfifo(node)
+    target = tmp_path / "target.h5"
+    target.write_text("keep me")
+    link = tmp_path / "link.h5"
+    link.symlink_to(target)
+    readonly = tmp_path / "readonly.h5"
+    readonly.write_text("keep me too")
+    readonly.chmod(0o444)
+    return {"node": node, "link": link, "readonly": readonly}
+
+
+@pytest.mark.parametrize("kind,message", [("node", "not a regular file"), ("link", "symbolic link"),
+                                          ("readonly", "read-only")])
+def test_outputs_that_are_not_regular_files_are_refused_unless_forced(tmp_path, capsys, kind, message):
+    """Was: /dev/full (as root) replaced by an HDF5 file; a symlink replaced; a read-only file
+    overwritten and made 644."""
+    path = special_paths(tmp_path)[kind]
+    before = os.lstat(path)
+    code, err = run_jam(tmp_path, capsys, "--n", "16", "--out", str(path))
+    assert code == 2 and message in err and "--force" in err and no_traceback(err)
+    after = os.lstat(path)
+    assert (after.st_mode, after.st_ino) == (before.st_mode, before.st_ino)
+    code, err = run_jam(tmp_path, capsys, "--n", "16", "--out", str(path), "--force")
+    assert code == 0, err
+    assert load_packing(path).n == 16 and not path.is_symlink()
+    if kind == "readonly":
+        assert stat.S_IMODE(path.stat().st_mode) == 0o444  # the file keeps its permissions
+    assert (tmp_path / "target.h5").read_text() == "keep me"
+
+
+# --- bad input files ------------------------------------------------------------------------
+def bad_files(tmp_path, good):
+    files = {"empty": b"", "truncated": good.read_bytes()[:3000], "text": b"hello\n"}
+    out = {}
+    for name, content in files.items():
+        out[name] = tmp_path / f"{name}.h5"
+        out[name].write_bytes(content)
+    out["incomplete"] = tmp_path / "incomplete.h5"
+    with h5py.File(out["incomplete"], "w") as f:
+        f.attrs.update(schema="jamflow.packing", schema_version=1)
+        f["positions"] = np.zeros((2, 2))
+    return out
+
+
+EXPECTED = {"empty": "is empty", "truncated": "truncated or damaged", "text": "not an HDF5 file",
+            "incomplete": "incomplete jamflow packing file: can't locate attribute: 'potential'"}
+
+
+@pytest.mark.parametrize("kind", sorted(EXPECTED))
+@pytest.mark.parametrize("command", [["modes"], ["analyze"], ["draw"], ["export", "--format", "xyz"]])
+def test_bad_input_files_give_one_line(tmp_path, capsys, packing_file, kind, command):
+    """Was: raw h5py tracebacks without the file name (modes, analyze)."""
+    path = bad_files(tmp_path, packing_file)[kind]
+    code = main([command[0], str(path), *command[1:], *(["--out", str(tmp_path / "s.h5")] if command[0] == "analyze" else [])])
+    err = capsys.readouterr().err
+    assert code == 2 and no_traceback(err) and str(path) in err and EXPECTED[kind] in err
+
+
+@pytest.mark.parametrize("kind,reader", [(k, r) for k in sorted(EXPECTED) for r in (load_packing, read_attrs, read_history)
+                                         if k != "incomplete" or r is load_packing])
+def test_bad_files_raise_clear_errors_in_python(tmp_path, packing_file, kind, reader):
+    path = bad_files(tmp_path, packing_file)[kind]
+    with pytest.raises(ValueError, match=EXPECTED[kind]) as info:
+        reader(path)
+    assert str(path) in str(info.value)
+
+
+def test_read_history_names_a_missing_group(tmp_path, packing_file):
+    path = bad_files(tmp_path, packing_file)["incomplete"]
+    with pytest.raises(ValueError, match="incomplete jamflow packing file.*history"):
+        read_history(path)
+
+
+# --- packings that are not at a minimum -----------------------------------------------------
+@pytest.fixture(scope="module")
+def squeezed_file(packing_file, tmp_path_factory):
+    p = load_packing(packing_file)
+    out = tmp_path_factory.mktemp("squeezed") / "squeezed.h5"
+    return save_packing(out, p.scaled_to_phi(p.phi / 0.95**2))  # box 5% smaller: max force ~0.05
+
+
+def test_modes_warns_when_not_at_a_minimum(squeezed_file, capsys):
+    """Was: a stability class without saying the state is not force balanced."""
+    assert main(["modes", str(squeezed_file), "--no-figure"]) == 0
+    out, err = capsys.readouterr()
+    assert "warning" in err and "not at an energy minimum" in err and "[NOT FORCE BALANCED]" in out
+    with h5py.File(squeezed_file.with_name("squeezed.modes.hdf5")) as f:
+        assert not f.attrs["force_balanced"] and not f["checks"].attrs["passed"]
+
+
+def test_modes_on_a_jammed_packing_does_not_warn(packing_file, capsys):
+    assert main(["modes", str(packing_file), "--no-figure"]) == 0
+    out, err = capsys.readouterr()
+    assert "warning" not in err and "NOT FORCE BALANCED" not in out
+    with h5py.File(packing_file.with_name("p.modes.hdf5")) as f:
+        assert f.attrs["force_balanced"]
+
+
+def test_analyze_warns_when_not_at_a_minimum(squeezed_file, packing_file, tmp_path, capsys):
+    out = tmp_path / "s.h5"
+    assert main(["analyze", str(packing_file), str(squeezed_file), "--out", str(out), "--r-min", "1.3"]) == 0
+    assert "squeezed.h5 is not at an energy minimum" in capsys.readouterr().err
+    with h5py.File(out) as f:
+        assert list(f["order/force_balanced"][...]) == [1, 0]
+
+
+# --- interruptions, pipes, temporary files --------------------------------------------------
+def test_sigterm_removes_temporary_files_and_keeps_the_old_output(tmp_path, packing_file):
+    """Was: /tmp/jamflow-*/start.data left behind on SIGTERM."""
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    out = tmp_path / "p.h5"
+    out.write_bytes(packing_file.read_bytes())
+    proc = subprocess.Popen([*JAMFLOW, "jam", "--n", "2048", "--engine", "lammps", "--quiet", "--out", str(out)],
+                            env={**os.environ, "TMPDIR": str(scratch)}, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while not list(scratch.glob("jamflow-*/start.data")) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert list(scratch.glob("jamflow-*/start.data")), "LAMMPS never started"
+    proc.send_signal(signal.SIGTERM)
+    err = proc.communicate(timeout=120)[1]
+    assert proc.returncode == EXIT_TERMINATED and no_traceback(err) and "terminated" in err
+    assert list(scratch.iterdir()) == []
+    assert out.read_bytes() == packing_file.read_bytes() and sorted(p.name for p in tmp_path.iterdir()) == ["p.h5", "tmp"]
+
+
+def test_sigterm_while_a_figure_is_written_leaves_no_hidden_file(tmp_path, packing_file, monkeypatch):
+    """Was: hidden .*.tmp figure files left behind."""
+    from matplotlib.figure import Figure
+
+    def savefig(self, target, **kwargs):
+        Path(target).write_bytes(b"half a png")
+        os.kill(os.getpid(), signal.SIGTERM)
+
+    monkeypatch.setattr(Figure, "savefig", savefig)
+    p = tmp_path / "p.h5"
+    p.write_bytes(packing_file.read_bytes())
+    assert main(["modes", str(p)]) == EXIT_TERMINATED
+    assert not [f for f in tmp_path.iterdir() if f.name.startswith(".")] and not (tmp_path / "p.modes.png").exists()
+
+
+def test_ctrl_c_during_start_up(capsys, monkeypatch):
+    """Was: a traceback from inside the imports."""
+    def interrupted(name):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr("jamflow.cli.import_module", interrupted)
+    assert main(["jam"]) == 130
+    assert "interrupted" in capsys.readouterr().err
+
+
+def test_output_into_a_closed_pipe(tmp_path, packing_file):
+    """Was: BrokenPipeError traceback (jamflow modes x.h5 | head -1). Now the command
+    finishes its work (results and figure) and drops the lines nobody reads."""
+    p = tmp_path / "p.h5"
+    p.write_bytes(packing_file.read_bytes())
+    proc = subprocess.Popen([*JAMFLOW, "modes", str(p)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc.stdout.close()  # the reader is gone before the first line
+    err = proc.stderr.read()
+    proc.wait(timeout=120)
+    assert proc.returncode == 0 and "Traceback" not in err and "Broken" not in err
+    assert (tmp_path / "p.modes.hdf5").is_file() and (tmp_path / "p.modes.png").is_file()
+
+
+# --- Python API -----------------------------------------------------------------------------
+@pytest.mark.parametrize("kwargs,error,message", [
+    (dict(dim=2.0), ValueError, "dim must be the integer 2 or 3"),
+    (dict(sizes=None), TypeError, "sizes must be a spec string"),
+    (dict(potential=3), TypeError, "potential must be a spec string"),
+    (dict(settings="fast"), TypeError, "settings must be a CompressionSettings"),
+    (dict(seed=2**70), ValueError, "seed must be an integer in"),
+    (dict(start=np.zeros((3, 2))), TypeError, "start must be a Packing"),
+])
+def test_python_jam_rejects_bad_arguments_clearly(kwargs, error, message, monkeypatch):
+    """Was: TypeError/AttributeError from deep inside (dim=2.0, sizes=None, potential=3, settings='fast')."""
+    monkeypatch.setattr("jamflow.protocols.compression.compress", lambda *a, **k: pytest.fail("work started"))
+    with pytest.raises(error, match=message):
+        jamflow.jam(n=16, **kwargs)
