@@ -104,7 +104,7 @@ def main(argv=None) -> int:
             ("shape", "dim", "n", "sizes", "engine", "damping")], s)) not in have]
     print(f"{len(todo)} packings to make; load {os.getloadavg()[0]:.1f}", flush=True)
     for seed in tqdm(todo, unit="packing"):
-        start = initial_packing(args.n, args.dim, args.sizes, "spring", seed, settings.start_phi(args.dim), args.shape)
+        start = initial_packing(args.n, args.dim, args.sizes, "spring", seed, settings.start_phi(args.dim, shape=args.shape), args.shape)
         cpu = time.process_time()
         result = compress(start, settings, engine=args.engine)
         cpu = time.process_time() - cpu

@@ -262,3 +262,39 @@ def test_cli_refuses_lammps_minimisers_for_bodies(tmp_path, capsys):
     code = main(["jam", "--shape", "nmer:2:1.5", "--engine", "lammps", "--out", str(tmp_path / "p.h5"), "--quiet"])
     err = capsys.readouterr().err
     assert code == 2 and "minimizer fire for nmer:2:1.5 particles (it runs md for them)" in err
+
+
+def test_crossed_tangent_dimers_are_an_interlocked_minimum():
+    """Why bodies start without overlaps: two alpha = 2 dimers crossed at their waists are at
+    rest with V > 0, and every small move (translation, turn) raises the energy, so FIRE from a
+    start with such a pair never unjams it (measured: jam at phi0 0.7 and 0.8 failed)."""
+    from jamflow.box import Box
+    from jamflow.engine.reference import energy_forces_pressure
+    from jamflow.packing import Packing
+
+    body = parse_shape("nmer:2:2", 2)
+    p = Packing([[5.0, 5.0], [5.0, 5.0]], [1.0, 1.0], Box.cube(10.0, 2), shape=body, orientations=[0.0, np.pi / 2])
+    ref = energy_forces_pressure(p)
+    assert ref.energy == pytest.approx(4 * 0.5 * (1 - 1 / np.sqrt(2)) ** 2, rel=1e-14)  # 4 site pairs at 1/sqrt 2
+    assert np.abs(ref.forces).max() < 1e-14 and np.abs(ref.torques).max() < 1e-14
+    for move in ([1e-3, 0.0, 0.0], [0.0, 1e-3, 0.0], [7e-4, 7e-4, 0.0], [0.0, 0.0, 1e-3]):
+        q = p.with_positions(p.positions + [[0, 0], move[:2]], orientations=p.orientations + [0.0, move[2]])
+        assert energy_forces_pressure(q).energy > ref.energy
+
+
+@pytest.mark.parametrize("dim,spec", [(2, "nmer:2:2"), (2, "trimer:2:0.3"), (3, "dimer:1.5:0.7")])
+def test_bodies_start_without_overlaps(dim, spec):
+    """Random sequential addition: no two bodies of the start overlap; the same seed gives the
+    same start; too dense a start is refused, naming phi0."""
+    from jamflow.packing import SeparationFailed
+    from jamflow.pairs import overlapping_sites
+    from jamflow.protocols.compression import CompressionSettings, initial_packing
+
+    phi0 = CompressionSettings().start_phi(dim, shape=spec)
+    assert phi0 == (0.45 if dim == 2 else 0.30)
+    a = initial_packing(64, dim, "bi:1.4:0.5", "spring", 3, phi0, spec)
+    b = initial_packing(64, dim, "bi:1.4:0.5", "spring", 3, phi0, spec)
+    assert len(overlapping_sites(a)[0]) == 0 and np.array_equal(a.positions, b.positions)
+    assert a.phi == pytest.approx(phi0, rel=1e-12)
+    with pytest.raises(SeparationFailed, match="use a lower phi0"):
+        initial_packing(64, dim, "bi:1.4:0.5", "spring", 3, 0.8 if dim == 2 else 0.6, spec)

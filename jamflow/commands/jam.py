@@ -41,7 +41,8 @@ def add_arguments(p) -> None:
                    help="auto: the compiled engine (FIRE, in process) wherever it runs the scene, else LAMMPS "
                         "(docs/speed.md). The engines sum forces in different orders, so from one start they "
                         "can reach different minima and phi_J (seed 0, N = 64: 0.8352519 numba, 0.8355434 lammps)")
-    p.add_argument("--phi0", type=float, default=None, help="initial packing fraction (default 0.80 in 2D, 0.55 in 3D)")
+    p.add_argument("--phi0", type=float, default=None, help="initial packing fraction (default 0.80 in 2D, 0.55 in 3D; rigid bodies, which "
+                        "start without overlaps, 0.45 and 0.30)")
     p.add_argument("--dphi0", type=float, default=1e-4, help="initial packing-fraction increment")
     p.add_argument("--vtol", type=float, default=1e-16, help="energy window V_tol < V < 2 V_tol (per particle)")
     p.add_argument("--ftol", type=float, default=None, help="max force component tolerance (default scales with box)")
@@ -99,7 +100,7 @@ def run(args) -> int:
     settings = settings_from_args(args)
     check_writable(args.out, args.force)
     start = initial_packing(args.n, args.dim, args.sizes, args.potential, args.seed,
-                            settings.start_phi(args.dim, args.gravity), args.shape, args.walls, args.wall_type,
+                            settings.start_phi(args.dim, args.gravity, args.shape), args.shape, args.walls, args.wall_type,
                             args.gravity)
     if args.pressure is not None:
         return run_pressure(args, start, settings)
