@@ -29,9 +29,9 @@ def test_dimer_deck_jams_rigid_dimers(tmp_path):
     and generalized torque below 1e-13 by the reference, dimers rigid (the reader checks every
     site distance to 1e-9), phi and P as the deck reports them. (3D runs too, but near onset
     damped dynamics creeps for 10^5 steps per minimisation: docs/nmers.md.)"""
-    dim, n, phi0 = 2, 16, 0.84
+    dim, n = 2, 16
     shape = parse_shape("nmer:2:1.5", dim)
-    res = run_deck(tmp_path, {"dim": dim, "N": n, "phi0": phi0, "dphi0": 0.001, "seed": 1}, deck=DECK, shape=shape)
+    res = run_deck(tmp_path, {"dim": dim, "N": n, "dphi0": 0.002, "seed": 1}, deck=DECK, shape=shape)
     p = res.packing
     ref = energy_forces_pressure(p)
     g = generalized_torques(p, ref.torques)
@@ -60,7 +60,7 @@ def test_deck_geometry_is_jamflows(tmp_path, dim, alpha):
 @pytest.mark.parametrize("variables,message", [
     ({"alpha": 2.5}, "alpha = 2.5 is outside 1 < alpha <= 2"), ({"alpha": 1.0}, "outside 1 < alpha <= 2"),
     ({"dim": 4}, "dim must be 2 or 3"), ({"damping": 25}, "0 < damping < 2/dt"),
-    ({"vmin": 1e-15}, "vmin = 1e-15 is above vtol")])
+    ({"vmin": 1e-15}, "vmin = 1e-15 is above vtol"), ({"phi0": 0.8}, "placed .* of 64 dimers at phi0 = 0.8")])
 def test_dimer_deck_refuses_bad_parameters(tmp_path, variables, message):
     with pytest.raises(DeckFailed, match=message):
         run_deck(tmp_path, variables, deck=DECK, shape=parse_shape("nmer:2:1.5", 2))
