@@ -201,8 +201,9 @@ class SeparationFailed(ValueError):
 
 
 def separated_positions(shape, diameters, orientations, box: Box, rng: np.random.Generator) -> np.ndarray:
-    """Random sequential addition of rigid bodies: each at a uniform random position, drawn again
-    while any of its sites overlaps a site of a body already placed (minimum image). Soft
+    """Random sequential addition of rigid bodies, the largest first: each at a uniform random
+    position, drawn again while any of its sites overlaps a site of a body already placed
+    (minimum image). Soft
     concave bodies started on top of each other can stay interlocked (two crossed dimers at
     alpha = 2 are a local energy minimum, site overlaps 1 - 1/sqrt 2: docs/nmers.md)."""
     n, dim = len(diameters), box.dim
@@ -210,7 +211,7 @@ def separated_positions(shape, diameters, orientations, box: Box, rng: np.random
     site_d = diameters[:, None] * shape.site_diameters[None, :]
     placed, placed_d = np.empty((0, dim)), np.empty(0)
     positions = np.empty((n, dim))
-    for k in range(n):
+    for k in np.argsort(-np.asarray(diameters), kind="stable"):
         for _ in range(SEPARATION_TRIES):
             centre = box.to_cartesian(rng.random(dim))
             sites = centre + local[k]

@@ -291,7 +291,7 @@ def test_bodies_start_without_overlaps(dim, spec):
     from jamflow.protocols.compression import CompressionSettings, initial_packing
 
     phi0 = CompressionSettings().start_phi(dim, shape=spec)
-    assert phi0 == (0.45 if dim == 2 else 0.30)
+    assert phi0 == (0.45 if dim == 2 else 0.25)
     a = initial_packing(64, dim, "bi:1.4:0.5", "spring", 3, phi0, spec)
     b = initial_packing(64, dim, "bi:1.4:0.5", "spring", 3, phi0, spec)
     assert len(overlapping_sites(a)[0]) == 0 and np.array_equal(a.positions, b.positions)

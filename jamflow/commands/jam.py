@@ -42,7 +42,7 @@ def add_arguments(p) -> None:
                         "(docs/speed.md). The engines sum forces in different orders, so from one start they "
                         "can reach different minima and phi_J (seed 0, N = 64: 0.8352519 numba, 0.8355434 lammps)")
     p.add_argument("--phi0", type=float, default=None, help="initial packing fraction (default 0.80 in 2D, 0.55 in 3D; rigid bodies, which "
-                        "start without overlaps, 0.45 and 0.30)")
+                        "start without overlaps, 0.45 and 0.25)")
     p.add_argument("--dphi0", type=float, default=1e-4, help="initial packing-fraction increment")
     p.add_argument("--vtol", type=float, default=1e-16, help="energy window V_tol < V < 2 V_tol (per particle)")
     p.add_argument("--ftol", type=float, default=None, help="max force component tolerance (default scales with box)")

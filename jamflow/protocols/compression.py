@@ -33,7 +33,7 @@ from ..walls import parse_walls, wall_loads, with_walls
 
 DEFAULT_PHI0 = {2: 0.80, 3: 0.55}
 GRAVITY_PHI0 = {2: 0.5, 3: 0.35}  # random starts under gravity: the settled pile stays clear of the ceiling
-BODY_PHI0 = {2: 0.45, 3: 0.30}  # rigid bodies start without overlaps (random sequential addition): below its limit
+BODY_PHI0 = {2: 0.45, 3: 0.25}  # rigid bodies start without overlaps (random sequential addition): below its limit
 NEWTON_FINAL_FACTOR = 3.0  # intermediate jumps stop at >= 3x the window's predicted distance from phi_J
 LOOSE_TRUST = 10.0  # a loosely minimised state decides its side only if V > 10 V_tol
 WINDOW_RESUMES = 3  # a state in the window cut off by the iteration cap is minimised again (at most 3 times a run)
