@@ -1,7 +1,7 @@
 """Figures and tables of issue 14 from the ensembles of benchmarks/nmer_ensembles.py.
 
-    python benchmarks/nmer_figures.py --csv docs/nmers/ensembles.csv --q6 docs/nmers/q6.csv \
-        --routes docs/nmers/routes.csv --out docs/nmers
+    python benchmarks/nmer_figures.py --csv docs/nmers/ensembles.csv docs/nmers/ensembles3d.csv \
+        --q6 docs/nmers/q6.csv --routes docs/nmers/routes.csv --out docs/nmers
 
 - ``q6-alpha.png`` / ``q6.csv`` rows: Q6 (global, ``jamflow.analysis.order.BondOrder`` on the body
   centres, neighbours within the first minimum of the ensemble's g(r)) against alpha for N = 256
@@ -207,11 +207,27 @@ def plot_routes(route_rows, path: Path) -> tuple:
     return len(seeds), *mean_err(phi["numba"]), *mean_err(phi["lammps"]), *mean_err(phi["lammps"] - phi["numba"])
 
 
+def stability_table(stab_rows) -> list[tuple]:
+    """Per (dim, alpha): packings, extra zero modes = free rotations, N_c + free = N_c,iso,
+    free rotations (range), lowest nonzero eigenvalue (range), Delta V power along it (range)."""
+    out = []
+    for (dim, alpha), group in grouped(stab_rows, lambda r: (int(r["dim"]), alpha_of(r))).items():
+        extra = [int(r["extra_zero"]) for r in group]
+        free = [int(r["free_rotations"]) for r in group]
+        iso = [int(r["contacts"]) + int(r["free_rotations"]) - int(r["isostatic_count"]) for r in group]
+        low = [float(r["lowest_nonzero"]) for r in group if r["lowest_nonzero"]]
+        power = [float(r["power_lowest"]) for r in group if r["power_lowest"]]
+        out.append((dim, alpha, len(group), sum(e == f for e, f in zip(extra, free)), sum(v == 0 for v in iso),
+                    min(iso), max(iso), min(free), max(free), min(low), max(low), min(power), max(power)))
+    return out
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--csv", default="docs/nmers/ensembles.csv")
+    ap.add_argument("--csv", nargs="+", default=["docs/nmers/ensembles.csv", "docs/nmers/ensembles3d.csv"])
     ap.add_argument("--q6", default="docs/nmers/q6.csv")
     ap.add_argument("--routes", default="docs/nmers/routes.csv")
+    ap.add_argument("--stability", default="docs/nmers/stability.csv")
     ap.add_argument("--out", default="docs/nmers")
     args = ap.parse_args(argv)
     out = Path(args.out)
@@ -224,13 +240,19 @@ def main(argv=None) -> int:
             print(f"{t[0]:<6g} {t[1]:.4f}  {t[2]:.4f}  {t[3]:.3f}  {t[4]}")
         plot_q6(table, out / "q6-alpha.png")
         plot_packings(q6_rows, out / "packings-figure-2-26.png")
-    if Path(args.csv).exists():
-        table = alpha_table(rows(args.csv))
+    ens = [r for path in args.csv if Path(path).exists() for r in rows(path)]
+    if ens:
+        table = alpha_table(ens)
         print("dim alpha  phi_J  stderr  <z>  stderr  <z>+free  stderr  n  sizes")
         for dim, t in table.items():
             for r in t:
                 print(f"{dim}  {r[0]:<5g} {r[1]:.5f} {r[2]:.5f}  {r[3]:.3f} {r[4]:.3f}  {r[5]:.3f} {r[6]:.3f}  {r[7]}  {r[8]}")
         plot_alpha(table, out / "phi-z-alpha.png")
+    if Path(args.stability).exists():
+        print("dim alpha packings extra_zero=free N_c+free=iso (min..max of N_c+free-iso) free lowest_e power")
+        for s in stability_table(rows(args.stability)):
+            print(f"{s[0]} {s[1]:<5g} {s[2]}  {s[3]}/{s[2]}  {s[4]}/{s[2]} ({s[5]}..{s[6]})  {s[7]}..{s[8]}  "
+                  f"{s[9]:.2e}..{s[10]:.2e}  {s[11]:.3f}..{s[12]:.3f}")
     if Path(args.routes).exists():
         summary = plot_routes(rows(args.routes), out / "routes.png")
         if summary:
