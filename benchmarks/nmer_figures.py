@@ -32,7 +32,7 @@ import numpy as np  # noqa: E402
 from jamflow.analysis.order import BondOrder, first_minimum  # noqa: E402
 from jamflow.analysis.structure import RDF  # noqa: E402
 from jamflow.io import atomic_path, load_packing  # noqa: E402
-from jamflow.shapes.draw import draw_packing  # noqa: E402
+from jamflow.drawing import draw_into  # noqa: E402
 
 FIGURE_2_26 = (1.04, 1.1, 1.2, 1.3, 1.4, 1.6)
 
@@ -136,7 +136,9 @@ def plot_packings(q6_rows, path: Path) -> None:
             ax.set_axis_off()
             continue
         p = load_packing(first[alpha]["file"])
-        draw_packing(ax, p)
+        draw_into(ax, p, color_by="orientation", contacts=False)
+        ax.set_xticks([])
+        ax.set_yticks([])
         ax.set_title(f"({label}) alpha = {alpha:g}, phi_J = {p.phi:.4f}", fontsize=9)
     fig.suptitle("Jammed packings of N = 256 dimers (chapter Figure 2.26); colour: director angle mod pi",
                  fontsize=9)

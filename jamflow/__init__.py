@@ -23,6 +23,7 @@ _EXPORTS = {
     "save_packing": "jamflow.io",
     "load_packing": "jamflow.io",
     "contact_distance": "jamflow.shapes.contact_distance",
+    "run_ensemble": "jamflow.ensemble",
 }
 
 __all__ = sorted(_EXPORTS)

@@ -29,6 +29,8 @@ SUBCOMMANDS = {
     "draw": ("jamflow.commands.draw", "draw a packing: particles to scale, contacts, floaters (PNG)"),
     "export": ("jamflow.commands.export", "write a packing for OVITO and other viewers (LAMMPS dump, extended XYZ)"),
     "crosscheck": ("jamflow.commands.crosscheck", "run the LAMMPS deck and the Python controller from one start and compare"),
+    "ensemble": ("jamflow.commands.ensemble", "many packings (seeds x N) on a Dask cluster into a resumable store"),
+    "onsets": ("jamflow.commands.onsets", "distribution of jamming onsets of an ensemble store: P(phi_J), W(N), nu"),
 }
 
 EXIT_USER, EXIT_JAMMING, EXIT_LAMMPS, EXIT_PLUGIN = 2, 3, 4, 5

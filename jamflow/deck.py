@@ -31,7 +31,7 @@ from .protocols.compression import CompressionSettings
 from .sizes import parse_sizes
 
 DECK_NAME = "jam.lmp"
-OPTIONAL = ("data", "phi0", "ftol")
+OPTIONAL = ("data", "phi0", "ftol", "plugin")
 PROTOCOL_COLUMNS = ("step", "phi", "energy_per_particle", "pressure", "dphi", "iterations", "max_force", "reason")
 
 
@@ -72,14 +72,27 @@ def deck_variables(n: int = 256, dim: int = 2, sizes="bi:1.4:0.5", seed: int = 0
                   vtol=_num(settings.v_tol), dphi0=_num(settings.dphi0), minimizer=m.method, vmin=_num(m.v_min),
                   delta=_num(m.delta), window=m.window, maxiter=m.max_iterations, dt=_num(m.timestep),
                   mddt=_num(m.md_timestep),
-                  damping=_num(m.damping), maxsteps=settings.max_steps, skin=_num(0.3), out=str(out),
+                  damping=_num(m.damping), mddamping=m.md_damping, mdsample=m.md_sample_every,
+                  maxsteps=settings.max_steps, skin=_num(0.3), out=str(out),
                   walls="".join("xyz"[a] for a in parse_walls(walls, int(dim))) or "none")
     start_phi = phi0 if phi0 is not None else settings.phi0
     optional = {"data": None if data is None else str(data),
                 "phi0": None if start_phi is None else repr(float(start_phi)),
-                "ftol": None if m.force_tol is None else repr(float(m.force_tol))}
+                "ftol": None if m.force_tol is None else repr(float(m.force_tol)),
+                "plugin": _plugin_path() if m.method == "md" and m.md_damping == "pairwise" else None}
     values.update({k: v for k, v in optional.items() if v is not None})
     return values
+
+
+def _plugin_path() -> str:
+    """The compiled jamflow plugin (fix jamflow/damping) that a pairwise-damping deck loads."""
+    from .engine.plugin_build import plugin_library
+
+    library = plugin_library()
+    if library is None:
+        raise ValueError("a deck with md_damping 'pairwise' loads jamflow's LAMMPS plugin, which needs a C++ "
+                         "compiler to build; install one or use md_damping 'viscous'")
+    return str(library)
 
 
 def _check_seed_protocol(settings: CompressionSettings) -> None:

@@ -29,6 +29,8 @@ HEADER = """\
 #   -var phi0 PHI    start packing fraction; default 0.80 (2D) / 0.55 (3D); with data,
 #                    the file's own (and a given PHI must match it to 1e-12)
 #   -var ftol F      max force component tolerance; default 1e-14 max(1, L/20), L = box side
+#   -var plugin SO   jamflow's compiled LAMMPS plugin (needed by mddamping pairwise), from
+#                    python -c "from jamflow.engine.plugin_build import plugin_library; print(plugin_library())"
 {optional}
 variable dim       index {dim:<12} # 2: disks, 3: spheres
 variable N         index {N:<12} # particles (random start only)
@@ -45,7 +47,9 @@ variable window    index {window:<12} # iterations per minimize call between rul
 variable maxiter   index {maxiter:<12} # iteration cap per minimisation
 variable dt        index {dt:<12} # FIRE initial step
 variable mddt      index {mddt:<12} # damped-MD step
-variable damping   index {damping:<12} # md only: viscous drag b
+variable damping   index {damping:<12} # md only: damping coefficient b
+variable mddamping index {mddamping:<12} # md only: viscous (-b v) | pairwise (seed eq. 2.3, needs plugin)
+variable mdsample  index {mdsample:<12} # md only: steps between energy samples (energy-steady rule)
 variable maxsteps  index {maxsteps:<12} # cap on minimisations
 variable skin      index {skin:<12} # neighbour-list skin
 variable out       index {out:<12} # output prefix
@@ -81,7 +85,15 @@ if "$(v_d1 <= 0 || v_d2 < v_d1)" then "variable jf_bad string 'need 0 < d1 <= d2
 if "$(v_vmin > v_vtol)" then "variable jf_bad string 'vmin = ${vmin} is above vtol = ${vtol}: every state in the window would be stopped as unjammed; set -var vmin ${vtol}'" "jump SELF jf_fail"
 variable jf_md internal 0
 if "${minimizer} == md" then "variable jf_md internal 1"
-if "$(v_jf_md == 1 && v_damping*v_mddt >= 2)" then "variable jf_bad string 'damped MD with damping x dt = $(v_damping*v_mddt) >= 2: the explicit drag -b v diverges (atoms fly off, V reads 0); use damping < 2/dt'" "jump SELF jf_fail"
+if "${mddamping} != viscous && ${mddamping} != pairwise" then "variable jf_bad string 'mddamping must be viscous or pairwise'" "jump SELF jf_fail"
+variable jf_pairwise internal 0
+if "${mddamping} == pairwise" then "variable jf_pairwise internal 1"
+if "$(v_jf_md == 1 && v_jf_pairwise == 0 && v_damping*v_mddt >= 2)" then "variable jf_bad string 'damped MD with damping x dt = $(v_damping*v_mddt) >= 2: the explicit drag -b v diverges (atoms fly off, V reads 0); use damping < 2/dt'" "jump SELF jf_fail"
+if "$(v_jf_md == 1 && v_jf_pairwise == 1 && v_damping*v_mddt >= 2.0/24)" then "variable jf_bad string 'pairwise damping with damping x dt = $(v_damping*v_mddt) >= 2/24: contacts are damped at up to b (z_i + z_j) <= 24 b, and the explicit step diverges beyond rate x dt = 2; use damping x dt < 0.0833'" "jump SELF jf_fail"
+if "$(v_mdsample < 1 || v_mdsample != floor(v_mdsample))" then "variable jf_bad string 'mdsample must be a positive integer'" "jump SELF jf_fail"
+if "$(v_jf_md == 1 && v_window < 2*v_mdsample)" then "variable jf_bad string 'window ${window} < 2 x mdsample ${mdsample}: the energy-steady rule needs 2 energy samples per window'" "jump SELF jf_fail"
+if "$(v_jf_md == 1 && v_jf_pairwise == 1 && !is_defined(variable,plugin))" then "variable jf_bad string 'mddamping pairwise needs jamflow plugin library: -var plugin PATH (see the header)'" "jump SELF jf_fail"
+if "$(v_jf_md == 1 && v_jf_pairwise == 1)" then "plugin load ${plugin}"
 # walls: boundary f on the walled axes (jamflow/engine/lammps.py)
 variable jf_bx string p
 variable jf_by string p
@@ -166,7 +178,7 @@ fix_modify jf_wall1 energy yes virial yes
 if "${jf_ntypes} == 2" then "group jf_w2 type 2" "fix jf_wall2 jf_w2 wall/harmonic ${jf_w2}units box" "fix_modify jf_wall2 energy yes virial yes"
 label jf_walls_done
 compute jf_press all pressure NULL virial
-thermo_style custom step pe c_jf_press[*] fmax
+thermo_style custom step pe c_jf_press[*] fmax ke
 thermo_modify norm no
 thermo 0
 if "${dim} == 2" then "fix jf_2d all enforce2d"
@@ -201,7 +213,17 @@ variable jf_epp equal pe/atoms
 fix jf_halt all halt 1 v_jf_epp < ${vmin} error continue
 if "${minimizer} == fire" then "min_style fire" "min_modify norm max"
 if "${minimizer} == cg" then "min_style cg" "min_modify norm max line forcezero"
-if "${minimizer} == md" then "velocity all set 0.0 0.0 0.0" "fix jf_nve all nve" "fix jf_visc all viscous ${damping}"
+variable jf_dampstyle string viscous
+if "${jf_pairwise} == 1" then "variable jf_dampstyle string jamflow/damping"
+if "${minimizer} == md" then "velocity all set 0.0 0.0 0.0" "fix jf_nve all nve" "fix jf_damp all ${jf_dampstyle} ${damping}"
+# the energies of a damped-MD window (fix jf_vsamples) and their mean and rms deviation
+variable jf_pe equal pe
+variable jf_vmean equal ave(f_jf_vsamples)
+variable jf_vdev vector (f_jf_vsamples-v_jf_vmean)^2
+variable jf_vrms equal sqrt(ave(v_jf_vdev))
+variable jf_vx atom f_jf_vstore[1]
+variable jf_vy atom f_jf_vstore[2]
+variable jf_vz atom f_jf_vstore[3]
 variable jf_done internal 0
 variable jf_first internal 1
 variable jf_eprev internal 0
@@ -209,27 +231,39 @@ variable jf_fmprev internal 0
 label jf_window
 variable jf_nsteps internal $(ternary(v_window<v_maxiter-v_jf_done,v_window,v_maxiter-v_jf_done))
 variable jf_before internal $(step)
+if "${minimizer} == md" then "fix jf_vsamples all vector ${mdsample} v_jf_pe"
 if "${minimizer} == md" then "run $(v_jf_nsteps)" else "minimize 0.0 $(v_jf_ftol:%.17g) $(v_jf_nsteps) $(10*v_jf_nsteps)"
 variable jf_ran internal $(step-v_jf_before)
+# md: mean and rms of the energies sampled on the window's steps that are multiples of mdsample
+variable jf_vm internal 0
+variable jf_vr internal 0
+if "$(v_jf_md == 1 && floor(step/v_mdsample)-ceil(v_jf_before/v_mdsample)+1 >= 2)" then "variable jf_vm internal $(v_jf_vmean:%.17g)" "variable jf_vr internal $(v_jf_vrms:%.17g)"
+if "${minimizer} == md" then "unfix jf_vsamples"
 variable jf_done internal $(v_jf_done+v_jf_ran)
 variable jf_e internal $(pe/atoms:%.17g)
+# no-progress compares V + K per particle in md (damping can only lower it), V alone otherwise
+variable jf_et internal $(v_jf_e+v_jf_md*ke/atoms:%.17g)
+# md: the potential's force alone, at rest (run 0 at v = 0), then the velocities put back
+if "${minimizer} == md" then "fix jf_vstore all store/state 0 vx vy vz" "velocity all set 0.0 0.0 0.0" "run 0"
 variable jf_fm internal $(fmax:%.17g)
+if "${minimizer} == md" then "set group all vx v_jf_vx vy v_jf_vy vz v_jf_vz" "unfix jf_vstore"
 variable jf_reason string none
 variable jf_capped internal 0
 variable jf_conv internal 0
 variable jf_vminstop internal 0
 if "$(v_jf_fm < v_jf_ftol)" then "variable jf_reason string force" "variable jf_conv internal 1" "jump SELF jf_min_done"
 if "$(v_jf_e < v_vmin)" then "variable jf_reason string energy-below-vmin" "variable jf_conv internal 1" "variable jf_vminstop internal 1" "jump SELF jf_min_done"
-if "$(v_jf_first == 0 && (v_jf_eprev-v_jf_e) < v_delta*v_jf_e && v_jf_fm > 0.5*v_jf_fmprev)" then "variable jf_reason string no-progress" "jump SELF jf_min_done"
+if "$(v_jf_vm > 0 && v_jf_vr/(v_jf_vm+(v_jf_vm<=0)) < v_delta)" then "variable jf_reason string energy-steady" "jump SELF jf_min_done"
+if "$(v_jf_first == 0 && (v_jf_eprev-v_jf_et) < v_delta*v_jf_et && v_jf_fm > 0.5*v_jf_fmprev)" then "variable jf_reason string no-progress" "jump SELF jf_min_done"
 if "$(v_jf_cg == 1 && v_jf_ran < v_jf_nsteps)" then "variable jf_reason string linesearch" "jump SELF jf_min_done"
 if "$(v_jf_done >= v_maxiter)" then "variable jf_reason string iteration-cap" "variable jf_capped internal 1" "jump SELF jf_min_done"
-variable jf_eprev internal $(v_jf_e:%.17g)
+variable jf_eprev internal $(v_jf_et:%.17g)
 variable jf_fmprev internal $(v_jf_fm:%.17g)
 variable jf_first internal 0
 jump SELF jf_window
 label jf_min_done
 unfix jf_halt
-if "${minimizer} == md" then "unfix jf_nve" "unfix jf_visc" "velocity all set 0.0 0.0 0.0"
+if "${minimizer} == md" then "unfix jf_nve" "unfix jf_damp" "velocity all set 0.0 0.0 0.0"
 variable jf_iters internal $(v_jf_iters+v_jf_done)
 variable jf_p internal $((c_jf_press[1]+c_jf_press[2]+ternary(v_dim==3,c_jf_press[3],0))/v_dim:%.17g)
 print "$(v_jf_step) $(v_jf_phi:%.17g) $(v_jf_e:%.17g) $(v_jf_p:%.17g) $(v_jf_laststep:%.17g) $(v_jf_done) $(v_jf_fm:%.17g) ${jf_reason}" append ${jf_logtmp} screen no

@@ -274,6 +274,12 @@ def read_history(path) -> dict:
         return {k: v[...] for k, v in f["history"].items()}
 
 
+def read_protocol(path) -> dict:
+    """The ``protocol`` group's attributes (protocol, minimiser and run parameters) of a packing file."""
+    with h5py.File(path, "r") as f:
+        return {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f["protocol"].attrs.items()}
+
+
 def read_attrs(path) -> dict:
     """Root attributes (phi, energy_per_particle, pressure, versions, ...) of a packing file."""
     with open_hdf5(path) as f:

@@ -4,10 +4,12 @@ Methods:
 - ``fire``: LAMMPS ``min_style fire`` (FIRE 2.0), ``min_modify norm max``.
 - ``cg``: Polak-Ribiere conjugate gradient, ``min_modify line forcezero`` (the default
   backtracking line search stalls at forces ~1e-10, see docs/failure-modes.md).
-- ``md``: damped molecular dynamics, ``fix nve`` + ``fix viscous b`` (drag -b v on every
-  particle). This is *not* the pairwise damping of seed eq. 2.3: it also damps rattlers
-  and is not Galilean invariant; both dissipate to the same local minima for large b,
-  and the net momentum of a periodic packing is zero, so the minima found are comparable.
+- ``md``: damped molecular dynamics (velocity Verlet, ``fix nve``) with one of two dampings:
+  ``md_damping="viscous"`` (default), ``fix viscous b``: a drag -b v on every particle. It
+  also damps rattlers and is not Galilean invariant.
+  ``md_damping="pairwise"``, ``fix jamflow/damping b`` (jamflow's plugin): seed eq. 2.3
+  exactly, -b (v_ij . rhat_ij) rhat_ij on every pair in contact; conserves momentum and
+  leaves free (rattler) and tangential motion undamped. docs/damped-md.md compares them.
 
 Stopping rules, checked after every ``window`` iterations (LAMMPS runs the window):
 1. ``force``: max force component below ``force_tol`` (default scales with the box side and
@@ -17,12 +19,17 @@ Stopping rules, checked after every ``window`` iterations (LAMMPS runs the windo
    (torque balance; d_k the rotational length of ``jamflow.shapes``).
 2. ``energy-below-vmin``: energy per particle below ``v_min`` (seed rule b, V_min = 1e-16),
    also caught inside a window by ``fix halt``.
-3. ``no-progress``: over a whole window the relative energy decrease was below ``delta``
+3. ``energy-steady`` (md only): the seed's MD rule, <(V - <V>)^2>^(1/2) / <V> < ``delta``
+   over the energies sampled every ``md_sample_every`` steps inside the window (needs 2
+   samples). Checked before ``no-progress``; reported as not converged by force, like it.
+4. ``no-progress``: over a whole window the relative energy decrease was below ``delta``
    (seed rule a, delta = 1e-16) and the max force did not halve: the round-off floor.
-   Reported as not converged by force; the protocol records it.
-4. ``linesearch``: CG's line search could not move (LAMMPS stopped early).
-5. ``iteration-cap``: ``max_iterations`` reached (not converged).
-6. ``blown-up``: non-finite energy or force, or V < V_min with a force no state at V < V_min
+   Reported as not converged by force; the protocol records it. For md the energy compared
+   is the mechanical energy V + K at the window ends, which damping can only lower: V alone
+   rises and falls as the dynamics trades it for kinetic energy (pairwise damping rings).
+5. ``linesearch``: CG's line search could not move (LAMMPS stopped early).
+6. ``iteration-cap``: ``max_iterations`` reached (not converged).
+7. ``blown-up``: non-finite energy or force, or V < V_min with a force no state at V < V_min
    can have (``_force_bound``): the integration diverged (not converged).
 
 At a target ``pressure`` (constant stress, the box as a degree of freedom: compiled FIRE's box
@@ -42,6 +49,7 @@ import numpy as np
 
 METHODS = ("fire", "cg", "md")
 STRESS_MODES = ("iso", "aniso", "tri")  # box relaxation at a target pressure
+MD_DAMPINGS = ("viscous", "pairwise")
 
 
 @dataclass(frozen=True)
@@ -56,7 +64,9 @@ class MinimizerSettings:
     window: int = 10000  # iterations per LAMMPS call between rule checks
     timestep: float = 0.05  # FIRE initial step (0.1 diverges: docs/failure-modes.md), in sqrt(m diameter^2 / eps)
     md_timestep: float = 0.1  # damped-MD step
-    damping: float = 0.3  # md only: drag coefficient b, in sqrt(m eps) / diameter
+    damping: float = 0.3  # md only: damping coefficient b, in sqrt(m eps) / diameter
+    md_damping: str = "viscous"  # md only: "viscous" (-b v on every particle) or "pairwise" (seed eq. 2.3)
+    md_sample_every: int = 10  # md only: steps between the energy samples of the energy-steady rule
     pressure: float | None = None  # target pressure (eps / diameter^d): the box relaxes to it; None: fixed box
     stress: str = "iso"  # with pressure: iso | aniso (each P_aa) | tri (also the shear stresses -> 0)
 
@@ -69,17 +79,34 @@ class MinimizerSettings:
                 raise ValueError(f"minimizer {name} must be a finite positive number, got {value}")
         if self.force_tol is not None and not (math.isfinite(self.force_tol) and self.force_tol > 0):
             raise ValueError(f"force_tol must be a finite positive number, got {self.force_tol}")
-        if self.method == "md" and self.damping * self.md_timestep >= 2.0:
-            raise ValueError(f"damping x md_timestep = {self.damping * self.md_timestep:g} >= 2: the explicit drag "
-                             "-b v overshoots and diverges (the blown-up state even reports V = 0); use "
-                             "damping < 2 / md_timestep, e.g. 0.3 with md_timestep 0.1")
-        if self.max_iterations < 1 or self.window < 1:
-            raise ValueError("max_iterations and window must be positive integers")
+        if self.md_damping not in MD_DAMPINGS:
+            raise ValueError(f"unknown md_damping {self.md_damping!r}; use one of {', '.join(MD_DAMPINGS)}")
+        if self.max_iterations < 1 or self.window < 1 or self.md_sample_every < 1:
+            raise ValueError("max_iterations, window and md_sample_every must be positive integers")
         if self.pressure is not None and not (isinstance(self.pressure, (int, float)) and math.isfinite(self.pressure)
                                               and self.pressure > 0):
             raise ValueError(f"target pressure must be a finite positive number (eps/diameter^d), got {self.pressure!r}")
         if self.stress not in STRESS_MODES:
             raise ValueError(f"unknown stress mode {self.stress!r}; use one of {', '.join(STRESS_MODES)}")
+        if self.method == "md":
+            self._check_md()
+
+    def _check_md(self) -> None:
+        """The explicit damping must not overshoot (docs/damped-md.md derives both limits)."""
+        bdt = self.damping * self.md_timestep
+        if self.md_damping == "viscous" and bdt >= 2.0:
+            raise ValueError(f"damping x md_timestep = {bdt:g} >= 2: the explicit drag "
+                             "-b v overshoots and diverges (the blown-up state even reports V = 0); use "
+                             "damping < 2 / md_timestep, e.g. 0.3 with md_timestep 0.1")
+        if self.md_damping == "pairwise" and bdt >= PAIRWISE_BDT_LIMIT:
+            raise ValueError(f"damping x md_timestep = {bdt:g} >= {PAIRWISE_BDT_LIMIT:.4g} with pairwise damping: "
+                             f"a contact network's relative velocities are damped at up to b (z_i + z_j) / m "
+                             f"(z_i + z_j <= {2 * KISSING_NUMBER_3D} for equal spheres), and the explicit step "
+                             "diverges beyond rate x dt = 2; use damping x md_timestep < "
+                             f"{PAIRWISE_BDT_LIMIT:.4g}, e.g. 0.3 with md_timestep 0.1")
+        if self.window < 2 * self.md_sample_every:
+            raise ValueError(f"window = {self.window} < 2 x md_sample_every = {2 * self.md_sample_every}: the "
+                             "energy-steady rule needs at least 2 energy samples per window")
 
     def resolved_force_tol(self, box, stiffness: float = 1.0) -> float:
         """The force tolerance; by default above the round-off floor ~ L * 1e-16 * stiffness."""
@@ -106,6 +133,10 @@ class MinimizeResult:
 
 
 CONVERGED_REASONS = ("force", "energy-below-vmin")
+KISSING_NUMBER_3D = 12
+# pairwise damping: v <- (1 - dt D/m) v with D = b sum_contacts (e_i - e_j)(e_i - e_j)^T (x) n n^T,
+# lambda_max(D) <= b max_contacts (z_i + z_j) (Gershgorin) <= 2 x 12 b: stable for b dt < 2 / 24
+PAIRWISE_BDT_LIMIT = 2.0 / (2 * KISSING_NUMBER_3D)
 
 
 def minimize(engine, settings: MinimizerSettings) -> MinimizeResult:
@@ -124,18 +155,20 @@ def minimize(engine, settings: MinimizerSettings) -> MinimizeResult:
     with engine.minimizer_session(settings, ftol) as run_window:
         while True:
             steps = min(settings.window, settings.max_iterations - done)
-            ran, energy_total, fmax, gmax = run_window(steps)
+            ran, energy_total, fmax, gmax, *md = run_window(steps)  # md adds (fluctuation, kinetic energy)
+            fluctuation, kinetic = md or (None, 0.0)
             done += ran
             energy = energy_total / n
+            mechanical = energy + kinetic / n  # V + K per particle: what damping can only lower
             worst = max(fmax, gmax)  # forces and generalized torques share the units and the tolerance
             reason = _stop_reason(settings, ftol, energy, worst, energy_prev, fmax_prev, ran, steps, done,
-                                  fmax_at_vmin)
+                                  fmax_at_vmin, fluctuation, mechanical)
             if reason:
                 if settings.pressure is not None:  # report the potential energy, not the enthalpy
                     energy = engine.state().energy / n
                 return MinimizeResult(reason in CONVERGED_REASONS, reason, done, energy, fmax,
                                       time.perf_counter() - start, gmax)
-            energy_prev, fmax_prev = energy, worst
+            energy_prev, fmax_prev = mechanical, worst
 
 
 def _force_bound(packing, energy: float) -> float:
@@ -151,7 +184,11 @@ def _force_bound(packing, energy: float) -> float:
     return 10.0 * abs(pot.dv_dr(np.array([r]), sigma)[0])
 
 
-def _stop_reason(s, ftol, energy, fmax, energy_prev, fmax_prev, ran, steps, done, fmax_at_vmin):
+def _stop_reason(s, ftol, energy, fmax, energy_prev, fmax_prev, ran, steps, done, fmax_at_vmin, fluctuation=None,
+                 mechanical=None):
+    """The stop reason or None. ``energy_prev`` is the previous window's ``mechanical`` energy
+    (V + K per particle; V for the minimisers, where K = 0), which no-progress compares."""
+    mechanical = energy if mechanical is None else mechanical
     fixed_box = s.pressure is None
     if not (math.isfinite(energy) and math.isfinite(fmax)) or (fixed_box and energy < s.v_min and fmax > fmax_at_vmin):
         return "blown-up"
@@ -159,7 +196,9 @@ def _stop_reason(s, ftol, energy, fmax, energy_prev, fmax_prev, ran, steps, done
         return "force"
     if fixed_box and energy < s.v_min:
         return "energy-below-vmin"
-    if math.isfinite(energy_prev) and (energy_prev - energy) < s.delta * energy and fmax > 0.5 * fmax_prev:
+    if fluctuation is not None and fluctuation < s.delta:
+        return "energy-steady"
+    if math.isfinite(energy_prev) and (energy_prev - mechanical) < s.delta * mechanical and fmax > 0.5 * fmax_prev:
         return "no-progress"
     if s.method == "cg" and ran < steps:
         return "linesearch"

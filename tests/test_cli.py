@@ -24,6 +24,7 @@ def test_jam_writes_a_packing_and_a_summary(tmp_path, capsys):
     (["--sizes", "bi:0.5:0.5"], "RATIO"),
     (["--potential", "spring:0.5"], "alpha"),
     (["--out", "/nonexistent-dir/p.h5"], "does not exist"),
+    (["--md-damping", "pairwise"], "applies to --minimizer md only"),
 ])
 def test_bad_input_gives_clear_error(tmp_path, capsys, args, message):
     argv = ["jam", "--quiet", *args] + ([] if "--out" in args else ["--out", str(tmp_path / "x.h5")])
@@ -31,3 +32,15 @@ def test_bad_input_gives_clear_error(tmp_path, capsys, args, message):
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err
     assert not (tmp_path / "x.h5").exists()
+
+
+def test_jam_with_pairwise_damped_md_records_it(tmp_path, capsys):
+    import h5py
+
+    out = tmp_path / "p.h5"
+    assert main(["jam", "--n", "16", "--seed", "3", "--minimizer", "md", "--md-damping", "pairwise",
+                 "--out", str(out), "--quiet"]) == 0
+    assert "phi_J =" in capsys.readouterr().out
+    with h5py.File(out) as f:
+        assert f["protocol"].attrs["minimizer_md_damping"] == "pairwise"
+        assert f["protocol"].attrs["minimizer_method"] == "md"

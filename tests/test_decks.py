@@ -85,6 +85,27 @@ def test_other_minimizer_mirrored(method):
     assert res.first_difference is None and res.agree
 
 
+@pytest.mark.parametrize("damping,seed,phi0", [("viscous", 5, 0.84), ("pairwise", 3, 0.8)])
+def test_damped_md_mirrored(damping, seed, phi0):
+    """Damped MD with either damping, its energy-steady rule and its halted-window force
+    measurement: deck and controller agree bit for bit."""
+    md = MinimizerSettings(method="md", md_damping=damping)
+    res = crosscheck(16, 2, seed=seed, settings=CompressionSettings(phi0=phi0, minimizer=md))
+    assert res.first_difference is None and res.agree and res.phi_j_difference == 0.0
+    assert "energy-below-vmin" in set(res.deck.history["reason"])  # the halted-window path was taken
+
+
+@pytest.mark.parametrize("variables,match", [
+    ({"mddamping": "pairwise"}, "needs jamflow plugin library"),
+    ({"mddamping": "pairwise", "damping": 0.9, "plugin": "x.so"}, "damping x dt = 0.09.* >= 2/24"),
+    ({"mddamping": "stokes"}, "mddamping must be viscous or pairwise"),
+    ({"window": 15}, "2 energy samples per window"),
+])
+def test_deck_refuses_bad_damped_md(tmp_path, variables, match):
+    with pytest.raises(DeckFailed, match=match):
+        run_deck(tmp_path, {"N": 16, "minimizer": "md", **variables}, deck=default_deck_path())
+
+
 def test_deck_under_two_mpi_ranks_jams(tmp_path):
     """mpirun -np 2 lmp: force sums in another order, so only the physics checks apply."""
     res = run_deck(tmp_path, {"N": 16, "seed": 4, "dphi0": 1e-3}, deck=default_deck_path(), ranks=2)

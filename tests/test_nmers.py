@@ -298,3 +298,61 @@ def test_bodies_start_without_overlaps(dim, spec):
     assert a.phi == pytest.approx(phi0, rel=1e-12)
     with pytest.raises(SeparationFailed, match="use a lower phi0"):
         initial_packing(64, dim, "bi:1.4:0.5", "spring", 3, 0.8 if dim == 2 else 0.6, spec)
+
+
+def _side_by_side(tilt_angle=0.0):
+    from jamflow.box import Box
+    from jamflow.packing import Packing
+
+    return Packing([[5.0, 5.0], [5.0, 5.99]], [1.0, 1.0], Box.cube(10.0, 2), shape=parse_shape("nmer:2:1.5", 2),
+                   orientations=[tilt_angle, np.pi + tilt_angle])
+
+
+def test_drawing_draws_bodies_site_by_site(tmp_path):
+    """jamflow.drawing: the disks drawn are the sites (4 for two dimers), the contact lines join
+    the centres of the 2 overlapping site pairs (0.99 long, both periodic ends drawn), every site
+    coloured by its body's director angle mod pi (pi and 0 are one direction)."""
+    from jamflow.drawing import _View, _colours, draw_packing
+    from jamflow.analysis.contacts import Contacts
+
+    p = _side_by_side()
+    view = _View(p, 0.5)
+    centres, sizes, owner = view.images()
+    assert len(centres) == 4 and np.allclose(sizes, 1.0) and list(view.owner) == [0, 0, 1, 1]
+    lines, widths, fmax = view.contact_lines()
+    assert len(lines) == 4 and np.allclose(np.linalg.norm(lines[:, 1] - lines[:, 0], axis=1), 0.99)
+    assert np.allclose(widths, widths.max())  # two equal site overlaps
+    turned = _side_by_side(0.3)
+    values, _, _ = _colours(turned, Contacts().compute(turned), "orientation", None)
+    assert np.allclose(values, 0.3)
+    assert draw_packing(p, tmp_path / "d.png", color_by="orientation").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_drawing_slices_3d_bodies_through_their_sites():
+    """3D: the slice cuts sites (spheres of a body), not body centres: a dimer lying along z
+    with its upper site's centre on the slice shows that site at full size and the other not."""
+    from jamflow.box import Box
+    from jamflow.drawing import _View
+    from jamflow.packing import Packing
+    from jamflow.shapes.rotations import random_orientations
+
+    body = parse_shape("nmer:2:2", 3)  # sites at -+0.5 along the body x axis
+    q = random_orientations(1, 3, np.random.default_rng(0))
+    p = Packing([[3.0, 3.0, 3.0]], [1.0], Box.cube(6.0, 3), shape=body, orientations=q)
+    sites = body.world_sites(p.positions, p.orientations, p.diameters)[0]
+    top = int(np.argmax(sites[:, 2]))
+    view = _View(p, sites[top, 2] / 6.0)
+    cut_heights = np.abs(sites[:, 2] - sites[top, 2])
+    assert list(view.index) == [int(k) for k in np.flatnonzero(cut_heights < 0.5)]
+    assert view.sizes[list(view.index).index(top)] == pytest.approx(1.0)
+
+
+def test_draw_refuses_orientation_colours_for_disks(tmp_path):
+    from jamflow.box import Box
+    from jamflow.drawing import draw_packing
+    from jamflow.packing import Packing
+
+    disks = Packing([[1.0, 1.0], [2.0, 2.0]], [1.0, 1.0], Box.cube(4.0, 2))
+    with pytest.raises(ValueError, match="color_by 'orientation' needs particles that turn"):
+        draw_packing(disks, tmp_path / "x.png", color_by="orientation")
+    assert not (tmp_path / "x.png").exists()

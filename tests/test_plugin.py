@@ -213,6 +213,11 @@ BOX_2D = ["units lj", "dimension 2", "region b block 0 9 0 9 -0.5 0.5", "create_
     (["atom_style sphere", *BOX_2D, "pair_style jamflow/rlj 1.4", "pair_coeff * * 0"], "EPSILON must be a positive"),
 ], ids=["cutoff-too-small", "no-radius", "alpha", "negative-cutoff", "missing-cutoff", "epsilon"])
 def test_lammps_rejects_bad_setup(commands, message):
+    assert_lammps_rejects(commands, message)
+
+
+def assert_lammps_rejects(commands, message):
+    """With the plugin loaded, one of ``commands`` fails with an error matching ``message``."""
     lmp = new_lammps()
     try:
         assert load_plugin(lmp)

@@ -23,6 +23,8 @@ from ..analysis.order import BondOrder, first_minimum, translational_order
 from ..analysis.plots_structure import (plot_bond_correlations, plot_bond_order_map, plot_order, plot_rdf,
                                        plot_structure_factor)
 from ..analysis.readers import packings_from_lammps
+from ..ensemble.parallel import add_engine_arguments, expand_inputs, file_mapper
+from ..ensemble.pooling import merge_rdf, merge_structure_factor, pooled_bins, structure_sums
 from ..analysis.structure import MAX_SPECIES, RDF, StructureFactor, positive
 
 FORMATS = ("auto", "jamflow", "data", "dump")
@@ -30,7 +32,7 @@ HDF5_SUFFIXES = (".h5", ".hdf5")
 
 
 def add_arguments(p) -> None:
-    p.add_argument("files", nargs="+", help="packing files: jamflow .h5, LAMMPS data or dump")
+    p.add_argument("files", nargs="+", help="packing files: jamflow .h5, LAMMPS data or dump; or ensemble store directories")
     p.add_argument("--out", default="structure.h5", help="output HDF5 file")
     p.add_argument("--plots", default=None, help="directory for PNG plots (default: beside --out)")
     p.add_argument("--format", choices=FORMATS, default="auto", help="input format (auto: HDF5 or by suffix)")
@@ -44,6 +46,7 @@ def add_arguments(p) -> None:
     p.add_argument("--q6-dr", type=float, default=0.1, help="bin width of the q6 correlation functions")
     p.add_argument("--force", action="store_true",
                    help="replace output or plot paths that are symlinks, devices or read-only files")
+    add_engine_arguments(p)
 
 
 def parse_diameters(text: str | None) -> dict | None:
@@ -88,24 +91,28 @@ def _discrete(packings) -> bool:
     return len(species[0]) <= MAX_SPECIES and all(np.array_equal(s, species[0]) for s in species)
 
 
-def analyze(packings, labels, args) -> dict:
-    """Every measurement of the command, as plain result objects and arrays."""
-    rdf = RDF(dr=args.dr, partial=_discrete(packings) and len(np.unique(packings[0].diameters)) > 1).compute(packings)
-    r_min = args.r_min if args.r_min is not None else first_minimum(rdf)
-    orders = [BondOrder(r_min=r_min).compute(p) for p in packings]
-    per_g = [translational_order(RDF(dr=args.dr).compute(p), r_min).G for p in packings]
-    table = {
-        "Q6_global": np.array([o.global_order for o in orders]),
-        "Q6_local": np.array([o.local_order for o in orders]),
-        "G": np.array(per_g),
-        "n_isolated": np.array([o.n_isolated for o in orders]),
-        "phi": np.array([p.phi for p in packings]),
-        "n": np.array([p.n for p in packings]),
-        "force_balanced": np.array([_force_balanced(p, label) for p, label in zip(packings, labels)], np.int8),
-    }
+def analyze(packings, labels, args, files=None) -> dict:
+    """Every measurement of the command, as plain result objects and arrays. With ``files``
+    (one jamflow packing file each) and --workers/--scheduler, per-packing work runs as one
+    Dask task per file and g(r), S(k) are pooled from the tasks (jamflow.ensemble.pooling)."""
+    partial = _discrete(packings) and len(np.unique(packings[0].diameters)) > 1
+    workers, scheduler = getattr(args, "workers", None), getattr(args, "scheduler", None)
+    parallel = files is not None and (workers is not None or scheduler is not None)
+    with file_mapper(workers, scheduler) if parallel else file_mapper() as run:
+        if parallel:
+            r_max, dk = pooled_bins(packings, args.k_max)
+            parts = run(structure_sums, files, args.dr, r_max, partial, args.k_max, dk, desc="g(r), S(k)")
+            rdf, sk = merge_rdf([p[:2] for p in parts]), merge_structure_factor([p[2] for p in parts])
+        else:
+            rdf = RDF(dr=args.dr, partial=partial).compute(packings)
+            sk = StructureFactor(k_max=args.k_max).compute(packings)
+        r_min = args.r_min if args.r_min is not None else first_minimum(rdf)
+        orders = run(order_row, files if parallel else packings, r_min, args.dr, desc="Q6, G")
+    table = {name: np.array([o[name] for o in orders]) for name in ORDER_COLUMNS}
+    table["phi"], table["n"] = np.array([p.phi for p in packings]), np.array([p.n for p in packings])
+    table["force_balanced"] = np.array([_force_balanced(p, label) for p, label in zip(packings, labels)], np.int8)
     return dict(rdf=rdf, r_min=float(r_min), table=table, labels=labels,
-                G=translational_order(rdf, r_min), g_fit=rdf_correlation_length(rdf, r_min),
-                sk=StructureFactor(k_max=args.k_max).compute(packings),
+                G=translational_order(rdf, r_min), g_fit=rdf_correlation_length(rdf, r_min), sk=sk,
                 corr=BondCorrelation(r_min=r_min, dr=args.q6_dr).compute(packings))
 
 
@@ -118,6 +125,18 @@ def _force_balanced(packing, label) -> int:
         warnings.warn(f"{label} is {checks.problems()[0]}; its structure is that of a state that is not force "
                       "balanced", stacklevel=2)
     return int(checks.force_balanced)
+
+
+ORDER_COLUMNS = ("Q6_global", "Q6_local", "G", "n_isolated")
+
+
+def order_row(packing, r_min: float, dr: float) -> dict:
+    """Per-packing order parameters (``packing`` may be a jamflow packing file)."""
+    if not hasattr(packing, "positions"):
+        packing = load_packing(packing)
+    order = BondOrder(r_min=r_min).compute(packing)
+    return dict(Q6_global=order.global_order, Q6_local=order.local_order, n_isolated=order.n_isolated,
+                G=translational_order(RDF(dr=dr).compute(packing), r_min).G)
 
 
 def write_results(path, res: dict, files) -> None:
@@ -178,10 +197,14 @@ def run(args) -> int:
     stem = Path(args.out).stem
     for suffix in PLOT_SUFFIXES:
         check_writable(plots / f"{stem}-{suffix}.png", args.force)
+    args.files = expand_inputs(args.files)  # a directory (ensemble store) stands for its packing files
     packings, labels = load_inputs(args.files, args.format, diameters, args.dim)
     if len({p.dim for p in packings}) != 1:
         raise ValueError("the input files mix 2D and 3D packings; analyse them separately")
-    res = analyze(packings, labels, args)
+    one_each = len(packings) == len(args.files) and all(h5py.is_hdf5(f) for f in args.files)
+    if (args.workers is not None or args.scheduler is not None) and not one_each:
+        raise ValueError("--workers/--scheduler run one task per jamflow packing file; LAMMPS inputs run without them")
+    res = analyze(packings, labels, args, files=args.files if one_each else None)
     with replacing([args.out, *(plots / f"{stem}-{s}.png" for s in PLOT_SUFFIXES)] if args.force else []):
         write_results(args.out, res, args.files)
         written = write_plots(plots, stem, res, packings[0])

@@ -11,7 +11,7 @@ import sys
 from ..crosscheck import crosscheck
 from ..deck import DeckFailed
 from ..minimize import METHODS
-from .jam import settings_from_args
+from .jam import add_md_damping_argument, settings_from_args
 
 
 def add_arguments(p) -> None:
@@ -20,6 +20,7 @@ def add_arguments(p) -> None:
     p.add_argument("--sizes", default="bi:1.4:0.5", help="mono | bi:RATIO:FRACTION_SMALL (the deck's sizes)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the start")
     p.add_argument("--minimizer", choices=METHODS, default="fire", help="energy minimiser")
+    add_md_damping_argument(p)
     p.add_argument("--phi0", type=float, default=None, help="initial packing fraction (default 0.80 in 2D, 0.55 in 3D)")
     p.add_argument("--dphi0", type=float, default=1e-4, help="initial packing-fraction increment")
     p.add_argument("--vtol", type=float, default=1e-16, help="energy window V_tol < V < 2 V_tol (per particle)")

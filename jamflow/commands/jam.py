@@ -12,7 +12,7 @@ import time
 from ..checks import check_packing
 from ..engine.base import ENGINES, engine_name
 from ..io import check_writable, replacing, save_packing
-from ..minimize import METHODS, MinimizerSettings
+from ..minimize import MD_DAMPINGS, METHODS, MinimizerSettings
 from ..protocols.compression import (DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, JammingFailed, check_resolution,
                                      initial_packing, jam)
 from ..progress import CompressionProgress
@@ -37,6 +37,7 @@ def add_arguments(p) -> None:
                    help="energy minimiser; rigid bodies in LAMMPS: md (damped rigid-body dynamics)")
     p.add_argument("--damping", type=float, default=MinimizerSettings().damping,
                    help="md only: drag coefficient (sqrt(m eps)/diameter); rigid bodies: damping time 1/DAMPING")
+    add_md_damping_argument(p)
     p.add_argument("--engine", choices=ENGINES, default="auto",
                    help="auto: the compiled engine (FIRE, in process) wherever it runs the scene, else LAMMPS "
                         "(docs/speed.md). The engines sum forces in different orders, so from one start they "
@@ -70,13 +71,22 @@ def add_arguments(p) -> None:
                         "instead of running it; then: cd DIR && lmp -in DECK.lmp")
 
 
+def add_md_damping_argument(p) -> None:
+    p.add_argument("--md-damping", choices=MD_DAMPINGS, default="viscous",
+                   help="--minimizer md only: viscous (drag -b v on every particle) or pairwise (seed eq. 2.3: "
+                        "-b (v_ij . rhat) rhat on contacting pairs; docs/damped-md.md)")
+
+
 def settings_from_args(args) -> CompressionSettings:
     for name in ("phi0", "dphi0", "vtol"):
         value = getattr(args, name)
         if value is not None and (not math.isfinite(value) or value <= 0):
             raise ValueError(f"--{name} must be a finite positive number, got {value}")
+    if args.md_damping != "viscous" and args.minimizer != "md":
+        raise ValueError(f"--md-damping {args.md_damping} applies to --minimizer md only, not {args.minimizer}")
     minimizer = MinimizerSettings(method=args.minimizer, force_tol=args.ftol, v_min=args.vtol,
-                                  damping=getattr(args, "damping", MinimizerSettings().damping))  # crosscheck: none
+                                  damping=getattr(args, "damping", MinimizerSettings().damping),  # crosscheck: none
+                                  md_damping=args.md_damping)
     protocol = args.protocol or ("seed" if args.emit_deck else DEFAULT_PROTOCOL)
     return PROTOCOLS[protocol](phi0=args.phi0, dphi0=args.dphi0, v_tol=args.vtol, minimizer=minimizer)
 
@@ -95,59 +105,73 @@ def check_boundary_args(args) -> None:
                          "is lammps_inputs/pressure.lmp")
 
 
-def run(args) -> int:
+def prepare(args):
+    """Validated settings and random start from parsed options: every refusal comes here,
+    before any work (shared by ``jamflow jam`` and ``jamflow ensemble``)."""
     check_boundary_args(args)
     settings = settings_from_args(args)
-    check_writable(args.out, args.force)
     start = initial_packing(args.n, args.dim, args.sizes, args.potential, args.seed,
                             settings.start_phi(args.dim, args.gravity, args.shape), args.shape, args.walls, args.wall_type,
                             args.gravity)
     if args.pressure is not None:
-        return run_pressure(args, start, settings)
-    engine_name(start, args.minimizer, args.engine)  # refuse --engine numba where it cannot run, before work
+        from ..protocols.pressure import PressureSettings, check_pressure_start, pressure_sequence
+
+        psettings = PressureSettings(pressure_sequence(args.pressure), args.stress, settings.minimizer)
+        check_pressure_start(start, psettings)
+        engine_name(start, args.minimizer, args.engine, pressure=True)
+        return psettings, start
+    engine_name(start, args.minimizer, args.engine)  # refuse an engine that cannot run the scene, before work
     check_resolution(start, settings)
+    return settings, start
+
+
+def jam_from_args(args, observers=(), engine_options=None):
+    """(result, checks) of the jam the parsed options ask for; JammingFailed if the protocol
+    fails or the packing fails its checks (``checked``), so nothing unchecked is written."""
+    settings, start = prepare(args)
+    if args.pressure is not None:
+        from ..protocols.pressure import jam_at_pressure
+
+        result = jam_at_pressure(start, settings, observers=observers, engine=args.engine,
+                                 engine_options=engine_options)
+        return result, checked(result, settings.minimizer, None, args.out)
+    result = jam(start=start, settings=settings, observers=observers, engine=args.engine,
+                 engine_options=engine_options)
+    window = None if args.gravity else settings.v_tol  # a pile under gravity has no energy window
+    return result, checked(result, settings.minimizer, window, args.out)
+
+
+def save_result(path, result, checks, args, **run_info):
+    """Write a checked result as a packing file; ``run_info`` (e.g. seconds) joins the protocol
+    attributes; ``args.force`` lets it replace a symlink, device or read-only file."""
+    with replacing([path] if getattr(args, "force", False) else []):
+        return save_packing(path, result.packing, energy_per_particle=result.energy_per_particle,
+                            pressure_tensor=result.pressure_tensor,
+                            protocol={**result.settings.as_dict(), "engine": result.engine, **run_info},
+                            history=result.history, lammps_version=result.lammps_version,
+                            wall_forces=getattr(result, "wall_forces", None), target_pressure=args.pressure,
+                            stress=args.stress if args.pressure is not None else None, checks=checks)
+
+
+def run(args) -> int:
+    check_writable(args.out, args.force)
     if args.emit_deck:
+        settings, start = prepare(args)
         return emit(args, start, settings)
     t0 = time.perf_counter()
     with CompressionProgress(disable=args.quiet) as progress:
-        result = jam(start=start, settings=settings, observers=[progress], engine=args.engine)
-    checks = checked(result, settings, args.out, v_tol=None if args.gravity else "settings")  # a pile has no window
-    with replacing([args.out] if args.force else []):
-        save_packing(args.out, result.packing, energy_per_particle=result.energy_per_particle,
-                     pressure_tensor=result.pressure_tensor, protocol={**settings.as_dict(), "engine": result.engine},
-                     history=result.history, lammps_version=result.lammps_version, wall_forces=result.wall_forces,
-                     checks=checks)
+        result, checks = jam_from_args(args, observers=[progress])
+    save_result(args.out, result, checks, args)
     print(f"{result.summary()}  -> {args.out} ({time.perf_counter() - t0:.2f} s)")
     return 0
 
 
-def run_pressure(args, start, settings) -> int:
-    """--pressure: the enthalpy minimisations of jamflow.protocols.pressure from the random start."""
-    from ..protocols.pressure import PressureSettings, check_pressure_start, jam_at_pressure, pressure_sequence
-
-    psettings = PressureSettings(pressure_sequence(args.pressure), args.stress, settings.minimizer)
-    check_pressure_start(start, psettings)
-    engine_name(start, args.minimizer, args.engine, pressure=True)
-    t0 = time.perf_counter()
-    with CompressionProgress(disable=args.quiet) as progress:
-        result = jam_at_pressure(start, psettings, observers=[progress], engine=args.engine)
-    checks = checked(result, settings, args.out, v_tol=None)
-    with replacing([args.out] if args.force else []):
-        save_packing(args.out, result.packing, energy_per_particle=result.energy_per_particle,
-                     pressure_tensor=result.pressure_tensor, protocol={**psettings.as_dict(), "engine": result.engine},
-                     history=result.history, lammps_version=result.lammps_version, target_pressure=args.pressure,
-                     stress=args.stress, checks=checks)
-    print(f"{result.summary()}  -> {args.out} ({time.perf_counter() - t0:.2f} s)")
-    return 0
-
-
-def checked(result, settings, out, v_tol="settings"):
-    """The packing checks of a jam result; JammingFailed (nothing written) if any fails.
-    ``v_tol`` None skips the energy-window check (constant-pressure packings have no window)."""
+def checked(result, minimizer, v_tol, out):
+    """The packing checks of a result; JammingFailed (nothing written) if any fails.
+    ``v_tol`` None skips the energy-window check (piles under gravity, constant pressure)."""
     packing = result.packing
-    ftol = settings.minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness)
-    window = settings.v_tol if v_tol == "settings" else v_tol
-    checks = check_packing(packing, result.energy_per_particle, None, window, ftol)
+    ftol = minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness)
+    checks = check_packing(packing, result.energy_per_particle, None, v_tol, ftol)
     if not checks.passed:
         reason = result.history["reason"][-1].decode()
         remedy = ("a larger --vtol (stronger contacts) or another --minimizer" if not checks.force_balanced else

@@ -9,23 +9,24 @@ of hypostatic packings against the missing contacts N' d_f - d + 1 - N_c)."""
 
 from __future__ import annotations
 
+import warnings
+from dataclasses import replace
 from pathlib import Path
 
 import h5py
 import numpy as np
 
-import warnings
-
 from .. import __version__
 from ..analysis.modes import DensityOfStates, Spectrum, Stability
 from ..checks import check_packing
+from ..ensemble.parallel import add_engine_arguments, expand_inputs, map_files
 from ..io import atomic_path, check_writable, load_packing, open_hdf5, read_checks, replacing
 
 SCHEMA, SCHEMA_VERSION = "jamflow.modes", 2  # v2 adds the shape, mode character and per-mode profiles
 
 
 def add_arguments(p) -> None:
-    p.add_argument("files", nargs="+", metavar="PACKING.h5", help="packing files (jamflow jam --out)")
+    p.add_argument("files", nargs="+", metavar="PACKING.h5", help="packing files (jamflow jam --out) or ensemble store directories")
     p.add_argument("--e-min", type=float, default=1e-6, help="zero-mode threshold on eigenvalues (eps/diameter^2)")
     p.add_argument("--mass", type=float, default=None,
                    help="M in omega = sqrt(e/M); default N m with m = 1, as the seed defines it")
@@ -39,6 +40,7 @@ def add_arguments(p) -> None:
     p.add_argument("--save-vectors", action="store_true", help="also store all eigenvectors")
     p.add_argument("--force", action="store_true",
                    help="replace result or figure paths that are symlinks, devices or read-only files")
+    add_engine_arguments(p)
 
 
 def results_path(packing_path) -> Path:
@@ -54,31 +56,39 @@ def figure_path(args) -> Path:
 
 
 def run(args) -> int:
+    args.files = expand_inputs(args.files)  # a directory (ensemble store) stands for its packing files
     spectrum = Spectrum(e_min=args.e_min, mass=args.mass, method=args.method)
-    stability, dos = Stability(spectrum=spectrum), DensityOfStates(args.bins, args.omega_max)
-    packings = [load_packing(f) for f in args.files]  # every input is read before any work
-    outputs = [results_path(f) for f in args.files]
-    written = outputs + ([] if args.no_figure else [figure_path(args)])
+    dos = DensityOfStates(args.bins, args.omega_max)
+    for f in args.files:  # every input is read before any work
+        load_packing(f)
+    written = [results_path(f) for f in args.files] + ([] if args.no_figure else [figure_path(args)])
     for out in written:
         check_writable(out, args.force)
-    with replacing(written if args.force else []):
-        rows = [analyse(path, packing, out, spectrum, stability, args) for path, packing, out in
-                zip(args.files, packings, outputs)]
-        print(ensemble_summary([s for s, _ in rows], [st for _, st in rows]))
-        if not args.no_figure:
+    rows = map_files(analyse_file, args.files, spectrum, args.save_vectors, args.force, workers=args.workers,
+                     scheduler=args.scheduler, progress=len(args.files) > 1, desc="modes")
+    for line, _, _ in rows:
+        print(line)
+    rows = [(spec, stab) for _, spec, stab in rows]
+    print(ensemble_summary([s for s, _ in rows], [st for _, st in rows]))
+    if not args.no_figure:
+        with replacing([figure_path(args)] if args.force else []):
             _draw(args, rows, dos)
     return 0
 
 
-def analyse(path, packing, out, spectrum, stability, args):
-    """Checks, spectrum and stability of one packing; writes its results file."""
+def analyse_file(path, spectrum, save_vectors=False, force=False):
+    """One packing: checks, spectrum, stability class, results file (``force``: it may replace a
+    symlink, device or read-only file); the spectrum comes back without eigenvectors (they stay
+    in the results file with --save-vectors)."""
+    packing = load_packing(path)
     checks = checked(path, packing)
     spec = spectrum.compute(packing)
-    stab = stability.compute(packing, spec)
-    save_modes(out, path, spec, stab, vectors=args.save_vectors, checks=checks)
-    print(summary_line(path, spec, stab) + ("" if checks.force_balanced else "  [NOT FORCE BALANCED]"))
-    return spec, stab
-
+    stab = Stability(spectrum=spectrum).compute(packing, spec)
+    out = results_path(path)
+    with replacing([out] if force else []):
+        save_modes(out, path, spec, stab, vectors=save_vectors, checks=checks)
+    line = summary_line(path, spec, stab) + ("" if checks.force_balanced else "  [NOT FORCE BALANCED]")
+    return line, replace(spec, eigenvectors=None), stab
 
 
 def checked(path, packing):

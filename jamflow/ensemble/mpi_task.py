@@ -1,0 +1,38 @@
+"""One ensemble packing on several MPI ranks: ``mpirun -np K python -m jamflow.ensemble.mpi_task SPEC``.
+
+Every rank runs the Python controller on LAMMPS over MPI.COMM_WORLD (domain decomposition;
+positions and forces gathered over ranks, README "How jamflow runs LAMMPS"); rank 0 writes
+the packing file, or the failure record, atomically. SPEC is the JSON that
+``jamflow.ensemble.tasks.make_packing`` passes (jam options, n, seed, paths).
+"""
+
+import argparse
+import json
+import sys
+import time
+
+from mpi4py import MPI  # first: this process is an MPI rank
+
+
+def main(spec: dict) -> int:
+    from ..commands.jam import jam_from_args, save_result
+    from ..protocols.compression import JammingFailed
+    from .store import write_failure
+
+    comm = MPI.COMM_WORLD
+    args = argparse.Namespace(**spec["options"])
+    t0 = time.perf_counter()
+    try:
+        result, checks = jam_from_args(args, engine_options={"comm": comm})
+    except JammingFailed as err:
+        if comm.rank == 0:
+            write_failure(spec["failure_path"], str(err), time.perf_counter() - t0)
+        return 0
+    if comm.rank == 0:
+        save_result(spec["path"], result, checks, args, seconds=round(time.perf_counter() - t0, 3),
+                    mpi_ranks=comm.size)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(json.loads(sys.argv[1])))

@@ -1,0 +1,203 @@
+"""Distribution of jamming onsets over an ensemble (seed section 2.4, Figure 2.14).
+
+Per N: P(phi_J) and P(<z>) histograms, <phi_J> with its standard error, the width
+W(N) = standard deviation of phi_J with a bootstrap error (packings resampled with
+replacement). Over N: W ~ N^-nu (weighted least squares on log W - log N; seed: nu ~ 0.5 for
+spheres, O'Hern, Silbert, Liu & Nagel, PRE 68, 011306, 2003) and the finite-size
+extrapolation <phi_J>(N) = phi_inf - a N^-nu (the shift scales as the width, O'Hern et al.
+2003), linear in N^-nu at the fitted nu. Errors of nu and phi_inf are the spread of the same
+fits over bootstrap replicates of every N at once.
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..io import atomic_path
+
+
+@dataclass(frozen=True)
+class SizeStats:
+    """Onset statistics at one N (phi_J dimensionless, <z> contacts per non-floater)."""
+
+    n: int
+    phi: np.ndarray  # phi_J of every packing
+    z: np.ndarray  # <z> of every packing (non-floaters)
+    isostatic: np.ndarray  # bool per packing
+    failed: int
+    width_err: float  # bootstrap standard error of W
+
+    @property
+    def count(self) -> int:
+        return len(self.phi)
+
+    @property
+    def mean_phi(self) -> float:
+        return float(np.mean(self.phi))
+
+    @property
+    def mean_phi_err(self) -> float:
+        return float(np.std(self.phi, ddof=1) / np.sqrt(self.count))
+
+    @property
+    def width(self) -> float:
+        return float(np.std(self.phi, ddof=1))
+
+
+@dataclass(frozen=True)
+class Fit:
+    """A fitted value with its bootstrap error (nan when too few sizes)."""
+
+    value: float
+    err: float
+
+
+@dataclass(frozen=True)
+class OnsetResult:
+    dim: int
+    sizes: list  # SizeStats, ascending N
+    nu: Fit  # W ~ N^-nu
+    amplitude: float  # W = amplitude * N^-nu
+    phi_inf: Fit  # <phi_J>(N -> infinity)
+    shift: float  # a in <phi_J>(N) = phi_inf - a N^-nu
+    n_bootstrap: int
+
+    def table(self) -> list[dict]:
+        return [dict(n=s.n, packings=s.count, failed=s.failed, mean_phi_j=s.mean_phi, mean_phi_j_err=s.mean_phi_err,
+                     width=s.width, width_err=s.width_err, mean_z=float(np.mean(s.z)),
+                     sd_z=float(np.std(s.z, ddof=1)), isostatic_fraction=float(np.mean(s.isostatic)))
+                for s in self.sizes]
+
+
+def rows_by_size(rows) -> tuple[int, dict]:
+    """Group summary.csv rows (status ok) by N; returns (dim, {n: [rows]}) and counts failures."""
+    groups, failed, dims = defaultdict(list), defaultdict(int), set()
+    for row in rows:
+        n = int(row["n"])
+        if row["status"] == "ok":
+            groups[n].append(row)
+            dims.add(int(row["dim"]))
+        else:
+            failed[n] += 1
+    if len(dims) > 1:
+        raise ValueError("the summary mixes 2D and 3D packings; analyse them separately")
+    if not groups:
+        raise ValueError("no finished packings in the summary; run jamflow ensemble first")
+    return dims.pop(), {n: (groups[n], failed[n]) for n in sorted(groups)}
+
+
+def onset_statistics(rows, n_bootstrap: int = 1000, seed: int = 0) -> OnsetResult:
+    """Statistics of phi_J and <z> per N and the fits over N (see the module docstring)."""
+    if n_bootstrap < 10:
+        raise ValueError(f"n_bootstrap must be at least 10, got {n_bootstrap}")
+    dim, groups = rows_by_size(rows)
+    rng = np.random.default_rng(seed)
+    phis = {n: np.array([float(r["phi_j"]) for r in g]) for n, (g, _) in groups.items()}
+    small = [n for n, p in phis.items() if len(p) < 3]
+    if small:
+        raise ValueError(f"N = {', '.join(map(str, small))}: fewer than 3 packings; a width needs more")
+    boot = {n: _resample(p, n_bootstrap, rng) for n, p in phis.items()}  # (B, count) replicates
+    sizes = [SizeStats(n, phis[n], np.array([float(r["mean_z"]) for r in g]), _isostatic(g, dim), failed,
+                       float(np.std(np.std(boot[n], axis=1, ddof=1), ddof=1)))
+             for n, (g, failed) in groups.items()]
+    ns = np.array([s.n for s in sizes], float)
+    w_err = np.array([s.width_err for s in sizes])
+    nu, amp, phi_inf, shift = _fits(ns, np.array([s.width for s in sizes]), w_err,
+                                    np.array([s.mean_phi for s in sizes]), np.array([s.mean_phi_err for s in sizes]))
+    boot_w = np.array([np.std(boot[int(n)], axis=1, ddof=1) for n in ns])  # (sizes, B)
+    boot_mean = np.array([boot[int(n)].mean(axis=1) for n in ns])
+    mean_err = np.array([s.mean_phi_err for s in sizes])
+    reps = np.array([_fits(ns, boot_w[:, b], w_err, boot_mean[:, b], mean_err) for b in range(n_bootstrap)])
+    return OnsetResult(dim, sizes, Fit(nu, _sd(reps[:, 0])), amp, Fit(phi_inf, _sd(reps[:, 2])), shift, n_bootstrap)
+
+
+def _resample(values, n_boot, rng):
+    return values[rng.integers(0, len(values), size=(n_boot, len(values)))]
+
+
+def _sd(x):
+    """Half the central 68 % range of bootstrap replicates (the sd for a normal spread; robust to
+    the rare degenerate replicate)."""
+    x = x[np.isfinite(x)]
+    return float(np.diff(np.percentile(x, [15.865, 84.135]))[0] / 2) if len(x) > 1 else float("nan")
+
+
+def _isostatic(group, dim) -> np.ndarray:
+    """N_c = d (N' - 1) + 1 over the non-floaters (seed section 4.1)."""
+    return np.array([int(r["n_contacts"]) == dim * (int(r["n"]) - int(r["floaters"]) - 1) + 1 for r in group])
+
+
+def _fits(ns, width, width_err, mean, mean_err):
+    """(nu, amplitude, phi_inf, shift): log W = log A - nu log N and <phi_J> = phi_inf - a N^-nu,
+    both weighted least squares; nan where fewer than 2 sizes (3 for phi_inf)."""
+    if len(ns) < 2:
+        return (np.nan,) * 4
+    slope, intercept = np.polyfit(np.log(ns), np.log(width), 1, w=width / width_err)
+    nu = -slope
+    if len(ns) < 3:
+        return nu, float(np.exp(intercept)), np.nan, np.nan
+    a_slope, phi_inf = np.polyfit(ns ** (-nu), mean, 1, w=1.0 / mean_err)
+    return nu, float(np.exp(intercept)), float(phi_inf), float(-a_slope)
+
+
+def histograms(values_by_n: dict, bins: int):
+    """Normalised histograms on common edges: (edges, {n: density})."""
+    allv = np.concatenate(list(values_by_n.values()))
+    edges = np.linspace(allv.min(), allv.max(), bins + 1)
+    return edges, {n: np.histogram(v, bins=edges, density=True)[0] for n, v in values_by_n.items()}
+
+
+def onsets_figure(result: OnsetResult, path, bins: int = 30, published: float | None = None):
+    """Four panels: P(phi_J), P(<z>) per N (Figure 2.14), W(N) with the fit, <phi_J> against N^-nu."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.ticker import NullLocator
+
+    fig, ax = plt.subplots(2, 2, figsize=(11, 8.5))
+    colors = plt.cm.viridis(np.linspace(0, 0.9, len(result.sizes)))
+    for key, axis, label in (("phi", ax[0, 0], r"$\phi_J$"), ("z", ax[0, 1], r"$\langle z \rangle_J$")):
+        edges, dens = histograms({s.n: getattr(s, key) for s in result.sizes}, bins)
+        centers = 0.5 * (edges[1:] + edges[:-1])
+        for s, c in zip(result.sizes, colors):
+            axis.plot(centers, dens[s.n], drawstyle="steps-mid", color=c, label=f"N = {s.n} ({s.count})")
+        axis.set_xlabel(label)
+        axis.set_ylabel(f"P({label})")
+        axis.legend(fontsize=8)
+    if published is not None:
+        ax[0, 0].axvline(published, color="k", ls=":", lw=1)
+    ns = np.array([s.n for s in result.sizes], float)
+    w = np.array([s.width for s in result.sizes])
+    ax[1, 0].errorbar(ns, w, yerr=[s.width_err for s in result.sizes], fmt="o", color="C0", label="W(N), bootstrap errors")
+    if np.isfinite(result.nu.value):
+        grid = np.geomspace(ns.min(), ns.max(), 50)
+        ax[1, 0].plot(grid, result.amplitude * grid ** -result.nu.value, "C1-",
+                      label=rf"fit $W \propto N^{{-\nu}}$, $\nu$ = {result.nu.value:.3f} $\pm$ {result.nu.err:.3f}")
+    ax[1, 0].set(xscale="log", yscale="log", xlabel="N", ylabel=r"W = sd($\phi_J$)")
+    ax[1, 0].set_xticks(ns, [str(int(n)) for n in ns], minor=False)
+    ax[1, 0].xaxis.set_minor_locator(NullLocator())
+    ax[1, 0].legend(fontsize=8)
+    x = ns ** -result.nu.value if np.isfinite(result.nu.value) else 1 / ns
+    ax[1, 1].errorbar(x, [s.mean_phi for s in result.sizes], yerr=[s.mean_phi_err for s in result.sizes], fmt="o",
+                      color="C0", label=r"$\langle\phi_J\rangle$(N)")
+    for s, xi in zip(result.sizes, x):
+        ax[1, 1].annotate(f"{s.n}", (xi, s.mean_phi), textcoords="offset points", xytext=(4, 4), fontsize=7)
+    if np.isfinite(result.phi_inf.value):
+        grid = np.linspace(0, x.max(), 50)
+        ax[1, 1].plot(grid, result.phi_inf.value - result.shift * grid, "C1-",
+                      label=rf"$\phi_\infty$ = {result.phi_inf.value:.4f} $\pm$ {result.phi_inf.err:.4f}")
+    if published is not None:
+        ax[1, 1].axhline(published, color="k", ls=":", lw=1, label=f"published {published}")
+    ax[1, 1].set(xlabel=rf"$N^{{-\nu}}$", ylabel=r"$\langle\phi_J\rangle$", xlim=(0, None))
+    ax[1, 1].legend(fontsize=8)
+    fig.suptitle(f"{result.dim}D jamming onsets: {sum(s.count for s in result.sizes)} packings, "
+                 f"{result.n_bootstrap} bootstrap replicates")
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110, format="png")
+    plt.close(fig)
+    return path

@@ -1,0 +1,64 @@
+"""Per-packing analysis of many files on the ensemble's Dask engine (``jamflow modes`` and
+``jamflow analyze`` over a store): directories expand to their packing files, and one task
+per file runs on a local cluster or an existing scheduler."""
+
+from __future__ import annotations
+
+import contextlib
+from pathlib import Path
+
+from tqdm import tqdm
+
+
+def expand_inputs(paths) -> list[str]:
+    """Files as given; a directory (an ensemble store) stands for its ``*.h5`` packing files."""
+    out = []
+    for path in map(Path, paths):
+        if path.is_dir():
+            files = sorted(path.glob("*.h5"))
+            if not files:
+                raise FileNotFoundError(f"directory {path} holds no *.h5 packing files")
+            out += [str(f) for f in files]
+        else:
+            out.append(str(path))
+    return out
+
+
+def add_engine_arguments(p) -> None:
+    """--workers / --scheduler, as in ``jamflow ensemble``."""
+    p.add_argument("--workers", type=int, default=None,
+                   help="run one task per file on a local Dask cluster of this many processes")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run one task per file on an existing Dask scheduler (tcp://HOST:PORT or a scheduler file)")
+
+
+@contextlib.contextmanager
+def file_mapper(workers=None, scheduler=None, progress=True):
+    """A function ``run(func, files, *args, desc=...)`` = ``[func(f, *args) for f in files]``,
+    one Dask task per file when ``workers`` or ``scheduler`` is given (results in input order;
+    the first task error is raised), else in this process. One cluster serves every call."""
+    if workers is not None and workers < 1:
+        raise ValueError(f"--workers must be at least 1, got {workers}")
+    if workers is None and scheduler is None:
+        yield lambda func, files, *args, desc="packings": [
+            func(f, *args) for f in tqdm(files, desc=desc, disable=not progress or len(files) < 2)]
+        return
+    from distributed import as_completed
+
+    from .cluster import dask_client
+
+    with dask_client(workers, scheduler) as client:
+        def run(func, files, *args, desc="packings"):
+            futures = [client.submit(func, f, *args, pure=False) for f in files]
+            with tqdm(total=len(files), desc=desc, disable=not progress) as bar:
+                for _ in as_completed(futures):
+                    bar.update(1)
+            return client.gather(futures)
+
+        yield run
+
+
+def map_files(func, files, *args, workers=None, scheduler=None, progress=True, desc="packings") -> list:
+    """One ``file_mapper`` call: ``[func(f, *args) for f in files]``, on Dask if asked."""
+    with file_mapper(workers, scheduler, progress) as run:
+        return run(func, files, *args, desc=desc)

@@ -1,0 +1,256 @@
+"""Run an ensemble: every (N, seed) task not yet in the store, one packing per Dask task."""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import errno
+import signal
+import threading
+import time
+import uuid
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from tqdm import tqdm
+
+from ..commands import jam as jam_command
+from .cluster import WAIT_WORKERS, dask_client, workers_line, workers_state
+from .checks import packing_row
+from .store import Store, Task, failure_row, write_failure
+
+TASK_KEYS = ("n", "seed", "out", "quiet", "emit_deck", "force")  # set per task, not store parameters
+SUMMARY_EVERY = 10.0  # seconds between summary.csv rewrites during a run
+MAX_ERRORS_BEFORE_SUCCESS = 3  # the same broken set-up fails every task: stop early
+
+
+@dataclass
+class EnsembleReport:
+    """What a run did; ``rows`` holds the summary row of every task of the run."""
+
+    directory: Path
+    requested: int
+    done_before: int = 0
+    made: int = 0
+    failed: int = 0  # recorded failures (JammingFailed or a task that killed its workers), new and old
+    errors: list = field(default_factory=list)  # exceptions not recorded (the task is retried by a rerun)
+    corrupt: list = field(default_factory=list)  # unreadable files moved aside and redone
+    workers_lost: int = 0
+    interrupted: bool = False
+    stopped: str = ""  # why the run stopped early (disk full, broken set-up)
+    rows: dict = field(default_factory=dict)
+
+
+def jam_parameters(**options) -> dict:
+    """The store parameters: ``jamflow jam``'s defaults updated with ``options`` (same names
+    as its command-line dests: dim, sizes, potential, protocol, engine, ...)."""
+    parser = argparse.ArgumentParser(add_help=False)
+    jam_command.add_arguments(parser)
+    defaults = vars(parser.parse_args([]))
+    unknown = sorted(set(options) - set(defaults))
+    if unknown:
+        raise ValueError(f"unknown jam option(s) {', '.join(unknown)}; use names of `jamflow jam --help`")
+    return {k: v for k, v in {**defaults, **options}.items() if k not in TASK_KEYS}
+
+
+def seed_range(seeds) -> range:
+    """'A:B' (seeds A to B-1) or a range; refuses empty, reversed and negative ranges."""
+    if isinstance(seeds, str):
+        try:
+            a, b = (int(x) for x in seeds.split(":"))
+        except ValueError:
+            raise ValueError(f"--seeds {seeds!r}: write A:B, e.g. 0:200 for seeds 0 to 199") from None
+        seeds = range(a, b)
+    if not isinstance(seeds, range) or seeds.step != 1:
+        raise ValueError("seeds must be a range of consecutive seeds, e.g. range(0, 200) or '0:200'")
+    if seeds.start < 0 or seeds.stop <= seeds.start:
+        raise ValueError(f"seed range {seeds.start}:{seeds.stop} is empty, reversed or negative; "
+                         "give A:B with 0 <= A < B, e.g. 0:200")
+    return seeds
+
+
+def run_ensemble(out, seeds, n=(64,), *, workers=None, scheduler=None, client=None, progress=True,
+                 retry_failed=False, on_result=None, wait_workers=WAIT_WORKERS, mpi_ranks=1,
+                 **jam_options) -> EnsembleReport:
+    """Make one packing per (N in ``n``, seed in ``seeds``) into the store ``out``.
+
+    Finished packings are skipped, recorded failures too (unless ``retry_failed``). The
+    engine is ``client`` (a distributed.Client), else the scheduler at ``scheduler``, else a
+    local cluster of ``workers`` processes (default: all cores). ``on_result(task, row,
+    client)`` is called in this process after every finished task. A scheduler without a
+    worker after ``wait_workers`` seconds stops the run with an error. ``mpi_ranks`` > 1 runs
+    each packing with LAMMPS on that many MPI ranks (needs engine="lammps" and mpi4py).
+    """
+    seeds = seed_range(seeds)
+    sizes = sorted({int(x) for x in ([n] if isinstance(n, int) else n)})
+    fixed = jam_parameters(**jam_options)
+    if workers is not None and (scheduler is not None or client is not None):
+        raise ValueError("--workers sizes the local cluster; with --scheduler the cluster's own workers run the tasks")
+    if workers is not None and workers < 1:
+        raise ValueError(f"--workers must be at least 1, got {workers}")
+    _check_mpi(mpi_ranks, fixed["engine"])
+    if not wait_workers > 0:
+        raise ValueError(f"--wait-workers must be a positive number of seconds, got {wait_workers}")
+    for size in sizes:  # every grid point is validated before any work
+        jam_command.prepare(argparse.Namespace(**fixed, n=size, seed=seeds.start, emit_deck=None))
+    tasks = [Task((("n", size),), seed) for size in sizes for seed in seeds]
+    with Store(out).open(fixed, ["n"], defaults=jam_parameters()) as store:
+        done, failed, todo, corrupt = store.classify(tasks, fixed, retry_failed)
+        report = EnsembleReport(store.dir, len(tasks), len(done), 0, len(failed), corrupt=corrupt,
+                                rows={**done, **failed})
+        try:
+            if todo:
+                with _interrupt_flag() as interrupted, dask_client(workers, scheduler, client, wait_workers) as c:
+                    _run(c, store, fixed, todo, report, progress, on_result, interrupted, mpi_ranks)
+        except KeyboardInterrupt:
+            report.interrupted = True
+        finally:
+            store.remove_debris()
+            _collect_late(store, fixed, todo, report)
+            _write_summary(store, report)
+    return report
+
+
+@contextlib.contextmanager
+def _interrupt_flag():
+    """An Event set by Ctrl-C, which the run loop polls (a KeyboardInterrupt inside Dask's
+    event loop would print its tracebacks); a second Ctrl-C interrupts at once."""
+    flag = threading.Event()
+    if threading.current_thread() is not threading.main_thread():
+        yield flag
+        return
+
+    def handler(signum, frame):
+        if flag.is_set():
+            raise KeyboardInterrupt
+        flag.set()
+
+    previous = signal.signal(signal.SIGINT, handler)
+    try:
+        yield flag
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _collect_late(store, fixed, todo, report):
+    """Rows of packings that workers finished after the run stopped listening (interrupt, stop)."""
+    for task in todo:
+        if task.name not in report.rows and store.packing_path(task).exists():
+            try:
+                report.rows[task.name] = packing_row(store.packing_path(task), task, fixed)
+                report.made += 1
+            except (OSError, KeyError, ValueError):
+                pass  # an unreadable file is moved aside and redone by the next run
+
+
+def _run(client, store, fixed, todo, report, progress, on_result, interrupted, mpi_ranks):
+    from distributed import wait
+
+    todo = sorted(todo, key=lambda t: (-dict(t.point)["n"], t.seed))  # longest first balances the load
+    run_id = uuid.uuid4().hex[:8]
+    futures = {client.submit(_make_packing, fixed, task, str(store.packing_path(task)), str(store.failure_path(task)),
+                             mpi_ranks, key=f"jam-{task.stem}-{run_id}", pure=False, priority=-k): task
+               for k, task in enumerate(todo)}
+    pending = set(futures)
+    bar = tqdm(total=len(todo), desc="ensemble", unit="packing", disable=not progress, dynamic_ncols=True)
+    line = tqdm(bar_format="{desc}", position=1, disable=not progress, leave=False)
+    bar.set_postfix_str(f"failed={report.failed}, done before={report.done_before}")
+    seen, last_write = set(), time.monotonic()  # worker addresses at the last poll
+    try:
+        while pending and not report.stopped:
+            if interrupted.is_set():
+                report.interrupted = True
+                break
+            try:
+                finished = wait(pending, timeout=1.0, return_when="FIRST_COMPLETED").done
+            except TimeoutError:
+                finished = set()
+            for fut in finished:
+                pending.discard(fut)
+                row = _outcome(fut, futures[fut], store, fixed, report)
+                if row is not None:
+                    report.rows[row["file"]] = row
+                    bar.update(1)
+                    if on_result is not None:
+                        on_result(futures[fut], row, client)
+            processing = workers_state(client)
+            if processing is not None:  # a worker gone from the scheduler's list is lost (a restart has a new address)
+                report.workers_lost += len(seen - set(processing))
+                seen = set(processing)
+            line.set_description_str(workers_line(processing, report.workers_lost))
+            bar.set_postfix_str(f"failed={report.failed}, errors={len(report.errors)}, done before={report.done_before}")
+            if time.monotonic() - last_write > SUMMARY_EVERY:
+                _write_summary(store, report)
+                last_write = time.monotonic()
+    finally:
+        client.cancel(list(pending))
+        line.close()
+        bar.close()
+
+
+def _check_mpi(ranks, engine):
+    if not (isinstance(ranks, int) and ranks >= 1):
+        raise ValueError(f"--mpi-ranks must be a positive integer, got {ranks!r}")
+    if ranks == 1:
+        return
+    if engine != "lammps":
+        raise ValueError(f"--mpi-ranks {ranks} runs LAMMPS on {ranks} ranks: add --engine lammps (the compiled "
+                         "engine is one process)")
+    import importlib.util
+
+    if importlib.util.find_spec("mpi4py") is None:
+        raise ValueError("--mpi-ranks needs mpi4py: pip install -e '.[mpi]'")
+
+
+def _make_packing(*args):
+    from .tasks import make_packing  # imported on the worker, where the jam runs
+
+    return make_packing(*args)
+
+
+def _outcome(fut, task, store, fixed, report):
+    """The row of a finished future; records failures, notes errors, stops the run on a write failure."""
+    from distributed.scheduler import KilledWorker
+
+    if fut.status == "finished":
+        row = fut.result()
+        if row["status"] == "ok":
+            report.made += 1
+        else:
+            report.failed += 1
+        return row
+    if fut.status == "cancelled":
+        return None
+    exc = fut.exception()
+    if isinstance(exc, KilledWorker):  # the task killed every worker it ran on: record it, do not retry
+        write_failure(store.failure_path(task), f"killed the workers that ran it ({exc})", 0.0)
+        report.failed += 1
+        return failure_row(store.failure_path(task), task, fixed)
+    if isinstance(exc, OSError):
+        what = "the disk is full" if exc.errno in (errno.ENOSPC, errno.EDQUOT) else "a file could not be written"
+        report.stopped = (f"stopped: {what} ({exc}); every finished packing in {store.dir} is intact; "
+                          "free space (or fix the directory) and rerun the same command to finish")
+        return None
+    report.errors.append(f"{task.name}: {type(exc).__name__}: {exc}")
+    if report.made == 0 and len(report.errors) >= MAX_ERRORS_BEFORE_SUCCESS:
+        report.stopped = (f"stopped: the first {len(report.errors)} tasks all raised an error, the last: "
+                          f"{report.errors[-1]}")
+    return None
+
+
+def _write_summary(store, report):
+    """summary.csv: this run's rows plus earlier rows of files still in the store."""
+    rows = dict(report.rows)
+    for row in store.read_summary():
+        if row["file"] not in rows and ((store.dir / row["file"]).exists()
+                                        or store.failure_path(_task_of(row)).exists()):
+            rows[row["file"]] = row
+    try:
+        store.write_summary(list(rows.values()))
+    except OSError as err:
+        report.stopped = report.stopped or (f"stopped: summary.csv could not be written ({err}); every packing "
+                                            "file is intact; free space and rerun to rebuild it")
+
+
+def _task_of(row) -> Task:
+    return Task((("n", int(row["n"])),), int(row["seed"]))

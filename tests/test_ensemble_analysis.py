@@ -1,0 +1,84 @@
+"""Onset statistics (W(N), nu, phi_inf) and modes / analyze over an ensemble store on Dask."""
+
+import csv
+import subprocess
+import sys
+
+import h5py
+import numpy as np
+import pytest
+
+from jamflow.ensemble import Store, run_ensemble
+from jamflow.ensemble.onsets import onset_statistics
+
+JAMFLOW = [sys.executable, "-m", "jamflow.cli"]
+
+
+def synthetic_rows(nu=0.5, phi_inf=0.84, shift=0.3, amplitude=0.2, count=400, sizes=(32, 64, 128, 256, 512), seed=1):
+    """phi_J ~ Normal(phi_inf - shift N^-nu, amplitude N^-nu): the scaling the fits assume."""
+    rng = np.random.default_rng(seed)
+    rows = []
+    for n in sizes:
+        for k, phi in enumerate(rng.normal(phi_inf - shift * n**-nu, amplitude * n**-nu, count)):
+            rows.append(dict(n=n, seed=k, status="ok", dim=2, phi_j=phi, mean_z=4.0, n_contacts=2 * (n - 1) + 1,
+                             floaters=0))
+    return rows + [dict(n=32, seed=count, status="failed", dim=2)]
+
+
+def test_fits_recover_the_exponent_and_the_limit_of_synthetic_onsets():
+    res = onset_statistics(synthetic_rows(), n_bootstrap=400)
+    assert abs(res.nu.value - 0.5) < 3 * res.nu.err and res.nu.err < 0.05
+    assert abs(res.phi_inf.value - 0.84) < 3 * res.phi_inf.err and res.phi_inf.err < 0.003
+    assert res.sizes[0].failed == 1 and all(s.isostatic.all() for s in res.sizes)
+    for s in res.sizes:  # bootstrap error of a normal sample's sd against its closed form sd / sqrt(2 (n - 1))
+        assert s.width_err == pytest.approx(s.width / np.sqrt(2 * (s.count - 1)), rel=0.2)
+        assert s.mean_phi_err == pytest.approx(s.width / np.sqrt(s.count))
+
+
+def test_too_few_packings_are_refused():
+    with pytest.raises(ValueError, match="fewer than 3 packings"):
+        onset_statistics(synthetic_rows(count=2), n_bootstrap=50)
+    with pytest.raises(ValueError, match="no finished packings"):
+        onset_statistics([dict(n=8, status="failed")])
+
+
+@pytest.fixture(scope="module")
+def store(tmp_path_factory):
+    from distributed import Client
+
+    out = tmp_path_factory.mktemp("ens") / "store"
+    with Client(processes=False, n_workers=1, threads_per_worker=1, dashboard_address=":0") as client:
+        run_ensemble(out, "0:6", [8, 12, 16], client=client, progress=False)
+    return out
+
+
+def test_onsets_command_writes_table_and_figure(store):
+    done = subprocess.run(JAMFLOW + ["onsets", str(store), "--bootstrap", "50"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert "nu =" in done.stdout and "phi_inf =" in done.stdout and "published large-N value about 0.842" in done.stdout
+    rows = list(csv.DictReader(open(store / "onsets.csv")))
+    assert [int(r["n"]) for r in rows] == [8, 12, 16] and all(int(r["packings"]) == 6 for r in rows)
+    phi = [float(r["phi_j"]) for r in Store(store).read_summary() if r["n"] == "12"]
+    assert float(rows[1]["mean_phi_j"]) == pytest.approx(np.mean(phi)) and float(rows[1]["width"]) == pytest.approx(
+        np.std(phi, ddof=1))
+    assert (store / "onsets.png").stat().st_size > 10_000
+
+
+def test_analyze_over_a_store_on_dask_equals_the_serial_pooling(store, tmp_path):
+    for name, extra in (("serial", []), ("dask", ["--workers", "1"])):
+        done = subprocess.run(JAMFLOW + ["analyze", str(store), "--out", str(tmp_path / f"{name}.h5")] + extra,
+                              capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+        assert "18 packing(s)" in done.stdout
+    with h5py.File(tmp_path / "serial.h5") as a, h5py.File(tmp_path / "dask.h5") as b:
+        for key in ("rdf/counts", "rdf/ideal", "rdf/g", "rdf/partial", "sk/k", "sk/s", "sk/n_vectors", "order/Q6_local",
+                    "order/G"):
+            np.testing.assert_allclose(b[key][...], a[key][...], rtol=1e-12, atol=1e-14, err_msg=key)
+
+
+def test_modes_over_a_store_on_dask(store):
+    done = subprocess.run(JAMFLOW + ["modes", str(store), "--workers", "1"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert "18 packing(s)" in done.stdout and (store / "modes.png").exists()
+    assert len(list(store.glob("*.modes.hdf5"))) == 18
+    assert len(list(store.glob("*.h5"))) == 18  # results files are not taken for packings
