@@ -111,7 +111,7 @@ def check_packing(packing: Packing, energy_per_particle: float | None = None, ma
     mean_f = float(magnitudes.mean()) if len(magnitudes) else math.nan
     ratio = fmax / mean_f if len(magnitudes) else (0.0 if fmax == 0 else math.inf)
     floor = MinimizerSettings().resolved_force_tol(packing.box, packing.potential.contact_stiffness)
-    c = Contacts().compute(packing)
+    c = Contacts(count="sites").compute(packing)  # rigid bodies: one constraint per site pair (the matrix's count)
     needed = c.isostatic_count - c.n_kept * (packing.dof_per_particle - packing.dim)  # N' d - d_trivial (+ 1)
     in_window = None if v_tol is None else bool(v_tol < v < 2 * v_tol)
     return PackingChecks(

@@ -89,7 +89,7 @@ def draw_into(ax, packing: Packing, *, color_by: str = "z", slice_at: float = 0.
     (coloured collection, colour label, norm, caption) for a colour bar and title."""
     check_options(packing, color_by, slice_at)
     view = _View(packing, slice_at)
-    found = Contacts().compute(packing)
+    found = Contacts(count="sites").compute(packing)  # rigid bodies: site contacts, as jamflow.checks
     values, label, norm = _colours(packing, found, color_by, q6_r_min)
     cell = Polygon(view.corners, closed=True, fill=False, lw=0.8, color="k")
     ax.add_patch(cell)
