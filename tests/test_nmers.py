@@ -356,3 +356,46 @@ def test_draw_refuses_orientation_colours_for_disks(tmp_path):
     with pytest.raises(ValueError, match="color_by 'orientation' needs particles that turn"):
         draw_packing(disks, tmp_path / "x.png", color_by="orientation")
     assert not (tmp_path / "x.png").exists()
+
+
+def test_free_rotation_vector_of_a_one_site_dimer():
+    """Body 0 of the one-lobe packing is touched on its right site (lever (0.25, 0)): its free
+    rotation is d_k theta on the rotation row and -z x lever = (0, -0.25) theta on its centre;
+    the dynamical matrix (floaters kept) maps it to the contact forces' stress term only."""
+    from jamflow.analysis.free_rotations import free_rotation_vectors, pivot_sites
+    from jamflow.analysis.hessian import Coordinates, hessian
+
+    p = _one_lobe_packing(False)
+    assert pivot_sites(p) == {0: 1, 1: 0, 2: 0, 3: 0, 4: 0}  # the neighbours touch with their inner site
+    coords = Coordinates.of(p)
+    v = free_rotation_vectors(p, coords)
+    assert v.shape == (15, 5)
+    dk = p.rotational_lengths[0, -1]
+    expected = np.zeros(15)
+    expected[[0, 1, 10]] = [0.0, -0.25, dk]
+    assert np.allclose(v[:, 0], expected / np.linalg.norm(expected), atol=1e-15)
+    m = hessian(p).toarray()
+    stress = 0.01  # |V'| of the 0.01 site overlaps (linear spring): the stress term's scale
+    spin = np.zeros(15)
+    spin[10] = 1.0  # turning body 0 about its centre instead: the contacts' stiffness resists
+    assert np.abs(m @ v).max() < 2 * stress < 0.2 * np.abs(m @ spin).max()
+
+
+def test_zero_modes_are_translations_plus_free_rotations():
+    """The stored N = 64 dimer packing: 6 zero modes = 2 translations + 4 free rotations of its
+    one-site dimers, nothing left over; ellipses (no sites) keep their 4 quartic zero modes
+    unexplained, so the check can fail."""
+    from pathlib import Path
+
+    from jamflow.analysis.free_rotations import zero_modes
+    from jamflow.analysis.modes import Spectrum
+    from jamflow.io import load_packing
+
+    data = Path(__file__).parent / "data"
+    dimers = Spectrum(method="dense").compute(load_packing(data / "dimer2d_a1.5_n64_s0.h5"))
+    z = zero_modes(dimers)
+    assert (z.n_zero, z.n_trivial, z.n_free, z.unexplained) == (6, 2, 4, 0) and z.residual < 1e-9 and z.exactly_trivial
+    ellipses = zero_modes(Spectrum(method="dense").compute(load_packing(data / "ellipse1.5_n16_s0.h5")))
+    assert (ellipses.n_free, ellipses.unexplained) == (0, 4) and not ellipses.exactly_trivial
+    with pytest.raises(ValueError, match="needs every eigenvector"):
+        zero_modes(Spectrum(method="dense", vectors=False).compute(load_packing(data / "dimer2d_a1.5_n64_s0.h5")))
