@@ -258,6 +258,24 @@ def test_cli_jams_dimers_and_the_file_keeps_the_body(tmp_path, capsys):
     assert 1e-16 < attrs["energy_per_particle"] < 2e-16
 
 
+def test_cli_refuses_pairwise_damping_for_bodies(tmp_path, capsys):
+    code = main(["jam", "--shape", "nmer:2:1.5", "--engine", "lammps", "--minimizer", "md", "--md-damping",
+                 "pairwise", "--out", str(tmp_path / "p.h5"), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 2 and "--md-damping pairwise is for disks and spheres" in err and len(err.strip().splitlines()) == 1
+    assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("spec,match", [
+    ("nmer:1:1.5", r"integer N >= 2"), ("nmer:2:0.9", r"outside 1 < ALPHA <= 2"),
+    ("dimer:1.5:0", r"S = D2/D1 must lie in \(0, 1\]"), ("dimer:1.8:0.7", r"1 \+ S = 1.7"),
+    ("trimer:2:0.5", r"above C_max\(2\)"), ("trimer:2:-0.1", r"turned by 180 degrees")])
+def test_bad_specs_are_refused_in_2d_and_3d(spec, match, dim):
+    with pytest.raises(ValueError, match=match):
+        parse_shape(spec, dim)
+
+
 def test_cli_refuses_lammps_minimisers_for_bodies(tmp_path, capsys):
     code = main(["jam", "--shape", "nmer:2:1.5", "--engine", "lammps", "--out", str(tmp_path / "p.h5"), "--quiet"])
     err = capsys.readouterr().err
