@@ -10,6 +10,11 @@
   (chapter Figure 2.26), coloured by the director angle.
 - ``phi-z-alpha.png``: phi_J and <z> (site contacts among non-floaters) against alpha, 2D and 3D,
   mean and standard error, with the isostatic values 2 d_f and 2 d.
+- ``acceptance.png`` and the acceptance table (issue 14, "How we will know"): per packing the
+  largest force and generalized torque on non-floaters (numpy reference, all site pairs), and
+  the zero modes beyond d against the free rotations of one-site bodies; per set how many
+  packings are in the window, pass ``jamflow.checks``, have exactly d zero modes as they stand,
+  and exactly d once the free rotations are set aside (``analysis.free_rotations``).
 - ``routes.png``: phi_J of the same starts jammed by the compiled FIRE and by LAMMPS's damped
   rigid bodies (paired).
 Prints the tables that docs/nmers.md quotes.
@@ -224,6 +229,64 @@ def stability_table(stab_rows) -> list[tuple]:
     return out
 
 
+ACCEPTANCE_SETS = ((2, 1.2), (2, 1.5), (2, 2.0), (3, 1.5))  # issue 14: 20 packings each
+F_LIMIT = 1e-12
+
+
+def acceptance_table(ens_rows, stab_rows) -> list[tuple]:
+    """Per issue set (dim, alpha): packings, in window, max force, max torque, below F_LIMIT,
+    passed jamflow.checks, exactly d zero modes as they stand, exactly d beside the free
+    rotations, free rotations (min..max), worst zero-space residual."""
+    stab = {r["file"]: r for r in stab_rows}
+    out = []
+    for dim, alpha in ACCEPTANCE_SETS:
+        group = [r for r in ens_rows if int(r["dim"]) == dim and alpha_of(r) == alpha and r["engine"] == "numba"]
+        checked = [stab[r["file"]] for r in group if r["file"] in stab]
+        if not group:
+            continue
+        force = [float(r["max_force"]) for r in group]
+        torque = [float(r["max_torque"]) for r in group]
+        free = [int(s["free_rotations"]) for s in checked] or [0]
+        out.append((dim, alpha, len(group), sum(1e-16 < float(r["v"]) < 2e-16 for r in group), max(force), max(torque),
+                    sum(f < F_LIMIT and t < F_LIMIT for f, t in zip(force, torque)), len(checked),
+                    sum(s["checks_passed"] == "True" for s in checked), sum(int(s["n_zero"]) == dim for s in checked),
+                    sum(int(s["unexplained_zero"]) == 0 and float(s["zero_residual"]) < 1e-6 for s in checked),
+                    min(free), max(free), max((float(s["zero_residual"]) for s in checked), default=math.nan)))
+    return out
+
+
+def plot_acceptance(ens_rows, stab_rows, path: Path) -> None:
+    stab = {r["file"]: r for r in stab_rows}
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.8))
+    for k, (dim, alpha) in enumerate(ACCEPTANCE_SETS):
+        group = [r for r in ens_rows if int(r["dim"]) == dim and alpha_of(r) == alpha and r["engine"] == "numba"]
+        if not group:
+            continue
+        x = k + np.linspace(-0.25, 0.25, len(group))
+        axes[0].semilogy(x - 0.05, [float(r["max_force"]) for r in group], "o", ms=3, color="C0",
+                         label="max |F|" if k == 0 else None)
+        axes[0].semilogy(x + 0.05, [float(r["max_torque"]) for r in group], "s", ms=3, color="C1",
+                         label="max |tau_a / d_k|" if k == 0 else None)
+        checked = [stab[r["file"]] for r in group if r["file"] in stab]
+        free = np.array([int(s["free_rotations"]) for s in checked])
+        extra = np.array([int(s["n_zero"]) - dim for s in checked])
+        axes[1].plot(free + 0.08 * (k - 1.5), extra, "o", ms=4, label=f"{dim}D alpha = {alpha:g}")
+    axes[0].axhline(F_LIMIT, color="k", ls=":", lw=0.8)
+    axes[0].set_xticks(range(len(ACCEPTANCE_SETS)), [f"{d}D alpha={a:g}" for d, a in ACCEPTANCE_SETS], fontsize=8)
+    axes[0].set_ylabel("non-floaters, numpy reference")
+    axes[0].set_title("force and torque balance (dotted: 1e-12)", fontsize=9)
+    axes[0].legend(fontsize=7)
+    top = max(axes[1].get_xlim()[1], axes[1].get_ylim()[1])
+    axes[1].plot([0, top], [0, top], "k:", lw=0.8)
+    axes[1].set_xlabel("free rotations of one-site bodies")
+    axes[1].set_ylabel("zero modes - d")
+    axes[1].set_title("zero modes beyond the d translations", fontsize=9)
+    axes[1].legend(fontsize=7)
+    fig.suptitle("Issue 14 acceptance sets, N = 128 dimers", fontsize=9)
+    fig.tight_layout()
+    save(fig, path)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--csv", nargs="+", default=["docs/nmers/ensembles.csv", "docs/nmers/ensembles3d.csv"])
@@ -255,6 +318,14 @@ def main(argv=None) -> int:
         for s in stability_table(rows(args.stability)):
             print(f"{s[0]} {s[1]:<5g} {s[2]}  {s[3]}/{s[2]}  {s[4]}/{s[2]} ({s[5]}..{s[6]})  {s[7]}..{s[8]}  "
                   f"{s[9]:.2e}..{s[10]:.2e}  {s[11]:.3f}..{s[12]:.3f}")
+    if ens and Path(args.stability).exists():
+        stab_rows = rows(args.stability)
+        print("acceptance: dim alpha packings in_window max|F| max|tau| both<1e-12 checked checks_passed "
+              "n_zero=d n_zero=d+free free(min..max) worst_residual")
+        for t in acceptance_table(ens, stab_rows):
+            print(f"{t[0]} {t[1]:<4g} {t[2]}  {t[3]}  {t[4]:.1e} {t[5]:.1e}  {t[6]}  {t[7]}  {t[8]}  {t[9]}  {t[10]}  "
+                  f"{t[11]}..{t[12]}  {t[13]:.1e}")
+        plot_acceptance(ens, stab_rows, out / "acceptance.png")
     if Path(args.routes).exists():
         summary = plot_routes(rows(args.routes), out / "routes.png")
         if summary:
