@@ -1,22 +1,27 @@
-"""Packings for viewers: a LAMMPS text dump and extended XYZ, both read by OVITO with radii.
+"""Packings for viewers: a LAMMPS text dump and extended XYZ, both read by OVITO with radii,
+shapes and orientations.
 
 ``export_packing(packing, path, fmt)`` with fmt one of ``FORMATS``:
 
-- LAMMPS dump (``lammps-dump``): ``ITEM: ATOMS id type radius x y z`` in a
-  (triclinic) ``BOX BOUNDS`` block; OVITO maps ``radius`` to its Radius property.
-- Extended XYZ (``xyz``): ``Lattice`` = the three cell vectors,
-  ``Properties=species:S:1:pos:R:3:radius:R:1``, ``pbc``.
+- LAMMPS dump (``lammps-dump``): ``ITEM: ATOMS id type x y z radius ...`` in a (triclinic)
+  ``BOX BOUNDS`` block.
+- Extended XYZ (``xyz``): ``Lattice`` = the three cell vectors, ``Properties=species:S:1:pos:R:3:
+  radius:R:1...``, ``pbc``.
 
-2D packings get z = 0 and a third cell vector (0, 0, 1) that is not periodic in XYZ.
-Types number the distinct diameters (at most ``MAX_TYPES``; continuous polydispersity is
-one type, the radius column carries the sizes). Shapes and orientations for nonspherical
-particles add columns in ``_columns`` (OVITO reads ``c_shape[1..3]`` / ``quatw quati quatj
-quatk`` from dumps and ``aspherical_shape:R:3`` / ``orientation:R:4`` from XYZ).
-Lengths in small diameters, full float64 precision (``repr``-exact, 17 digits).
+Ellipses/spheroids add their axes and quaternions (``_rows``); rigid bodies are written one row
+per site with the body as molecule id. Measured with OVITO 3.17.2 (``ovito.io.import_file``):
+dump ``shapex..z`` are read as full axes and halved into Aspherical Shape, XYZ
+``aspherical_shape`` is taken as semi-axes; dump ``quatw quati quatj quatk`` and XYZ
+``orientation`` (x, y, z, w) both give Orientation; ``mol`` / ``molecule`` give Molecule
+Identifier. 2D packings get z = 0, a third cell vector (0, 0, 1) that is not periodic in XYZ, and
+2D angles become turns about z. Types number the distinct sizes (at most ``MAX_TYPES``; continuous
+polydispersity is one type, the radius column carries the sizes). Lengths in small diameters,
+full float64 precision (``repr``-exact, 17 digits).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -39,9 +44,68 @@ def export_packing(packing: Packing, path, fmt: str) -> Path:
     return Path(path)
 
 
-def _columns(packing: Packing) -> dict[str, np.ndarray]:
-    """Per-particle columns after the position: name -> (N,) values."""
-    return {"radius": 0.5 * packing.diameters}
+@dataclass(frozen=True)
+class _Column:
+    """One per-row property: its LAMMPS dump column names, its extended-XYZ name and (M, k) values."""
+
+    dump: tuple[str, ...]
+    xyz: str
+    values: np.ndarray
+    kind: str = "R"
+
+
+def _quaternions(packing: Packing) -> np.ndarray:
+    """(N, 4) unit quaternions (w, x, y, z); a 2D angle theta is the turn about z."""
+    if packing.dim == 3:
+        return np.asarray(packing.orientations, float)
+    half = 0.5 * np.asarray(packing.orientations, float)
+    return np.column_stack([np.cos(half), np.zeros_like(half), np.zeros_like(half), np.sin(half)])
+
+
+def _rows(packing: Packing) -> tuple[np.ndarray, np.ndarray, list[_Column]]:
+    """Rows to write: positions (M, 3), types (M,) and the columns after the position.
+
+    Spheres: one row per particle with its radius. Ellipses/spheroids: one row per particle with
+    its full axes (dump ``shapex..z``, which OVITO halves) or semi-axes (XYZ ``aspherical_shape``)
+    and its quaternion (dump ``quatw..k``, XYZ ``orientation`` in OVITO's x, y, z, w order); a 2D
+    ellipse's third axis is its minor one. Rigid bodies: one row per site (radius, ``mol`` = body),
+    sites placed about the wrapped body centre so a body stays whole across the cell edge.
+    """
+    h, centres = _cell(packing)
+    types, kind = _types(packing), packing.shape.kind
+    if kind == "rigid":
+        sites = packing.shape.world_sites(packing.positions, packing.orientations, packing.diameters)
+        offsets = np.zeros(sites.shape[:2] + (3,))
+        offsets[..., : packing.dim] = sites - packing.positions[:, None, :]
+        n_sites = sites.shape[1]
+        radius = 0.5 * packing.diameters[:, None] * packing.shape.site_diameters[None, :]
+        body = np.repeat(np.arange(1, packing.n + 1), n_sites)
+        return ((centres[:, None, :] + offsets).reshape(-1, 3), np.repeat(types, n_sites),
+                [_Column(("radius",), "radius", radius.reshape(-1, 1)),
+                 _Column(("mol",), "molecule", body[:, None], "I")])
+    columns = [_Column(("radius",), "radius", (0.5 * packing.diameters)[:, None])]
+    if kind == "ellipsoid":
+        a, b = packing.shape.axes(packing.diameters).T
+        columns += [_Column(("shapex", "shapey", "shapez"), "aspherical_shape", np.column_stack([a, b, b])),
+                    _Column(("quatw", "quati", "quatj", "quatk"), "orientation", _quaternions(packing))]
+    return centres, types, columns
+
+
+def _xyz_values(column: _Column) -> np.ndarray:
+    """The values as extended XYZ stores them for OVITO: semi-axes, quaternion (x, y, z, w)."""
+    if column.xyz == "aspherical_shape":
+        return 0.5 * column.values
+    if column.xyz == "orientation":
+        return column.values[:, [1, 2, 3, 0]]
+    return column.values
+
+
+def _table(pos: np.ndarray, columns: list[_Column], values: list[np.ndarray]) -> list[str]:
+    """One text row per particle/site: position then every column, float64 repr-exact."""
+    def cells(k):
+        for c, v in zip(columns, values):
+            yield from (str(int(x)) if c.kind == "I" else repr(float(x)) for x in v[k])
+    return [" ".join([*(repr(float(x)) for x in pos[k]), *cells(k)]) for k in range(len(pos))]
 
 
 def _types(packing: Packing) -> np.ndarray:
@@ -59,7 +123,7 @@ def _cell(packing: Packing) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _lammps_dump(packing: Packing) -> str:
-    h, pos = _cell(packing)
+    h, _ = _cell(packing)
     lx, ly, lz = np.diag(h)
     xy, xz, yz = h[0, 1], h[0, 2], h[1, 2]
     zlo = -0.5 if packing.dim == 2 else 0.0
@@ -68,22 +132,22 @@ def _lammps_dump(packing: Packing) -> str:
     triclinic = packing.box.is_triclinic
     header = "ITEM: BOX BOUNDS xy xz yz pp pp pp" if triclinic else "ITEM: BOX BOUNDS pp pp pp"
     box = [" ".join(repr(float(v)) for v in (b if triclinic else b[:2])) for b in bounds]
-    extra = _columns(packing)
-    lines = ["ITEM: TIMESTEP", "0", "ITEM: NUMBER OF ATOMS", str(packing.n), header, *box,
-             "ITEM: ATOMS id type x y z " + " ".join(extra)]
-    types, columns = _types(packing), np.column_stack(list(extra.values()))
-    lines += [f"{k + 1} {types[k]} " + " ".join(repr(float(v)) for v in (*pos[k], *columns[k])) for k in range(packing.n)]
+    pos, types, columns = _rows(packing)
+    names = " ".join(name for c in columns for name in c.dump)
+    lines = ["ITEM: TIMESTEP", "0", "ITEM: NUMBER OF ATOMS", str(len(pos)), header, *box,
+             "ITEM: ATOMS id type x y z " + names]
+    rows = _table(pos, columns, [c.values for c in columns])
+    lines += [f"{k + 1} {types[k]} {row}" for k, row in enumerate(rows)]
     return "\n".join(lines) + "\n"
 
 
 def _extended_xyz(packing: Packing) -> str:
-    h, pos = _cell(packing)
+    h, _ = _cell(packing)
     lattice = " ".join(repr(float(v)) for v in h.T.ravel())  # a, b, c in turn
-    extra = _columns(packing)
-    props = "species:S:1:pos:R:3:" + ":".join(f"{name}:R:1" for name in extra)
+    pos, types, columns = _rows(packing)
+    props = "species:S:1:pos:R:3:" + ":".join(f"{c.xyz}:{c.kind}:{c.values.shape[1]}" for c in columns)
     pbc = "T T T" if packing.dim == 3 else "T T F"
     comment = (f'Lattice="{lattice}" Properties={props} pbc="{pbc}" phi={packing.phi!r} '
-               f'potential={packing.potential.spec} dim={packing.dim}')
-    types, columns = _types(packing), np.column_stack(list(extra.values()))
-    rows = [f"T{types[k]} " + " ".join(repr(float(v)) for v in (*pos[k], *columns[k])) for k in range(packing.n)]
-    return "\n".join([str(packing.n), comment, *rows]) + "\n"
+               f'potential={packing.potential.spec} dim={packing.dim} shape="{packing.shape.spec(packing.dim)}"')
+    rows = _table(pos, columns, [_xyz_values(c) for c in columns])
+    return "\n".join([str(len(pos)), comment, *(f"T{types[k]} {row}" for k, row in enumerate(rows))]) + "\n"

@@ -87,3 +87,56 @@ def test_export_command(disks, tmp_path, capsys):
     assert main(["export", str(src), "--format", "xyz"]) == 0 and (tmp_path / "p.xyz").is_file()
     assert main(["export", str(src), "--format", "lammps-dump", "-o", str(tmp_path / "x.dump")]) == 0
     assert (tmp_path / "x.dump").read_text().startswith("ITEM: TIMESTEP")
+
+
+def _random_oriented(shape, dim, seed=0):
+    from jamflow.box import Box
+    from jamflow.packing import Packing
+    from jamflow.shapes.rotations import random_orientations
+
+    rng = np.random.default_rng(seed)
+    return Packing(rng.uniform(0, 12.0, (6, dim)), rng.choice([1.0, 1.4], 6), Box(12.0 * np.eye(dim)),
+                   shape=shape, orientations=random_orientations(6, dim, rng))
+
+
+def _dump_table(path):
+    lines = path.read_text().splitlines()
+    start = next(k for k, line in enumerate(lines) if line.startswith("ITEM: ATOMS")) + 1
+    names = lines[start - 1].split()[2:]
+    return {name: np.array([float(row.split()[c]) for row in lines[start:]]) for c, name in enumerate(names)}
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_export_ellipsoids_axes_and_quaternions(dim, tmp_path):
+    """Dump: full axes and (w, i, j, k) turning body x onto the director; XYZ: semi-axes, (x, y, z, w)."""
+    from jamflow.shapes import parse_shape
+    from jamflow.shapes.rotations import directors, quaternion_matrices
+
+    p = _random_oriented(parse_shape("ellipse:1.5" if dim == 2 else "spheroid:0.5", dim), dim)
+    t = _dump_table(export_packing(p, tmp_path / "e.dump", "lammps-dump"))
+    a, b = p.shape.axes(p.diameters).T
+    assert np.array_equal(t["shapex"], a) and np.array_equal(t["shapey"], b) and np.array_equal(t["shapez"], b)
+    q = np.column_stack([t["quatw"], t["quati"], t["quatj"], t["quatk"]])
+    assert np.allclose(quaternion_matrices(q)[:, :dim, 0], directors(p.orientations, dim), atol=1e-15)
+    xyz = export_packing(p, tmp_path / "e.xyz", "xyz").read_text().splitlines()
+    assert "aspherical_shape:R:3:orientation:R:4" in xyz[1] and f'shape="{p.shape.spec(dim)}"' in xyz[1]
+    rows = np.array([[float(v) for v in line.split()[1:]] for line in xyz[2:]])
+    assert np.array_equal(rows[:, 4:7], 0.5 * np.column_stack([a, b, b]))
+    assert np.array_equal(rows[:, 7:11], q[:, [1, 2, 3, 0]])
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_export_rigid_bodies_one_row_per_site(dim, tmp_path):
+    """Sites at the body's world positions (whole about the wrapped centre), site radii, body ids."""
+    from jamflow.shapes import RigidBody
+
+    sites = [[0, 0], [0.5, 0]] if dim == 2 else [[0, 0, 0], [0.5, 0, 0], [0.5, 0.4, 0]]
+    p = _random_oriented(RigidBody(sites, [1.0, 0.7] if dim == 2 else [1.0, 1.0, 0.8]), dim)
+    t = _dump_table(export_packing(p, tmp_path / "b.dump", "lammps-dump"))
+    world = p.shape.world_sites(p.positions, p.orientations, p.diameters)
+    shift = (p.box.wrap(p.positions) - p.positions)[:, None, :]
+    pos = np.column_stack([t[c] for c in "xyz"[:dim]])
+    assert np.allclose(pos, (world + shift).reshape(-1, dim), atol=1e-12)
+    assert np.array_equal(t["mol"], np.repeat(np.arange(1, p.n + 1), p.shape.n_sites))
+    assert np.array_equal(t["radius"], (0.5 * p.diameters[:, None] * p.shape.site_diameters).ravel())
+    assert "molecule:I:1" in export_packing(p, tmp_path / "b.xyz", "xyz").read_text().splitlines()[1]

@@ -1,6 +1,7 @@
-"""Write a packing in a format OVITO (and other viewers) open with particle radii: a LAMMPS
-text dump (id type x y z radius, triclinic box bounds) or extended XYZ (Lattice, pbc,
-species, pos, radius). Positions at full float64 precision; 2D packings get z = 0."""
+"""Write a packing in a format OVITO (and other viewers) open with particle radii, shapes and
+orientations: a LAMMPS text dump (id type x y z radius [shape, quaternion | mol], triclinic box
+bounds) or extended XYZ (Lattice, pbc, species, pos, radius, ...). Rigid bodies are written one
+row per site. Positions at full float64 precision; 2D packings get z = 0 (see jamflow.export)."""
 
 from __future__ import annotations
 
