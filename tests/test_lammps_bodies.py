@@ -105,8 +105,8 @@ def test_damped_rigid_bodies_reach_force_and_torque_balance(dim):
 def test_lammps_minimisers_are_refused_for_rigid_bodies(method):
     """LAMMPS's minimize ignores fix rigid (bodies come apart): only damped dynamics is offered."""
     p = bodies("nmer:2:1.5", 2)
-    with pytest.raises(ValueError, match=f"engine lammps cannot run minimizer {method} for nmer:2:1.5 particles "
-                                         r"\(it runs md for them\)"):
+    with pytest.raises(ValueError, match=f"engine lammps cannot run minimizer {method} on nmer:2:1.5 particles: "
+                                         r"LAMMPS's minimisers ignore fix rigid.*\(it runs md there\)"):
         engine_name(p, method, "lammps")
     assert engine_name(p, "md", "auto") == "lammps" and engine_name(p, "fire", "auto") == "numba"
     with LammpsEngine(p) as eng, pytest.raises(ValueError, match="minimisers ignore rigid bodies"):

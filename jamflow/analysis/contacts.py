@@ -50,7 +50,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import linprog
 
 from ..packing import Packing
 from ..pairs import (candidate_pairs, contact_distances, overlapping_sites, particle_contacts, separations,
@@ -362,6 +361,8 @@ def positively_spanning(vectors: np.ndarray) -> bool:
     """True iff the vectors (k, d) positively span R^d: they span R^d linearly and some
     strictly positive combination vanishes (then the origin is interior to their convex
     hull). Solved as the LP feasibility problem sum_k l_k v_k = 0, l_k >= 1."""
+    from scipy.optimize import linprog  # imported here: scipy.optimize costs 0.25 s at start-up
+
     vectors = np.asarray(vectors, float)
     k, d = vectors.shape
     if k <= d or np.linalg.matrix_rank(vectors) < d:

@@ -63,25 +63,28 @@ class Capabilities:
     options: frozenset = field(default_factory=frozenset)  # keyword options its constructor takes
     boundaries: frozenset = field(default_factory=frozenset)  # of "walls", "fixed", "gravity" (disks, spheres)
     box_methods: frozenset = field(default_factory=frozenset)  # minimisers that relax the box at a target pressure
-    shape_methods: dict = field(default_factory=dict, hash=False)  # shape kind -> its minimisers, where fewer
+    shape_methods: tuple = ()  # (shape kind, minimisers, why) where a shape runs fewer minimisers
 
-    def reason(self, packing, method: str = "fire", comm=None, pressure: bool = False) -> str | None:
-        needs, kind = scene_boundaries(packing), packing.shape.kind
-        if needs and kind != "sphere":
+    def reason(self, packing, method: str | None = "fire", comm=None, pressure: bool = False) -> str | None:
+        """Why the engine cannot run the scene, or None; ``method`` None: any of its minimisers."""
+        needs = scene_boundaries(packing)
+        if needs and packing.shape.kind != "sphere":
             return f"{' and '.join(sorted(needs))} with {packing.shape.name(packing.dim)} particles (written for disks and spheres)"
         if needs - self.boundaries:
             return f"{' and '.join(sorted(needs - self.boundaries))} (it runs {', '.join(sorted(self.boundaries)) or 'none'})"
         if pressure and method not in self.box_methods:
             return (f"a target pressure with minimizer {method} (it relaxes the box with "
                     f"{', '.join(sorted(self.box_methods)) or 'no minimizer'})")
-        if kind not in self.shapes:
+        if packing.shape.kind not in self.shapes:
             return f"{packing.shape.name(packing.dim)} particles (it runs {', '.join(sorted(self.shapes))})"
         if packing.potential.name not in self.potentials:
             return f"potential {packing.potential.spec} (it runs {', '.join(sorted(self.potentials))})"
-        methods = self.shape_methods.get(kind, self.methods)
-        if method not in methods:
-            what = f" for {packing.shape.name(packing.dim)} particles" if kind in self.shape_methods else ""
-            return f"minimizer {method}{what} (it runs {', '.join(sorted(methods))}{' for them' if what else ''})"
+        if method is not None and method not in self.methods:
+            return f"minimizer {method} (it runs {', '.join(sorted(self.methods))})"
+        for kind, methods, why in self.shape_methods:
+            if method is not None and packing.shape.kind == kind and method not in methods:
+                return (f"minimizer {method} on {packing.shape.name(packing.dim)} particles: {why} (it runs "
+                        f"{', '.join(sorted(methods))} there)")
         if packing.box.is_triclinic and not self.tilted_boxes:
             return "a tilted (sheared) box"
         if comm is not None and not self.mpi:

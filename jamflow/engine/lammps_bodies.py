@@ -79,7 +79,7 @@ class BodySites:
 
     def generalized(self, orientations: np.ndarray, torques: np.ndarray) -> np.ndarray:
         """Generalized torques tau_a / d_k (N, r), body frame, the rotations that are DOF."""
-        return generalized_torques(orientations, torques, self.lengths, self.mask, self.dim)
+        return generalized_torques(orientations, torques, self.dim, self.lengths, self.mask)
 
     def damped_dynamics_commands(self, settings, fix_2d: str | None) -> list[str]:
         """The zero-temperature damped rigid-body dynamics of a minimisation session (fix

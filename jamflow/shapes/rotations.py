@@ -154,12 +154,13 @@ def fit_orientations(body: np.ndarray, world: np.ndarray, weights: np.ndarray) -
     return quaternions_from_matrices(rot)
 
 
-def generalized_torques(orientations: np.ndarray, torques: np.ndarray, lengths: np.ndarray,
-                        mask, dim: int) -> np.ndarray:
-    """(N, r) torques as forces on the rotational coordinates d_k theta (seed section 3):
-    mask_a (R_i^T tau_i)_a / d_k,a, body frame; 2D torques (N,) give (N, 1). Units of force."""
+def generalized_torques(orientations, torques, dim: int, rotational_lengths, mask) -> np.ndarray:
+    """(N, r) torques as forces on the coordinates d_k theta (seed section 3): the body-frame
+    components (R^T tau)_a / d_k on the axes that are degrees of freedom (``mask``), 0 elsewhere.
+    torques: world frame, (N,) in 2D (about z), (N, 3) in 3D; rotational_lengths (N, r)."""
     tau = np.asarray(torques, float)
     if dim == 2:
-        return (tau[:, None] / lengths) * np.asarray(mask, float)
-    body = np.einsum("nba,nb->na", rotation_matrices(orientations, 3), tau)
-    return body / lengths * np.asarray(mask, float)
+        body = tau.reshape(-1, 1)
+    else:
+        body = np.einsum("nab,na->nb", quaternion_matrices(orientations), tau)
+    return body * np.asarray(mask, float) / rotational_lengths

@@ -1,0 +1,113 @@
+"""The compiled kernel against its floor (issue 17, item 5): microseconds per FIRE iteration
+and per bare force loop over the same pairs, at N = 256, 1024, 4096 (2D, 50:50 bidisperse,
+a relaxed state at phi = 0.85, as near jamming), with the particles in their random order
+and reordered along a Morton (Z-order) curve, and the FIRE iteration cost for several skins.
+
+    python benchmarks/kernel.py --sizes 256 1024 4096 --out docs/kernel.csv
+
+``floor``: the disk kernel (``compiled.spheres.forces``) called in a compiled loop, i.e. the
+pair loop alone, no integration, no Python. ``fire``: ``CompiledEngine`` FIRE iterations
+(force_tol 1e-300, so it never stops; pair-list rebuilds included) per iteration. The
+pair list holds every pair within sigma_ij + skin. Minimum over ``--reps``; run under
+``flock /tmp/jamflow-bench.lock``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import os
+import time
+from pathlib import Path
+
+import numba
+import numpy as np
+
+from jamflow.engine.compiled import spheres
+from jamflow.engine.compiled.engine import CompiledEngine
+from jamflow.minimize import MinimizerSettings
+from jamflow.protocols.compression import initial_packing
+
+
+@numba.njit
+def _repeat(pairs, x, o, f, tau, virial, reps):
+    e = 0.0
+    for _ in range(reps):
+        e += spheres.forces(pairs, x, o, f, tau, virial)
+    return e
+
+
+def near_jamming_state(n: int, seed: int = 0):
+    start = initial_packing(n, 2, "bi:1.4:0.5", "spring", seed, 0.85)
+    with CompiledEngine(start) as eng:
+        eng.minimize(MinimizerSettings(force_tol=1e-9, max_iterations=200_000))
+        return eng.packing()
+
+
+def morton_order(packing) -> np.ndarray:
+    """Particle order along a Z-order curve of the cell (16 bits per axis)."""
+    s = packing.box.to_fractional(packing.box.wrap(packing.positions))
+    q = np.clip((s * 65536).astype(np.int64), 0, 65535)
+    key = np.zeros(len(q), np.int64)
+    for bit in range(16):
+        for a in range(packing.dim):
+            key |= ((q[:, a] >> bit) & 1) << (packing.dim * bit + a)
+    return np.argsort(key, kind="stable")
+
+
+def floor_us(packing, skin: float, reps: int, repeats: int) -> float:
+    x = np.ascontiguousarray(packing.positions)
+    pairs = spheres.build(packing, x, skin)
+    n, d = x.shape
+    f, o, tau, virial = np.zeros((n, d)), np.zeros((n, 0)), np.zeros((n, 0)), np.zeros((d, d))
+    _repeat(pairs, x, o, f, tau, virial, 10)
+    best = np.inf
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        _repeat(pairs, x, o, f, tau, virial, reps)
+        best = min(best, (time.perf_counter() - t0) / reps * 1e6)
+    return best
+
+
+def fire_us(packing, skin: float, iterations: int, repeats: int) -> float:
+    best = np.inf
+    for _ in range(repeats):
+        with CompiledEngine(packing, skin=skin) as eng:
+            r = eng.minimize(MinimizerSettings(force_tol=1e-300, max_iterations=iterations, window=iterations))
+        best = min(best, r.seconds / r.iterations * 1e6)
+    return best
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--sizes", type=int, nargs="+", default=[256, 1024, 4096])
+    ap.add_argument("--skins", type=float, nargs="+", default=[0.1, 0.2, 0.3, 0.5])
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--out", default="docs/kernel.csv")
+    args = ap.parse_args()
+    rows = []
+    for n in args.sizes:
+        state = near_jamming_state(n)
+        ordered = state.subset(morton_order(state))
+        iterations, reps = max(2000, 2_000_000 // n), max(200, 4_000_000 // n)
+        for order, packing in (("random", state), ("morton", ordered)):
+            for skin in args.skins:
+                row = {"n": n, "order": order, "skin": skin,
+                       "floor_us": round(floor_us(packing, skin, reps, args.repeats), 3),
+                       "fire_us": round(fire_us(packing, skin, iterations, args.repeats), 3),
+                       "pairs": len(spheres.build(packing, packing.positions, skin).i),
+                       "load": round(os.getloadavg()[0], 2)}
+                row["fire_over_floor"] = round(row["fire_us"] / row["floor_us"], 2)
+                print(" ".join(f"{k}={v}" for k, v in row.items()), flush=True)
+                rows.append(row)
+    out = Path(args.out)
+    new = not out.exists()
+    with out.open("a", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        if new:
+            writer.writeheader()
+        writer.writerows(rows)
+
+
+if __name__ == "__main__":
+    main()

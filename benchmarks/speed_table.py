@@ -1,0 +1,151 @@
+"""The side-by-side table of issue 17: jamflow's default ``jamflow jam`` as a whole process
+and in process, against the hand-written LAMMPS protocol (``speed_vs_handwritten.py``), the
+same seeds and starts, with iterations per phase (compress / approach / final, as in
+``predictor.py``) and the packing checks.
+
+    python benchmarks/speed_table.py --dim 2 --n 64 256 1024 --seeds 1 2 3 4 5 --handwritten 64 256 1024 --out docs/speed-table.csv
+    python benchmarks/speed_table.py --dim 3 --sizes mono --n 512 --seeds 1 2 3 --handwritten 512 --out docs/speed-table.csv
+    python benchmarks/speed_table.py --chart docs/speed-table.csv --png docs/speed-2.png
+
+Whole process: ``python -m jamflow.cli jam ...`` wall and CPU (user + sys) seconds, imports
+and numba's cache load included. In process: ``jam()`` with a warm interpreter. Rows are
+appended with the load average; run under ``flock /tmp/jamflow-bench.lock``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+from predictor import phase_iterations
+from speed_vs_handwritten import handwritten_jam
+
+from jamflow.checks import check_packing
+from jamflow.protocols.compression import PROTOCOLS, DEFAULT_PROTOCOL, initial_packing, jam
+
+
+def whole_process(n, dim, sizes, seed, tmp) -> tuple[float, float]:
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "jamflow.cli", "jam", "--n", str(n), "--dim", str(dim), "--sizes", sizes,
+                    "--seed", str(seed), "--quiet", "--force", "--out", f"{tmp}/p.h5"], check=True,
+                   stdout=subprocess.DEVNULL)
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+
+
+def jamflow_row(n, dim, sizes, seed, tmp, process: bool) -> dict:
+    wall, cpu = whole_process(n, dim, sizes, seed, tmp) if process else (None, None)
+    settings = PROTOCOLS[DEFAULT_PROTOCOL]()
+    t0, c0 = time.perf_counter(), time.process_time()
+    r = jam(n=n, dim=dim, sizes=sizes, seed=seed, settings=settings)
+    inproc, inproc_cpu = time.perf_counter() - t0, time.process_time() - c0
+    ftol = settings.minimizer.resolved_force_tol(r.packing.box, r.packing.potential.contact_stiffness)
+    checks = check_packing(r.packing, r.energy_per_particle, None, settings.v_tol, ftol)
+    return {"method": "jamflow", "n": n, "dim": dim, "sizes": sizes, "seed": seed, "phi_j": f"{r.phi_j:.10f}",
+            "process_wall_s": "" if wall is None else round(wall, 3),
+            "process_cpu_s": "" if cpu is None else round(cpu, 3), "inprocess_wall_s": round(inproc, 3),
+            "inprocess_cpu_s": round(inproc_cpu, 3), "iterations": r.iterations,
+            **phase_iterations(r.history, settings.v_tol), "minimizations": r.minimizations,
+            "checks": checks.passed, "load": round(os.getloadavg()[0], 2)}
+
+
+def handwritten_row(n, dim, sizes, seed, tmp) -> dict:
+    start = initial_packing(n, dim, sizes, "spring", seed, PROTOCOLS["seed"]().start_phi(dim))
+    c0 = time.process_time()
+    phi, v, m, seconds = handwritten_jam(start, Path(tmp) / "start.data")
+    return {"method": "handwritten", "n": n, "dim": dim, "sizes": sizes, "seed": seed, "phi_j": f"{phi:.10f}",
+            "process_wall_s": "", "process_cpu_s": "", "inprocess_wall_s": round(seconds, 3),
+            "inprocess_cpu_s": round(time.process_time() - c0, 3), "iterations": "", "compress": "", "approach": "",
+            "final": "", "minimizations": m, "checks": "", "load": round(os.getloadavg()[0], 2)}
+
+
+PHASES = ("compress", "approach", "final")
+
+
+def chart(csv_path: str, png: str) -> None:
+    """Median CPU seconds per packing against N (jamflow in process and whole process, the
+    hand-written loop) and jamflow's median iterations per phase, one column per dimension."""
+    import statistics
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = list(csv.DictReader(open(csv_path)))
+    dims = sorted({int(r["dim"]) for r in rows})
+    fig, axes = plt.subplots(2, len(dims), figsize=(5.5 * len(dims), 8), squeeze=False)
+    for col, dim in enumerate(dims):
+        mine = [r for r in rows if int(r["dim"]) == dim]
+        ax = axes[0, col]
+        for method, key, label, marker in (("jamflow", "inprocess_cpu_s", "jamflow jam() in process", "o"),
+                                           ("jamflow", "process_cpu_s", "jamflow jam, whole process", "s"),
+                                           ("handwritten", "inprocess_cpu_s", "hand-written LAMMPS loop", "^")):
+            sizes = sorted({int(r["n"]) for r in mine if r["method"] == method and r[key]})
+            med = [statistics.median(float(r[key]) for r in mine if r["method"] == method and int(r["n"]) == n
+                                     and r[key]) for n in sizes]
+            if sizes:
+                ax.loglog(sizes, med, marker=marker, label=label)
+        ax.set(xlabel="N", ylabel="median CPU seconds per packing", title=f"{dim}D ({mine[0]['sizes']})")
+        ax.legend(fontsize=8)
+        ax = axes[1, col]
+        sizes = sorted({int(r["n"]) for r in mine if r["method"] == "jamflow"})
+        med = np.array([[statistics.median(int(r[phase]) for r in mine if r["method"] == "jamflow"
+                                           and int(r["n"]) == n) for n in sizes] for phase in PHASES], float)
+        share, bottom = med / med.sum(axis=0), np.zeros(len(sizes))
+        for phase, part in zip(PHASES, share):
+            ax.bar([str(n) for n in sizes], part, bottom=bottom, label=phase)
+            bottom += part
+        for k, total in enumerate(med.sum(axis=0)):
+            ax.text(k, 1.01, f"{total:,.0f}", ha="center", fontsize=8)
+        ax.set(xlabel="N", ylabel="share of the median FIRE iterations", ylim=(0, 1.1))
+        ax.legend(fontsize=8, loc="lower right")
+    fig.tight_layout()
+    fig.savefig(png, dpi=110)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--dim", type=int, default=2)
+    ap.add_argument("--sizes", default="bi:1.4:0.5")
+    ap.add_argument("--n", type=int, nargs="+", default=[64, 256, 1024])
+    ap.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3, 4, 5])
+    ap.add_argument("--handwritten", type=int, nargs="*", default=[], help="sizes that also run the LAMMPS baseline")
+    ap.add_argument("--handwritten-seeds", type=int, nargs="*", default=None, help="seeds of the baseline (default all)")
+    ap.add_argument("--process-max", type=int, default=1024, help="whole-process runs only up to this N")
+    ap.add_argument("--out", default="docs/speed-table.csv")
+    ap.add_argument("--chart", default=None, metavar="CSV", help="only draw the chart of this CSV")
+    ap.add_argument("--png", default="docs/speed-2.png")
+    args = ap.parse_args()
+    if args.chart:
+        return chart(args.chart, args.png)
+    jam(n=16, seed=0)  # numba's cache load outside the in-process timings
+    out = Path(args.out)
+    with tempfile.TemporaryDirectory() as tmp:
+        for n in args.n:
+            for seed in args.seeds:
+                rows = [jamflow_row(n, args.dim, args.sizes, seed, tmp, n <= args.process_max)]
+                if n in args.handwritten and (args.handwritten_seeds is None or seed in args.handwritten_seeds):
+                    rows.append(handwritten_row(n, args.dim, args.sizes, seed, tmp))
+                for row in rows:
+                    print(" ".join(f"{k}={v}" for k, v in row.items()), flush=True)
+                new = not out.exists()
+                with out.open("a", newline="") as fh:
+                    writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+                    if new:
+                        writer.writeheader()
+                    writer.writerows(rows)
+
+
+if __name__ == "__main__":
+    main()

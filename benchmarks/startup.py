@@ -1,0 +1,96 @@
+"""Start-up cost of the ``jamflow`` command (issue 17, item 1): whole-process wall and CPU
+seconds of ``jamflow --help``, ``jamflow jam --help`` and ``jamflow jam --n 64``, and what a
+jam's first second is made of (imports, numba's first call, the jam itself).
+
+    python benchmarks/startup.py --repeats 5 --out docs/startup.csv
+    python benchmarks/startup.py --repeats 5 --source /tmp/main-src --label main --out docs/startup.csv
+
+``--source DIR`` runs the jamflow found in DIR (e.g. ``git archive main | tar -x -C DIR``)
+instead of the installed one, for a before/after table on the same machine and venv.
+Rows are appended to the CSV with the load average; take timings under
+``flock /tmp/jamflow-bench.lock``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+COMMANDS = {"help": ["--help"], "jam-help": ["jam", "--help"],
+            "jam-n64": ["jam", "--n", "64", "--seed", "1", "--quiet", "--out", "{tmp}/p.h5", "--force"]}
+
+# in-process phases of one N = 64 jam, each timed after the previous (fresh interpreter)
+PHASES = """import time, sys
+t = [time.perf_counter()]
+def mark(): t.append(time.perf_counter())
+import numpy; mark()
+import jamflow.commands.jam as jc; mark()
+import numba; mark()
+import jamflow.engine.compiled.engine; mark()
+from jamflow.protocols.compression import jam
+jam(n=16, seed=1); mark()
+res = jam(n=64, seed=1); mark()
+print(*[f"{b - a:.4f}" for a, b in zip(t, t[1:])], res.iterations)
+"""
+PHASE_NAMES = ["numpy", "jam command (parser)", "numba", "compiled engine + scipy.spatial",
+               "first jam (numba cache load, N = 16)", "jam N = 64 warm"]
+
+
+def run_once(argv, env) -> tuple[float, float]:
+    """(wall s, user + sys CPU s) of one ``python -m jamflow.cli ARGV`` process."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "jamflow.cli", *argv], env=env, check=True, stdout=subprocess.DEVNULL)
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--source", default=None, help="directory holding the jamflow package to time")
+    ap.add_argument("--label", default="branch")
+    ap.add_argument("--out", default="docs/startup.csv")
+    args = ap.parse_args()
+    env = dict(os.environ)
+    if args.source:
+        env["PYTHONPATH"] = str(Path(args.source).resolve())
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, argv in COMMANDS.items():
+            argv = [a.replace("{tmp}", tmp) for a in argv]
+            run_once(argv, env)  # warm the file cache and numba's disk cache
+            runs = [run_once(argv, env) for _ in range(args.repeats)]
+            rows.append({"label": args.label, "what": name, "wall_median_s": statistics.median(w for w, _ in runs),
+                         "wall_min_s": min(w for w, _ in runs), "cpu_median_s": statistics.median(c for _, c in runs),
+                         "repeats": args.repeats, "load": os.getloadavg()[0]})
+            print(f"{args.label:8s} {name:9s} wall {rows[-1]['wall_median_s']:.3f} s (min {rows[-1]['wall_min_s']:.3f})"
+                  f"  cpu {rows[-1]['cpu_median_s']:.3f} s  load {rows[-1]['load']:.2f}")
+    phases = [subprocess.run([sys.executable, "-c", PHASES], env=env, check=True, capture_output=True,
+                             text=True).stdout.split() for _ in range(args.repeats)]
+    for i, name in enumerate(PHASE_NAMES):
+        value = statistics.median(float(p[i]) for p in phases)
+        rows.append({"label": args.label, "what": f"phase: {name}", "wall_median_s": value, "wall_min_s":
+                     min(float(p[i]) for p in phases), "cpu_median_s": "", "repeats": args.repeats,
+                     "load": os.getloadavg()[0]})
+        print(f"{args.label:8s} phase {name:40s} {value:.3f} s")
+    out = Path(args.out)
+    new = not out.exists()
+    with out.open("a", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        if new:
+            writer.writeheader()
+        writer.writerows(rows)
+
+
+if __name__ == "__main__":
+    main()
