@@ -23,7 +23,6 @@ import numpy as np
 from ..box import AXES
 from ..engine.base import check_engine, open_engine
 from ..minimize import MinimizerSettings, MinimizeResult
-from ..pairs import overlapping_pairs, overlapping_sites
 from ..packing import DENSEST_PHI, Packing, SeparationFailed, random_packing
 from ..potentials import POTENTIALS, Potential, Spring, parse_potential
 from ..shapes.shape import parse_shape
