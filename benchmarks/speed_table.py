@@ -140,7 +140,7 @@ def chart(csv_path: str, png: str) -> None:
         for k, total in enumerate(med.sum(axis=0)):
             ax.text(k, 1.01, f"{total:,.0f}", ha="center", fontsize=8)
         ax.set(xlabel="N", ylabel="share of the median FIRE iterations", ylim=(0, 1.1))
-        ax.legend(fontsize=8, loc="lower right")
+        ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=3)
     fig.tight_layout()
     fig.savefig(png, dpi=110)
 
