@@ -96,8 +96,9 @@ def summary(csv_path: str) -> None:
         inproc, jf_med = cell(r["inprocess_cpu_s"] for r in jf)
         hand, hw_med = cell(r["inprocess_cpu_s"] for r in hw)
         phases = " / ".join(f"{statistics.median(int(r[p]) for r in jf):,.0f}" for p in PHASES)
-        ratio = (f"{hw_med / jf_med:.0f}x" if hw_med and jf_med else "") + (
-            f" ({hw_med / proc_med:.0f}x)" if hw_med and proc_med else "")
+        times = lambda x: f"{x:.1f}x" if x < 10 else f"{x:.0f}x"
+        ratio = (times(hw_med / jf_med) if hw_med and jf_med else "") + (
+            f" ({times(hw_med / proc_med)})" if hw_med and proc_med else "")
         checks = f"{sum(r['checks'] == 'True' for r in jf)}/{len(jf)}"
         load = f"{min(float(r['load']) for r in mine):.1f}-{max(float(r['load']) for r in mine):.1f}"
         print(f"| {dim}D | {n} | {proc} | {proc_wall} | {inproc} | {phases} | {hand} | {ratio} | {checks} | {load} |")
