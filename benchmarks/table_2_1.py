@@ -76,10 +76,10 @@ def errors(alpha, m):
 
 def printed_eq_2_15_coefficients(p):
     """The chapter's quartic with L from eq. 2.15 exactly as printed (+ sign of the m^2 term)."""
-    J, K, _ = cdm._jkl_2d(p)
     ai2, bi2, aj2, bj2 = p.a_i**2, p.b_i**2, p.a_j**2, p.b_j**2
+    J, K, _ = cdm.jkl_2d(ai2, bi2, aj2, bj2, p.x, p.z, p.m)
     L_printed = (ai2 * aj2 + bi2 * bj2 + (ai2 - bi2) * (aj2 - bj2) * p.m**2) / (ai2 * bi2) - 2
-    return cdm._quartic(J, K, L_printed)
+    return np.stack(cdm.quartic(J, K, L_printed), axis=-1)
 
 
 def log_mean(e):
@@ -163,8 +163,8 @@ def main():
         out.append(f"| {label} | " + " | ".join(f"{fmt(v)} ({c:.1f})" for v, c in zip(rows[k], ch)) + " |")
     out += [
         "",
-        "Linear and quadratic use the library's fallback: where the truncated root y lies outside (-1/2, 1/2)",
-        "the truncation has failed and lambda = 1/2 (the Cleaver value) is used.",
+        "Linear and quadratic use the library's fallback (`contact_distance.truncated_lambda`): where the truncated",
+        "root y lies outside (-1/2, 1/2), or gives a larger sigma than lambda = 1/2, lambda = 1/2 (the Cleaver value) is used.",
         "",
         "## The truncations where they fail, and eq. 2.15 as printed",
         "",

@@ -19,6 +19,7 @@ _EXPORTS = {
     "parse_sizes": "jamflow.sizes",
     "jam": "jamflow.protocols.compression",
     "CompressionSettings": "jamflow.protocols.compression",
+    "compress_above": "jamflow.protocols.above",
     "MinimizerSettings": "jamflow.minimize",
     "save_packing": "jamflow.io",
     "load_packing": "jamflow.io",

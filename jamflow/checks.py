@@ -110,7 +110,8 @@ def check_packing(packing: Packing, energy_per_particle: float | None = None, ma
     magnitudes = ref.contact_forces
     mean_f = float(magnitudes.mean()) if len(magnitudes) else math.nan
     ratio = fmax / mean_f if len(magnitudes) else (0.0 if fmax == 0 else math.inf)
-    floor = MinimizerSettings().resolved_force_tol(packing.box, packing.potential.contact_stiffness)
+    floor = MinimizerSettings().resolved_force_tol(packing.box, packing.potential.contact_stiffness,
+                                                  packing.shape.force_tol_base)
     c = Contacts().compute(packing)
     needed = c.isostatic_count - c.n_kept * (packing.dof_per_particle - packing.dim)  # N' d - d_trivial (+ 1)
     in_window = None if v_tol is None else bool(v_tol < v < 2 * v_tol)

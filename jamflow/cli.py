@@ -24,10 +24,14 @@ from . import __version__
 
 SUBCOMMANDS = {
     "jam": ("jamflow.commands.jam", "jam particles at onset by isotropic compression"),
+    "anneal": ("jamflow.commands.anneal", "particle-shape annealing: grow the aspect ratio of a jammed packing step by step"),
     "modes": ("jamflow.commands.modes", "contacts, floaters, normal modes, D(omega) and stability class of packing files"),
     "analyze": ("jamflow.commands.analyze", "structure: g(r), S(k), Q6, G, correlation lengths"),
     "draw": ("jamflow.commands.draw", "draw a packing: particles to scale, contacts, floaters (PNG)"),
     "export": ("jamflow.commands.export", "write a packing for OVITO and other viewers (LAMMPS dump, extended XYZ)"),
+    "shear": ("jamflow.commands.shear", "quasistatic shear of a packing at zero pressure (seed section 2.2)"),
+    "families": ("jamflow.commands.families", "geometric families of small disk packings under shear (Figure 2.7)"),
+    "moduli": ("jamflow.commands.moduli", "bulk and shear moduli: strain sweeps and the Hessian route"),
     "crosscheck": ("jamflow.commands.crosscheck", "run the LAMMPS deck and the Python controller from one start and compare"),
     "ensemble": ("jamflow.commands.ensemble", "many packings (seeds x N) on a Dask cluster into a resumable store"),
     "onsets": ("jamflow.commands.onsets", "distribution of jamming onsets of an ensemble store: P(phi_J), W(N), nu"),

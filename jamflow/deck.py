@@ -57,6 +57,26 @@ def deck_variables(n: int = 256, dim: int = 2, sizes="bi:1.4:0.5", seed: int = 0
     from .walls import parse_walls
 
     settings = settings or CompressionSettings()
+    d2, fsmall = system_values(sizes, potential)
+    values = dict(dim=int(dim), N=int(n), d1=1, d2=_num(d2), fsmall=_num(fsmall), seed=int(seed),
+                  **protocol_values(settings), out=str(out),
+                  walls="".join("xyz"[a] for a in parse_walls(walls, int(dim))) or "none")
+    values.update(start_values(settings, data, phi0))
+    values.update(optional_values(settings))
+    return values
+
+
+def start_values(settings: CompressionSettings, data=None, phi0: float | None = None) -> dict:
+    """The deck's start variables that are set (data file, phi0 at full precision)."""
+    start_phi = phi0 if phi0 is not None else settings.phi0
+    optional = {"data": None if data is None else str(data),
+                "phi0": None if start_phi is None else repr(float(start_phi))}
+    return {k: v for k, v in optional.items() if v is not None}
+
+
+def system_values(sizes, potential) -> tuple[float, float]:
+    """(large diameter d2, small fraction) of what the decks run: the linear spring (alpha 2,
+    eps 1) with one or two diameters; ValueError otherwise."""
     pot = parse_potential(potential) if isinstance(potential, str) else potential
     if not (pot.name == "spring" and pot.alpha == 2.0 and pot.epsilon == 1.0):
         raise ValueError(f"the deck runs the linear spring (alpha = 2, eps = 1) only, got {pot.spec}; "
@@ -65,23 +85,25 @@ def deck_variables(n: int = 256, dim: int = 2, sizes="bi:1.4:0.5", seed: int = 0
     if spec.kind not in ("mono", "bi"):
         raise ValueError(f"the deck runs mono or bi sizes only (atom types), got {spec.spec}; "
                          "run polydisperse sizes with the Python controller (jamflow jam)")
+    return (1.0, 1.0) if spec.kind == "mono" else spec.params
+
+
+def protocol_values(settings: CompressionSettings) -> dict:
+    """The bisection's and minimiser's deck variables (the seed protocol only)."""
     _check_seed_protocol(settings)
-    d2, fsmall = (1.0, 1.0) if spec.kind == "mono" else spec.params
     m: MinimizerSettings = settings.minimizer
-    values = dict(dim=int(dim), N=int(n), d1=1, d2=_num(d2), fsmall=_num(fsmall), seed=int(seed),
-                  vtol=_num(settings.v_tol), dphi0=_num(settings.dphi0), minimizer=m.method, vmin=_num(m.v_min),
-                  delta=_num(m.delta), window=m.window, maxiter=m.max_iterations, dt=_num(m.timestep),
-                  mddt=_num(m.md_timestep),
-                  damping=_num(m.damping), mddamping=m.md_damping, mdsample=m.md_sample_every,
-                  maxsteps=settings.max_steps, skin=_num(0.3), out=str(out),
-                  walls="".join("xyz"[a] for a in parse_walls(walls, int(dim))) or "none")
-    start_phi = phi0 if phi0 is not None else settings.phi0
-    optional = {"data": None if data is None else str(data),
-                "phi0": None if start_phi is None else repr(float(start_phi)),
-                "ftol": None if m.force_tol is None else repr(float(m.force_tol)),
+    return dict(vtol=_num(settings.v_tol), dphi0=_num(settings.dphi0), minimizer=m.method, vmin=_num(m.v_min),
+                delta=_num(m.delta), window=m.window, maxiter=m.max_iterations, dt=_num(m.timestep),
+                mddt=_num(m.md_timestep), damping=_num(m.damping), mddamping=m.md_damping,
+                mdsample=m.md_sample_every, maxsteps=settings.max_steps, skin=_num(0.3))
+
+
+def optional_values(settings: CompressionSettings) -> dict:
+    """The minimiser's optional deck variables that are set (ftol; plugin for pairwise MD)."""
+    m: MinimizerSettings = settings.minimizer
+    optional = {"ftol": None if m.force_tol is None else repr(float(m.force_tol)),
                 "plugin": _plugin_path() if m.method == "md" and m.md_damping == "pairwise" else None}
-    values.update({k: v for k, v in optional.items() if v is not None})
-    return values
+    return {k: v for k, v in optional.items() if v is not None}
 
 
 def _plugin_path() -> str:
@@ -111,9 +133,15 @@ def deck_text(variables: dict | None = None) -> str:
     """The deck with ``variables`` (from ``deck_variables``) as its defaults."""
     from .deck_script import BODY, HEADER
 
-    values = deck_variables() if variables is None else dict(variables)
-    optional = "".join(f"variable {k:<9} index {values.pop(k)}\n" for k in OPTIONAL if k in values)
-    return HEADER.format(version=__version__, optional=optional, **{k: str(v) for k, v in values.items()}) + BODY
+    return render(HEADER, BODY, OPTIONAL, deck_variables() if variables is None else variables)
+
+
+def render(header: str, body: str, optional_names, variables: dict) -> str:
+    """A deck: ``header`` formatted with ``variables`` (the optional ones, if given, as extra
+    ``index`` lines), then ``body``."""
+    values = dict(variables)
+    optional = "".join(f"variable {k:<9} index {values.pop(k)}\n" for k in optional_names if k in values)
+    return header.format(version=__version__, optional=optional, **{k: str(v) for k, v in values.items()}) + body
 
 
 def write_deck(path, variables: dict | None = None) -> Path:
@@ -169,46 +197,58 @@ def _walls_of(variables: dict) -> tuple:
 
 
 def run_deck(workdir, variables: dict | None = None, *, deck=None, lmp=None, ranks: int = 1,
-             timeout: float | None = None) -> DeckResult:
+             timeout: float | None = None, reader=None) -> DeckResult:
     """Run the deck with ``lmp`` in ``workdir``; raise DeckFailed unless it jammed.
 
     ``deck`` defaults to a fresh copy written into ``workdir``; ``variables`` become
-    ``-var`` arguments (paths in them are used as given, relative to ``workdir``).
+    ``-var`` arguments (paths in them are used as given, relative to ``workdir``);
+    ``reader(path) -> Packing`` reads the final data file (default ``read_data_file``; the ellipse
+    deck's is ``jamflow.deck_ellipsoids.read_ellipsoid_data``).
     """
-    from .engine.lammps_lib import lammps_env
+    workdir = check_workdir(workdir)
+    deck = Path(deck) if deck else write_deck(workdir / DECK_NAME)
+    prefix, seconds, proc = run_lmp(workdir, deck, variables, "jammed", lmp, ranks, timeout)
+    return read_deck_result(prefix, seconds, proc, periodic=_walls_of(variables or {}), reader=reader)
 
+
+def check_workdir(workdir) -> Path:
     workdir = Path(workdir)
     if not workdir.is_dir():
         raise ValueError(f"work directory {workdir} does not exist; create it first")
+    return workdir
+
+
+def run_lmp(workdir: Path, deck: Path, variables, out_default: str, lmp=None, ranks: int = 1, timeout=None):
+    """Run ``lmp -in deck -var ...`` in ``workdir``; return (output prefix, seconds, process)."""
+    from .engine.lammps_lib import lammps_env
+
     variables = dict(variables or {})
-    out = str(variables.setdefault("out", "jammed"))
+    out = str(variables.setdefault("out", out_default))
     command = lmp_command(lmp, ranks)
-    deck = Path(deck) if deck else write_deck(workdir / DECK_NAME)
-    args = [*command, "-in", str(deck.resolve()), "-log", f"{out}.lammps.log", "-screen", "none", "-nocite"]
+    args = [*command, "-in", str(Path(deck).resolve()), "-log", f"{out}.lammps.log", "-screen", "none", "-nocite"]
     for name, value in variables.items():
         args += ["-var", name, str(value)]
     start = time.perf_counter()
     proc = subprocess.run(args, cwd=workdir, env=lammps_env(), capture_output=True, text=True, timeout=timeout)
-    seconds = time.perf_counter() - start
-    return read_deck_result(workdir / out, seconds, proc, periodic=_walls_of(variables))
+    return workdir / out, time.perf_counter() - start, proc
 
 
-def read_deck_result(prefix, seconds: float = math.nan, proc=None, periodic=None) -> DeckResult:
+def read_deck_result(prefix, seconds: float = math.nan, proc=None, periodic=None, reader=None) -> DeckResult:
     """Read PREFIX.protocol.txt and PREFIX.data (``periodic``: per axis, False where the deck
     had walls); raise DeckFailed with the deck's reason."""
     prefix = Path(prefix)
     log = Path(f"{prefix}.protocol.txt")
     if not log.is_file():
-        raise DeckFailed(f"the deck wrote no protocol log {log}: {_lammps_error(prefix, proc)}")
+        raise DeckFailed(f"the deck wrote no protocol log {log}: {lammps_error(prefix, proc)}")
     history, result = read_protocol(log)
     if result.get("status") != "jammed":
         raise DeckFailed(f"the deck did not jam: {result.get('message', 'no result line in ' + str(log))}")
-    packing = read_data_file(f"{prefix}.data", periodic=periodic)
+    packing = reader(f"{prefix}.data") if reader else read_data_file(f"{prefix}.data", periodic=periodic)
     return DeckResult(packing, float(result["phi_J"]), float(result["V"]), float(result["P"]),
                       float(result["max_force"]), history, seconds, prefix)
 
 
-def _lammps_error(prefix, proc) -> str:
+def lammps_error(prefix, proc) -> str:
     lines = []
     for source in (Path(f"{prefix}.lammps.log"),):
         if source.is_file():
@@ -324,7 +364,7 @@ def run_pressure_deck(workdir, start: Packing, pressures, *, stress: str = "iso"
     proc = subprocess.run(args, cwd=workdir, env=lammps_env(), capture_output=True, text=True, timeout=timeout)
     log = workdir / f"{out}.pressure.txt"
     if proc.returncode != 0 or not log.is_file():
-        raise DeckFailed(f"the pressure deck failed: {_lammps_error(workdir / out, proc)}")
+        raise DeckFailed(f"the pressure deck failed: {lammps_error(workdir / out, proc)}")
     rows = np.array([ln.split() for ln in log.read_text().splitlines() if ln.strip() and not ln.startswith("#")],
                     dtype=float).reshape(-1, len(PRESSURE_COLUMNS))
     history = {name: rows[:, k] for k, name in enumerate(PRESSURE_COLUMNS)}

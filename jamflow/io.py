@@ -13,7 +13,9 @@ epsilon, pressures in epsilon / diameter^d)::
                                    walls (walled axes, "" | "y" | "x,y" | ...), wall_type
                                    ("" | "smooth" | "rough"), gravity (g, 0 without),
                                    target_pressure (NaN at fixed box), stress ("" | "iso" |
-                                   "aniso" | "tri")
+                                   "aniso" | "tri"), dphi_above (NaN, or the step by
+                                   which ``jamflow jam --above`` compressed the onset
+                                   packing: phi = phi_J + dphi_above)
     /positions  (N, d)      float64, Cartesian, wrapped into the cell
     /diameters  (N,)        float64, each particle's size scale (jamflow.packing)
     /box        (d, d)      float64, upper-triangular, columns = cell vectors (LAMMPS tilt)
@@ -151,12 +153,14 @@ def check_writable(path, force: bool = False) -> None:
 
 def save_packing(path, packing: Packing, *, energy_per_particle=None, pressure_tensor=None,
                  protocol: dict | None = None, history: dict | None = None, lammps_version=None,
-                 wall_forces=None, target_pressure=None, stress=None, checks=None) -> Path:
+                 wall_forces=None, target_pressure=None, stress=None, checks=None,
+                 dphi_above=None, tables=None) -> Path:
     """Write ``packing`` (and optional results) atomically to the HDF5 file ``path``.
 
     ``wall_forces`` (d, 2, d): the force on each face (``jamflow.walls.wall_loads``).
     ``checks``: a ``jamflow.checks.PackingChecks``, stored as the attributes of group
-    ``checks``."""
+    ``checks``; ``dphi_above``: the compression above onset (``jamflow.protocols.above``).
+    ``tables``: {group: {name: column}}, more groups of datasets (e.g. ``anneal``)."""
     pot = packing.potential
     attrs = dict(
         schema=SCHEMA, schema_version=SCHEMA_VERSION, jamflow_version=__version__,
@@ -168,7 +172,7 @@ def save_packing(path, packing: Packing, *, energy_per_particle=None, pressure_t
         shape=json.dumps(packing.shape.attrs()), shape_spec=packing.shape.spec(packing.dim),
         gamma=packing.box.shear_strain,
         walls=packing.box.wall_spec, wall_type=wall_type(packing), gravity=float(packing.gravity),
-        target_pressure=_num(target_pressure), stress=str(stress or ""),
+        target_pressure=_num(target_pressure), stress=str(stress or ""), dphi_above=_num(dphi_above),
     )
     ptensor = None if pressure_tensor is None else np.asarray(pressure_tensor, float)
     attrs["pressure"] = math.nan if ptensor is None else float(np.trace(ptensor) / packing.dim)
@@ -193,6 +197,10 @@ def save_packing(path, packing: Packing, *, energy_per_particle=None, pressure_t
             hist[name] = np.asarray(column)
         if checks is not None:
             f.create_group("checks").attrs.update(checks.as_attrs())
+        for group, columns in (tables or {}).items():
+            g = f.create_group(group)
+            for name, column in columns.items():
+                g[name] = np.asarray(column)
     return Path(path)
 
 
@@ -270,8 +278,13 @@ def shape_datasets(packing: Packing) -> dict:
 
 def read_history(path) -> dict:
     """The protocol history columns of a packing file as numpy arrays."""
-    with open_hdf5(path) as f:
-        return {k: v[...] for k, v in f["history"].items()}
+    return read_table(path, "history")
+
+
+def read_table(path, group: str) -> dict:
+    """The datasets of ``group`` in a packing file (``history``, ``anneal``) as numpy arrays."""
+    with open_hdf5(path) as f:  # a missing group: "incomplete jamflow packing file" naming it
+        return {k: v[...] for k, v in f[group].items()}
 
 
 def read_protocol(path) -> dict:

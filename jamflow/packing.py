@@ -64,6 +64,7 @@ class Packing:
         if np.any(dia <= 0):
             raise ValueError("diameters must be positive")
         self.shape.check(self.box.dim)
+        self.shape.check_sizes(dia, self.box.dim)
         if self.shape.oriented:
             if self.orientations is None:
                 raise ValueError(f"a packing of {self.shape.name(self.box.dim)} particles needs orientations")

@@ -30,3 +30,25 @@ class CompressionProgress:
         self.bar.set_postfix_str(f"phi={step['phi']:.9f} V={res.energy_per_particle:.2e} dphi={step['dphi']:.1e}",
                                  refresh=False)
         self.bar.update(1)
+
+
+class ShearProgress:
+    """A tqdm bar over the steps of a shear path (total known) with gamma, phi_J and the
+    number of steps whose contact network changed so far."""
+
+    def __init__(self, disable: bool = False):
+        self.bar = tqdm(desc="shear", unit="step", disable=disable, dynamic_ncols=True)
+        self.changes = 0
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.bar.close()
+
+    def __call__(self, step, k: int, total: int) -> None:
+        self.bar.total = total
+        self.changes += bool(step.changed)
+        self.bar.set_postfix_str(f"gamma={step.gamma:.5f} phi_J={step.phi_j:.8f} changes={self.changes}",
+                                 refresh=False)
+        self.bar.update(1)

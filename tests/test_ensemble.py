@@ -75,10 +75,12 @@ def test_store_made_by_other_parameters_is_refused(tmp_path):
     with pytest.raises(ValueError, match=r"--vtol 1e-16, this run asks 1e-15"):
         Store(tmp_path).open(jam_parameters(sizes="mono", vtol=1e-15), ["n"])
     # an option jam gains later: accepted at its default, refused at another value
-    later = {**jam_parameters(sizes="mono"), "gamma": 0.0}
-    Store(tmp_path).open(later, ["n"], defaults={"gamma": 0.0}).close()
-    with pytest.raises(ValueError, match=r"--gamma 0.0, this run asks 0.1"):
-        Store(tmp_path).open({**later, "gamma": 0.1}, ["n"], defaults={"gamma": 0.0})
+    later = {**jam_parameters(sizes="mono"), "later_option": 0.0}
+    Store(tmp_path).open(later, ["n"], defaults={"later_option": 0.0}).close()
+    with pytest.raises(ValueError, match=r"--later-option 0.0, this run asks 0.1"):
+        Store(tmp_path).open({**later, "later_option": 0.1}, ["n"], defaults={"later_option": 0.0})
+    with pytest.raises(ValueError, match="not an ensemble option"):
+        jam_parameters(above=1e-3)
 
 
 def test_unwritable_directory_is_refused(tmp_path):

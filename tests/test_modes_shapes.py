@@ -216,6 +216,21 @@ def test_stability_profiles_the_requested_modes(dimers):
             Stability(n_modes=bad)
 
 
+def test_three_branches_partition_the_nontrivial_modes(ellipses):
+    """Branch 1 = the extra zero modes, 2 and 3 split the nonzero ones by character at 1/2
+    (seed Figure 2.17); disks have no branches."""
+    from jamflow.analysis.modes import Spectrum, branches
+
+    spec = Spectrum().compute(ellipses[0])
+    one, two, three = branches(spec)
+    assert one.count == spec.n_extra_zero and one.count + two.count + three.count == spec.n_dof - spec.dim
+    assert two.translational < 0.5 <= three.translational and one.omega_high < two.omega_low
+    assert two.count + three.count == len(spec.nonzero)
+    from jamflow import jam
+
+    assert branches(Spectrum().compute(jam(n=16, seed=1).packing)) is None
+
+
 def test_cli_stores_mode_character_and_profiles(tmp_path, capsys):
     from jamflow.commands import modes
 
@@ -231,6 +246,7 @@ def test_cli_stores_mode_character_and_profiles(tmp_path, capsys):
     missing = res["missing_contacts"]
     assert f"quartic modes {missing}, one-particle flat 0 (missing contacts {missing})" in out
     assert "extra zero modes = missing contacts 1/1, quartic modes = missing contacts 1/1" in out
+    assert f"branches: 1 zero {missing} (omega" in out and "; 2 rotational " in out and "; 3 translational " in out
     assert res["schema_version"] == 2 and res["shape"] == "ellipse:1.5" and res["dof_per_particle"] == 3
     assert res["n_quartic"] == missing and res["classification"] == QUARTIC_STABLE
     assert res["n_translational"] == 2 * res["n_kept"]

@@ -177,6 +177,24 @@ def test_3d_nematic_matches_freud_and_vanishes_for_random_axes():
     assert abs(mine.director @ np.asarray(nem.director, float)) == pytest.approx(1.0, abs=1e-5)
 
 
+@pytest.mark.parametrize("dim", [2, 3])
+def test_nematic_of_a_packing_uses_its_directors(dim):
+    """Aligned ellipses/spheroids: P2 = 1; uniformly random orientations (the random start):
+    P2 ~ 1/sqrt(N); disks and spheres have no axis and are refused."""
+    from jamflow.shapes import Ellipsoid
+
+    n = 2000
+    p = random_packing(n, dim, parse_sizes("bi:1.4:0.5"), 0.3, 1, shape=Ellipsoid(1.5))
+    assert Nematic().compute(p).p2 < 5 / math.sqrt(n)
+    aligned = np.zeros(n) + 0.7 if dim == 2 else np.tile([np.cos(0.35), 0.0, 0.0, np.sin(0.35)], (n, 1))
+    res = Nematic().compute(p.with_positions(p.positions, orientations=aligned))
+    assert res.p2 == pytest.approx(1.0, abs=1e-12)
+    expected = [np.cos(0.7), np.sin(0.7)] + [0.0] * (dim - 2)  # 3D: body x turned by 0.7 about z
+    assert abs(res.director @ expected) == pytest.approx(1.0, abs=1e-12)
+    with pytest.raises(ValueError, match="needs particles with an axis"):
+        Nematic().compute(random_packing(20, dim, parse_sizes("mono"), 0.3, 1))
+
+
 # --- r_min, G, errors ----------------------------------------------------------------------------
 def test_first_minimum_refuses_a_gas():
     p = gas(1500, 2, 0.05, 2)

@@ -269,6 +269,7 @@ def test_analyze_command_writes_hdf5_and_plots(tmp_path, lammps_files):
 
     from jamflow.commands import analyze
     from jamflow.io import save_packing
+    from jamflow.shapes import Ellipsoid
 
     save_packing(tmp_path / "crystal.h5", triangular_packing(12, 12, tilted=True))
     parser = argparse.ArgumentParser()
@@ -279,8 +280,18 @@ def test_analyze_command_writes_hdf5_and_plots(tmp_path, lammps_files):
         assert f["order/Q6_global"][0] == pytest.approx(1.0, abs=1e-12)
         assert f["order/G"][0] == 0.0 and 1 < f.attrs["r_min"] < math.sqrt(3)
         assert f["sk/s"].shape == f["sk/k"].shape and f["rdf/g"].shape == f["rdf/r"].shape
+        assert np.isnan(f["order/P2"][0])  # disks have no nematic order
     for kind in ("rdf", "sk", "q6corr", "order", "q6map"):
         assert (tmp_path / f"res-{kind}.png").stat().st_size > 1000
+    # aligned ellipses on the same lattice (b = 0.8, a = 0.96: no overlaps): P2 = 1 (closed form)
+    crystal = triangular_packing(12, 12, tilted=True)
+    aligned = Packing(crystal.positions, 0.8 * crystal.diameters, crystal.box, shape=Ellipsoid(1.2),
+                      orientations=np.full(crystal.n, 0.4))
+    save_packing(tmp_path / "ellipses.h5", aligned)
+    assert analyze.run(parser.parse_args([str(tmp_path / "ellipses.h5"), "--out", str(out), "--k-max", "8",
+                                          "--force"])) == 0
+    with h5py.File(out) as f:
+        assert f["order/P2"][0] == pytest.approx(1.0, abs=1e-12)
     bad = parser.parse_args([str(lammps_files[1] / "p.dump"), "--out", str(out), "--dr", "-1"])
     with pytest.raises(ValueError, match="--dr"):
         analyze.run(bad)

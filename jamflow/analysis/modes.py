@@ -103,6 +103,53 @@ class SpectrumResult:
         return float(np.abs(m @ self.dynamical.translations()).max()) if m.shape[0] else 0.0
 
 
+@dataclass(frozen=True)
+class Branch:
+    """One branch of the sorted spectrum: its modes' count, frequency range sqrt(|e| / M) and
+    mean translational fraction."""
+
+    name: str
+    count: int
+    omega_low: float
+    omega_high: float
+    translational: float
+
+
+BRANCH_NAMES = ("1 zero", "2 rotational", "3 translational")
+
+
+def branch_labels(spec: SpectrumResult) -> np.ndarray | None:
+    """Per mode 1, 2 or 3, the branch of the spectrum of particles that turn (seed Figure 2.17):
+    1 the nontrivial zero modes (|e| <= e_min: the quartic modes at onset), 2 the nonzero modes
+    that are mostly rotational (translational fraction < 1/2), 3 the mostly translational ones;
+    0 for the d trivial translations (the zero modes of largest translational fraction). None
+    for disks/spheres, or without eigenvectors or a complete spectrum."""
+    fraction = spec.translational_fraction
+    if not spec.dynamical.packing.shape.oriented or fraction is None or not spec.complete:
+        return None
+    zero = np.abs(spec.eigenvalues) <= spec.e_min
+    labels = np.where(zero, 1, np.where(fraction < 0.5, 2, 3))
+    k = np.flatnonzero(zero)
+    labels[k[np.argsort(fraction[k])[max(len(k) - spec.dim, 0):]]] = 0
+    return labels
+
+
+def branches(spec: SpectrumResult) -> list[Branch] | None:
+    """The three branches (``branch_labels``) with their counts, frequency ranges and mean
+    translational fractions; None where there are no branches."""
+    labels = branch_labels(spec)
+    if labels is None:
+        return None
+    omega, fraction = np.sqrt(np.abs(spec.eigenvalues) / spec.mass), spec.translational_fraction
+    out = []
+    for b, name in enumerate(BRANCH_NAMES, 1):
+        k = labels == b
+        out.append(Branch(name, int(k.sum()), float(omega[k].min()) if k.any() else math.nan,
+                          float(omega[k].max()) if k.any() else math.nan,
+                          float(fraction[k].mean()) if k.any() else math.nan))
+    return out
+
+
 class Spectrum:
     """Eigenvalues (and vectors) of the dynamical matrix.
 

@@ -216,11 +216,17 @@ class NematicResult:
 class Nematic:
     """Nematic order P2 (seed section 4.3) of particle axes in 2D or 3D.
 
-    ``compute(orientations)``: unit (or any non-zero) axis vectors (N, d), or in 2D angles
-    (N,) in radians. Head and tail are equivalent (n and -n give the same P2).
+    ``compute(orientations)``: unit (or any non-zero) axis vectors (N, d), in 2D angles (N,)
+    in radians, or a ``Packing`` of particles that turn (their directors, the long axes of
+    prolate particles). Head and tail are equivalent (n and -n give the same P2).
     """
 
     def compute(self, orientations) -> NematicResult:
+        if isinstance(orientations, Packing):
+            if not orientations.shape.oriented:
+                raise ValueError(f"nematic order needs particles with an axis; "
+                                 f"{orientations.shape.name(orientations.dim)}s have none")
+            orientations = orientations.directors
         u = _unit_axes(orientations)
         dim = u.shape[1]
         tensor = (dim * np.einsum("na,nb->ab", u, u) / len(u) - np.eye(dim)) / (dim - 1)

@@ -19,7 +19,7 @@ from .. import __version__
 from ..checks import check_packing
 from ..io import atomic_path, check_writable, load_packing, replacing
 from ..analysis.correlations import BondCorrelation, rdf_correlation_length
-from ..analysis.order import BondOrder, first_minimum, translational_order
+from ..analysis.order import BondOrder, Nematic, first_minimum, translational_order
 from ..analysis.plots_structure import (plot_bond_correlations, plot_bond_order_map, plot_order, plot_rdf,
                                        plot_structure_factor)
 from ..analysis.readers import packings_from_lammps
@@ -127,16 +127,18 @@ def _force_balanced(packing, label) -> int:
     return int(checks.force_balanced)
 
 
-ORDER_COLUMNS = ("Q6_global", "Q6_local", "G", "n_isolated")
+ORDER_COLUMNS = ("Q6_global", "Q6_local", "G", "n_isolated", "P2")
 
 
 def order_row(packing, r_min: float, dr: float) -> dict:
-    """Per-packing order parameters (``packing`` may be a jamflow packing file)."""
+    """Per-packing order parameters (``packing`` may be a jamflow packing file); P2 (nematic
+    order of the directors) is NaN for particles without an axis (disks, spheres)."""
     if not hasattr(packing, "positions"):
         packing = load_packing(packing)
     order = BondOrder(r_min=r_min).compute(packing)
     return dict(Q6_global=order.global_order, Q6_local=order.local_order, n_isolated=order.n_isolated,
-                G=translational_order(RDF(dr=dr).compute(packing), r_min).G)
+                G=translational_order(RDF(dr=dr).compute(packing), r_min).G,
+                P2=Nematic().compute(packing).p2 if packing.shape.oriented else math.nan)
 
 
 def write_results(path, res: dict, files) -> None:
@@ -182,9 +184,14 @@ def write_plots(directory: Path, stem: str, res: dict, first) -> list[Path]:
         plot_rdf(res["rdf"], directory / f"{stem}-rdf.png", r_min=res["r_min"], fit=res["g_fit"], title=title),
         plot_structure_factor(res["sk"], directory / f"{stem}-sk.png", title="S(k)"),
         plot_bond_correlations(res["corr"], directory / f"{stem}-q6corr.png", title=title),
-        plot_order(res["labels"], {k: table[k] for k in ("Q6_global", "Q6_local", "G")},
+        plot_order(res["labels"], {k: table[k] for k in _plotted(table)},
                    directory / f"{stem}-order.png", title=f"r_min = {res['r_min']:.3f}"),
     ]
+
+
+def _plotted(table) -> list[str]:
+    """The order parameters to draw: P2 only where some packing has it."""
+    return ["Q6_global", "Q6_local", "G"] + (["P2"] if np.isfinite(table["P2"]).any() else [])
 
 
 def run(args) -> int:
@@ -211,6 +218,7 @@ def run(args) -> int:
     t = res["table"]
     print(f"{len(packings)} packing(s): r_min = {res['r_min']:.3f}  Q6 global = {t['Q6_global'].mean():.3f}  "
           f"Q6 local = {t['Q6_local'].mean():.3f}  G = {res['G'].G:.3g}  first peak g = {res['G'].g_max:.3g}  "
-          f"xi(g) = {res['g_fit'].xi:.3g}  xi(q6) = {res['corr'].fit.xi:.3g}")
+          f"xi(g) = {res['g_fit'].xi:.3g}  xi(q6) = {res['corr'].fit.xi:.3g}"
+          + (f"  P2 = {np.nanmean(t['P2']):.3f}" if np.isfinite(t["P2"]).any() else ""))
     print(f"-> {args.out}, " + ", ".join(str(p) for p in written))
     return 0

@@ -12,7 +12,7 @@ import numpy as np
 
 from . import jam as jam_command
 
-REPLACED = {"n", "seed", "out", "emit_deck", "help"}  # jam options the ensemble sets per task or replaces
+REPLACED = {"n", "seed", "out", "emit_deck", "above", "help"}  # jam options the ensemble sets per task, replaces or lacks (--above)
 
 
 def add_arguments(p) -> None:

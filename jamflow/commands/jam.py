@@ -2,7 +2,10 @@
 compression (seed section 2.1) and write the packing as HDF5 (schema: jamflow/io.py).
 With --walls the box is bounded by walls on those axes (smooth or rough); with --gravity the
 particles settle on the floor instead; with --pressure the box relaxes to a target pressure
-(seed section 2.3, jamflow/walls.py, jamflow/protocols/gravity.py, pressure.py)."""
+(seed section 2.3, jamflow/walls.py, jamflow/protocols/gravity.py, pressure.py); with --gamma the
+periodic cell is sheared to that fixed Lees-Edwards strain (section 2.2, docs/shear.md). With --above
+DPHI the onset packing is compressed affinely by DPHI and minimised again, and that packing is
+written (attribute dphi_above; the state jamflow moduli measures, seed section 4.5)."""
 
 from __future__ import annotations
 
@@ -12,10 +15,12 @@ import time
 from ..engine.base import ENGINES, engine_name
 from ..io import check_writable, replacing, save_packing
 from ..minimize import MD_DAMPINGS, METHODS, MinimizerSettings
-from ..protocols.compression import (DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, JammingFailed, check_resolution,
-                                     initial_packing, jam)
+from ..protocols.compression import (DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, JammingFailed, at_shear_strain,
+                                     check_resolution, initial_packing, jam, with_accumulated_strain)
 from ..progress import CompressionProgress
-from ..walls import WALL_TYPES
+from ..protocols.above import check_dphi, compress_above
+from ..shapes.contact_distance import METHODS as METHODS_CONTACT
+from ..walls import WALL_TYPES, wall_loads
 
 
 def add_arguments(p) -> None:
@@ -24,13 +29,20 @@ def add_arguments(p) -> None:
     p.add_argument("--sizes", default="bi:1.4:0.5",
                    help="mono | bi:RATIO:FRACTION_SMALL | poly-uniform:WIDTH | poly-normal:WIDTH | poly-lognormal:WIDTH")
     p.add_argument("--potential", default="spring", help="spring | hertz | spring:ALPHA | rlj")
-    p.add_argument("--shape", default="disk", help="particle shape: disk | sphere (the same: round particles); "
-                   "--sizes scales whole particles")
+    p.add_argument("--shape", default="disk", help="particle shape: disk | sphere (the same: round particles) | "
+                   "ellipse:ALPHA (2D, ALPHA = a/b >= 1) | spheroid:ALPHA (3D, ALPHA < 1 oblate); ALPHA = 1 is the "
+                   "disk/sphere. --sizes scales whole particles (b; a = ALPHA b)")
+    p.add_argument("--contact", choices=METHODS_CONTACT, default="exact",
+                   help="contact distance of ellipses/spheroids (seed section 2.3.2): exact (Perram-Wertheim), "
+                        "gaussian (equal sizes only), cleaver, linear, quadratic (3D: equal sizes only); "
+                        "docs/contact-distance.md")
     p.add_argument("--protocol", choices=sorted(PROTOCOLS), default=None,
                    help=f"seed: the chapter's constant-increment bisection; fast: the same stopping rule with "
                         f"growing increments and Newton jumps (docs/speed.md). Default {DEFAULT_PROTOCOL}; "
                         "seed with --emit-deck (decks run the seed protocol)")
-    p.add_argument("--minimizer", choices=METHODS, default="fire", help="energy minimiser")
+    p.add_argument("--minimizer", choices=METHODS, default="fire",
+                   help="energy minimiser; ellipses/spheroids: fire (compiled engine, over positions and "
+                        "orientations) or md (LAMMPS damped dynamics with rotations; no LAMMPS minimiser turns them)")
     add_md_damping_argument(p)
     p.add_argument("--engine", choices=ENGINES, default="auto",
                    help="auto: the compiled engine (FIRE, in process) wherever it runs the scene, else LAMMPS "
@@ -41,6 +53,9 @@ def add_arguments(p) -> None:
     p.add_argument("--vtol", type=float, default=1e-16, help="energy window V_tol < V < 2 V_tol (per particle)")
     p.add_argument("--ftol", type=float, default=None, help="max force component tolerance (default scales with box)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the initial positions and sizes")
+    p.add_argument("--above", type=float, default=None, metavar="DPHI",
+                   help="write the packing compressed from its onset by DPHI (phi_J -> phi_J + DPHI, affine) and "
+                        "minimised again (attribute dphi_above): the state jamflow moduli measures")
     p.add_argument("--walls", default=None, metavar="AXES",
                    help="walls on these axes (y, x,y, x,y,z): flat walls at both faces, the particles' own law at "
                         "contact distance a_i/2; periodic along the others; phi between the walls")
@@ -55,6 +70,8 @@ def add_arguments(p) -> None:
     p.add_argument("--stress", choices=("iso", "aniso", "tri"), default="iso",
                    help="with --pressure: iso (box shape kept), aniso (each P_aa = P), tri (shear stresses relaxed to "
                         "0 too: the box tilts)")
+    p.add_argument("--gamma", type=float, default=None,
+                   help="jam at this fixed Lees-Edwards shear strain (any finite value; seed section 2.2)")
     p.add_argument("--out", default="packing.h5", help="output HDF5 file")
     p.add_argument("--force", action="store_true",
                    help="replace an --out that is a symlink, device node or read-only file")
@@ -95,6 +112,12 @@ def check_boundary_args(args) -> None:
     if args.emit_deck and (args.pressure is not None or args.gravity or args.wall_type == "rough"):
         raise ValueError("--emit-deck writes the compression deck (smooth walls at most); the constant-pressure deck "
                          "is lammps_inputs/pressure.lmp")
+    above = getattr(args, "above", None)  # jamflow ensemble has no --above
+    if above is not None:
+        check_dphi(above, 0.0)  # not finite, not positive, >= 1: refused before any work
+        if args.pressure is not None or args.gravity or args.emit_deck:
+            raise ValueError("--above compresses the onset packing at a fixed box: it does not combine with "
+                             "--pressure, --gravity or --emit-deck")
 
 
 def prepare(args):
@@ -102,9 +125,14 @@ def prepare(args):
     before any work (shared by ``jamflow jam`` and ``jamflow ensemble``)."""
     check_boundary_args(args)
     settings = settings_from_args(args)
+    gamma = getattr(args, "gamma", None)
+    if gamma is not None and args.pressure is not None:
+        raise ValueError("--gamma fixes the shear strain, --pressure relaxes the box: use one of them")
     start = initial_packing(args.n, args.dim, args.sizes, args.potential, args.seed,
                             settings.start_phi(args.dim, args.gravity), args.shape, args.walls, args.wall_type,
-                            args.gravity)
+                            args.gravity, args.contact)
+    if gamma is not None:
+        start = at_shear_strain(start, gamma)  # refuses a strain that is not finite, or walls with a shear
     if args.pressure is not None:
         from ..protocols.pressure import PressureSettings, check_pressure_start, pressure_sequence
 
@@ -129,6 +157,8 @@ def jam_from_args(args, observers=(), engine_options=None):
         return result, checked(result, settings.minimizer, None, args.out)
     result = jam(start=start, settings=settings, observers=observers, engine=args.engine,
                  engine_options=engine_options)
+    if getattr(args, "gamma", None) is not None:
+        result = with_accumulated_strain(result, args.gamma)  # the file's gamma: the accumulated strain
     window = None if args.gravity else settings.v_tol  # a pile under gravity has no energy window
     return result, checked(result, settings.minimizer, window, args.out)
 
@@ -153,6 +183,8 @@ def run(args) -> int:
     t0 = time.perf_counter()
     with CompressionProgress(disable=args.quiet) as progress:
         result, checks = jam_from_args(args, observers=[progress])
+    if getattr(args, "above", None) is not None:
+        return save_above(args, result, t0)
     save_result(args.out, result, checks, args)
     print(f"{result.summary()}  -> {args.out} ({time.perf_counter() - t0:.2f} s)")
     return 0
@@ -164,7 +196,7 @@ def checked(result, minimizer, v_tol, out):
     from ..checks import check_packing  # imported here: its pair search (scipy.spatial) is not needed for --help
 
     packing = result.packing
-    ftol = minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness)
+    ftol = minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness, packing.shape.force_tol_base)
     checks = check_packing(packing, result.energy_per_particle, None, v_tol, ftol)
     if not checks.passed:
         reason = result.history["reason"][-1].decode()
@@ -176,15 +208,41 @@ def checked(result, minimizer, v_tol, out):
     return checks
 
 
+def save_above(args, result, t0) -> int:
+    """--above: compress the checked onset packing by DPHI, minimise, write that packing; the
+    onset's phi_J and the minimisation's stop are in the protocol group, its history is the onset's."""
+    settings = result.settings
+    try:
+        above = compress_above(result.packing, args.above, settings.minimizer, engine=args.engine)
+    except JammingFailed as err:
+        raise ValueError(f"{err} (onset phi_J = {result.phi_j:.10f}; nothing written)") from None
+    protocol = {**settings.as_dict(), "engine": above.engine, "phi_onset": result.phi_j, "above_dphi": above.dphi,
+                "above_reason": above.minimization.reason, "above_iterations": above.minimization.iterations}
+    wall_forces = wall_loads(above.packing) if above.packing.box.walls else None
+    with replacing([args.out] if getattr(args, "force", False) else []):
+        save_packing(args.out, above.packing, energy_per_particle=above.energy_per_particle,
+                     pressure_tensor=above.pressure_tensor, protocol=protocol, history=result.history,
+                     lammps_version=result.lammps_version, wall_forces=wall_forces, dphi_above=above.dphi)
+    print(result.summary())
+    print(f"{above.summary()}  -> {args.out} ({time.perf_counter() - t0:.2f} s)")
+    return 0
+
+
 def emit(args, start, settings) -> int:
-    """--emit-deck: the deck and start data file, no LAMMPS run."""
+    """--emit-deck: the deck and start data file, no LAMMPS run (ellipses/spheroids: the ellipse
+    deck, lammps_inputs/jam-ellipses.lmp, which minimises by damped dynamics with rotations)."""
     from pathlib import Path
 
     from ..deck import emit_deck
+    from ..deck_ellipsoids import emit_deck as emit_ellipsoid_deck
 
+    kind = start.shape.kind
+    if kind not in ("sphere", "ellipsoid"):
+        raise ValueError(f"--emit-deck writes decks for disks/spheres and ellipses/spheroids, not {start.shape.name(start.dim)}")
     check_writable(args.emit_deck)
     check_writable(Path(args.emit_deck).with_name(Path(args.emit_deck).stem + ".start.data"))
-    deck, data = emit_deck(args.emit_deck, start, settings, out=Path(args.out).stem)
+    writer = emit_ellipsoid_deck if kind == "ellipsoid" else emit_deck
+    deck, data = writer(args.emit_deck, start, settings, out=Path(args.out).stem)
     print(f"wrote {deck} and {data}; run: cd {deck.parent} && lmp -in {deck.name}  "
           f"(writes {Path(args.out).stem}.data and {Path(args.out).stem}.protocol.txt)")
     return 0

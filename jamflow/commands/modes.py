@@ -17,7 +17,7 @@ import h5py
 import numpy as np
 
 from .. import __version__
-from ..analysis.modes import DensityOfStates, Spectrum, Stability
+from ..analysis.modes import DensityOfStates, Spectrum, Stability, branches
 from ..checks import check_packing
 from ..ensemble.parallel import add_engine_arguments, expand_inputs, map_files
 from ..io import atomic_path, check_writable, load_packing, open_hdf5, read_checks, replacing
@@ -120,7 +120,17 @@ def summary_line(path, spec, stab) -> str:
     return (f"{path}: N' = {c.n_kept} ({c.n_floaters} floaters)  N_c = {c.n_contacts} (iso {c.isostatic_count}, "
             f"excess {c.excess_contacts:+d})  <z> = {c.mean_z:.4f}  near-contacts {c.n_near_contact}  "
             f"zero modes {spec.n_zero}  negative {spec.n_negative}  lowest e = {spec.lowest_nonzero:.4e}{quartic}  "
-            f"-> {stab.label}, Delta V {stab.behaviour}")
+            f"-> {stab.label}, Delta V {stab.behaviour}{branch_text(spec)}")
+
+
+def branch_text(spec) -> str:
+    """The three branches of a spectrum with rotations (Figure 2.17), or '' (disks, no vectors)."""
+    found = branches(spec)
+    if found is None:
+        return ""
+    parts = [f"{b.name} {b.count}" + (f" (omega {b.omega_low:.2e}..{b.omega_high:.2e}, translational "
+                                       f"{b.translational:.2f})" if b.count else "") for b in found]
+    return "\n  branches: " + "; ".join(parts)
 
 
 def ensemble_summary(spectra, stabilities=()) -> str:

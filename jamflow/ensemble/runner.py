@@ -50,6 +50,9 @@ def jam_parameters(**options) -> dict:
     unknown = sorted(set(options) - set(defaults))
     if unknown:
         raise ValueError(f"unknown jam option(s) {', '.join(unknown)}; use names of `jamflow jam --help`")
+    if options.get("above") is not None:
+        raise ValueError("above is not an ensemble option (the store keeps onset packings); run `jamflow jam --above` "
+                         "or jamflow.compress_above on them")
     return {k: v for k, v in {**defaults, **options}.items() if k not in TASK_KEYS}
 
 

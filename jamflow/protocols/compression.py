@@ -131,6 +131,7 @@ class JamResult:
     engine: str = "lammps"  # which engine minimised: "lammps" or "numba"
     max_torque: float = 0.0  # largest generalized torque component tau / d_k (0 for disks, spheres)
     wall_forces: np.ndarray | None = None  # (d, 2, d) force of the particles on each face (walled boxes)
+    counters: dict = field(default_factory=dict)  # what the engine's kernel counted (ellipsoids: fallbacks, ...)
 
     @property
     def pressure(self) -> float:
@@ -167,15 +168,21 @@ class JammingFailed(RuntimeError):
 def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | Potential = "spring",
         seed: int = 0, settings: CompressionSettings | None = None, *, start: Packing | None = None,
         observers=(), engine: str = "auto", engine_options: dict | None = None, shape="disk",
-        walls=None, wall_type: str = "smooth", gravity: float = 0.0) -> JamResult:
+        walls=None, wall_type: str = "smooth", gravity: float = 0.0, contact: str = "exact",
+        gamma: float | None = None) -> JamResult:
     """Jam N particles by isotropic compression; ``start`` overrides the random start.
 
-    ``shape``: a ``--shape`` spec or shape object (``jamflow.shapes``; default disks/spheres).
+    ``shape``: a ``--shape`` spec or shape object (``jamflow.shapes``; default disks/spheres);
+    ``sizes`` scale whole particles (an ellipse's b; a = ALPHA b). ``contact``: the contact-distance
+    method of ellipses/spheroids (exact, gaussian, cleaver, linear, quadratic).
     ``walls``: walled axes (``"y"``, ``"x,y"``, ...; ``jamflow.walls``) of ``wall_type``
     smooth or rough. ``gravity`` g > 0 settles the packing on the floor instead of
     compressing it (``jamflow.protocols.gravity``; needs walls on the last axis).
     A start of a potential that diverges at contact (repulsive LJ) with deep overlaps (the
     random one always) is first relaxed with the linear spring (``remove_overlaps``).
+    ``gamma``: jam at this fixed Lees-Edwards shear strain (seed section 2.2; any finite value,
+    the random start placed in the sheared cell, see ``at_shear_strain``); the packing's box
+    carries gamma as its accumulated strain (periodic cells only).
     ``observers`` are callables ``f(step: dict)`` called after every minimisation
     (progress bars, writers). ``engine``: "auto" (the compiled engine wherever it runs the
     scene, else LAMMPS), "lammps" or "numba" (``jamflow.engine.base``).
@@ -186,10 +193,17 @@ def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | 
         raise TypeError(f"settings must be a CompressionSettings, e.g. fast_protocol() or seed_protocol() from "
                         f"jamflow.protocols.compression, got {settings!r}")
     check_engine(engine)
+    if gamma is not None:
+        check_strain(gamma)
+        if start is not None:
+            raise ValueError("gamma sets the strain of the random start; a given start keeps its own box "
+                             "(shear it with start.box.with_shear_strain, or pass gamma=None)")
     random_start = start is None
     if random_start:
         start = initial_packing(n, dim, sizes, potential, seed, settings.start_phi(dim, gravity), shape, walls,
-                                wall_type, gravity)
+                                wall_type, gravity, contact)
+        if gamma is not None:
+            start = at_shear_strain(start, gamma)
     elif not isinstance(start, Packing):
         raise TypeError(f"start must be a Packing (or None for a random start), got {type(start).__name__}")
     if start.potential.soft_start and (random_start or _deepest_overlap(start) < RLJ_MIN_START_RATIO):
@@ -198,8 +212,34 @@ def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | 
         from .gravity import settle
 
         return settle(start, settings.minimizer, observers=observers, engine=engine, engine_options=engine_options)
-    return compress(start, settings, observers=observers, engine=engine, engine_options=engine_options)
+    result = compress(start, settings, observers=observers, engine=engine, engine_options=engine_options)
+    return result if gamma is None else with_accumulated_strain(result, gamma)
 
+
+def check_strain(gamma) -> float:
+    """A finite shear strain as a float; ValueError otherwise."""
+    if isinstance(gamma, bool) or not isinstance(gamma, (int, float, np.integer, np.floating)) \
+            or not math.isfinite(gamma):
+        raise ValueError(f"shear strain gamma must be a finite number, got {gamma!r}")
+    return float(gamma)
+
+
+def at_shear_strain(packing: Packing, gamma: float) -> Packing:
+    """``packing`` (particles where they are, Cartesian) in the Lees-Edwards cell at strain
+    ``gamma`` of its cell, held as the reduced strain gamma - k (k the nearest integer, the
+    subtraction exact): cells at gamma and gamma + 1 are one lattice (seed Figure 2.4), so
+    strains that are exactly one apart as doubles run the same floating-point operations.
+    ``with_accumulated_strain`` gives the result its accumulated strain back."""
+    k = math.floor(check_strain(gamma) + 0.5)
+    box = packing.box.with_shear_strain(float(gamma) - k)
+    return packing.with_positions(box.wrap(packing.positions), box=box)
+
+
+def with_accumulated_strain(result: "JamResult", gamma: float) -> "JamResult":
+    """The result with its packing's box tilted to the accumulated strain ``gamma`` (xy = gamma
+    ly; the same lattice as the reduced cell it was jammed in, to round-off in the tilt)."""
+    packing = result.packing  # positions stay as the engine left them (inside the reduced cell)
+    return replace(result, packing=packing.with_positions(packing.positions, box=packing.box.with_shear_strain(gamma)))
 
 
 BYTES_PER_PARTICLE = 4096  # peak memory of a jam run: measured 1.1-2.2 kB per particle at N = 131072 (docs/hardening.md)
@@ -207,9 +247,9 @@ MAX_SEED = 2**63 - 1  # seeds are stored as int64 in the packing file
 
 
 def initial_packing(n, dim, sizes, potential, seed, phi0, shape="disk", walls=None, wall_type="smooth",
-                    gravity=0.0) -> Packing:
+                    gravity=0.0, contact="exact") -> Packing:
     """Validated random start (seed step 1), with walls and gravity if given; errors before any
-    engine work."""
+    engine work. ``contact``: the contact-distance method of ellipses/spheroids."""
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
         raise ValueError(f"n must be an integer >= 2, got {n!r}")
     if isinstance(dim, bool) or not isinstance(dim, (int, np.integer)) or dim not in (2, 3):
@@ -224,12 +264,14 @@ def initial_packing(n, dim, sizes, potential, seed, phi0, shape="disk", walls=No
     size_spec = parse_sizes(sizes) if isinstance(sizes, str) else sizes
     if not isinstance(size_spec, SizeSpec):
         raise TypeError(f"sizes must be a spec string such as 'bi:1.4:0.5' or a SizeSpec, got {sizes!r}")
-    particle = parse_shape(shape, int(dim))
+    particle = parse_shape(shape, int(dim), contact)
     axes = parse_walls(walls, int(dim))
     try:
         start = random_packing(int(n), int(dim), size_spec, phi0, int(seed), pot, particle)
     except ValueError as err:
-        raise ValueError(f"{err} (n = {n} is too small for these sizes)") from None
+        if "box too small" in str(err):
+            raise ValueError(f"{err} (n = {n} is too small for these sizes)") from None
+        raise
     return replace(with_walls(start, axes, wall_type), gravity=gravity)
 
 
@@ -270,57 +312,71 @@ def remove_overlaps(packing: Packing, minimizer: MinimizerSettings, engine: str 
 def compress(packing: Packing, settings: CompressionSettings, *, observers=(), engine: str = "auto",
              engine_options=None) -> JamResult:
     """Run the compression/decompression bisection from ``packing`` (seed steps 2-4)."""
-    from ..engine.lammps_lib import lammps_version
-
     _check_start(packing)
     check_resolution(packing, settings)
     if packing.gravity > 0:
         raise ValueError("a packing under gravity is settled, not compressed: use jam(..., gravity=g) or "
                          "jamflow.protocols.gravity.settle")
+    with open_engine(packing, settings.minimizer.method, engine, **(engine_options or {})) as sim:
+        return bisect(sim, settings, observers=observers)
+
+
+def bisect(sim, settings: CompressionSettings, *, observers=()) -> JamResult:
+    """The bisection on an open engine from its current configuration and box, whose shape
+    (and shear strain) it keeps: every box is the current one scaled (seed steps 2-4). The
+    engine is left holding the jammed packing (the shear protocol continues from it)."""
+    from ..engine.lammps_lib import lammps_version
+
     start_time = time.perf_counter()
-    base_box, base_phi = packing.box, packing.phi
-    mean_volume = packing.phi * packing.box.volume / packing.n_mobile  # the volume phi counts, per mobile particle
-    stepper = PhiStepper(settings, packing.potential.onset_exponent, mean_volume)
+    current = sim.packing()  # phi and the volume it counts (walls: between them) of the current state
+    base_box, base_phi = current.box, current.phi
+    mean_volume = current.phi * current.box.volume / current.n_mobile  # the volume phi counts, per mobile particle
+    stepper = PhiStepper(settings, current.potential.onset_exponent, mean_volume)
     rows = {c: [] for c in HISTORY_COLUMNS}
     phi, resumes = base_phi, 0
-    with open_engine(packing, settings.minimizer.method, engine, **(engine_options or {})) as sim:
-        for step in range(settings.max_steps):
-            sim.set_box(base_box.scaled((base_phi / phi) ** (1.0 / packing.dim)))
-            minimizer = stepper.minimizer()
-            result = sim.minimize(minimizer)
-            if result.reason == "blown-up":
-                raise JammingFailed(f"the minimisation at phi = {phi:.10f} diverged (V = {result.energy_per_particle:.3g}, "
-                                    f"max force {result.max_force:.3g}): lower the timestep, or for damped MD use "
-                                    "damping x md_timestep well below 2")
-            pressure = sim.state().pressure
-            _record(rows, phi, result, pressure, stepper.last_step)
-            for observe in observers:
-                observe({"step": step, "phi": phi, "dphi": stepper.last_step, "result": result})
-            v = result.energy_per_particle
-            loose = minimizer.force_tol != settings.minimizer.force_tol
-            if loose and result.reason != "energy-below-vmin" and v < LOOSE_TRUST * settings.v_tol:
-                stepper.final_approach, stepper.last_step = True, 0.0  # too close to the window to trust
-                continue  # a loose minimum: polish it in place with the full tolerance
-            in_window = settings.v_tol < v < 2 * settings.v_tol and result.reason != "energy-below-vmin"
-            if in_window and result.reason == "iteration-cap" and resumes < WINDOW_RESUMES:
-                # not yet a minimum (near onset FIRE can creep off a saddle for 10^5-10^6
-                # iterations, docs/speed.md): keep minimising before the window decides
-                resumes += 1
-                stepper.last_step = 0.0
-                continue
-            if in_window:
-                return _finish(sim, phi, result, rows, settings, start_time, lammps_version())
-            phi = stepper.next_phi(phi, v, pressure, unjammed=result.reason == "energy-below-vmin")
+    for step in range(settings.max_steps):
+        sim.set_box(base_box.scaled((base_phi / phi) ** (1.0 / current.dim)))
+        minimizer = stepper.minimizer()
+        result = sim.minimize(minimizer)
+        if result.reason == "blown-up":
+            raise JammingFailed(f"the minimisation at phi = {phi:.10f} diverged (V = {result.energy_per_particle:.3g}, "
+                                f"max force {result.max_force:.3g}): lower the timestep, or for damped MD use "
+                                "damping x md_timestep well below 2")
+        pressure = sim.state().pressure
+        _record(rows, phi, result, pressure, stepper.last_step)
+        for observe in observers:
+            observe({"step": step, "phi": phi, "dphi": stepper.last_step, "result": result})
+        v = result.energy_per_particle
+        loose = minimizer.force_tol != settings.minimizer.force_tol
+        if loose and result.reason != "energy-below-vmin" and v < LOOSE_TRUST * settings.v_tol:
+            stepper.final_approach, stepper.last_step = True, 0.0  # too close to the window to trust
+            continue  # a loose minimum: polish it in place with the full tolerance
+        in_window = settings.v_tol < v < 2 * settings.v_tol and result.reason != "energy-below-vmin"
+        if in_window and result.reason == "iteration-cap" and resumes < WINDOW_RESUMES:
+            # not yet a minimum (near onset FIRE can creep off a saddle for 10^5-10^6
+            # iterations, docs/speed.md): keep minimising before the window decides
+            resumes += 1
+            stepper.last_step = 0.0
+            continue
+        if in_window:
+            jammed = _finish(sim, phi, result, rows, settings, start_time, lammps_version())
+            _warn_fallbacks(jammed)
+            return jammed
+        phi = stepper.next_phi(phi, v, pressure, unjammed=result.reason == "energy-below-vmin")
     raise JammingFailed(f"no packing in the window {settings.v_tol:g} < V < {2 * settings.v_tol:g} after "
                         f"{settings.max_steps} minimisations (last phi = {phi}); raise max_steps or check "
                         "the minimiser's stop reasons in the history")
 
 
 RLJ_MIN_START_RATIO = 0.9  # r/sigma below this: repulsive-LJ forces > ~1e2 eps/sigma, LAMMPS loses atoms
+CONTACT_RANGE = 1e-6  # ellipsoids: r / (smallest possible sigma) below this leaves r_hat, hence sigma, imprecise
 
 
 def _check_start(packing: Packing) -> None:
-    """Refuse a repulsive-LJ start with deep overlaps before any work (seed step 1)."""
+    """Refuse before any work a start the engines cannot evaluate: ellipses/spheroids with centres so
+    close that the contact distance is undefined or imprecise, repulsive LJ with deep overlaps."""
+    if packing.shape.kind == "ellipsoid":
+        _check_contact_range(packing)
     if not packing.potential.soft_start:
         return
     deepest = _deepest_overlap(packing)
@@ -354,10 +410,38 @@ def check_resolution(packing: Packing, settings: CompressionSettings) -> None:
                          f"with {low:g} <= ALPHA <= {high:g}")
     from ..checks import resolution  # imported here: the checks load scipy.spatial, not needed for --help
 
-    ftol = settings.minimizer.resolved_force_tol(packing.box, pot.contact_stiffness)
+    ftol = settings.minimizer.resolved_force_tol(packing.box, pot.contact_stiffness, packing.shape.force_tol_base)
     problem = resolution(packing, settings.v_tol, ftol).problem()
     if problem:
         raise ValueError(f"{problem} (N = {packing.n}, potential {pot.spec}, box side {packing.box.lengths.max():.3g})")
+
+
+def _check_contact_range(packing: Packing) -> None:
+    """sigma_ij depends on the direction r_hat = r_ij / |r_ij|, known to ~1e-16 L / |r_ij| in a box of
+    side L; at r_ij = 0 it is undefined (the contact-distance solver would return NaN)."""
+    from ..pairs import candidate_pairs  # here, like resolution: scipy.spatial loads lazily
+
+    reach = packing.shape.reach(packing.diameters)
+    i, j = candidate_pairs(packing, 2.0 * float(reach.max()))
+    r = np.linalg.norm(packing.box.minimum_image(packing.positions[i] - packing.positions[j]), axis=1)
+    shortest = packing.shape.axes(packing.diameters).min(axis=1)
+    ratio = r / (0.5 * (shortest[i] + shortest[j]))  # <= r / sigma_ij
+    if len(ratio) and ratio.min() < CONTACT_RANGE:
+        k = int(np.argmin(ratio))
+        raise ValueError(f"the start is too dense for the contact distance: particles {i[k]} and {j[k]} have centres "
+                         f"{r[k]:.3g} apart (r/sigma <= {ratio[k]:.2g} < {CONTACT_RANGE:g}), where the direction r_hat, "
+                         "and with it sigma_ij, is undefined or imprecise; use a lower phi0 or another seed, or "
+                         "separate the pair")
+
+
+def _warn_fallbacks(result: JamResult) -> None:
+    """Warn when a truncated contact distance (linear, quadratic) fell back to lambda = 1/2."""
+    fallbacks, evaluations = result.counters.get("fallbacks", 0), result.counters.get("approximate", 0)
+    if fallbacks:
+        warnings.warn(f"contact method {result.packing.shape.contact}: the truncated root left (0, 1) and lambda "
+                      f"fell back to 1/2 in {fallbacks} of {evaluations} contact evaluations "
+                      f"({100 * fallbacks / max(evaluations, 1):.2g} %) during this run; there sigma is Cleaver's "
+                      "(eq. 2.6), and it jumps where the root leaves. Use --contact exact to avoid it", stacklevel=3)
 
 
 class PhiStepper:
@@ -463,11 +547,14 @@ def _finish(engine, phi, result, rows, settings, start_time, version) -> JamResu
     state = engine.state()
     packing = engine.packing()
     if not result.converged:
+        tol = settings.minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness,
+                                                    packing.shape.force_tol_base)
         warnings.warn(f"final minimisation stopped by '{result.reason}' with max force {result.max_force:.2e} "
-                      f"(tolerance {settings.minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness):.1e}); the packing is in "
-                      "the energy window but force balance is only as good as that max force", stacklevel=3)
+                      f"(tolerance {tol:.1e}); the packing is in the energy window but force balance is only as "
+                      "good as that max force", stacklevel=3)
     history = {k: np.array(v) for k, v in rows.items()}
     history["reason"] = history["reason"].astype("S")
+    counters = engine.counters() if hasattr(engine, "counters") else {}
     return JamResult(packing, phi, result.energy_per_particle, state.pressure_tensor, result.max_force,
                      history, settings, time.perf_counter() - start_time, version, engine.name, result.max_torque,
-                     wall_loads(packing) if packing.box.walls else None)
+                     wall_loads(packing) if packing.box.walls else None, counters)

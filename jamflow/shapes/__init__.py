@@ -12,6 +12,7 @@ from .contact_distance import (
     contact_lambda,
     lambda_polynomial,
     overlap_state,
+    truncation_fallbacks,
 )
 from .ellipse_plot import draw_contact_pair, figure_2_12
 from .shape import SPHERE, Ellipsoid, RigidBody, Sphere, parse_shape, shape_from_attrs
@@ -35,4 +36,5 @@ __all__ = [
     "overlap_state",
     "parse_shape",
     "shape_from_attrs",
+    "truncation_fallbacks",
 ]

@@ -38,7 +38,13 @@ Methods (``method=``):
 - ``"linear"``, ``"quadratic"``: lambda_min from the truncations of eq. 2.26 (read as
   y_min = lambda_min - 1/2, quadratic root on the branch that tends to the linear one);
   wherever the chapter's polynomials apply (2D, or 3D equal spheroids). Where the truncated
-  root leaves (-1/2, 1/2) (common at alpha >~ 3) they fall back to lambda = 1/2 (Cleaver).
+  root leaves (-1/2, 1/2) (common at alpha >~ 3), or gives a larger sigma than lambda = 1/2,
+  they fall back to lambda = 1/2 (Cleaver; ``truncated_lambda``).
+
+Every method has derivatives (``contact_distance_gradient``): at lambda_min by the envelope
+theorem, at lambda = 1/2 directly, for the truncations through dlambda/d(configuration).
+The algebra (``pw_terms`` ... ``truncated_root``) is plain arithmetic that numpy evaluates on
+arrays here and numba compiles into the engine kernel (jamflow/engine/compiled/ellipsoids.py).
 """
 
 from __future__ import annotations
@@ -49,11 +55,15 @@ from functools import cached_property
 import numpy as np
 
 METHODS = ("exact", "gaussian", "cleaver", "linear", "quadratic")
-GRADIENT_METHODS = ("exact", "gaussian", "cleaver")
 UNIT_TOL = 1e-8  # allowed | |v| - 1 | for the unit vectors r_hat, u_i, u_j
 SAME_SIZE_RTOL = 1e-12  # a_i == a_j and b_i == b_j to this relative tolerance counts as equal
 OVERLAPPING, TOUCHING, APART = -1, 0, 1
 STEP_TOL = 1e-12  # safeguarded Newton stops after a step this small (t = y or lambda, O(1))
+# what the engines count while they evaluate contact distances (in this order): contacts where a
+# truncation's root left (-1/2, 1/2) and lambda fell back to 1/2, contacts where it gave a larger
+# sigma than 1/2 and was capped there, contacts evaluated with a truncation, pair evaluations
+# whose contact distance came out non-finite
+ENGINE_COUNTERS = ("fallbacks", "capped", "approximate", "invalid")
 
 
 @dataclass(frozen=True)
@@ -157,39 +167,200 @@ def _check_method(method: str, allowed=METHODS) -> None:
         raise ValueError(f"unknown or unsupported method {method!r} here; choose one of {allowed}")
 
 
-def _check_validity(p: _Pair, method: str) -> None:
-    """Raise if ``method`` is used outside the domain where the chapter defines it."""
-    if method == "gaussian" and not np.all(p.same_size()):
+def check_method_sizes(method: str, dim: int, identical: bool) -> None:
+    """Raise if ``method`` is used outside the domain where the chapter defines it; ``identical``:
+    every pair has a_i == a_j and b_i == b_j (e.g. a monodisperse packing)."""
+    if method == "gaussian" and not identical:
         raise ValueError(
             "method='gaussian' (Berne-Pechukas eq. 2.5) assumes identical particles "
             "(a_i == a_j and b_i == b_j); use method='cleaver' (eq. 2.6) or 'exact'"
         )
-    if method in ("linear", "quadratic") and p.dim == 3 and not np.all(p.same_size()):
+    if method in ("linear", "quadratic") and dim == 3 and not identical:
         raise ValueError(
             f"method={method!r} truncates the chapter's quintic (eqs 2.16-2.25), derived for "
             "identical spheroids only; for 3D pairs of different sizes use 'exact' or 'cleaver'"
         )
 
 
+def _check_validity(p: _Pair, method: str) -> None:
+    """Raise if ``method`` is used outside the domain where the chapter defines it."""
+    if method == "gaussian" or (method in ("linear", "quadratic") and p.dim == 3):
+        check_method_sizes(method, p.dim, bool(np.all(p.same_size())))
+
+
 # --------------------------------------------------------------------------------------
-# The contact function h(lambda) in closed form and its tangential gradient
+# The algebra, written once: plain arithmetic on numpy arrays (here) or floats (numba compiles
+# these very functions into jamflow/engine/compiled/ellipsoids.py). Arguments: squared full
+# axis lengths ai2 = a_i^2, bi2, aj2, bj2; x = r_hat.u_i, z = r_hat.u_j, m = u_i.u_j and
+# g = (r_hat . u_i x u_j)^2 (0 in 2D).
 # --------------------------------------------------------------------------------------
 
 
-def _terms(p: _Pair, lam: np.ndarray):
-    """C, P, Q, Nn, Qd of the module docstring at lambda (arrays of shape (n,))."""
-    x, z, m = p.x, p.z, p.m
-    C = (1 - lam) * p.b_i**2 + lam * p.b_j**2
-    P = (1 - lam) * (p.a_i**2 - p.b_i**2)
-    Q = lam * (p.a_j**2 - p.b_j**2)
-    Nn = C * C + C * (P * (1 - x * x) + Q * (1 - z * z)) + P * Q * p.g
+def pw_terms(lam, ai2, bi2, aj2, bj2, x, z, m, g):
+    """C, P, Q, Nn, Qd of the module docstring at lambda."""
+    C = (1 - lam) * bi2 + lam * bj2
+    P = (1 - lam) * (ai2 - bi2)
+    Q = lam * (aj2 - bj2)
+    Nn = C * C + C * (P * (1 - x * x) + Q * (1 - z * z)) + P * Q * g
     Qd = C * C + C * (P + Q) + P * Q * (1 - m * m)
     return C, P, Q, Nn, Qd
 
 
-def _h(p: _Pair, lam: np.ndarray) -> np.ndarray:
-    C, _, _, Nn, Qd = _terms(p, lam)
+def pw_h(lam, ai2, bi2, aj2, bj2, x, z, m, g):
+    """h(lambda) = sigma(lambda)^-2 in the closed form."""
+    C, _, _, Nn, Qd = pw_terms(lam, ai2, bi2, aj2, bj2, x, z, m, g)
     return 4 * lam * (1 - lam) * Nn / (C * Qd)
+
+
+def sigma_partials(lam, ai2, bi2, aj2, bj2, x, z, m, g):
+    """sigma(lambda) = h^{-1/2} and its partial derivatives in x, z, m at fixed lambda (g as the
+    Gram determinant 1 - x^2 - z^2 - m^2 + 2 x z m of the unit vectors, 0 in 2D)."""
+    C, P, Q, Nn, Qd = pw_terms(lam, ai2, bi2, aj2, bj2, x, z, m, g)
+    sigma = np.sqrt(C * Qd / (4 * lam * (1 - lam) * Nn))
+    k_n, k_q = -0.5 * sigma / Nn, 0.5 * sigma / Qd
+    s_x = k_n * (-2 * P * ((C + Q) * x - Q * m * z))
+    s_z = k_n * (-2 * Q * ((C + P) * z - P * m * x))
+    s_m = k_n * (2 * P * Q * (x * z - m)) + k_q * (-2 * P * Q * m)
+    return sigma, s_x, s_z, s_m
+
+
+def h_lambda_derivatives(lam, ai2, bi2, aj2, bj2, x, z, m, g):
+    """dh/dlambda and d2h/dlambda2 of the closed form (C, P, Q are linear in lambda)."""
+    dC, dP, dQ = bj2 - bi2, -(ai2 - bi2), aj2 - bj2
+    C, P, Q, Nn, Qd = pw_terms(lam, ai2, bi2, aj2, bj2, x, z, m, g)
+    wx, wz, wm = 1 - x * x, 1 - z * z, 1 - m * m
+    # first and second lambda-derivatives of the quadratics Nn, Qd and of w = 4 lam (1-lam)
+    Nn1 = 2 * C * dC + dC * (P * wx + Q * wz) + C * (dP * wx + dQ * wz) + (dP * Q + P * dQ) * g
+    Nn2 = 2 * dC * dC + 2 * dC * (dP * wx + dQ * wz) + 2 * dP * dQ * g
+    Qd1 = 2 * C * dC + dC * (P + Q) + C * (dP + dQ) + (dP * Q + P * dQ) * wm
+    Qd2 = 2 * dC * dC + 2 * dC * (dP + dQ) + 2 * dP * dQ * wm
+    w, w1, w2 = 4 * lam * (1 - lam), 4 - 8 * lam, -8.0
+    # h = w Nn / (C Qd): differentiate the quotient
+    num, num1, num2 = w * Nn, w1 * Nn + w * Nn1, w2 * Nn + 2 * w1 * Nn1 + w * Nn2
+    den, den1, den2 = C * Qd, dC * Qd + C * Qd1, 2 * dC * Qd1 + C * Qd2
+    h = num / den
+    h1 = (num1 - h * den1) / den
+    h2 = (num2 - 2 * h1 * den1 - h * den2) / den
+    return h1, h2
+
+
+def jkl_2d(ai2, bi2, aj2, bj2, x, z, m):
+    """J, K, L of eqs 2.13-2.15 (eq. 2.15 with the sign of its m^2 term corrected, see docs)."""
+    n_i = ai2 - (ai2 - bi2) * x * x
+    n_j = aj2 - (aj2 - bj2) * z * z
+    J = (n_j - n_i) / n_i  # eq. 2.13
+    K = (aj2 * bj2) / (ai2 * bi2) - 1  # eq. 2.14
+    # a_i^2 a_j^2 + b_i^2 b_j^2 - (a_i^2-b_i^2)(a_j^2-b_j^2) m^2, written as a sum of positive terms
+    L = (ai2 * bj2 + bi2 * aj2 + (ai2 - bi2) * (aj2 - bj2) * (1 - m * m)) / (ai2 * bi2) - 2
+    return J, K, L
+
+
+def quartic(J, K, L):
+    """Coefficients q0..q4 of eqs 2.8-2.12."""
+    return (J * (L + 4) / 16 - K * (J + 4) / 16,  # eq. 2.8
+            -(1 + K / 2) * (J + 2),  # eq. 2.9
+            -J * (L + 6) / 2 - K * (3 * J + 2) / 2,  # eq. 2.10
+            -2 * J * K,  # eq. 2.11
+            J * (L - K))  # eq. 2.12
+
+
+def jlm_3d(alpha2, x, z, m, g):
+    """J, L, M of eqs 2.23-2.25 (identical spheroids, alpha2 = (a / b)^2, prolate or oblate)."""
+    e = (alpha2 - 1) / alpha2  # (alpha^2 - 1) / alpha^2
+    den = 1 - e * x * x
+    J = e * (x * x - z * z) / den  # eq. 2.23
+    L = (alpha2 - 1) * e * (1 - m * m)  # eq. 2.24
+    # eq. 2.25: (x^2 + z^2 - m (2 x z - m) - 1) = -g, the Gram determinant of (r_hat, u_i, u_j)
+    M = -(alpha2 - 1) * e * g / den
+    return J, L, M
+
+
+def quintic(J, L, M):
+    """Coefficients q0..q5 of eqs 2.17-2.22."""
+    return (J * (L + 4) / 16,  # eq. 2.17
+            -(J + 2) + M * (L + 8) / 8,  # eq. 2.18
+            -J * (L + 6) / 2,  # eq. 2.19
+            -M * (L + 4),  # eq. 2.20
+            J * L,  # eq. 2.21
+            2 * M * L)  # eq. 2.22
+
+
+def root_partials_2d(y, quad, ai2, bi2, aj2, bj2, x, z, m):
+    """dy/dx, dy/dz, dy/dm of the root y of the truncation q0 + q1 y + quad q2 y^2 of the quartic
+    (quad = 1 quadratic, 0 linear), by implicit differentiation (K does not depend on x, z, m)."""
+    J, K, L = jkl_2d(ai2, bi2, aj2, bj2, x, z, m)
+    n_i = ai2 - (ai2 - bi2) * x * x
+    n_j = aj2 - (aj2 - bj2) * z * z
+    J_x, J_z = 2 * (ai2 - bi2) * x * n_j / (n_i * n_i), -2 * (aj2 - bj2) * z / n_i
+    L_m = -2 * m * (ai2 - bi2) * (aj2 - bj2) / (ai2 * bi2)
+    p_J = (L + 4) / 16 - K / 16 - (1 + K / 2) * y + quad * (-(L + 6) / 2 - 1.5 * K) * y * y
+    p_L = J / 16 + quad * (-J / 2) * y * y
+    p_y = -(1 + K / 2) * (J + 2) + quad * 2 * (-J * (L + 6) / 2 - K * (3 * J + 2) / 2) * y
+    return -p_J * J_x / p_y, -p_J * J_z / p_y, -p_L * L_m / p_y
+
+
+def root_partials_3d(y, quad, alpha2, x, z, m, g):
+    """As ``root_partials_2d`` for the quintic of identical spheroids (J, L, M of eqs 2.23-2.25),
+    with g the Gram determinant (dg/dx = 2 (z m - x), and cyclically)."""
+    J, L, M = jlm_3d(alpha2, x, z, m, g)
+    e = (alpha2 - 1) / alpha2
+    den = 1 - e * x * x
+    J_x, J_z = 2 * e * x * (1 - e * z * z) / (den * den), -2 * e * z / den
+    L_m = -2 * (alpha2 - 1) * e * m
+    c = -(alpha2 - 1) * e / den
+    M_x = c * (2 * (z * m - x) + g * 2 * e * x / den)
+    M_z, M_m = c * 2 * (x * m - z), c * 2 * (x * z - m)
+    p_J = (L + 4) / 16 - y + quad * (-(L + 6) / 2) * y * y
+    p_L = J / 16 + M / 8 * y + quad * (-J / 2) * y * y
+    p_M = (L + 8) / 8 * y
+    p_y = -(J + 2) + M * (L + 8) / 8 + quad * 2 * (-J * (L + 6) / 2) * y
+    return ((-p_J * J_x - p_M * M_x) / p_y, (-p_J * J_z - p_M * M_z) / p_y, (-p_L * L_m - p_M * M_m) / p_y)
+
+
+def truncated_root(q0, q1, q2, quad):
+    """y_min of eq. 2.26 truncated at linear (quad = 0) or quadratic (quad = 1) order.
+
+    Returns (y, q, inside): the quadratic root is the branch that tends to -q0/q1 (q1 < 0 always,
+    so no cancellation; without real roots the linear root, q = 0); where the root misses the
+    physical interval (-1/2, 1/2) the truncation has failed (inside False) and y = 0 (lambda = 1/2,
+    the Cleaver value), still an upper bound on sigma. Branch-free: floats or arrays.
+    """
+    disc = q1 * q1 - 4 * q0 * q2
+    q = quad * (disc >= 0)
+    root = np.sqrt(np.maximum(disc, 0.0))
+    y = -2 * q0 / (q1 + (1 - q) * q1 + q * np.copysign(root, q1))
+    inside = np.abs(y) < 0.5
+    return y * inside, q * inside, inside
+
+
+def truncated_lambda(quad, ai2, bi2, aj2, bj2, x, z, m, g, q0, q1, q2):
+    """lambda of the linear (quad = 0) or quadratic (quad = 1) truncation with its fallback:
+    (lambda, q, inside, kept). The truncation is dropped for lambda = 1/2 (the Cleaver value)
+    where its root leaves (-1/2, 1/2) (inside False: the chapter's truncation has failed) or
+    where it gives a larger sigma than lambda = 1/2 does (kept False too; both are upper bounds
+    on the exact sigma, and near the ends of (0, 1) the linear root gave sigma up to ~100x the
+    exact one at alpha >= 3). The second switch is continuous in the configuration, and it
+    bounds sigma by the Cleaver value, sigma^2 <= 2 (R_i^2 + R_j^2), R the half longest axes."""
+    y, q, inside = truncated_root(q0, q1, q2, quad)
+    kept = inside & (pw_h(0.5 + y, ai2, bi2, aj2, bj2, x, z, m, g) >= pw_h(0.5, ai2, bi2, aj2, bj2, x, z, m, g))
+    return 0.5 + y * kept, q * kept, inside, kept
+
+
+# --------------------------------------------------------------------------------------
+# The contact function on validated pairs, the chapter's polynomials f(y), y = lambda - 1/2
+# --------------------------------------------------------------------------------------
+
+
+def _squares(p: _Pair):
+    return p.a_i**2, p.b_i**2, p.a_j**2, p.b_j**2
+
+
+def _terms(p: _Pair, lam: np.ndarray):
+    return pw_terms(lam, *_squares(p), p.x, p.z, p.m, p.g)
+
+
+def _h(p: _Pair, lam: np.ndarray) -> np.ndarray:
+    return pw_h(lam, *_squares(p), p.x, p.z, p.m, p.g)
 
 
 def _sigma_at(p: _Pair, lam: np.ndarray) -> np.ndarray:
@@ -201,84 +372,38 @@ def _tangential(v: np.ndarray, e: np.ndarray) -> np.ndarray:
     return v - np.einsum("nk,nk->n", v, e)[:, None] * e
 
 
-def _sigma_gradient(p: _Pair, lam: np.ndarray):
-    """sigma(lambda) and its tangential gradients in r_hat, u_i, u_j at fixed lambda.
+def _sigma_gradient(p: _Pair, lam: np.ndarray, y_partials=None):
+    """sigma(lambda) and its tangential gradients in r_hat, u_i, u_j.
 
-    At lambda_min this is the full derivative of sigma_ij (envelope theorem: dh/dlambda = 0).
+    At lambda_min this is the full derivative of sigma_ij (envelope theorem: dh/dlambda = 0);
+    at lambda = 1/2 (gaussian, cleaver) lambda is constant. ``y_partials``: dlambda/d(x, z, m)
+    where lambda depends on the configuration (linear, quadratic), added through dsigma/dlambda.
     """
-    x, z, m = p.x, p.z, p.m
-    C, P, Q, Nn, Qd = _terms(p, lam)
-    sigma = np.sqrt(C * Qd / (4 * lam * (1 - lam) * Nn))
-    n_x = -2 * P * ((C + Q) * x - Q * m * z)
-    n_z = -2 * Q * ((C + P) * z - P * m * x)
-    n_m = 2 * P * Q * (x * z - m)
-    q_m = -2 * P * Q * m
-    k_n, k_q = (-0.5 * sigma / Nn)[:, None], (0.5 * sigma / Qd)[:, None]
+    sq = _squares(p)
+    sigma, s_x, s_z, s_m = sigma_partials(lam, *sq, p.x, p.z, p.m, p.g)
+    if y_partials is not None:
+        h1, _ = h_lambda_derivatives(lam, *sq, p.x, p.z, p.m, p.g)
+        s_lam = -0.5 * sigma**3 * h1  # d h^{-1/2} / d lambda
+        s_x, s_z, s_m = s_x + s_lam * y_partials[0], s_z + s_lam * y_partials[1], s_m + s_lam * y_partials[2]
     col = lambda v: v[:, None]  # noqa: E731
-    d_r = k_n * (col(n_x) * p.u_i + col(n_z) * p.u_j)
-    d_ui = k_n * (col(n_x) * p.r + col(n_m) * p.u_j) + k_q * col(q_m) * p.u_j
-    d_uj = k_n * (col(n_z) * p.r + col(n_m) * p.u_i) + k_q * col(q_m) * p.u_i
+    d_r = col(s_x) * p.u_i + col(s_z) * p.u_j
+    d_ui = col(s_x) * p.r + col(s_m) * p.u_j
+    d_uj = col(s_z) * p.r + col(s_m) * p.u_i
     return sigma, _tangential(d_r, p.r), _tangential(d_ui, p.u_i), _tangential(d_uj, p.u_j)
-
-
-# --------------------------------------------------------------------------------------
-# The chapter's polynomials f(y), y = lambda - 1/2 (coefficients ascending: q0, q1, ...)
-# --------------------------------------------------------------------------------------
-
-
-def _jkl_2d(p: _Pair):
-    """J, K, L of eqs 2.13-2.15 (eq. 2.15 with the sign of its m^2 term corrected, see docs)."""
-    x, z, m = p.x, p.z, p.m
-    ai2, bi2, aj2, bj2 = p.a_i**2, p.b_i**2, p.a_j**2, p.b_j**2
-    n_i = ai2 - (ai2 - bi2) * x * x
-    n_j = aj2 - (aj2 - bj2) * z * z
-    J = (n_j - n_i) / n_i  # eq. 2.13
-    K = (aj2 * bj2) / (ai2 * bi2) - 1  # eq. 2.14
-    # a_i^2 a_j^2 + b_i^2 b_j^2 - (a_i^2-b_i^2)(a_j^2-b_j^2) m^2, written as a sum of positive terms
-    L = (ai2 * bj2 + bi2 * aj2 + (ai2 - bi2) * (aj2 - bj2) * (1 - m * m)) / (ai2 * bi2) - 2
-    return J, K, L
-
-
-def _quartic(J, K, L) -> np.ndarray:
-    """Coefficients q0..q4 of eqs 2.8-2.12."""
-    return np.stack(
-        [
-            J * (L + 4) / 16 - K * (J + 4) / 16,  # eq. 2.8
-            -(1 + K / 2) * (J + 2),  # eq. 2.9
-            -J * (L + 6) / 2 - K * (3 * J + 2) / 2,  # eq. 2.10
-            -2 * J * K,  # eq. 2.11
-            J * (L - K),  # eq. 2.12
-        ],
-        axis=-1,
-    )
 
 
 def _chapter_coefficients_2d(p: _Pair) -> np.ndarray:
     """Quartic eqs 2.7-2.15 (any two ellipses)."""
-    return _quartic(*_jkl_2d(p))
+    return np.stack(quartic(*jkl_2d(*_squares(p), p.x, p.z, p.m)), axis=-1)
+
+
+def _alpha2(p: _Pair) -> np.ndarray:
+    return (p.a_i / p.b_i) ** 2
 
 
 def _chapter_coefficients_3d(p: _Pair) -> np.ndarray:
     """Quintic eqs 2.16-2.25 (identical spheroids, alpha = a / b, prolate or oblate)."""
-    x, z, m = p.x, p.z, p.m
-    alpha2 = (p.a_i / p.b_i) ** 2
-    e = (alpha2 - 1) / alpha2  # (alpha^2 - 1) / alpha^2
-    den = 1 - e * x * x
-    J = e * (x * x - z * z) / den  # eq. 2.23
-    L = (alpha2 - 1) * e * (1 - m * m)  # eq. 2.24
-    # eq. 2.25: (x^2 + z^2 - m (2 x z - m) - 1) = -g, the Gram determinant of (r_hat, u_i, u_j)
-    M = -(alpha2 - 1) * e * p.g / den
-    return np.stack(
-        [
-            J * (L + 4) / 16,  # eq. 2.17
-            -(J + 2) + M * (L + 8) / 8,  # eq. 2.18
-            -J * (L + 6) / 2,  # eq. 2.19
-            -M * (L + 4),  # eq. 2.20
-            J * L,  # eq. 2.21
-            2 * M * L,  # eq. 2.22
-        ],
-        axis=-1,
-    )
+    return np.stack(quintic(*jlm_3d(_alpha2(p), p.x, p.z, p.m, p.g)), axis=-1)
 
 
 def _chapter_coefficients(p: _Pair) -> np.ndarray:
@@ -326,20 +451,8 @@ def _safeguarded_newton(fun, lo: float, hi: float, x0: np.ndarray, max_iter: int
 
 
 def _approx_y(q: np.ndarray, order: int) -> np.ndarray:
-    """y_min from f truncated at linear or quadratic order (eq. 2.26, stable root form).
-
-    Where the truncated root misses the physical interval (-1/2, 1/2) the truncation has
-    failed; we then use y = 0 (lambda = 1/2, the Cleaver value), still an upper bound on sigma.
-    A quadratic without real roots falls back to the linear root.
-    """
-    q0, q1, q2 = q[:, 0], q[:, 1], q[:, 2]
-    y = -q0 / q1
-    if order == 2:
-        # root that tends to -q0/q1 as q2 -> 0; q1 < 0 always (see docs), so no cancellation
-        disc = q1 * q1 - 4 * q0 * q2
-        with np.errstate(invalid="ignore"):
-            y = np.where(disc >= 0, -2 * q0 / (q1 + np.copysign(np.sqrt(disc), q1)), y)
-    return np.where(np.abs(y) < 0.5, y, 0.0)
+    """y_min from f truncated at linear or quadratic order (``truncated_root``)."""
+    return truncated_root(q[:, 0], q[:, 1], q[:, 2], float(order == 2))[0]
 
 
 def _lambda_polynomial(p: _Pair) -> np.ndarray:
@@ -351,24 +464,7 @@ def _lambda_polynomial(p: _Pair) -> np.ndarray:
 
 
 def _h_lambda_derivatives(p: _Pair, lam: np.ndarray):
-    """dh/dlambda and d2h/dlambda2 of the closed form (C, P, Q are linear in lambda)."""
-    x, z, m = p.x, p.z, p.m
-    dC, dP, dQ = p.b_j**2 - p.b_i**2, -(p.a_i**2 - p.b_i**2), p.a_j**2 - p.b_j**2
-    C, P, Q, Nn, Qd = _terms(p, lam)
-    wx, wz, wm = 1 - x * x, 1 - z * z, 1 - m * m
-    # first and second lambda-derivatives of the quadratics Nn, Qd and of w = 4 lam (1-lam)
-    Nn1 = 2 * C * dC + dC * (P * wx + Q * wz) + C * (dP * wx + dQ * wz) + (dP * Q + P * dQ) * p.g
-    Nn2 = 2 * dC * dC + 2 * dC * (dP * wx + dQ * wz) + 2 * dP * dQ * p.g
-    Qd1 = 2 * C * dC + dC * (P + Q) + C * (dP + dQ) + (dP * Q + P * dQ) * wm
-    Qd2 = 2 * dC * dC + 2 * dC * (dP + dQ) + 2 * dP * dQ * wm
-    w, w1, w2 = 4 * lam * (1 - lam), 4 - 8 * lam, -8.0
-    # h = w Nn / (C Qd): differentiate log h
-    num, num1, num2 = w * Nn, w1 * Nn + w * Nn1, w2 * Nn + 2 * w1 * Nn1 + w * Nn2
-    den, den1, den2 = C * Qd, dC * Qd + C * Qd1, 2 * dC * Qd1 + C * Qd2
-    h = num / den
-    h1 = (num1 - h * den1) / den
-    h2 = (num2 - 2 * h1 * den1 - h * den2) / den
-    return h1, h2
+    return h_lambda_derivatives(lam, *_squares(p), p.x, p.z, p.m, p.g)
 
 
 def _lambda_maximise(p: _Pair) -> np.ndarray:
@@ -402,12 +498,28 @@ def _lambda_exact(p: _Pair) -> np.ndarray:
     return lam
 
 
+def _truncation(p: _Pair, method: str):
+    """(lambda, q, inside, kept) of ``truncated_lambda`` for "linear" / "quadratic"."""
+    c = _chapter_coefficients(p)
+    return truncated_lambda(float(method == "quadratic"), *_squares(p), p.x, p.z, p.m, p.g, c[:, 0], c[:, 1], c[:, 2])
+
+
 def _lambda(p: _Pair, method: str) -> np.ndarray:
     if method == "exact":
         return _lambda_exact(p)
     if method in ("gaussian", "cleaver"):
         return np.full(len(p.r), 0.5)
-    return 0.5 + _approx_y(_chapter_coefficients(p), 1 if method == "linear" else 2)
+    return _truncation(p, method)[0]
+
+
+def _root_partials(p: _Pair, method: str):
+    """dlambda/d(x, z, m) of "linear" / "quadratic" (0 where the truncation fell back to 1/2)."""
+    lam, q, _, kept = _truncation(p, method)
+    if p.dim == 2:
+        parts = root_partials_2d(lam - 0.5, q, *_squares(p), p.x, p.z, p.m)
+    else:
+        parts = root_partials_3d(lam - 0.5, q, _alpha2(p), p.x, p.z, p.m, p.g)
+    return [np.where(kept, v, 0.0) for v in parts]
 
 
 # --------------------------------------------------------------------------------------
@@ -447,15 +559,26 @@ def contact_distance_gradient(a_i, b_i, a_j, b_j, r_hat, u_i, u_j, method: str =
     (orthogonal to their unit vector), i.e. derivatives along the unit circle / sphere, in
     length units. For a separation vector r = |r| r_hat: d sigma / d r = dsigma_dr_hat / |r|;
     for a 2D director u = (cos t, sin t): d sigma / d t = dsigma_du . (-sin t, cos t).
-    Uses the envelope theorem at lambda_min (exact) or lambda = 1/2 (gaussian, cleaver);
-    "linear"/"quadratic" are not supported (their lambda depends on the configuration).
+    Uses the envelope theorem at lambda_min (exact) or the constant lambda = 1/2 (gaussian,
+    cleaver); "linear"/"quadratic" add the change of their lambda (implicit differentiation of
+    the truncated eq. 2.26; 0 where the truncation fell back to lambda = 1/2, where sigma jumps).
     """
-    _check_method(method, GRADIENT_METHODS)
+    _check_method(method)
     p = _validate(a_i, b_i, a_j, b_j, r_hat, u_i, u_j)
     _check_validity(p, method)
-    sigma, d_r, d_ui, d_uj = _sigma_gradient(p, _lambda(p, method))
+    partials = _root_partials(p, method) if method in ("linear", "quadratic") else None
+    sigma, d_r, d_ui, d_uj = _sigma_gradient(p, _lambda(p, method), partials)
     vec = p.shape + (p.dim,)
     return sigma.reshape(p.shape), d_r.reshape(vec), d_ui.reshape(vec), d_uj.reshape(vec)
+
+
+def truncation_fallbacks(a_i, b_i, a_j, b_j, r_hat, u_i, u_j, method: str) -> np.ndarray:
+    """True where "linear" / "quadratic" use lambda = 1/2 instead of their root (``truncated_lambda``:
+    the root left (-1/2, 1/2), or gave a larger sigma)."""
+    _check_method(method, ("linear", "quadratic"))
+    p = _validate(a_i, b_i, a_j, b_j, r_hat, u_i, u_j)
+    _check_validity(p, method)
+    return ~_truncation(p, method)[3].reshape(p.shape)
 
 
 def contact_function(lam, a_i, b_i, a_j, b_j, r_hat, u_i, u_j) -> np.ndarray:

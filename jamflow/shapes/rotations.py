@@ -116,3 +116,15 @@ def check_orientations(orientations, n: int, dim: int) -> np.ndarray:
                              f"{worst:.3g}); normalise with q / np.linalg.norm(q, axis=1, keepdims=True)")
         o = o / norm[:, None]
     return o
+
+
+def generalized_torques(orientations, torques, dim: int, rotational_lengths, mask) -> np.ndarray:
+    """(N, r) torques as forces on the coordinates d_k theta (seed section 3): the body-frame
+    components (R^T tau)_a / d_k on the axes that are degrees of freedom (``mask``), 0 elsewhere.
+    torques: world frame, (N,) in 2D (about z), (N, 3) in 3D; rotational_lengths (N, r)."""
+    tau = np.asarray(torques, float)
+    if dim == 2:
+        body = tau.reshape(-1, 1)
+    else:
+        body = np.einsum("nab,na->nb", quaternion_matrices(orientations), tau)
+    return body * np.asarray(mask, float) / rotational_lengths

@@ -3,14 +3,14 @@ with one force/torque kernel per particle shape and the potentials' own laws.
 
 Layout: ``laws`` (the potentials of ``jamflow.potentials`` compiled from their own source),
 ``rotation`` (2D angles, 3D quaternions), ``fire`` (the integrator, written once), one module
-per shape kernel (``spheres``, ``bodies``), ``kernels`` (the dispatch from a pair-list type to
+per shape kernel (``spheres``, ``bodies``, ``ellipsoids``), ``kernels`` (the dispatch from a pair-list type to
 its kernel) and ``engine`` (``CompiledEngine``, the Python side). A new shape adds a kernel
 module and registers it in ``kernels.KERNELS``; the integrator does not change.
 
 Kernels are cached on disk (numba ``cache=True``) under ``<jamflow cache>/numba/<digest>``,
-the digest covering this package's sources and ``jamflow/potentials.py``: numba's own cache
-check looks only at the file of the cached function, not at the laws it inlines from
-other files, so a changed law would otherwise run stale machine code.
+the digest covering this package's sources, ``jamflow/potentials.py`` and
+``jamflow/shapes/contact_distance.py``: numba's own cache check looks only at the file of the
+cached function, not at the laws and formulas it inlines from other files, so a changed law would otherwise run stale machine code.
 """
 
 from __future__ import annotations
@@ -22,7 +22,8 @@ from pathlib import Path
 
 import numba
 
-_SOURCES = [*sorted(Path(__file__).parent.glob("*.py")), Path(__file__).parents[2] / "potentials.py"]
+_SOURCES = [*sorted(Path(__file__).parent.glob("*.py")), Path(__file__).parents[2] / "potentials.py",
+            Path(__file__).parents[2] / "shapes" / "contact_distance.py"]
 
 
 @lru_cache(maxsize=1)

@@ -20,7 +20,7 @@ from ...packing import Packing
 from ..base import Capabilities, State
 from . import fire as kernels
 from .field import make_field
-from .kernels import BUILDERS
+from .kernels import BUILDERS, COUNTERS, TURNING_MOVES_SITES
 
 
 def _orientation_array(packing: Packing) -> np.ndarray:
@@ -58,7 +58,8 @@ class CompiledEngine:
         r = self._dk.shape[1]
         self._tau, self._g = np.zeros((n, r)), np.zeros((n, r))
         self._mask = np.array(packing.shape.rotation_mask(d), dtype=float)
-        self._reach = np.asarray(packing.shape.reach(packing.diameters), float)
+        reach = np.asarray(packing.shape.reach(packing.diameters), float)
+        self._reach = reach if TURNING_MOVES_SITES[packing.shape.kind] else np.zeros_like(reach)  # rebuild rule
         self._virial = np.zeros((d, d))
         self._field = make_field(packing)
         self._gb = np.zeros(0)  # box-coordinate forces (constant stress only)
@@ -66,6 +67,7 @@ class CompiledEngine:
         self._pairs = None
         self._built_at = self._x.copy()
         self._turned = np.zeros(n)
+        self._counts = np.zeros(len(COUNTERS[packing.shape.kind]), np.int64)  # kernel counters of dropped lists
 
     # lifecycle ---------------------------------------------------------------------------------
     def __enter__(self):
@@ -75,10 +77,30 @@ class CompiledEngine:
         self.close()
 
     def close(self):
-        self._pairs = None
+        self._drop_pairs()
 
     # pair list -----------------------------------------------------------------------------------
+    def _drop_pairs(self):
+        if self._pairs is not None and self._counts.size:
+            self._counts += self._pairs.counters
+        self._pairs = None
+
+    def counters(self) -> dict:
+        """What the shape's kernel counted since the engine was opened (``COUNTERS`` of its
+        module; ellipsoids: contact-distance fallbacks, approximate contacts, invalid pairs)."""
+        live = self._pairs.counters if self._pairs is not None and self._counts.size else 0
+        names = COUNTERS[self.template.shape.kind]
+        return dict(zip(names, (int(c) for c in self._counts + live)))
+
+    def _check_counters(self):
+        invalid = self.counters().get("invalid", 0)
+        if invalid:
+            raise RuntimeError(f"the contact-distance solver returned a non-finite sigma for {invalid} pair "
+                               "evaluation(s) (coincident centres or non-finite coordinates); start from a valid "
+                               "configuration (jamflow.protocols.compression checks starts before work)")
+
     def _build_pairs(self):
+        self._drop_pairs()
         self._x = self.box.wrap(self._x)
         self._pairs = BUILDERS[self.template.shape.kind](self.packing(), self._x, self.skin)
         self._built_at = self._x.copy()
@@ -105,12 +127,14 @@ class CompiledEngine:
         self._x = np.array(positions, dtype=float)
         if orientations is not None:
             self._o = _orientation_array(self.template.with_positions(self._x, orientations=orientations))
-        self._pairs, self._energy = None, None
+        self._drop_pairs()
+        self._energy = None
 
     def evaluate(self) -> State:
         """Energy, forces, torques and virial pressure tensor at the current configuration."""
         self._energy = kernels.forces(self._model(), self._field, self._x, self._f, self._o, self._tau, self._g,
                                       self._dk, self._mask, self._virial, self._gb)
+        self._check_counters()
         return self.state()
 
     def state(self) -> State:
@@ -137,7 +161,8 @@ class CompiledEngine:
             self._x = self._x * (box.lengths / self.box.lengths)
         self.box = box
         self._field.h[:] = box.h
-        self._pairs, self._energy = None, None
+        self._drop_pairs()
+        self._energy = None
 
     # minimisation -------------------------------------------------------------------------------------
     def minimize(self, settings=None):
@@ -181,6 +206,7 @@ class CompiledEngine:
             if reason == kernels.REBUILD:  # the cap fell on a rebuild step: forces with a fresh list
                 self._build_pairs()
                 self.evaluate()
+            self._check_counters()
             fmax = float(np.abs(self._f).max()) if n else 0.0
             gmax = max([0.0] + [float(np.abs(a).max()) for a in (self._g, self._gb) if a.size])
             objective = float(self._energy) + (pressure * self.box.volume if pressure is not None else 0.0)

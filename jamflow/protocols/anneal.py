@@ -1,0 +1,138 @@
+"""Particle-shape annealing (seed section 2.3.3): from a jammed packing of disks/spheres, grow
+the aspect ratio in steps of dalpha (random major-axis directions at the first step), re-jamming
+with the compression protocol of section 2.1 at every step.
+
+Each step replaces the shape (a particle's size stays its b, a = ALPHA b), rescales the box
+affinely back to the previous step's phi_J (the longer particles would otherwise start at
+phi_J ALPHA / ALPHA_prev, deep above onset), and jams from there (``compress``: it
+decompresses or compresses as the energy says). Every step's packing is checked
+(``jamflow.checks``); its phi_J, <z> and floaters are recorded.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..checks import check_packing
+from ..packing import Packing
+from ..shapes.rotations import random_orientations
+from ..shapes.shape import SPHERE, Ellipsoid
+from .compression import (DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, JammingFailed, JamResult, check_resolution,
+                          jam)
+
+STEP_COLUMNS = ("alpha", "phi_j", "mean_z", "n_contacts", "n_floaters", "energy_per_particle", "max_force",
+                "checks_passed", "minimizations", "iterations", "seconds")
+
+
+@dataclass
+class AnnealResult:
+    """The last step's jam (``final``, packing and checks) and one row per step in ``steps``
+    (columns ``STEP_COLUMNS``; row 0 is the input packing)."""
+
+    final: JamResult
+    checks: object
+    steps: dict
+
+    @property
+    def packing(self) -> Packing:
+        return self.final.packing
+
+
+def anneal_alphas(alpha0: float, target: float, dalpha: float) -> np.ndarray:
+    """The aspect ratios of the steps after ``alpha0``: alpha0 +- k dalpha, the last one ``target``
+    exactly (a shorter final step if dalpha does not divide the change)."""
+    change = target - alpha0
+    n = max(1, math.ceil(abs(change) / dalpha - 1e-9))
+    steps = alpha0 + math.copysign(dalpha, change) * np.arange(1, n + 1)
+    steps[-1] = target
+    return np.round(steps, 12)
+
+
+def check_anneal(start: Packing, target: float, dalpha: float, contact: str | None = None) -> float:
+    """Refuse, before any work, what cannot be annealed; returns the start's aspect ratio."""
+    for name, value in (("--to", target), ("--dalpha", dalpha)):
+        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+            raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
+    kind = start.shape.kind
+    if kind not in ("sphere", "ellipsoid"):
+        raise ValueError(f"shape annealing starts from disks/spheres (or ellipses/spheroids), not "
+                         f"{start.shape.name(start.dim)} particles")
+    if start.box.walls or start.fixed is not None or start.gravity:
+        raise ValueError("shape annealing runs in a periodic box: the input has walls, fixed particles or gravity")
+    alpha0 = 1.0 if kind == "sphere" else float(start.shape.alpha)
+    if target == alpha0:
+        raise ValueError(f"the input is already at aspect ratio {alpha0:g}; give --to another ALPHA")
+    if (target - 1.0) * (alpha0 - 1.0) < 0:
+        raise ValueError(f"--to {target:g} lies across ALPHA = 1 from the input's {alpha0:g} (prolate vs oblate): "
+                         "anneal from a disk/sphere packing instead")
+    shape = Ellipsoid(float(target), contact or getattr(start.shape, "contact", "exact"))
+    shape.check(start.dim)  # an ellipse with ALPHA < 1
+    shape.check_sizes(start.diameters, start.dim)  # gaussian / truncations outside their domain
+    if dalpha > abs(target - alpha0):
+        raise ValueError(f"--dalpha {dalpha:g} is larger than the whole change {alpha0:g} -> {target:g}; use a "
+                         "smaller step (the chapter uses 0.05 and 0.005)")
+    return alpha0
+
+
+def _grown(packing: Packing, alpha: float, contact: str, rng: np.random.Generator) -> Packing:
+    """``packing`` with aspect ratio ``alpha`` (random directors if it was round), box and positions
+    rescaled so that phi stays what it was."""
+    orientations = packing.orientations
+    if orientations is None:
+        orientations = random_orientations(packing.n, packing.dim, rng)
+    shape = SPHERE if alpha == 1.0 else Ellipsoid(float(alpha), contact)
+    grown = replace(packing, shape=shape, orientations=orientations, metadata={**packing.metadata, "anneal": True})
+    return grown.scaled_to_phi(packing.phi)
+
+
+def anneal(start: Packing, target: float, dalpha: float, settings: CompressionSettings | None = None, *,
+           seed: int = 0, contact: str | None = None, engine: str = "auto", observers=()) -> AnnealResult:
+    """Anneal the shape of the jammed ``start`` to aspect ratio ``target`` in steps of ``dalpha``.
+
+    ``seed``: the random major-axis directions of the first step (a round start only).
+    ``observers``: callables ``f(row: dict)`` after each step (progress bars). JammingFailed
+    if a step's protocol fails, or the last step's packing fails its checks.
+    """
+    settings = settings or PROTOCOLS[DEFAULT_PROTOCOL]()
+    alpha0 = check_anneal(start, target, dalpha, contact)
+    contact = contact or getattr(start.shape, "contact", "exact")
+    rng = np.random.default_rng(seed)
+    alphas = anneal_alphas(alpha0, float(target), float(dalpha))
+    packing = _grown(start, alphas[0], contact, rng)
+    check_resolution(packing, settings)
+    rows = {c: [] for c in STEP_COLUMNS}
+    _append(rows, alpha0, start, check_packing(start), None, 0.0)
+    result = checks = None
+    for k, alpha in enumerate(alphas):
+        if k:
+            packing = _grown(result.packing, alpha, contact, rng)
+        t0 = time.perf_counter()
+        result = jam(start=packing, settings=settings, engine=engine)
+        checks = check_packing(result.packing, result.energy_per_particle, None, settings.v_tol,
+                               _force_tol(result.packing, settings))
+        _append(rows, alpha, result.packing, checks, result, time.perf_counter() - t0)
+        for observe in observers:
+            observe({c: rows[c][-1] for c in STEP_COLUMNS})
+    if not checks.passed:
+        raise JammingFailed(f"the annealed packing at ALPHA = {alphas[-1]:g}, phi_J = {result.phi_j:.10f} failed "
+                            f"its checks: {'; '.join(checks.problems())}")
+    return AnnealResult(result, checks, {c: np.asarray(v) for c, v in rows.items()})
+
+
+def _force_tol(packing: Packing, settings: CompressionSettings) -> float:
+    return settings.minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness,
+                                                 packing.shape.force_tol_base)
+
+
+def _append(rows: dict, alpha: float, packing: Packing, checks, result: JamResult | None, seconds: float) -> None:
+    values = dict(alpha=float(alpha), phi_j=packing.phi, mean_z=checks.mean_z, n_contacts=checks.n_contacts,
+                  n_floaters=checks.n_floaters, energy_per_particle=checks.energy_per_particle,
+                  max_force=checks.max_force, checks_passed=bool(checks.passed),
+                  minimizations=0 if result is None else result.minimizations,
+                  iterations=0 if result is None else result.iterations, seconds=float(seconds))
+    for c in STEP_COLUMNS:
+        rows[c].append(values[c])
