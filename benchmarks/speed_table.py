@@ -6,6 +6,7 @@ same seeds and starts, with iterations per phase (compress / approach / final, a
     python benchmarks/speed_table.py --dim 2 --n 64 256 1024 --seeds 1 2 3 4 5 --handwritten 64 256 1024 --out docs/speed-table.csv
     python benchmarks/speed_table.py --dim 3 --sizes mono --n 512 --seeds 1 2 3 --handwritten 512 --out docs/speed-table.csv
     python benchmarks/speed_table.py --chart docs/speed-table.csv --png docs/speed-2.png
+    python benchmarks/speed_table.py --summary docs/speed-table.csv    # the markdown rows of docs/speed-2.md
 
 Whole process: ``python -m jamflow.cli jam ...`` wall and CPU (user + sys) seconds, imports
 and numba's cache load included. In process: ``jam()`` with a warm interpreter. Rows are
@@ -72,6 +73,37 @@ def handwritten_row(n, dim, sizes, seed, tmp) -> dict:
 PHASES = ("compress", "approach", "final")
 
 
+def summary(csv_path: str) -> None:
+    """Markdown rows: per (dim, N) medians (min-max) of jamflow whole process / in process CPU
+    and wall seconds, iterations per phase, the hand-written loop, and the ratio of medians."""
+    import statistics
+
+    rows = list(csv.DictReader(open(csv_path)))
+
+    def cell(values, digits=2):
+        values = [float(v) for v in values if v != ""]
+        if not values:
+            return "", None
+        med = statistics.median(values)
+        return f"{med:.{digits}f} ({min(values):.{digits}f}-{max(values):.{digits}f}, {len(values)})", med
+
+    for dim, n in sorted({(int(r["dim"]), int(r["n"])) for r in rows}):
+        mine = [r for r in rows if int(r["dim"]) == dim and int(r["n"]) == n]
+        jf = [r for r in mine if r["method"] == "jamflow"]
+        hw = [r for r in mine if r["method"] == "handwritten"]
+        proc, proc_med = cell(r["process_cpu_s"] for r in jf)
+        proc_wall, _ = cell(r["process_wall_s"] for r in jf)
+        inproc, jf_med = cell(r["inprocess_cpu_s"] for r in jf)
+        hand, hw_med = cell(r["inprocess_cpu_s"] for r in hw)
+        phases = " / ".join(f"{statistics.median(int(r[p]) for r in jf):,.0f}" for p in PHASES)
+        times = lambda x: f"{x:.1f}x" if x < 10 else f"{x:.0f}x"
+        ratio = (times(hw_med / jf_med) if hw_med and jf_med else "") + (
+            f" ({times(hw_med / proc_med)})" if hw_med and proc_med else "")
+        checks = f"{sum(r['checks'] == 'True' for r in jf)}/{len(jf)}"
+        load = f"{min(float(r['load']) for r in mine):.1f}-{max(float(r['load']) for r in mine):.1f}"
+        print(f"| {dim}D | {n} | {proc} | {proc_wall} | {inproc} | {phases} | {hand} | {ratio} | {checks} | {load} |")
+
+
 def chart(csv_path: str, png: str) -> None:
     """Median CPU seconds per packing against N (jamflow in process and whole process, the
     hand-written loop) and jamflow's median iterations per phase, one column per dimension."""
@@ -109,7 +141,7 @@ def chart(csv_path: str, png: str) -> None:
         for k, total in enumerate(med.sum(axis=0)):
             ax.text(k, 1.01, f"{total:,.0f}", ha="center", fontsize=8)
         ax.set(xlabel="N", ylabel="share of the median FIRE iterations", ylim=(0, 1.1))
-        ax.legend(fontsize=8, loc="lower right")
+        ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=3)
     fig.tight_layout()
     fig.savefig(png, dpi=110)
 
@@ -126,7 +158,10 @@ def main():
     ap.add_argument("--out", default="docs/speed-table.csv")
     ap.add_argument("--chart", default=None, metavar="CSV", help="only draw the chart of this CSV")
     ap.add_argument("--png", default="docs/speed-2.png")
+    ap.add_argument("--summary", default=None, metavar="CSV", help="only print the markdown rows of this CSV")
     args = ap.parse_args()
+    if args.summary:
+        return summary(args.summary)
     if args.chart:
         return chart(args.chart, args.png)
     jam(n=16, seed=0)  # numba's cache load outside the in-process timings

@@ -197,12 +197,18 @@ def _force_bound(packing, energy: float) -> float:
 @lru_cache(maxsize=64)
 def _contact_force_bound(pot, sigma: float, energy: float) -> float:
     """``_force_bound`` for one law and contact distance, cached: a protocol asks it once per
-    minimisation with the same arguments (the root search cost 2 ms a call, 0.1 s per N = 64 jam)."""
-    from scipy.optimize import brentq
-
-    if pot.energy(np.array([0.5 * sigma]), sigma)[0] <= energy:
+    minimisation with the same arguments (the root search cost 2 ms a call, 0.1 s per N = 64
+    jam). The root of V(r) = energy on [sigma/2, sigma] by bisection (V falls with r): scipy's
+    brentq cost a 0.1 s scipy.optimize import that a jam needs nowhere else."""
+    lo, hi = 0.5 * sigma, sigma
+    if pot.energy(np.array([lo]), sigma)[0] <= energy:
         return math.inf
-    r = brentq(lambda x: pot.energy(np.array([x]), sigma)[0] - energy, 0.5 * sigma, sigma, xtol=1e-15 * sigma)
+    while hi - lo > 1e-15 * sigma:
+        mid = 0.5 * (lo + hi)
+        if mid in (lo, hi):  # float64 resolution
+            break
+        lo, hi = (mid, hi) if pot.energy(np.array([mid]), sigma)[0] > energy else (lo, mid)
+    r = 0.5 * (lo + hi)
     return 10.0 * abs(pot.dv_dr(np.array([r]), sigma)[0])
 
 

@@ -68,3 +68,16 @@ def test_help_loads_only_its_subcommand(argv, lists_commands, jam_options):
 
     result = subprocess.run([sys.executable, "-c", HELP_PROBE, *argv], capture_output=True, text=True)
     assert result.stdout.split() == ["none", str(lists_commands), str(jam_options)], result.stdout + result.stderr
+
+
+def test_a_disk_jam_does_not_import_scipy_optimize(tmp_path):
+    """Start-up (issue 17): a disk jam needs neither scipy.optimize (the blow-up bound is a
+    bisection) nor the analyze command's modules."""
+    import subprocess
+    import sys
+
+    code = ("import sys; from jamflow.cli import main; "
+            f"code = main(['jam', '--n', '16', '--quiet', '--out', {str(tmp_path / 'p.h5')!r}]); "
+            "print(code, 'scipy.optimize' in sys.modules, 'matplotlib' in sys.modules)")
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert result.stdout.split()[-3:] == ["0", "False", "False"], result.stdout + result.stderr
