@@ -13,8 +13,12 @@ Rigid bodies (n-mers, ``jamflow.shapes.nmers``) are drawn site by site: every si
 bodies, and ``color_by="orientation"`` colours each body by its director angle mod pi on a
 cyclic map (nematic domains show as patches of one colour, like the chapter's Figure 2.26).
 
-A new particle shape adds one function to ``DRAWERS`` that returns a matplotlib collection
-of the particles' outlines to scale (see ``_disks``).
+Ellipses are drawn with their full axes a, b along and across the director; 3D spheroids have
+no slice picture (their cross-sections are ellipses of varying size): export them to OVITO
+(``jamflow export``).
+
+A new particle shape adds one function to ``DRAWERS`` that gives the outline of every drawn
+particle image as ellipse widths, heights and angles (see ``_round``, ``_elliptic``).
 """
 
 from __future__ import annotations
@@ -38,14 +42,30 @@ COLOR_BY = ("z", "q6", "orientation")
 MAX_LINE_WIDTH = 3.0  # points, for the largest contact force
 
 
-def _disks(centres, diameters, ax, **style):
-    """Disks (and sphere cross-sections) of the given diameters, in data units."""
-    return EllipseCollection(diameters, diameters, np.zeros(len(diameters)), units="xy", offsets=centres,
-                             offset_transform=ax.transData, **style)
+def _round(view, owner):
+    """Disks, sphere cross-sections and body sites: widths = heights = their drawn sizes."""
+    sizes = view.sizes[owner]
+    return sizes, sizes, np.zeros(len(sizes))
 
 
-# shape kind (Packing.shape.kind) -> function(centres, sizes, ax, **style); rigid bodies are their site disks
-DRAWERS = {"sphere": _disks, "rigid": _disks}
+def _elliptic(view, owner):
+    """2D ellipses: full axes a (along the director), b, and the director angle in degrees."""
+    particle = view.owner[view.index[owner]]
+    a, b = view.packing.shape.axes(view.packing.diameters[particle]).T
+    u = view.packing.directors[particle]
+    return a, b, np.degrees(np.arctan2(u[:, 1], u[:, 0]))
+
+
+# shape kind (Packing.shape.kind) -> function(view, owner) -> (widths, heights, angles) of the drawn
+# images, owner indexing view.index; rigid bodies are their site disks
+DRAWERS = {"sphere": _round, "rigid": _round, "ellipsoid": _elliptic}
+
+
+def _outlines(centres, outline, ax, **style):
+    """The particle images as ellipses (widths, heights, angles in degrees) in data units."""
+    widths, heights, angles = outline
+    return EllipseCollection(widths, heights, angles, units="xy", offsets=centres, offset_transform=ax.transData,
+                             **style)
 
 
 def draw_packing(packing: Packing, path, *, color_by: str = "z", slice_at: float = 0.5, q6_r_min: float | None = None,
@@ -80,6 +100,9 @@ def check_options(packing: Packing, color_by: str, slice_at: float) -> None:
         raise ValueError(f"slice_at must lie in [0, 1) (a fraction of the cell height), got {slice_at}")
     if packing.shape.kind not in DRAWERS:
         raise ValueError(f"jamflow draw cannot draw {packing.shape.kind} particles yet; it draws {', '.join(DRAWERS)}")
+    if packing.shape.kind == "ellipsoid" and packing.dim == 3:
+        raise ValueError("jamflow draw has no slice picture of 3D spheroids; view them in OVITO: "
+                         "jamflow export IN.h5 --format xyz")
 
 
 def draw_into(ax, packing: Packing, *, color_by: str = "z", slice_at: float = 0.5, q6_r_min: float | None = None,
@@ -93,15 +116,15 @@ def draw_into(ax, packing: Packing, *, color_by: str = "z", slice_at: float = 0.
     values, label, norm = _colours(packing, found, color_by, q6_r_min)
     cell = Polygon(view.corners, closed=True, fill=False, lw=0.8, color="k")
     ax.add_patch(cell)
-    drawer = DRAWERS[packing.shape.kind]
-    centres, sizes, owner = view.images()
-    particle = view.owner[view.index][owner]  # the particle of every drawn disk image
+    centres, _, owner = view.images()
+    outline = DRAWERS[packing.shape.kind](view, owner)
+    particle = view.owner[view.index][owner]  # the particle of every drawn image
     kept, floaters = ~found.floater[particle], found.floater[particle]
     cmap = "twilight" if color_by == "orientation" else "viridis"
-    body = drawer(centres[kept], sizes[kept], ax, array=values[particle][kept], cmap=cmap, norm=norm,
-                  edgecolors="k", linewidths=0.3)
-    ghost = drawer(centres[floaters], sizes[floaters], ax, facecolors="0.85", edgecolors="0.4", linewidths=0.3,
-                   hatch="////")
+    body = _outlines(centres[kept], [o[kept] for o in outline], ax, array=values[particle][kept], cmap=cmap,
+                     norm=norm, edgecolors="k", linewidths=0.3)
+    ghost = _outlines(centres[floaters], [o[floaters] for o in outline], ax, facecolors="0.85", edgecolors="0.4",
+                      linewidths=0.3, hatch="////")
     artists = [body, ghost]
     fmax = 0.0
     if contacts:
@@ -117,7 +140,7 @@ def draw_into(ax, packing: Packing, *, color_by: str = "z", slice_at: float = 0.
 
 def _caption(packing, contacts, fmax, view) -> str:
     where = "" if packing.dim == 2 else f"3D slice at z = {view.slice_at:.2f} L_z (cross-sections), "
-    return (f"{where}N = {packing.n}, phi = {packing.phi:.6f}, {packing.potential.spec}\n"
+    return (f"{where}N = {packing.n} {packing.shape.spec(packing.dim)}, phi = {packing.phi:.6f}, {packing.potential.spec}\n"
             f"N_c = {contacts.n_contacts} (isostatic {contacts.isostatic_count}), {contacts.n_floaters} floaters "
             f"(hatched); line width ~ contact force (widest {fmax:.2e})")
 
@@ -148,8 +171,8 @@ class _View:
         disks, self.owner = site_packing(packing) if rigid else (packing, np.arange(packing.n))
         h = packing.box.h
         pos = packing.box.wrap(disks.positions)
-        if packing.dim == 2:
-            self.index, self.sizes, xy = np.arange(disks.n), disks.diameters, pos
+        if packing.dim == 2:  # sizes: what a particle image reaches (an ellipse's major axis)
+            self.index, self.sizes, xy = np.arange(disks.n), 2.0 * disks.shape.reach(disks.diameters), pos
         else:
             dz = (pos[:, 2] - slice_at * h[2, 2] + 0.5 * h[2, 2]) % h[2, 2] - 0.5 * h[2, 2]
             radius = 0.5 * disks.diameters
