@@ -61,8 +61,11 @@ def test_dimer_deck_jams_rigid_dimers(tmp_path):
 def test_deck_geometry_is_jamflows(tmp_path, dim, alpha):
     """The deck's closed forms (union area/volume, radius of gyration across the dimer) equal
     jamflow's union integrals (shapes.union) to 1e-12."""
-    run_lmp(tmp_path, dim=dim, alpha=alpha, N=4, maxsteps=1)
-    line = next(ln for ln in (tmp_path / "jammed.protocol.txt").read_text().splitlines() if ln.startswith("# dimer"))
+    done = run_lmp(tmp_path, dim=dim, alpha=alpha, N=4, maxsteps=1)
+    protocol, log = tmp_path / "jammed.protocol.txt", tmp_path / "deck.log"
+    assert protocol.is_file(), (f"lmp exit {done.returncode}, no protocol file; stderr: {done.stderr[-500:]!r}; "
+                                f"log tail: {log.read_text()[-1500:] if log.is_file() else 'none'!r}")
+    line = next(ln for ln in protocol.read_text().splitlines() if ln.startswith("# dimer"))
     words = line.split()
     volume, dk = float(words[3]), float(words[-1])
     shape = parse_shape(f"nmer:2:{alpha}", dim)
