@@ -24,18 +24,20 @@ import numpy as np
 from tqdm import tqdm
 
 from jamflow import jam
+from jamflow.analysis.order import Nematic
 from jamflow.checks import check_packing
 from jamflow.protocols.anneal import anneal
 
 from ellipse_ensembles import SIZES, pyplot, read_rows, run_or_report, save_figure, stats, write_rows  # (benchmarks/ is the script's directory)
 
-COLUMNS = ["protocol", "dalpha", "seed", "n", "alpha", "phi_j", "mean_z", "n_floaters", "energy_per_particle",
+COLUMNS = ["protocol", "dalpha", "seed", "n", "alpha", "phi_j", "mean_z", "n_floaters", "p2", "energy_per_particle",
            "max_force", "checks_passed", "cpu_seconds", "load"]
 
 
-def _row(protocol, dalpha, seed, n, alpha, phi_j, checks, cpu) -> dict:
-    return dict(protocol=protocol, dalpha=dalpha, seed=seed, n=n, alpha=alpha, phi_j=phi_j, mean_z=checks.mean_z,
-                n_floaters=checks.n_floaters, energy_per_particle=checks.energy_per_particle,
+def _row(protocol, dalpha, seed, n, alpha, packing, checks, cpu) -> dict:
+    p2 = Nematic().compute(packing).p2 if packing.shape.oriented else float("nan")
+    return dict(protocol=protocol, dalpha=dalpha, seed=seed, n=n, alpha=alpha, phi_j=packing.phi, mean_z=checks.mean_z,
+                n_floaters=checks.n_floaters, p2=p2, energy_per_particle=checks.energy_per_particle,
                 max_force=checks.max_force, checks_passed=checks.passed, cpu_seconds=round(cpu, 2),
                 load=os.getloadavg()[0])
 
@@ -44,13 +46,13 @@ def run_anneal(n, seed, target, dalpha) -> list[dict]:
     t = time.process_time()
     disks = jam(n=n, sizes=SIZES, seed=seed)
     cpu0 = time.process_time() - t
-    rows = [_row("compression", 0.0, seed, n, 1.0, disks.phi_j, check_packing(disks.packing), cpu0)]
+    rows = [_row("compression", 0.0, seed, n, 1.0, disks.packing, check_packing(disks.packing), cpu0)]
     clock = [time.process_time()]
 
     def record(step):
         now = time.process_time()
         rows.append(dict(protocol="anneal", dalpha=dalpha, seed=seed, n=n, alpha=step["alpha"], phi_j=step["phi_j"],
-                         mean_z=step["mean_z"], n_floaters=step["n_floaters"],
+                         mean_z=step["mean_z"], n_floaters=step["n_floaters"], p2=step["p2"],
                          energy_per_particle=step["energy_per_particle"], max_force=step["max_force"],
                          checks_passed=step["checks_passed"], cpu_seconds=round(now - clock[0], 2),
                          load=os.getloadavg()[0]))
@@ -64,7 +66,7 @@ def run_compress(n, seed, alpha) -> dict:
     t = time.process_time()
     res = jam(n=n, sizes=SIZES, seed=seed, shape=f"ellipse:{alpha:g}")
     cpu = time.process_time() - t
-    return _row("compression", 0.0, seed, n, alpha, res.phi_j, check_packing(res.packing), cpu)
+    return _row("compression", 0.0, seed, n, alpha, res.packing, check_packing(res.packing), cpu)
 
 
 def run(args) -> None:
@@ -100,17 +102,18 @@ def report(path: Path, every: float = 0.1) -> None:
     rows = read_rows(path)
     groups = groups_of(rows)
     grid = {k: g for k, g in groups.items() if abs(k[1] / every - round(k[1] / every)) < 1e-6}
-    print("| protocol | alpha | packings | <phi_J> +- s.e. | <z> +- s.e. (non-floaters) | floaters / N | checks passed "
+    print("| protocol | alpha | packings | <phi_J> +- s.e. | <z> +- s.e. (non-floaters) | floaters / N | P2 | checks passed "
           "| median CPU s per step |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|")
     for (label, alpha), g in sorted(grid.items(), key=lambda kv: (kv[0][1], kv[0][0])):
         phi, phi_se, k = stats(r["phi_j"] for r in g)
         z, z_se, _ = stats(r["mean_z"] for r in g)
         floaters = np.mean([int(r["n_floaters"]) / int(r["n"]) for r in g])
         passed = sum(r["checks_passed"] == "True" for r in g)
         cpu = np.median([float(r["cpu_seconds"]) for r in g])
+        p2 = np.mean([float(r["p2"]) for r in g])
         print(f"| {label} | {alpha:g} | {k} | {phi:.4f} +- {phi_se:.4f} | {z:.3f} +- {z_se:.3f} | {floaters:.3f} | "
-              f"{passed}/{k} | {cpu:.1f} |")
+              f"{p2:.3f} | {passed}/{k} | {cpu:.1f} |")
     paired(rows)
     chart(groups, path.with_suffix(".png"))
 

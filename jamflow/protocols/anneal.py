@@ -17,6 +17,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..analysis.order import Nematic
 from ..checks import check_packing
 from ..packing import Packing
 from ..shapes.rotations import random_orientations
@@ -24,7 +25,7 @@ from ..shapes.shape import SPHERE, Ellipsoid
 from .compression import (DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, JammingFailed, JamResult, check_resolution,
                           jam)
 
-STEP_COLUMNS = ("alpha", "phi_j", "mean_z", "n_contacts", "n_floaters", "energy_per_particle", "max_force",
+STEP_COLUMNS = ("alpha", "phi_j", "mean_z", "n_contacts", "n_floaters", "p2", "energy_per_particle", "max_force",
                 "checks_passed", "minimizations", "iterations", "seconds")
 
 
@@ -132,8 +133,9 @@ def _force_tol(packing: Packing, settings: CompressionSettings) -> float:
 
 
 def _append(rows: dict, alpha: float, packing: Packing, checks, result: JamResult | None, seconds: float) -> None:
+    p2 = Nematic().compute(packing).p2 if packing.shape.oriented else math.nan  # nematic order (section 4.3)
     values = dict(alpha=float(alpha), phi_j=packing.phi, mean_z=checks.mean_z, n_contacts=checks.n_contacts,
-                  n_floaters=checks.n_floaters, energy_per_particle=checks.energy_per_particle,
+                  n_floaters=checks.n_floaters, p2=p2, energy_per_particle=checks.energy_per_particle,
                   max_force=checks.max_force, checks_passed=bool(checks.passed),
                   minimizations=0 if result is None else result.minimizations,
                   iterations=0 if result is None else result.iterations, seconds=float(seconds))
