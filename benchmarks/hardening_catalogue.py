@@ -530,7 +530,7 @@ def _():
     s.packing()
     done = s.run("anneal", "p.h5", "--to", "1.1", "--dalpha", "0.05", "--seed", "99999999999999999999999",
                  "--out", "a.h5", "--quiet")
-    return verdict(done, 2, ["seed must be an integer in"], s, [s.dir / "a.h5"])
+    return verdict(done, 2, ["seed must be a non-negative integer below 2\\^63"], s, [s.dir / "a.h5"])
 
 
 @case(54, "anneal --to 0.5 (disks)")

@@ -329,7 +329,7 @@ def test_anneal_refuses_before_work(tmp_path, capsys, monkeypatch, packing_file)
     base = ["anneal", str(packing_file), "--dalpha", "0.05", "--out", str(tmp_path / "a.h5"), "--quiet"]
     # was: the whole anneal ran, then a TypeError traceback at the save (result lost)
     assert main([*base, "--to", "1.1", "--seed", "99999999999999999999999"]) == 2
-    assert "seed must be an integer in [0, 2^63 - 1]" in capsys.readouterr().err
+    assert "--seed must be a non-negative integer below 2^63" in capsys.readouterr().err
     # was: "use ellipse:2", an option anneal does not have
     assert main([*base, "--to", "0.5"]) == 2
     err = capsys.readouterr().err

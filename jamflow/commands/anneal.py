@@ -39,7 +39,7 @@ def add_arguments(p) -> None:
 def run(args) -> int:
     check_writable(args.out, args.force)
     if not 0 <= args.seed <= MAX_SEED:
-        raise ValueError(f"--seed must be an integer in [0, 2^63 - 1], got {args.seed}")
+        raise ValueError(f"--seed must be a non-negative integer below 2^63 (it is stored as int64), got {args.seed}")
     if not (args.vtol > 0 and args.vtol < 1):
         raise ValueError(f"--vtol must be a positive number below 1, got {args.vtol}")
     start = load_packing(args.input)
