@@ -30,7 +30,7 @@ import numpy as np
 from .analysis.contacts import Contacts
 from .minimize import MinimizerSettings
 from .packing import Packing
-from .shapes.rotations import rotation_matrices
+from .shapes.rotations import generalized_torques as body_torques
 
 BALANCE_RTOL = 1e-3  # max net force / mean contact force above this: not at an energy minimum
 
@@ -112,7 +112,7 @@ def check_packing(packing: Packing, energy_per_particle: float | None = None, ma
     ratio = fmax / mean_f if len(magnitudes) else (0.0 if fmax == 0 else math.inf)
     floor = MinimizerSettings().resolved_force_tol(packing.box, packing.potential.contact_stiffness,
                                                   packing.shape.force_tol_base)
-    c = Contacts().compute(packing)
+    c = Contacts(count="sites").compute(packing)  # rigid bodies: one constraint per site pair (the matrix's count)
     needed = c.isostatic_count - c.n_kept * (packing.dof_per_particle - packing.dim)  # N' d - d_trivial (+ 1)
     in_window = None if v_tol is None else bool(v_tol < v < 2 * v_tol)
     return PackingChecks(
@@ -126,12 +126,8 @@ def check_packing(packing: Packing, energy_per_particle: float | None = None, ma
 def generalized_torques(packing: Packing, torques: np.ndarray) -> np.ndarray:
     """(N, r) tau_a / d_k about each rotational body axis that is a degree of freedom (zero
     about the others): the forces of the minimiser's rotational coordinates (eps/diameter)."""
-    dk = packing.rotational_lengths
-    mask = np.array(packing.shape.rotation_mask(packing.dim), float)
-    if packing.dim == 2:
-        return mask * np.asarray(torques, float)[:, None] / dk
-    body = np.einsum("nab,na->nb", rotation_matrices(packing.orientations, 3), torques)  # R^T tau
-    return mask * body / dk
+    return body_torques(packing.orientations, torques, packing.dim, packing.rotational_lengths,
+                        packing.shape.rotation_mask(packing.dim))
 
 
 # The refusal thresholds (benchmarks/vtol_resolution.py, docs/vtol-resolution.csv, 96 runs at

@@ -235,7 +235,8 @@ def run_lmp(workdir: Path, deck: Path, variables, out_default: str, lmp=None, ra
 
 def read_deck_result(prefix, seconds: float = math.nan, proc=None, periodic=None, reader=None) -> DeckResult:
     """Read PREFIX.protocol.txt and PREFIX.data (``periodic``: per axis, False where the deck
-    had walls); raise DeckFailed with the deck's reason."""
+    had walls; ``reader``: how to read the data file, e.g. ``read_body_data`` for a body deck);
+    raise DeckFailed with the deck's reason."""
     prefix = Path(prefix)
     log = Path(f"{prefix}.protocol.txt")
     if not log.is_file():
@@ -285,12 +286,57 @@ def read_data_file(path, potential: Potential | None = None, periodic=None) -> P
     it), in float64 and atom-ID order, positions as written; the dimension is 2 when every
     z is 0; ``periodic`` per axis (data files do not say: False for walled axes).
     (jamflow.analysis.readers goes through MDAnalysis, which keeps float32.)"""
+    bounds, tilts, table = _atoms_table(path, "sphere", "sphere", 7)
+    table = table[np.argsort(table[:, 0])]
+    box, origin = _data_box(bounds, tilts, table[:, 6], periodic)
+    positions = table[:, 4:4 + box.dim] - origin  # write_data writes them inside the cell
+    meta = {"source": str(path)}
+    return Packing(positions, table[:, 2], box, potential or Spring(), meta)
+
+
+def read_body_data(path, shape, potential: Potential | None = None) -> Packing:
+    """A packing of rigid bodies of ``shape`` from a LAMMPS data file of ``atom_style hybrid
+    sphere molecular`` as ``write_data`` writes it (id type x y z diameter density molecule ix iy
+    iz; one molecule per body, its atoms in id order = the shape's sites). Sites are unwrapped
+    with their image flags, centres are the mass-weighted site centres (``site_masses``: the
+    union's centre of mass), orientations the best rotation of the body frame onto the sites
+    (``shapes.rotations.fit_orientations``), scales the site diameters over the shape's."""
+    from .shapes.rotations import fit_orientations
+
+    bounds, tilts, table = _atoms_table(path, "hybrid", "hybrid sphere molecular", 11)
+    table = table[np.lexsort((table[:, 0], table[:, 7]))]  # by molecule, then atom id
+    box, origin = _data_box(bounds, tilts, table[:, 4])
+    dim, n_sites = box.dim, shape.n_sites
+    if len(table) % n_sites:
+        raise ValueError(f"{path} has {len(table)} atoms, not a multiple of the {n_sites} sites of {shape.label}")
+    sites = (table[:, 2:2 + dim] - origin + box.to_cartesian(table[:, 8:8 + dim])).reshape(-1, n_sites, dim)
+    scale = table[::n_sites, 5] / shape.site_diameters[0]
+    local = scale[:, None, None] * shape.sites[None]
+    internal = lambda x: np.linalg.norm(x[:, :, None] - x[:, None, :], axis=-1)
+    worst = float(np.abs(internal(sites) - internal(local)).max())
+    if worst > 1e-9 * max(1.0, float(scale.max())):
+        raise ValueError(f"{path}: site distances inside a body differ from {shape.label}'s by up to {worst:.3g}; "
+                         "the file's bodies are not rigid copies of this shape (or their image flags are wrong)")
+    centres = np.einsum("s,nsa->na", shape.site_masses, sites)
+    orientations = fit_orientations(local, sites - centres[:, None, :], shape.site_masses)
+    return Packing(box.wrap(centres), scale, box, potential or Spring(), {"source": str(path)}, shape, orientations)
+
+
+def _atoms_table(path, section: str, style: str, width: int) -> tuple[dict, tuple, np.ndarray]:
+    """(bounds, tilts, the first ``width`` columns of the 'Atoms # SECTION' rows) of a data file."""
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"no LAMMPS data file {path}")
     lines = path.read_text().splitlines()
-    bounds, tilts, atoms = {}, (0.0, 0.0, 0.0), []
-    k = 1
+    bounds, tilts, k = _data_header(lines)
+    if k == len(lines) or section not in lines[k]:
+        raise ValueError(f"{path} has no 'Atoms # {section}' section; write it with atom_style {style}")
+    return bounds, tilts, np.array(_section_rows(lines, k, width), dtype=float)
+
+
+def _data_header(lines) -> tuple[dict, tuple, int]:
+    """(bounds {axis: (lo, hi)}, tilts (xy, xz, yz), index of the Atoms line) of a LAMMPS data file."""
+    bounds, tilts, k = {}, (0.0, 0.0, 0.0), 1
     while k < len(lines) and not lines[k].strip().startswith("Atoms"):
         words = lines[k].split("#")[0].split()
         if len(words) == 4 and words[2][1:] == "lo":
@@ -298,25 +344,27 @@ def read_data_file(path, potential: Potential | None = None, periodic=None) -> P
         elif len(words) == 6 and words[3:] == ["xy", "xz", "yz"]:
             tilts = tuple(float(w) for w in words[:3])
         k += 1
-    if k == len(lines) or "sphere" not in lines[k]:
-        raise ValueError(f"{path} has no 'Atoms # sphere' section; write it with atom_style sphere")
+    return bounds, tilts, k
+
+
+def _data_box(bounds: dict, tilts: tuple, z: np.ndarray, periodic=None) -> tuple[Box, np.ndarray]:
+    """(box, origin) of a data file; the dimension is 2 when every z is 0."""
+    dim = 2 if np.all(z == 0.0) else 3
+    lengths = [bounds[a][1] - bounds[a][0] for a in "xyz"[:dim]]
+    return Box.from_lammps(dim, lengths, tilts, periodic), np.array([bounds[a][0] for a in "xyz"[:dim]])
+
+
+def _section_rows(lines, k: int, width: int) -> list:
+    """The first ``width`` words of every row of the section whose title is lines[k]."""
+    rows = []
     for line in lines[k + 1:]:
         words = line.split()
         if not words:
-            if atoms:
+            if rows:
                 break
             continue
-        atoms.append(words[:7])
-    table = np.array(atoms, dtype=float)
-    table = table[np.argsort(table[:, 0])]
-    z = table[:, 6]
-    dim = 2 if np.all(z == 0.0) else 3
-    lengths = [bounds[a][1] - bounds[a][0] for a in "xyz"[:dim]]
-    origin = np.array([bounds[a][0] for a in "xyz"[:dim]])
-    box = Box.from_lammps(dim, lengths, tilts, periodic)
-    positions = table[:, 4:4 + dim] - origin  # write_data writes them inside the cell
-    meta = {"source": str(path)}
-    return Packing(positions, table[:, 2], box, potential or Spring(), meta)
+        rows.append(words[:width])
+    return rows
 
 
 def emit_deck(path, start: Packing, settings: CompressionSettings | None = None, *, out: str = "jammed"):
@@ -377,5 +425,5 @@ def default_deck_path() -> Path:
 
 
 __all__ = ["DeckFailed", "DeckResult", "deck_text", "deck_variables", "write_deck", "run_deck",
-           "read_deck_result", "read_protocol", "read_data_file", "lmp_command", "emit_deck",
+           "read_deck_result", "read_protocol", "read_data_file", "read_body_data", "lmp_command", "emit_deck",
            "default_deck_path", "run_pressure_deck"]

@@ -329,10 +329,16 @@ def write_lammps_data(path, packing: Packing) -> Path:
     - ellipses/spheroids: ``atom_style ellipsoid`` (id type 1 density x y z) and an
       ``Ellipsoids`` section (id a b b qw qx qy qz: full lengths, body x along the director);
     - rigid bodies: ``atom_style hybrid sphere molecular``, one atom per site
-      (id type x y z diameter density molecule), molecule = body; each site carries 1/S of the
-      body's mass.
+      (id type x y z diameter density molecule ix iy iz), atom id k S + s + 1 for site s of body
+      k, molecule = body, types number the distinct site diameters; site s carries the fraction
+      ``RigidBody.site_masses[s]`` of the body's mass 1, so the mass-weighted site centre (LAMMPS's
+      rigid-body centre) is the union's centre of mass; image flags keep each body whole.
     Densities use LAMMPS's 3D volumes (also in 2D), so the masses come out as stated."""
     values, types = packing.species()
+    if packing.shape.kind == "rigid":
+        site_d = packing.diameters[:, None] * packing.shape.site_diameters[None, :]
+        values, types = np.unique(site_d, return_inverse=True)
+        types = types.reshape(site_d.shape)
     box = packing.box.to_lammps()
     pos = _xyz(packing.box.wrap(packing.positions))
     n, kind = packing.n, packing.shape.kind
@@ -358,18 +364,17 @@ def write_lammps_data(path, packing: Packing) -> Path:
         lines += ["", "Ellipsoids", ""]
         lines += [f"{k + 1} {a[k]:.17g} {b[k]:.17g} {b[k]:.17g} {_row(quat[k])}" for k in range(n)]
     else:
-        sites = packing.shape.world_sites(packing.box.wrap(packing.positions), packing.orientations, packing.diameters)
-        site_d = packing.diameters[:, None] * packing.shape.site_diameters[None, :]
-        per_site = 1.0 / packing.shape.n_sites
+        shape, cell = packing.shape, packing.box.reduced()  # image flags count cells of the box LAMMPS holds
+        sites = shape.world_sites(packing.box.wrap(packing.positions), packing.orientations, packing.diameters)
+        flat = sites.reshape(-1, packing.dim)
+        image = np.floor(cell.to_fractional(flat)).astype(int)
+        inside = _xyz(flat - cell.to_cartesian(image))
+        image = image if packing.dim == 3 else np.column_stack([image, np.zeros(len(image), int)])
+        mass = np.tile(shape.site_masses, n)
+        density = mass / (np.pi * site_d.ravel() ** 3 / 6.0)
         lines += ["", "Atoms # hybrid", ""]
-        rows, atom = [], 0
-        for k in range(n):
-            for s in range(packing.shape.n_sites):
-                atom += 1
-                xyz = _xyz(packing.box.wrap(sites[k, s][None]))[0]
-                rows.append(f"{atom} {types[k] + 1} {_row(xyz)} {site_d[k, s]:.17g} "
-                            f"{per_site / (np.pi * site_d[k, s] ** 3 / 6.0):.17g} {k + 1}")
-        lines += rows
+        lines += [f"{a + 1} {types.flat[a] + 1} {_row(inside[a])} {site_d.flat[a]:.17g} {density[a]:.17g} "
+                  f"{a // shape.n_sites + 1} {image[a, 0]} {image[a, 1]} {image[a, 2]}" for a in range(atoms)]
     with atomic_path(path) as tmp:
         tmp.write_text("\n".join(lines) + "\n")
     return Path(path)

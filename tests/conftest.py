@@ -24,3 +24,15 @@ def random_config(n, dim, phi, seed, diameters=None, tilt=0.0, potential=None):
 @pytest.fixture
 def config():
     return random_config
+
+
+def tilted(packing, tilt: float):
+    """The packing in the box with xy tilt = tilt * ly, positions moved affinely."""
+    h = packing.box.h.copy()
+    h[0, 1] = tilt * h[1, 1]
+    return packing.with_positions(Box(h).to_cartesian(packing.box.to_fractional(packing.positions)), box=Box(h))
+
+
+def rel(a, b) -> float:
+    """Largest absolute difference over the largest |b|."""
+    return float(np.max(np.abs(np.asarray(a) - np.asarray(b))) / np.max(np.abs(b)))

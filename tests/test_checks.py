@@ -98,7 +98,7 @@ def test_checks_cover_particles_that_turn():
     ok = check_packing(res.packing, res.energy_per_particle, None, 1e-16)
     assert ok.passed, ok.problems()
     o = res.packing.orientations.copy()
-    kept = np.flatnonzero(~Contacts().compute(res.packing).floater)
+    kept = np.flatnonzero(~Contacts(count="sites").compute(res.packing).floater)
     o[kept[0]] += 1e-4
     bad = check_packing(res.packing.with_positions(res.packing.positions, orientations=o))
     assert not bad.force_balanced

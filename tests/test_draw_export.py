@@ -140,3 +140,23 @@ def test_export_rigid_bodies_one_row_per_site(dim, tmp_path):
     assert np.array_equal(t["mol"], np.repeat(np.arange(1, p.n + 1), p.shape.n_sites))
     assert np.array_equal(t["radius"], (0.5 * p.diameters[:, None] * p.shape.site_diameters).ravel())
     assert "molecule:I:1" in export_packing(p, tmp_path / "b.xyz", "xyz").read_text().splitlines()[1]
+
+
+def test_draw_ellipses_to_scale_along_their_directors(tmp_path):
+    """Each ellipse image is drawn with its full axes a, b and the director's angle; 3D spheroids are refused."""
+    from jamflow.drawing import _elliptic
+    from jamflow.shapes import parse_shape
+
+    p = _random_oriented(parse_shape("ellipse:1.6", 2), 2)
+    view = _View(p, 0.5)
+    centres, _, owner = view.images()
+    widths, heights, angles = _elliptic(view, owner)
+    a, b = p.shape.axes(p.diameters).T
+    k = view.index[owner]
+    assert np.array_equal(widths, a[k]) and np.array_equal(heights, b[k])
+    u = p.directors[k]
+    assert np.allclose(np.cos(np.radians(angles)), u[:, 0]) and np.allclose(np.sin(np.radians(angles)), u[:, 1])
+    assert draw_packing(p, tmp_path / "e.png", color_by="orientation").read_bytes()[:8] == PNG
+    spheroids = _random_oriented(parse_shape("spheroid:1.5", 3), 3)
+    with pytest.raises(ValueError, match="OVITO"):
+        draw_packing(spheroids, tmp_path / "s.png")

@@ -5,6 +5,7 @@ options, refusals) and minimisation with rotations."""
 
 import numpy as np
 import pytest
+from conftest import rel, tilted
 
 from jamflow import jam
 from jamflow.box import Box
@@ -46,17 +47,6 @@ def sample(model, dim, tilt=0.0, potential=None, n=None, seed=3):
     p = random_packing(n, dim, parse_sizes("bi:1.4:0.5"), phi2 if dim == 2 else phi3, seed,
                        potential or Spring(2.5), shape or SPHERE)
     return tilted(p, tilt) if tilt else p
-
-
-def tilted(p: Packing, tilt: float) -> Packing:
-    """p in the box sheared by xy = tilt * L_y, positions following affinely."""
-    h = p.box.h.copy()
-    h[0, 1] = tilt * h[1, 1]
-    return p.with_positions(Box(h).to_cartesian(p.box.to_fractional(p.positions)), box=Box(h))
-
-
-def rel(a, b):
-    return float(np.max(np.abs(np.asarray(a) - np.asarray(b))) / np.max(np.abs(b)))
 
 
 @pytest.mark.parametrize("tilt", [0.0, 0.37], ids=["orthogonal", "tilted"])

@@ -19,7 +19,7 @@ from jamflow.io import read_attrs
 from jamflow.minimize import MinimizerSettings, minimize
 from jamflow.packing import Packing
 from jamflow.potentials import Spring
-from jamflow.protocols.compression import initial_packing
+from jamflow.protocols.compression import BODY_PHI0, initial_packing
 from jamflow.protocols.pressure import (PressureSettings, extrapolate_phi_j, jam_at_pressure, pressure_floor,
                                         pressure_sequence)
 from jamflow.shapes import RigidBody
@@ -132,7 +132,7 @@ def test_lammps_jams_at_pressure(at_pressure):
 
 def test_rigid_bodies_at_constant_pressure():
     dimer = RigidBody([[0.0, 0.0], [0.6, 0.0]], [1.0, 1.0], "dimer")
-    start = initial_packing(32, 2, "bi:1.4:0.5", "spring", 2, 0.75, shape=dimer)
+    start = initial_packing(32, 2, "bi:1.4:0.5", "spring", 2, BODY_PHI0[2], shape=dimer)  # bodies start without overlaps
     res = jam_at_pressure(start, PressureSettings((1e-3, 1e-4)))
     ref = energy_forces_pressure(res.packing)
     assert abs(ref.pressure / 1e-4 - 1) < 1e-6 and np.max(np.abs(ref.forces)) < 1e-12

@@ -23,7 +23,14 @@
   per pair of bodies, however many site pairs touch (``count="bodies"``); with
   ``count="sites"`` every overlapping site pair is one contact, the constraint count of the
   dynamical matrix (each site pair is a point-point distance; two dimers touching at two site
-  pairs fix two coordinates), which ``DynamicalMatrix`` uses.
+  pairs fix two coordinates), which ``DynamicalMatrix`` uses. For rigid bodies the result also
+  counts both: ``n_site_contacts`` and ``n_body_contacts`` among the non-floaters.
+- Concave bodies need more care than the convex rule d_f + 1: a rigid body whose contacts all
+  touch one of its sites turns freely about that site's centre, since every contact force passes
+  through it (the "rotational rattlers" of 2D dimers, Shiraishi, Mizuno, Ikeda, PRE 100, 012606
+  (2019)). Such bodies (``one_site``) can keep d_f + 1 contacts and are not floaters by the
+  convex rule, but have d_f - d free rotations (zero modes); ``free_rotations`` counts them and
+  ``isostatic_count - free_rotations`` is the isostatic count without them (docs/nmers.md).
 - N' = N - N_f, N_c = contacts among non-floaters, <z> = 2 N_c / N',
   N_c,iso = N' d_f - d + 1 (d trivial translations subtracted, one added for phi); packings
   of particles that turn are generally hypostatic (N_c < N_c,iso, seed section 4.1).
@@ -66,11 +73,21 @@ class ContactsResult:
     trivial: int | None = None  # trivial translations (None: d, a periodic box)
     loaded: bool = False  # under gravity: no +1 in the isostatic count
     balanced: np.ndarray | None = None  # (N,) bool: kept by the Figure 2.19 exception (None: not tested)
+    n_site_contacts: int | None = None  # rigid bodies: overlapping site pairs among non-floaters
+    n_body_contacts: int | None = None  # rigid bodies: touching pairs of non-floater bodies
+    one_site: np.ndarray | None = None  # rigid bodies (N,) bool: a non-floater whose contacts all touch one site
 
     @property
     def n_balanced(self) -> int:
         """Non-floaters with fewer than d_f + 1 contacts whose contact forces balance them."""
         return 0 if self.balanced is None else int(self.balanced.sum())
+
+    @property
+    def free_rotations(self) -> int:
+        """Rotations left free by contacts that all touch one site: (d_f - d) per ``one_site`` body."""
+        if self.one_site is None:
+            return 0
+        return int(self.one_site.sum()) * ((self.dim if self.dof is None else self.dof) - self.dim)
 
     @property
     def n_floaters(self) -> int:
@@ -155,7 +172,8 @@ class Contacts:
         self.near_tol = float(near_tol)
 
     def compute(self, packing: Packing) -> ContactsResult:
-        i, j, dr = (site_contacts(packing) if self.count == "sites" and packing.shape.kind == "rigid"
+        sites = overlapping_sites(packing) if packing.shape.kind == "rigid" else None
+        i, j, dr = (site_contacts(packing, sites) if self.count == "sites" and sites is not None
                     else particle_contacts(packing))
         n = packing.n
         if packing.fixed is not None:  # fixed particles do not interact with each other
@@ -185,17 +203,33 @@ class Contacts:
              + np.bincount(wall_i[wall_keep], minlength=n))
         trivial = 0 if packing.fixed is not None else sum(packing.box.periodic)
         balanced = (~floater & (z < need)) if test else None
+        bodies = body_counts(packing.n, sites, floater) if sites is not None else (None, None, None)
         return ContactsResult(i[keep], j[keep], floater, z, packing.dim, len(i),
                               near_contact_count(packing, self.near_tol), d_f,
                               np.column_stack([wall_i[wall_keep], wall_face[wall_keep]]) if bounded else None,
-                              packing.fixed, trivial if bounded else None, packing.gravity > 0, balanced)
+                              packing.fixed, trivial if bounded else None, packing.gravity > 0, balanced, *bodies)
 
 
-def site_contacts(packing: Packing):
+def site_contacts(packing: Packing, sites=None):
     """(body_i, body_j, dr) for every overlapping pair of sites of different bodies (a pair of
-    bodies appears once per touching site pair; dr = centre separation)."""
-    bi, bj, *_ = overlapping_sites(packing)
+    bodies appears once per touching site pair; dr = centre separation); ``sites``: the
+    ``overlapping_sites`` of the packing, if already found."""
+    bi, bj, *_ = overlapping_sites(packing) if sites is None else sites
     return bi, bj, separations(packing, bi, bj)
+
+
+def body_counts(n: int, sites, floater) -> tuple[int, int, np.ndarray]:
+    """Rigid bodies, from their overlapping site pairs (``overlapping_sites``) between
+    non-floaters: (site contacts, touching body pairs, (N,) mask of non-floaters whose contacts
+    all touch one of their sites)."""
+    bi, bj, s, t = sites[:4]
+    live = ~floater[bi] & ~floater[bj]
+    bi, bj, s, t = bi[live], bj[live], s[live], t[live]
+    pairs = np.unique(np.column_stack([bi, bj]), axis=0) if len(bi) else np.empty((0, 2), int)
+    owner, site = np.concatenate([bi, bj]), np.concatenate([s, t])
+    touched = np.unique(np.column_stack([owner, site]), axis=0) if len(owner) else np.empty((0, 2), int)
+    n_touched = np.bincount(touched[:, 0], minlength=n)
+    return len(bi), len(pairs), ~floater & (n_touched == 1)
 
 
 BALANCE_TOL = 1e-3  # |net generalized force| / largest contact term below which a particle is balanced

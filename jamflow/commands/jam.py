@@ -31,7 +31,9 @@ def add_arguments(p) -> None:
     p.add_argument("--potential", default="spring", help="spring | hertz | spring:ALPHA | rlj")
     p.add_argument("--shape", default="disk", help="particle shape: disk | sphere (the same: round particles) | "
                    "ellipse:ALPHA (2D, ALPHA = a/b >= 1) | spheroid:ALPHA (3D, ALPHA < 1 oblate); ALPHA = 1 is the "
-                   "disk/sphere. --sizes scales whole particles (b; a = ALPHA b)")
+                   "disk/sphere | rigid n-mers of fused sites (docs/nmers.md): nmer:N:ALPHA (linear, ALPHA = L/D), "
+                   "dimer:ALPHA:S (asymmetric, S = D2/D1), trimer:ALPHA:C (bent, C = h/L). --sizes scales whole "
+                   "particles (b; a = ALPHA b)")
     p.add_argument("--contact", choices=METHODS_CONTACT, default="exact",
                    help="contact distance of ellipses/spheroids (seed section 2.3.2): exact (Perram-Wertheim), "
                         "gaussian (equal sizes only), cleaver, linear, quadratic (3D: equal sizes only); "
@@ -42,13 +44,17 @@ def add_arguments(p) -> None:
                         "seed with --emit-deck (decks run the seed protocol)")
     p.add_argument("--minimizer", choices=METHODS, default="fire",
                    help="energy minimiser; ellipses/spheroids: fire (compiled engine, over positions and "
-                        "orientations) or md (LAMMPS damped dynamics with rotations; no LAMMPS minimiser turns them)")
+                        "orientations) or md (LAMMPS damped dynamics with rotations; no LAMMPS minimiser turns them); "
+                        "rigid bodies in LAMMPS: md (damped rigid-body dynamics)")
+    p.add_argument("--damping", type=float, default=MinimizerSettings().damping,
+                   help="md only: drag coefficient (sqrt(m eps)/diameter); rigid bodies: damping time 1/DAMPING")
     add_md_damping_argument(p)
     p.add_argument("--engine", choices=ENGINES, default="auto",
                    help="auto: the compiled engine (FIRE, in process) wherever it runs the scene, else LAMMPS "
                         "(docs/speed.md). The engines sum forces in different orders, so from one start they "
                         "can reach different minima and phi_J (seed 0, N = 64: 0.8352519 numba, 0.8355434 lammps)")
-    p.add_argument("--phi0", type=float, default=None, help="initial packing fraction (default 0.80 in 2D, 0.55 in 3D)")
+    p.add_argument("--phi0", type=float, default=None, help="initial packing fraction (default 0.80 in 2D, 0.55 in 3D; rigid bodies, which "
+                        "start without overlaps, 0.45 and 0.25)")
     p.add_argument("--dphi0", type=float, default=1e-4, help="initial packing-fraction increment")
     p.add_argument("--vtol", type=float, default=1e-16, help="energy window V_tol < V < 2 V_tol (per particle)")
     p.add_argument("--ftol", type=float, default=None, help="max force component tolerance (default scales with box)")
@@ -95,6 +101,7 @@ def settings_from_args(args) -> CompressionSettings:
     if args.md_damping != "viscous" and args.minimizer != "md":
         raise ValueError(f"--md-damping {args.md_damping} applies to --minimizer md only, not {args.minimizer}")
     minimizer = MinimizerSettings(method=args.minimizer, force_tol=args.ftol, v_min=args.vtol,
+                                  damping=getattr(args, "damping", MinimizerSettings().damping),  # crosscheck: none
                                   md_damping=args.md_damping)
     protocol = args.protocol or ("seed" if args.emit_deck else DEFAULT_PROTOCOL)
     return PROTOCOLS[protocol](phi0=args.phi0, dphi0=args.dphi0, v_tol=args.vtol, minimizer=minimizer)
@@ -129,7 +136,7 @@ def prepare(args):
     if gamma is not None and args.pressure is not None:
         raise ValueError("--gamma fixes the shear strain, --pressure relaxes the box: use one of them")
     start = initial_packing(args.n, args.dim, args.sizes, args.potential, args.seed,
-                            settings.start_phi(args.dim, args.gravity), args.shape, args.walls, args.wall_type,
+                            settings.start_phi(args.dim, args.gravity, args.shape), args.shape, args.walls, args.wall_type,
                             args.gravity, args.contact)
     if gamma is not None:
         start = at_shear_strain(start, gamma)  # refuses a strain that is not finite, or walls with a shear
@@ -141,6 +148,9 @@ def prepare(args):
         engine_name(start, args.minimizer, args.engine, pressure=True)
         return psettings, start
     engine_name(start, args.minimizer, args.engine)  # refuse an engine that cannot run the scene, before work
+    if start.shape.kind == "rigid" and settings.minimizer.md_damping != "viscous":
+        raise ValueError(f"--md-damping {settings.minimizer.md_damping} is for disks and spheres: rigid bodies are "
+                         "damped by fix rigid/small langevin (set its rate with --damping)")
     check_resolution(start, settings)
     return settings, start
 

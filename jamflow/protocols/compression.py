@@ -23,7 +23,7 @@ import numpy as np
 from ..box import AXES
 from ..engine.base import check_engine, open_engine
 from ..minimize import MinimizerSettings, MinimizeResult
-from ..packing import DENSEST_PHI, Packing, random_packing
+from ..packing import DENSEST_PHI, Packing, SeparationFailed, random_packing
 from ..potentials import POTENTIALS, Potential, Spring, parse_potential
 from ..shapes.shape import parse_shape
 from ..sizes import SizeSpec, parse_sizes
@@ -31,6 +31,7 @@ from ..walls import parse_walls, wall_loads, with_walls
 
 DEFAULT_PHI0 = {2: 0.80, 3: 0.55}
 GRAVITY_PHI0 = {2: 0.5, 3: 0.35}  # random starts under gravity: the settled pile stays clear of the ceiling
+BODY_PHI0 = {2: 0.45, 3: 0.25}  # rigid bodies start without overlaps (random sequential addition): below its limit
 NEWTON_FINAL_FACTOR = 3.0  # intermediate jumps stop at >= 3x the window's predicted distance from phi_J
 LOOSE_TRUST = 10.0  # a loosely minimised state decides its side only if V > 10 V_tol
 WINDOW_RESUMES = 3  # a state in the window cut off by the iteration cap is minimised again (at most 3 times a run)
@@ -82,11 +83,15 @@ class CompressionSettings:
         if self.max_steps < 1:
             raise ValueError("max_steps must be a positive integer")
 
-    def start_phi(self, dim: int, gravity: float = 0.0) -> float:
-        """phi0, or the default start for this dimension (a looser one under gravity)."""
+    def start_phi(self, dim: int, gravity: float = 0.0, shape=None) -> float:
+        """phi0, or the default start for this dimension (a looser one under gravity, and for
+        rigid bodies, which start without overlaps)."""
         if self.phi0 is not None:
             return self.phi0
-        return (GRAVITY_PHI0 if gravity else DEFAULT_PHI0).get(dim, math.nan)
+        if gravity:
+            return GRAVITY_PHI0.get(dim, math.nan)
+        rigid = shape is not None and dim in (2, 3) and parse_shape(shape, dim).kind == "rigid"
+        return (BODY_PHI0 if rigid else DEFAULT_PHI0).get(dim, math.nan)
 
     def as_dict(self) -> dict:
         out = {k: v for k, v in asdict(self).items() if k != "minimizer"}
@@ -200,7 +205,7 @@ def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | 
                              "(shear it with start.box.with_shear_strain, or pass gamma=None)")
     random_start = start is None
     if random_start:
-        start = initial_packing(n, dim, sizes, potential, seed, settings.start_phi(dim, gravity), shape, walls,
+        start = initial_packing(n, dim, sizes, potential, seed, settings.start_phi(dim, gravity, shape), shape, walls,
                                 wall_type, gravity, contact)
         if gamma is not None:
             start = at_shear_strain(start, gamma)
@@ -267,7 +272,10 @@ def initial_packing(n, dim, sizes, potential, seed, phi0, shape="disk", walls=No
     particle = parse_shape(shape, int(dim), contact)
     axes = parse_walls(walls, int(dim))
     try:
-        start = random_packing(int(n), int(dim), size_spec, phi0, int(seed), pot, particle)
+        start = random_packing(int(n), int(dim), size_spec, phi0, int(seed), pot, particle,
+                               separated=particle.kind == "rigid")  # bodies: no overlaps (separated_positions)
+    except SeparationFailed:
+        raise
     except ValueError as err:
         if "box too small" in str(err):
             raise ValueError(f"{err} (n = {n} is too small for these sizes)") from None

@@ -118,6 +118,42 @@ def check_orientations(orientations, n: int, dim: int) -> np.ndarray:
     return o
 
 
+
+def quaternions_from_matrices(rot: np.ndarray) -> np.ndarray:
+    """(N, 4) unit quaternions (w, x, y, z), w >= 0, of rotation matrices (N, 3, 3). Shepperd's
+    method: each row below is 4 q_k q for the component k with the largest pivot (accurate for
+    every rotation)."""
+    r = np.asarray(rot, float)
+    t = np.trace(r, axis1=1, axis2=2)
+    s = [r[:, 2, 1] - r[:, 1, 2], r[:, 0, 2] - r[:, 2, 0], r[:, 1, 0] - r[:, 0, 1]]
+    a = [r[:, 0, 1] + r[:, 1, 0], r[:, 0, 2] + r[:, 2, 0], r[:, 1, 2] + r[:, 2, 1]]
+    rows = np.stack([np.column_stack([1 + t, s[0], s[1], s[2]]),
+                     np.column_stack([s[0], 1 + 2 * r[:, 0, 0] - t, a[0], a[1]]),
+                     np.column_stack([s[1], a[0], 1 + 2 * r[:, 1, 1] - t, a[2]]),
+                     np.column_stack([s[2], a[1], a[2], 1 + 2 * r[:, 2, 2] - t])], axis=1)  # (N, 4, 4)
+    pivot = np.argmax(np.einsum("nkk->nk", rows), axis=1)
+    q = rows[np.arange(len(r)), pivot]
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    return q * np.where(q[:, :1] < 0, -1.0, 1.0)
+
+
+def fit_orientations(body: np.ndarray, world: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """Orientations of rigid bodies from their points: the rotation R_i minimising
+    sum_s w_s |R_i body_is - world_is|^2 (Kabsch), ``body`` and ``world`` (N, S, d) offsets from
+    the centre. 2D: angles (N,); 3D: quaternions (N, 4). For points on a line (a linear body)
+    the rotation about it is arbitrary, as the body ignores it."""
+    h = np.einsum("s,nsa,nsb->nab", weights, body, world)  # sum w b w^T
+    if body.shape[2] == 2:
+        return np.arctan2(h[:, 0, 1] - h[:, 1, 0], h[:, 0, 0] + h[:, 1, 1])
+    u, _, vt = np.linalg.svd(h)
+    sign = np.sign(np.linalg.det(np.einsum("nab,nbc->nac", u, vt)))
+    sign[sign == 0] = 1.0
+    fix = np.ones((len(h), 3))
+    fix[:, 2] = sign
+    rot = np.einsum("nba,nb,ncb->nac", vt, fix, u)  # V diag(1, 1, sign) U^T
+    return quaternions_from_matrices(rot)
+
+
 def generalized_torques(orientations, torques, dim: int, rotational_lengths, mask) -> np.ndarray:
     """(N, r) torques as forces on the coordinates d_k theta (seed section 3): the body-frame
     components (R^T tau)_a / d_k on the axes that are degrees of freedom (``mask``), 0 elsewhere.

@@ -271,6 +271,25 @@ class RigidBody:
             g = np.array([1.0, g[1], g[2]])
         return _scale(scale)[:, None] * g[None, :]
 
+    @property
+    def site_masses(self) -> np.ndarray:
+        """(S,) fractions of the body's mass on each site such that the mass-weighted site centre
+        is the union's centre of mass (the body-frame origin): LAMMPS's rigid-body centre is the
+        mass-weighted centre of its atoms. The minimum-norm solution of sum m = 1, sum m b = 0
+        (equal masses for symmetric bodies); ValueError if a site would need a mass <= 0."""
+        if "sites" not in self._mass:
+            a = np.vstack([np.ones(self.n_sites), self.sites.T])
+            e = np.zeros(len(a))
+            e[0] = 1.0
+            m = np.linalg.lstsq(a, e, rcond=None)[0]
+            size = float(np.abs(self.sites).max() + self.site_diameters.max())
+            if np.abs(a @ m - e).max() > 1e-12 * max(1.0, size) or np.any(m <= 0):
+                raise ValueError(f"no positive site masses put the site centre of mass of {self.label} at the "
+                                 "union's centre of mass; LAMMPS cannot run this body (use engine numba)")
+            m.setflags(write=False)
+            self._mass["sites"] = m
+        return self._mass["sites"]
+
     def reach(self, scale) -> np.ndarray:
         r = float(np.max(np.linalg.norm(self.sites, axis=1) + 0.5 * self.site_diameters))
         return r * _scale(scale)
@@ -291,7 +310,9 @@ class RigidBody:
 
 
 def _check_fused(sites: np.ndarray, diam: np.ndarray) -> None:
-    """Sites of a fused body must overlap into one connected piece and must not coincide."""
+    """Sites of a fused body must overlap (or touch) into one connected piece and must not
+    coincide. Touching sites (separation = the mean diameter, to 1e-12) count as joined: the
+    dimer at alpha = 2 of Schreck, Xu, O'Hern, Soft Matter 6, 2960 (2010)."""
     s = len(sites)
     sep = np.linalg.norm(sites[:, None] - sites[None], axis=-1)
     reach = 0.5 * (diam[:, None] + diam[None])
@@ -300,12 +321,12 @@ def _check_fused(sites: np.ndarray, diam: np.ndarray) -> None:
     linked, frontier = {0}, [0]
     while frontier:
         k = frontier.pop()
-        for m in np.flatnonzero(sep[k] < reach[k]):
+        for m in np.flatnonzero(sep[k] <= reach[k] * (1.0 + 1e-12)):
             if m not in linked:
                 linked.add(int(m))
                 frontier.append(int(m))
     if len(linked) < s:
-        raise ValueError(f"the body's sites do not overlap into one piece (sites {sorted(set(range(s)) - linked)} are "
+        raise ValueError(f"the body's sites do not overlap or touch into one piece (sites {sorted(set(range(s)) - linked)} are "
                          "apart from site 0); move them closer or pass fused=False for bodies of separate sites")
 
 
@@ -325,12 +346,14 @@ def shape_from_attrs(attrs: dict):
     raise ValueError(f"unknown particle shape kind {kind!r} in packing file")
 
 
-SHAPE_USAGE = "disk | sphere | ellipse:ALPHA (2D) | spheroid:ALPHA (3D)"
+SHAPE_USAGE = ("disk | sphere | ellipse:ALPHA (2D) | spheroid:ALPHA (3D) | nmer:N:ALPHA | dimer:ALPHA:S | "
+               "trimer:ALPHA:C")
 
 
 def parse_shape(spec, dim: int, contact: str = "exact"):
     """A ``--shape`` spec -> a shape object for dimension ``dim``. ALPHA = 1 gives the disk/sphere
-    (the cheapest exact model of that scene)."""
+    (the cheapest exact model of that scene). Rigid n-mers (``nmer``, ``dimer``, ``trimer``):
+    ``jamflow.shapes.nmers`` defines their parameters and ranges."""
     if not isinstance(spec, str):
         if hasattr(spec, "kind"):
             spec.check(dim)
@@ -356,4 +379,8 @@ def parse_shape(spec, dim: int, contact: str = "exact"):
         shape = Ellipsoid(alpha, contact)
         shape.check(dim)
         return shape
+    if kind in ("nmer", "dimer", "trimer"):
+        from .nmers import parse_body
+
+        return parse_body(spec, kind, rest.split(":") if rest else [], dim)
     raise ValueError(f"unknown shape {spec!r}; use {SHAPE_USAGE}")

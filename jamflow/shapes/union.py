@@ -39,9 +39,14 @@ def _visible_arcs(cx, cy, r, k):
         covered.append((phi - half, phi + half))
     if not covered:
         return [(0.0, 2 * np.pi)]
-    # unwrap onto [start, start + 2 pi) from the start of one covered interval
-    start = covered[0][0]
-    spans = sorted(((a - start) % (2 * np.pi), (a - start) % (2 * np.pi) + (b - a)) for a, b in covered)
+    # unwrap onto [start, start + 2 pi) from the start of one covered interval; an interval that
+    # runs past start + 2 pi also covers the beginning, so it is split there
+    start, turn = covered[0][0], 2 * np.pi
+    spans = []
+    for a, b in covered:
+        lo = (a - start) % turn
+        spans += [(lo, turn), (0.0, lo + b - a - turn)] if lo + b - a > turn else [(lo, lo + b - a)]
+    spans.sort()
     arcs, reach = [], 0.0
     for a, b in spans:
         if a > reach:
