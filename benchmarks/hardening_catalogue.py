@@ -5,6 +5,7 @@ a traceback, a wrong or unchecked packing written, a damaged or left-over file (
 that does not apply. docs/hardening.md has the table with what happened before.
 
     python benchmarks/hardening_catalogue.py            (prints the table; docs/hardening-catalogue.csv)
+    python benchmarks/hardening_catalogue.py 44 45      (only those cases; no CSV written)
 
 Every case runs in its own scratch directory with its own TMPDIR and plugin cache.
 Interrupt timing cases (Ctrl-C during start-up) are run at several delays.
@@ -424,9 +425,202 @@ def _():
                                                           else f"OVITO: {check.stderr.strip()[-120:]}")
 
 
-def main() -> int:
+# --- issue 18 follow-up: commands and options added since (shear, families, moduli, anneal) ----
+def _signalled(s, args, signum, wait_for=None, delay=3.0):
+    """Run ``jamflow ARGS``, send ``signum`` after ``delay`` s (or once ``wait_for`` exists)."""
+    proc = subprocess.Popen([str(BIN), *map(str, args)], cwd=s.dir, env=s.env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + (300 if wait_for else delay)
+    while time.monotonic() < deadline and not (wait_for and wait_for.exists()):
+        time.sleep(0.01)
+    proc.send_signal(signum)
+    out, err = proc.communicate(timeout=300)
+    return subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
+
+
+def _gone(path):
+    return "" if not path.exists() else f"left {path.name}/ behind"
+
+
+SHEAR = ("shear", "p.h5", "--dgamma", "1e-3", "--to", "2e-3", "--quiet", "--no-figure")
+FAMILIES = ("families", "--n", 6, "--starts", 1, "--gamma-max", 0.02, "--quiet")
+MODULI = ("moduli", "p.h5", "--min-amplitude", "1e-7", "--max-amplitude", "1e-5", "--per-decade", 1, "--quiet",
+          "--no-figure")
+
+
+@case(44, "shear --dgamma -1e-3 (its help: either sign)")
+def _():
+    s = Scratch()
+    s.packing()
+    done = s.run("shear", "p.h5", "--dgamma", "-1e-3", "--to", "-2e-3", "--out", "d", "--quiet", "--no-figure")
+    return outcome(verdict(done, 0, ["gamma 0 -> -0.002"], s), "" if (s.dir / "d/p.shear.h5").is_file() else "no path file")
+
+
+@case(45, "shear --vtol 1e-30 --out NEW_DIR (refused): no empty DIR left")
+def _():
+    s = Scratch()
+    s.packing()
+    done = s.run(*SHEAR, "--vtol", "1e-30", "--out", "d")
+    return outcome(verdict(done, 2, ["not resolvable"], s), _gone(s.dir / "d"))
+
+
+@case(46, "SIGTERM during shear --out NEW_DIR (N = 64, before the first write)")
+def _():
+    s = Scratch()
+    s.packing(n=64)
+    done = _signalled(s, ["shear", "p.h5", "--dgamma", "1e-3", "--to", "0.5", "--out", "d", "--quiet"], signal.SIGTERM)
+    return outcome(verdict(done, 143, ["terminated"], s), _gone(s.dir / "d"))
+
+
+@case(47, "families --n 1 --out NEW_DIR (refused): no empty DIR left")
+def _():
+    s = Scratch()
+    done = s.run("families", "--n", 1, "--out", "d", "--quiet")
+    return outcome(verdict(done, 2, ["n must be an integer >= 2"], s), _gone(s.dir / "d"))
+
+
+@case(48, "Ctrl-C during families --out NEW_DIR (as soon as DIR exists)")
+def _():
+    s = Scratch()
+    out = s.dir / "d"
+    done = _signalled(s, ["families", "--n", 10, "--starts", 20, "--out", "d", "--quiet"], signal.SIGINT, wait_for=out)
+    kept = out.exists() and [p.name for p in out.iterdir()] == ["points.h5"]  # a checkpoint came first: kept
+    return outcome(verdict(done, 130, ["interrupted"], s), "" if kept else _gone(out))
+
+
+def _symlinked_output(args, link, before_work):
+    """A symlinked output is refused (exit 2, before work) naming --force; --force replaces the link."""
+    s = Scratch()
+    s.packing()
+    (s.dir / "d").mkdir(exist_ok=True)
+    (s.dir / link).symlink_to(s.dir / "elsewhere")
+    done = s.run(*args)
+    worked = [w for w in before_work if (s.dir / w).exists()]
+    result = outcome(verdict(done, 2, ["symbolic link", "--force"], s), f"work done first ({worked})" if worked else "")
+    forced = s.run(*args, "--force")
+    replaced = (s.dir / link).is_file() and not (s.dir / link).is_symlink()
+    return outcome(result, "" if forced.returncode == 0 and replaced else f"--force: {forced.stderr.strip()[-100:]}")
+
+
+@case(49, "families --out DIR with DIR/families.h5 a symlink")
+def _():
+    return _symlinked_output([*FAMILIES, "--out", "d"], "d/families.h5", ["d/points.h5"])
+
+
+@case(50, "moduli IN.h5 with IN.moduli.h5 a symlink")
+def _():
+    return _symlinked_output(MODULI, "p.moduli.h5", [])
+
+
+@case(51, "shear --out DIR with DIR/IN.shear.h5 a symlink")
+def _():
+    return _symlinked_output([*SHEAR, "--out", "d"], "d/p.shear.h5", [])
+
+
+@case(52, "jam --emit-deck D.lmp onto a read-only D.lmp, then --force")
+def _():
+    s = Scratch()
+    (s.dir / "d.lmp").write_text("keep")
+    (s.dir / "d.lmp").chmod(0o444)
+    done = s.run("jam", "--n", 10, "--emit-deck", "d.lmp")
+    forced = s.run("jam", "--n", 10, "--emit-deck", "d.lmp", "--force")
+    return outcome(verdict(done, 2, ["read-only", "--force"], s),
+                   "" if forced.returncode == 0 and (s.dir / "d.lmp").read_text() != "keep" else "--force refused")
+
+
+@case(53, "anneal --seed 99999999999999999999999")
+def _():
+    s = Scratch()
+    s.packing()
+    done = s.run("anneal", "p.h5", "--to", "1.1", "--dalpha", "0.05", "--seed", "99999999999999999999999",
+                 "--out", "a.h5", "--quiet")
+    return verdict(done, 2, ["seed must be a non-negative integer below 2\\^63"], s, [s.dir / "a.h5"])
+
+
+@case(54, "anneal --to 0.5 (disks)")
+def _():
+    s = Scratch()
+    s.packing()
+    done = s.run("anneal", "p.h5", "--to", "0.5", "--dalpha", "0.05", "--out", "a.h5", "--quiet")
+    return outcome(verdict(done, 2, ["use --to 2"], s), "advises ellipse:2 (no such anneal option)"
+                   if "ellipse:2" in done.stderr else "")
+
+
+@case(55, "moduli on an onset packing, sweep from 1e-7 (the bulk sweep yields at once)")
+def _():
+    s = Scratch()
+    s.packing()
+    done = s.run(*MODULI)
+    nan = "B = nan" in done.stdout
+    return verdict(done, 0, ["no bulk amplitude stayed linear"] if nan else [], s)
+
+
+@case(56, "jam --above 2")
+def _():
+    s = Scratch()
+    done = s.run("jam", "--n", 10, "--above", 2, "--quiet", "--out", "x.h5")
+    return outcome(verdict(done, 2, ["--above 2 >= 1"], s, [s.dir / "x.h5"]),
+                   "quotes phi_J = 0.000000 (not yet known)" if "0.000000" in done.stderr else "")
+
+
+@case(57, "shear/moduli/anneal/export/draw/modes on a missing, empty, text or truncated file, or a file of "
+          "another kind (a shear path, a moduli results file)")
+def _():
+    s = Scratch()
+    good = s.packing()
+    for kind in ("empty", "text", "truncated"):
+        _bad_file(kind, s, good)
+    s.run("shear", "p.h5", "--dgamma", "1e-3", "--to", "1e-3", "--out", ".", "--quiet", "--no-figure")
+    s.run(*MODULI)
+    problems = []
+    commands = {"shear": ["--dgamma", "1e-3", "--to", "2e-3", "--out", "d", "--quiet"], "moduli": ["--quiet"],
+                "anneal": ["--to", "1.1", "--dalpha", "0.05", "--out", "a.h5", "--quiet"],
+                "export": ["--format", "xyz"], "draw": ["-o", "x.png"], "modes": ["--no-figure"]}
+    for name, extra in commands.items():
+        for source in ("missing.h5", "empty.h5", "text.h5", "truncated.h5", "p.shear.h5", "p.moduli.h5"):
+            done = s.run(name, source, *extra)
+            one_line = len(done.stderr.strip().splitlines()) == 1
+            v = outcome(verdict(done, 2, [re.escape(source)], s), "" if one_line else "more than one line")
+            if v != "ok":
+                problems.append(f"{name} {source}: {v}")
+    return "; ".join(problems) or "ok"
+
+
+@case(58, "bad numbers and shapes for the new options (not finite, zero, negative, wrong dim)")
+def _():
+    s = Scratch()
+    s.packing()
+    probes = [["shear", "p.h5", "--dgamma", v, "--to", "0.01", "--out", "d"] for v in ("nan", "0", "inf")]
+    probes += [["shear", "p.h5", "--dgamma", "1e-3", "--to", "0.01", "--out", "d", "--ftol", v] for v in ("-1", "nan")]
+    probes += [["families", opt, v, "--out", "d"] for opt, v in (("--n", "0"), ("--spacing", "0"), ("--spacing", "-0.01"),
+               ("--gamma-max", "nan"), ("--substeps", "0"), ("--starts", "0"), ("--seed", "-1"), ("--sizes", "x"))]
+    probes += [["moduli", "p.h5", opt, v] for opt, v in (("--min-amplitude", "nan"), ("--max-amplitude", "2"),
+               ("--per-decade", "0"), ("--linear-tol", "-1"), ("--jump-tol", "0"), ("--past-yield", "-1"), ("--ftol", "inf"))]
+    probes += [["anneal", "p.h5", "--to", to, "--dalpha", d, "--out", "a.h5"] for to, d in
+               (("nan", "0.05"), ("1.1", "0"), ("1.1", "-0.05"), ("1.1", "inf"))]
+    probes += [["jam", "--n", 10, *a, "--out", "x.h5"] for a in (["--gamma", "nan"], ["--above", "0"], ["--above", "nan"],
+               ["--shape", "ellipse:0"], ["--shape", "ellipse:nan"], ["--shape", "ellipse:-2"], ["--shape", "ellipse:"],
+               ["--shape", "ellipse:2", "--dim", 3], ["--shape", "spheroid:2"], ["--shape", "blob"],
+               ["--md-damping", "pairwise"], ["--shape", "ellipse:1.5", "--emit-deck", "no/d.lmp"])]
+    problems = []
+    for args in probes:
+        done = s.run(*args, "--quiet")
+        one_line = len(done.stderr.strip().splitlines()) == 1
+        v = outcome(verdict(done, 2, [], s, [s.dir / "x.h5", s.dir / "a.h5", s.dir / "d"]),
+                    "" if one_line else "more than one line")
+        if v != "ok":
+            problems.append(f"{' '.join(map(str, args))}: {v}")
+        shutil.rmtree(s.dir / "d", ignore_errors=True)  # each probe is judged on its own
+        for name in ("x.h5", "a.h5"):
+            (s.dir / name).unlink(missing_ok=True)
+    return "; ".join(problems) or f"ok ({len(probes)} probes)"
+
+
+def main(only=()) -> int:
     rows = []
     for number, title, fn in CASES:
+        if only and number not in only:
+            continue
         start = time.perf_counter()
         try:
             outcome = fn()
@@ -438,6 +632,8 @@ def main() -> int:
         print(f"{number:3d}  {title:70s}  {outcome}", flush=True)
     bad = [r for r in rows if not (r["outcome"] == "ok" or r["outcome"].startswith(("ok (", "not run")))]
     print(f"\n{len(rows)} cases, {len(bad)} still misbehave")
+    if only:
+        return 1 if bad else 0
     with open(CSV, "w", newline="") as fh:
         writer = csv.DictWriter(fh, ["case", "title", "outcome", "seconds"])
         writer.writeheader()
@@ -446,4 +642,4 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(main({int(a) for a in sys.argv[1:]}))

@@ -15,6 +15,7 @@ import argparse
 import contextlib
 import io
 import os
+import re
 import signal
 import sys
 import warnings
@@ -37,6 +38,8 @@ SUBCOMMANDS = {
     "onsets": ("jamflow.commands.onsets", "distribution of jamming onsets of an ensemble store: P(phi_J), W(N), nu"),
 }
 
+# argparse's own pattern (-1, -.5) misses exponents (-1e-3), which it then reads as unknown options
+NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|nan)$")
 EXIT_USER, EXIT_JAMMING, EXIT_LAMMPS, EXIT_PLUGIN = 2, 3, 4, 5
 EXIT_INTERRUPTED, EXIT_TERMINATED = 130, 143
 
@@ -63,6 +66,7 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
         mod = import_module(module)
         p = sub.add_parser(name, help=help_text, description=mod.__doc__,
                            formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+        p._negative_number_matcher = NEGATIVE_NUMBER  # so --dgamma -1e-3 is a value, not an option
         mod.add_arguments(p)
         p.set_defaults(run=mod.run)
     return parser

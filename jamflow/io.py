@@ -113,6 +113,21 @@ def atomic_path(path, force: bool = False):
             os.unlink(tmp)
 
 
+@contextlib.contextmanager
+def output_directory(path):
+    """Create the output directory ``path`` (its parent must exist) for the block; if the block
+    fails or is interrupted and the directory was made here and is still empty, remove it."""
+    path = Path(path)
+    made = not path.exists()
+    path.mkdir(exist_ok=True)
+    try:
+        yield path
+    except BaseException:
+        if made and path.is_dir() and not any(path.iterdir()):
+            path.rmdir()
+        raise
+
+
 def _umask() -> int:
     mask = os.umask(0)
     os.umask(mask)

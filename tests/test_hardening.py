@@ -312,3 +312,105 @@ def test_python_jam_rejects_bad_arguments_clearly(kwargs, error, message, monkey
     monkeypatch.setattr("jamflow.protocols.compression.compress", lambda *a, **k: pytest.fail("work started"))
     with pytest.raises(error, match=message):
         jamflow.jam(n=16, **kwargs)
+
+
+# --- issue 18 follow-up: the commands added since (shear, families, moduli, anneal, jam options) ---
+def test_negative_values_with_an_exponent_are_values():
+    # was: `jamflow shear --dgamma -1e-3` "expected one argument" (argparse read -1e-3 as an option)
+    from jamflow.cli import build_parser
+
+    args = build_parser("shear").parse_args(["shear", "p.h5", "--dgamma", "-1e-3", "--to", "-2e-3", "--out", "d"])
+    assert (args.dgamma, args.to) == (-1e-3, -2e-3)
+    assert build_parser("jam").parse_args(["jam", "--gamma", "-1e-2"]).gamma == -1e-2
+
+
+def test_anneal_refuses_before_work(tmp_path, capsys, monkeypatch, packing_file):
+    monkeypatch.setattr("jamflow.commands.anneal.anneal", lambda *a, **k: pytest.fail("work started"))
+    base = ["anneal", str(packing_file), "--dalpha", "0.05", "--out", str(tmp_path / "a.h5"), "--quiet"]
+    # was: the whole anneal ran, then a TypeError traceback at the save (result lost)
+    assert main([*base, "--to", "1.1", "--seed", "99999999999999999999999"]) == 2
+    assert "--seed must be a non-negative integer below 2^63" in capsys.readouterr().err
+    # was: "use ellipse:2", an option anneal does not have
+    assert main([*base, "--to", "0.5"]) == 2
+    err = capsys.readouterr().err
+    assert "use --to 2" in err and "ellipse:2" not in err
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("command", ["shear-refused", "shear-interrupted", "families-refused", "families-interrupted"])
+def test_a_failed_run_leaves_no_empty_out_directory(tmp_path, capsys, monkeypatch, packing_file, command):
+    # was: shear --vtol 1e-30, families --n 1 / --seed -1 / --sizes x and Ctrl-C left an empty --out DIR
+    out = tmp_path / "out"
+    name, how = command.split("-")
+    if how == "interrupted":
+        def interrupt(*a, **k):
+            raise KeyboardInterrupt
+        monkeypatch.setattr(f"jamflow.commands.{name}.{'shear' if name == 'shear' else 'sample'}", interrupt)
+    args = {"shear": ["shear", str(packing_file), "--dgamma", "1e-3", "--to", "2e-3"],
+            "families": ["families", "--n", "6", "--starts", "1", "--gamma-max", "0.02"]}[name]
+    bad = {"shear": ["--vtol", "1e-30"], "families": ["--n", "1"]}[name] if how == "refused" else []
+    code = main([*args, *bad, "--out", str(out), "--quiet"])
+    assert code == (2 if how == "refused" else 130) and no_traceback(capsys.readouterr().err)
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("command", ["shear", "families", "moduli"])
+def test_commands_refuse_a_symlinked_output_before_work_and_force_it(tmp_path, capsys, monkeypatch, packing_file,
+                                                                     command):
+    # was: "... or --force" advice where the command had no --force; families refused only after all its work
+    work = {"shear": "jamflow.commands.shear.shear", "families": "jamflow.commands.families.sample",
+            "moduli": "jamflow.analysis.moduli.Moduli.compute"}[command]
+    monkeypatch.setattr(work, lambda *a, **k: pytest.fail("work started"))
+    out = tmp_path / "out"
+    out.mkdir()
+    source = out / "p.h5"
+    source.write_bytes(packing_file.read_bytes())
+    args, link = {"shear": (["shear", str(source), "--dgamma", "1e-3", "--to", "2e-3", "--out", str(out)], "p.shear.h5"),
+                  "families": (["families", "--n", "6", "--out", str(out)], "families.h5"),
+                  "moduli": (["moduli", str(source)], "p.moduli.h5")}[command]
+    (out / link).symlink_to(tmp_path / "elsewhere.h5")
+    assert main([*args, "--quiet", "--no-figure"] if command != "families" else [*args, "--quiet"]) == 2
+    assert "symbolic link" in capsys.readouterr().err
+    assert (out / link).is_symlink()
+    from jamflow.cli import build_parser
+
+    assert build_parser(command).parse_args([*args, "--force"]).force
+
+
+def test_shear_force_replaces_a_symlinked_path_file(tmp_path, capsys, packing_file):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "p.shear.h5").symlink_to(tmp_path / "elsewhere.h5")
+    args = ["shear", str(packing_file), "--dgamma", "1e-3", "--to", "2e-3", "--out", str(out), "--quiet", "--no-figure"]
+    assert main([*args, "--force"]) == 0
+    assert (out / "p.shear.h5").is_file() and not (out / "p.shear.h5").is_symlink()
+    assert not (tmp_path / "elsewhere.h5").exists()
+
+
+def test_emit_deck_force_replaces_a_read_only_deck(tmp_path, capsys):
+    # was: refused with "or --force to replace it", and refused again with --force
+    deck = tmp_path / "deck.lmp"
+    deck.write_text("keep")
+    deck.chmod(0o444)
+    args = ["jam", "--n", "10", "--emit-deck", str(deck), "--out", str(tmp_path / "p.h5")]
+    assert main(args) == 2 and "--force" in capsys.readouterr().err
+    assert main([*args, "--force"]) == 0
+    assert deck.read_text() != "keep" and (tmp_path / "deck.start.data").is_file()
+
+
+def test_moduli_warns_when_a_sweep_has_no_linear_amplitude(tmp_path, capsys, packing_file):
+    # was: "B = nan +- nan", exit 0, nothing said (an onset packing yields at the first amplitude 1e-6)
+    source = tmp_path / "p.h5"
+    source.write_bytes(packing_file.read_bytes())
+    args = ["moduli", str(source), "--min-amplitude", "1e-6", "--max-amplitude", "1e-5", "--per-decade", "1"]
+    assert main([*args, "--quiet", "--no-figure"]) == 0
+    err = capsys.readouterr().err
+    assert "no bulk amplitude stayed linear" in err and "--min-amplitude" in err
+
+
+def test_jam_above_one_does_not_quote_an_onset_not_yet_known(tmp_path, capsys, monkeypatch):
+    # was: "phi_J + dphi = 0.000000 + 2 >= 1"
+    monkeypatch.setattr("jamflow.commands.jam.jam", lambda *a, **k: pytest.fail("work started"))
+    assert main(["jam", "--n", "10", "--above", "2", "--quiet", "--out", str(tmp_path / "x.h5")]) == 2
+    err = capsys.readouterr().err
+    assert "--above 2 >= 1" in err and "0.000000" not in err

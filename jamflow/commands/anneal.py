@@ -14,7 +14,7 @@ from ..engine.base import ENGINES
 from ..io import check_writable, load_packing, replacing, save_packing
 from ..minimize import MinimizerSettings
 from ..protocols.anneal import anneal, anneal_alphas, check_anneal
-from ..protocols.compression import DEFAULT_PROTOCOL, PROTOCOLS
+from ..protocols.compression import DEFAULT_PROTOCOL, MAX_SEED, PROTOCOLS
 from ..shapes.contact_distance import METHODS as METHODS_CONTACT
 
 
@@ -38,8 +38,8 @@ def add_arguments(p) -> None:
 
 def run(args) -> int:
     check_writable(args.out, args.force)
-    if args.seed < 0:
-        raise ValueError(f"--seed must be a non-negative integer, got {args.seed}")
+    if not 0 <= args.seed <= MAX_SEED:
+        raise ValueError(f"--seed must be a non-negative integer below 2^63 (it is stored as int64), got {args.seed}")
     if not (args.vtol > 0 and args.vtol < 1):
         raise ValueError(f"--vtol must be a positive number below 1, got {args.vtol}")
     start = load_packing(args.input)

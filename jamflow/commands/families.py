@@ -15,7 +15,7 @@ from tqdm import tqdm
 
 from ..analysis.families import convergence, join, mirror_by_sightings, mirror_check, richness
 from ..engine.base import ENGINES
-from ..io import atomic_path
+from ..io import atomic_path, check_writable, output_directory, replacing
 from ..protocols.families import FamilySampling, sample
 from ..shear_file import load_family_points, save_family_points, save_family_table
 
@@ -33,6 +33,8 @@ def add_arguments(p) -> None:
     p.add_argument("--engine", choices=ENGINES, default="auto", help="engine for jamming and shear")
     p.add_argument("--out", required=True, metavar="DIR", help="output directory (created if its parent exists)")
     p.add_argument("--resume", action="store_true", help="continue DIR/points.h5 of the same plan")
+    p.add_argument("--force", action="store_true",
+                   help="replace outputs that are symlinks, device nodes or read-only files")
     p.add_argument("--quiet", action="store_true", help="no progress display")
 
 
@@ -47,17 +49,20 @@ def run(args) -> int:
     out = Path(args.out)
     if not out.parent.is_dir() or (out.exists() and not out.is_dir()):
         raise ValueError(f"--out {out} must be a directory whose parent exists")
-    out.mkdir(exist_ok=True)
     points_file = out / "points.h5"
+    outputs = [points_file] + [out / name for name in ("families.h5", "families.csv", "families.png")]
+    for path in outputs if out.is_dir() else []:  # a new directory holds nothing to refuse
+        check_writable(path, args.force)
     done, failures = _resumed(points_file, plan) if args.resume else (None, [])
     if points_file.exists() and not args.resume:
         raise ValueError(f"{points_file} exists; pass --resume to continue it or choose another --out")
     total = plan.starts * len(plan.grid)
-    with tqdm(total=total, desc="families", unit="start", disable=args.quiet, dynamic_ncols=True) as bar:
-        bar.update(0 if done is None else len(set(done["start"].tolist())) * len(plan.grid))
-        points, failures = sample(plan, done=done, failures=failures, observers=[lambda k, s: bar.update(1)],
-                                  checkpoint=lambda cols, why: save_family_points(points_file, plan, cols, why))
-    report(plan, points, failures, out)
+    with output_directory(out), replacing(outputs if args.force else []):  # an empty new --out is removed on failure
+        with tqdm(total=total, desc="families", unit="start", disable=args.quiet, dynamic_ncols=True) as bar:
+            bar.update(0 if done is None else len(set(done["start"].tolist())) * len(plan.grid))
+            points, failures = sample(plan, done=done, failures=failures, observers=[lambda k, s: bar.update(1)],
+                                      checkpoint=lambda cols, why: save_family_points(points_file, plan, cols, why))
+        report(plan, points, failures, out)
     return 0
 
 

@@ -80,7 +80,7 @@ def add_arguments(p) -> None:
                    help="jam at this fixed Lees-Edwards shear strain (any finite value; seed section 2.2)")
     p.add_argument("--out", default="packing.h5", help="output HDF5 file")
     p.add_argument("--force", action="store_true",
-                   help="replace an --out that is a symlink, device node or read-only file")
+                   help="replace an --out (or --emit-deck files) that is a symlink, device node or read-only file")
     p.add_argument("--quiet", action="store_true", help="no progress display")
     p.add_argument("--emit-deck", default=None, metavar="DECK.lmp",
                    help="write the LAMMPS deck that runs this jam in lmp alone (and its start, DECK.start.data) "
@@ -249,10 +249,12 @@ def emit(args, start, settings) -> int:
     kind = start.shape.kind
     if kind not in ("sphere", "ellipsoid"):
         raise ValueError(f"--emit-deck writes decks for disks/spheres and ellipses/spheroids, not {start.shape.name(start.dim)}")
-    check_writable(args.emit_deck)
-    check_writable(Path(args.emit_deck).with_name(Path(args.emit_deck).stem + ".start.data"))
+    outputs = [args.emit_deck, Path(args.emit_deck).with_name(Path(args.emit_deck).stem + ".start.data")]
+    for out in outputs:
+        check_writable(out, args.force)
     writer = emit_ellipsoid_deck if kind == "ellipsoid" else emit_deck
-    deck, data = writer(args.emit_deck, start, settings, out=Path(args.out).stem)
+    with replacing(outputs if args.force else []):
+        deck, data = writer(args.emit_deck, start, settings, out=Path(args.out).stem)
     print(f"wrote {deck} and {data}; run: cd {deck.parent} && lmp -in {deck.name}  "
           f"(writes {Path(args.out).stem}.data and {Path(args.out).stem}.protocol.txt)")
     return 0

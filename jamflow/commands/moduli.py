@@ -8,6 +8,7 @@ stress-strain figure IN.moduli.png."""
 from __future__ import annotations
 
 import math
+import sys
 from pathlib import Path
 
 import h5py
@@ -19,7 +20,7 @@ from ..analysis.moduli import Moduli
 from ..analysis.strains import STRAINS
 from ..analysis.sweeps import JUMP_TOL, LINEAR_TOL, PAST_YIELD, SweepSettings
 from ..engine.base import ENGINES
-from ..io import atomic_path, check_writable, load_packing, read_attrs
+from ..io import atomic_path, check_writable, load_packing, read_attrs, replacing
 from ..minimize import MinimizerSettings
 
 SCHEMA, SCHEMA_VERSION = "jamflow.moduli", 1
@@ -40,6 +41,8 @@ def add_arguments(p) -> None:
                         "until it stops making progress)")
     p.add_argument("--engine", choices=ENGINES, default="auto", help="engine of the relaxations")
     p.add_argument("--no-figure", action="store_true", help="do not draw IN.moduli.png")
+    p.add_argument("--force", action="store_true",
+                   help="replace outputs that are symlinks, device nodes or read-only files")
     p.add_argument("--quiet", action="store_true", help="no progress display")
 
 
@@ -69,9 +72,17 @@ def run(args) -> int:
     moduli = Moduli(settings_from_args(args), engine=args.engine)
     packings = [load_packing(f) for f in args.files]  # every input is read before any work
     outputs = [results_path(f) for f in args.files]
-    for out in outputs + ([] if args.no_figure else [figure_path(f) for f in args.files]):
-        check_writable(out)
+    written = outputs + ([] if args.no_figure else [figure_path(f) for f in args.files])
+    for out in written:
+        check_writable(out, args.force)
     checks = [moduli.check(p) for p in packings]  # every input is refused or accepted before any sweep
+    with replacing(written if args.force else []):
+        _measure(args, moduli, packings, outputs, checks)
+    return 0
+
+
+def _measure(args, moduli, packings, outputs, checks) -> None:
+    """Sweep, write and report each checked packing."""
     for path, packing, out, checked in zip(args.files, packings, outputs, checks):
         with tqdm(total=moduli.total_relaxations(), desc=Path(path).name, unit="relax", disable=args.quiet,
                   dynamic_ncols=True) as bar:
@@ -81,11 +92,15 @@ def run(args) -> int:
         dphi = float(read_attrs(path).get("dphi_above", math.nan))
         save_moduli(out, path, packing, result, dphi, moduli)
         print(summary_line(path, result))
+        for strain in STRAINS:
+            if not math.isfinite(result.sweep(strain).modulus):  # the smallest amplitude already yielded
+                print(f"jamflow moduli: warning: {path}: no {strain.kind} amplitude stayed linear, so the sweep's "
+                      f"{strain.modulus} is NaN (the Hessian route's is kept); use a smaller --min-amplitude",
+                      file=sys.stderr)
         if not args.no_figure:
             from ..analysis.plots_moduli import stress_strain_figure
 
             print(f"figure -> {stress_strain_figure(figure_path(path), result, title=f'{Path(path).name}')}")
-    return 0
 
 
 def _progress(bar):

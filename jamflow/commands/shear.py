@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from ..engine.base import ENGINES, engine_name
-from ..io import check_writable, load_packing
+from ..io import check_writable, load_packing, output_directory, replacing
 from ..minimize import MinimizerSettings
 from ..progress import ShearProgress
 from ..protocols.compression import PROTOCOLS
@@ -35,6 +35,8 @@ def add_arguments(p) -> None:
     p.add_argument("--dphi0", type=float, default=1e-6, help="initial packing-fraction increment after each step")
     p.add_argument("--vtol", type=float, default=1e-16, help="energy window V_tol < V < 2 V_tol (per particle)")
     p.add_argument("--ftol", type=float, default=None, help="max force component tolerance (default scales with box)")
+    p.add_argument("--force", action="store_true",
+                   help="replace outputs that are symlinks, device nodes or read-only files")
     p.add_argument("--quiet", action="store_true", help="no progress display")
     p.add_argument("--no-figure", action="store_true", help="do not draw DIR/STEM.shear.png")
     p.add_argument("--emit-deck", default=None, metavar="DECK.lmp",
@@ -73,23 +75,25 @@ def run(args) -> int:
     if args.emit_deck:
         return emit(args, packing, settings)
     data, figure = output_paths(args)
-    Path(args.out).mkdir(exist_ok=True)
-    check_writable(data)
-    with warnings.catch_warnings(record=True) as caught, ShearProgress(disable=args.quiet) as progress:
-        warnings.simplefilter("always")
-        path = shear(packing, args.dgamma, args.to, settings, engine=args.engine, observers=[progress])
-    for w in caught:
-        print(f"jamflow shear: warning: {w.message}")
-    passed = step_checks(path, settings)
-    if not passed.all():
-        print(f"jamflow shear: warning: {int((~passed).sum())} of {len(passed)} steps failed the packing checks "
-              f"(steps {np.flatnonzero(~passed).tolist()[:10]}; column checks_passed in the path file)")
-    save_shear_path(data, path, source=args.packing, extra_columns={"checks_passed": passed})
-    print(f"{path.summary()}  -> {data}")
-    if not args.no_figure:
-        from ..analysis.plots_shear import shear_path_figure
+    with output_directory(args.out):  # removed again if nothing gets written into it
+        for out in [data] + ([] if args.no_figure else [figure]):
+            check_writable(out, args.force)
+        with warnings.catch_warnings(record=True) as caught, ShearProgress(disable=args.quiet) as progress:
+            warnings.simplefilter("always")
+            path = shear(packing, args.dgamma, args.to, settings, engine=args.engine, observers=[progress])
+        for w in caught:
+            print(f"jamflow shear: warning: {w.message}")
+        passed = step_checks(path, settings)
+        if not passed.all():
+            print(f"jamflow shear: warning: {int((~passed).sum())} of {len(passed)} steps failed the packing checks "
+                  f"(steps {np.flatnonzero(~passed).tolist()[:10]}; column checks_passed in the path file)")
+        with replacing([data, figure] if args.force else []):
+            save_shear_path(data, path, source=args.packing, extra_columns={"checks_passed": passed})
+            print(f"{path.summary()}  -> {data}")
+            if not args.no_figure:
+                from ..analysis.plots_shear import shear_path_figure
 
-        print(f"figure -> {shear_path_figure(figure, path_columns(path))}")
+                print(f"figure -> {shear_path_figure(figure, path_columns(path))}")
     return 0
 
 
@@ -97,8 +101,12 @@ def emit(args, packing, settings) -> int:
     """--emit-deck: the shear deck and its start data file, no run."""
     from ..shear_deck import emit_shear_deck
 
-    check_writable(args.emit_deck)
-    deck, data = emit_shear_deck(args.emit_deck, packing, args.dgamma, args.to, settings, out=Path(args.packing).stem)
+    outputs = [args.emit_deck, Path(args.emit_deck).with_name(Path(args.emit_deck).stem + ".start.data")]
+    for out in outputs:
+        check_writable(out, args.force)
+    with replacing(outputs if args.force else []):
+        deck, data = emit_shear_deck(args.emit_deck, packing, args.dgamma, args.to, settings,
+                                     out=Path(args.packing).stem)
     print(f"wrote {deck} and {data}; run: cd {deck.parent} && lmp -in {deck.name}  "
           f"(writes {Path(args.packing).stem}.data and {Path(args.packing).stem}.protocol.txt)")
     return 0

@@ -59,7 +59,8 @@ def check_dphi(dphi, phi: float) -> float:
         raise ValueError(f"--above must be positive (a compression above onset), got {dphi:g}; "
                          "use e.g. --above 1e-4")
     if phi + dphi >= 1.0:
-        raise ValueError(f"phi_J + dphi = {phi:.6f} + {dphi:g} >= 1: no packing fraction above 1; use a smaller --above")
+        raise ValueError(f"phi_J + dphi = {phi:.6f} + {dphi:g} >= 1: no packing fraction above 1; use a smaller --above"
+                         if phi else f"--above {dphi:g} >= 1 would compress past phi = 1; use a small step such as 1e-4")
     if dphi < 64 * np.finfo(float).eps * phi:
         raise ValueError(f"--above {dphi:g} is below the float64 resolution of phi = {phi:.6f} "
                          f"({64 * np.finfo(float).eps * phi:.1e}); use dphi >= 1e-12")

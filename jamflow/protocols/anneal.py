@@ -70,6 +70,9 @@ def check_anneal(start: Packing, target: float, dalpha: float, contact: str | No
     if (target - 1.0) * (alpha0 - 1.0) < 0:
         raise ValueError(f"--to {target:g} lies across ALPHA = 1 from the input's {alpha0:g} (prolate vs oblate): "
                          "anneal from a disk/sphere packing instead")
+    if start.dim == 2 and target < 1:
+        raise ValueError(f"--to {target:g}: an ellipse with ALPHA = {target:g} < 1 is the ellipse with ALPHA = "
+                         f"{1 / target:g} turned by 90 degrees; use --to {1 / target:g}")
     shape = Ellipsoid(float(target), contact or getattr(start.shape, "contact", "exact"))
     shape.check(start.dim)  # an ellipse with ALPHA < 1
     shape.check_sizes(start.diameters, start.dim)  # gaussian / truncations outside their domain
