@@ -16,10 +16,11 @@ option: to time another version of the kernel, run this script with PYTHONPATH=D
 from __future__ import annotations
 
 import argparse
-import csv
 import os
 import time
 from pathlib import Path
+
+from speed_accuracy import append_row  # (benchmarks/ is the script's directory)
 
 import numba
 import numpy as np
@@ -102,13 +103,8 @@ def main():
                 row["fire_over_floor"] = round(row["fire_us"] / row["floor_us"], 2)
                 print(" ".join(f"{k}={v}" for k, v in row.items()), flush=True)
                 rows.append(row)
-    out = Path(args.out)
-    new = not out.exists()
-    with out.open("a", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        if new:
-            writer.writeheader()
-        writer.writerows(rows)
+    for row in rows:
+        append_row(Path(args.out), list(rows[0]), row)
 
 
 if __name__ == "__main__":

@@ -20,10 +20,11 @@ at the final phi (window resumes and in-place polishing included). One row per r
 from __future__ import annotations
 
 import argparse
-import csv
 import os
 import time
 from pathlib import Path
+
+from speed_accuracy import append_row  # (benchmarks/ is the script's directory)
 
 import numpy as np
 
@@ -145,12 +146,7 @@ def main():
         for max_change in [None, *args.max_change]:
             row = run(args.n, args.dim, seed, max_change)
             print(" ".join(f"{k}={v}" for k, v in row.items()), flush=True)
-            new = not out.exists()
-            with out.open("a", newline="") as fh:
-                writer = csv.DictWriter(fh, fieldnames=list(row))
-                if new:
-                    writer.writeheader()
-                writer.writerow(row)
+            append_row(out, list(row), row)
 
 
 if __name__ == "__main__":

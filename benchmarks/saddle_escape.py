@@ -25,10 +25,11 @@ Prints each attempt (eigenvalue, step, energy before/after) and appends one row 
 from __future__ import annotations
 
 import argparse
-import csv
 import time
 from dataclasses import replace
 from pathlib import Path
+
+from speed_accuracy import append_row  # (benchmarks/ is the script's directory)
 
 import numpy as np
 import scipy.sparse as sp
@@ -167,12 +168,7 @@ def main():
                    "moved": sum(e[1] > 0 for e in escapes) + sum(str(e[0]).startswith("newton alpha") for e in log),
                    "cpu_s": round(cpu, 2)}
             print(" ".join(f"{k}={v}" for k, v in row.items()), flush=True)
-            new = not out.exists()
-            with out.open("a", newline="") as fh:
-                writer = csv.DictWriter(fh, fieldnames=list(row))
-                if new:
-                    writer.writeheader()
-                writer.writerow(row)
+            append_row(out, list(row), row)
 
 
 if __name__ == "__main__":

@@ -25,6 +25,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from speed_accuracy import append_row  # (benchmarks/ is the script's directory)
+
 import numpy as np
 from predictor import phase_iterations
 from speed_vs_handwritten import handwritten_jam
@@ -174,12 +176,8 @@ def main():
                     rows.append(handwritten_row(n, args.dim, args.sizes, seed, tmp))
                 for row in rows:
                     print(" ".join(f"{k}={v}" for k, v in row.items()), flush=True)
-                new = not out.exists()
-                with out.open("a", newline="") as fh:
-                    writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
-                    if new:
-                        writer.writeheader()
-                    writer.writerows(rows)
+                for row in rows:
+                    append_row(out, list(rows[0]), row)
 
 
 if __name__ == "__main__":

@@ -14,7 +14,6 @@ Rows are appended to the CSV with the load average; take timings under
 from __future__ import annotations
 
 import argparse
-import csv
 import os
 import resource
 import statistics
@@ -23,6 +22,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+from speed_accuracy import append_row  # (benchmarks/ is the script's directory)
 
 COMMANDS = {"help": ["--help"], "jam-help": ["jam", "--help"],
             "jam-n64": ["jam", "--n", "64", "--seed", "1", "--quiet", "--out", "{tmp}/p.h5", "--force"]}
@@ -83,13 +84,8 @@ def main():
                      min(float(p[i]) for p in phases), "cpu_median_s": "", "repeats": args.repeats,
                      "load": os.getloadavg()[0]})
         print(f"{args.label:8s} phase {name:40s} {value:.3f} s")
-    out = Path(args.out)
-    new = not out.exists()
-    with out.open("a", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        if new:
-            writer.writeheader()
-        writer.writerows(rows)
+    for row in rows:
+        append_row(Path(args.out), list(rows[0]), row)
 
 
 if __name__ == "__main__":
