@@ -4,7 +4,29 @@ from __future__ import annotations
 
 import math
 
-from tqdm import tqdm
+
+class _Hidden:
+    """What a disabled bar does (nothing), without importing tqdm: ``--quiet`` start-up."""
+
+    n, total = 0, None
+
+    def set_postfix_str(self, *args, **kwargs):
+        pass
+
+    def update(self, k=1):
+        self.n += k
+
+    def close(self):
+        pass
+
+
+def _bar(desc: str, unit: str, disable: bool):
+    """A tqdm bar with rate and ETA, or a hidden one."""
+    if disable:
+        return _Hidden()
+    from tqdm import tqdm
+
+    return tqdm(desc=desc, unit=unit, dynamic_ncols=True)
 
 
 class CompressionProgress:
@@ -15,7 +37,7 @@ class CompressionProgress:
     """
 
     def __init__(self, disable: bool = False):
-        self.bar = tqdm(desc="jam", unit="min", disable=disable, dynamic_ncols=True)
+        self.bar = _bar("jam", "min", disable)
 
     def __enter__(self):
         return self
@@ -37,7 +59,7 @@ class ShearProgress:
     number of steps whose contact network changed so far."""
 
     def __init__(self, disable: bool = False):
-        self.bar = tqdm(desc="shear", unit="step", disable=disable, dynamic_ncols=True)
+        self.bar = _bar("shear", "step", disable)
         self.changes = 0
 
     def __enter__(self):
