@@ -7,6 +7,11 @@ what a jam's first second is made of (imports, numba's first call, the jam itsel
     python benchmarks/startup.py --repeats 5 --out docs/startup.csv
     python benchmarks/startup.py --repeats 5 --source /tmp/main-src --label main --out docs/startup.csv
     python benchmarks/startup.py --repeats 3 --seeds 1 2 3 4 5 --floors --out docs/startup.csv
+    python benchmarks/startup.py --repeats 3 --seeds 1 2 3 4 5 --alternate /tmp/main-src --out docs/startup.csv
+
+``--alternate DIR`` runs, for each repeat and seed in turn, the numba floor, ``jamflow jam --n 64``
+of DIR (label ``DIR``) and of the installed jamflow, so that both see the same load (on a
+shared machine the load drifts between two separate runs).
 
 ``--source DIR`` runs the jamflow found in DIR (e.g. ``git archive main | tar -x -C DIR``)
 instead of the installed one, for a before/after table on the same machine and venv.
@@ -75,7 +80,11 @@ def main():
     ap.add_argument("--out", default="docs/startup.csv")
     ap.add_argument("--seeds", type=int, nargs="+", default=[1], help="seeds of the jam-n64 command")
     ap.add_argument("--floors", action="store_true", help="also time the floors (python, numpy, numba)")
+    ap.add_argument("--alternate", default=None, help="directory of another jamflow: jam-n64 of both, alternating")
+    ap.add_argument("--other-label", default="main", help="label of the --alternate jamflow")
     args = ap.parse_args()
+    if args.alternate:
+        return alternate(args)
     env = dict(os.environ)
     if args.source:
         env["PYTHONPATH"] = str(Path(args.source).resolve())
@@ -104,6 +113,35 @@ def main():
         print(f"{args.label:8s} phase {name:40s} {value:.3f} s")
     for row in rows:
         append_row(Path(args.out), list(rows[0]), row)
+
+
+def alternate(args) -> None:
+    """The numba floor, DIR's jam --n 64 and the installed one's, interleaved run by run."""
+    envs = {"floor": dict(os.environ), args.alternate: {**os.environ, "PYTHONPATH": str(Path(args.alternate).resolve())},
+            args.label: dict(os.environ)}
+    with tempfile.TemporaryDirectory() as tmp:
+        Path(tmp, "numba_floor.py").write_text(NUMBA_FLOOR)
+        argv = {"floor": FLOORS["floor: numba cached call"], args.alternate: COMMANDS["jam-n64"],
+                args.label: COMMANDS["jam-n64"]}
+        runs = {k: [] for k in argv}
+        for k in argv:  # warm-up: file cache, numba's disk cache of each source tree
+            run_once([a.replace("{tmp}", tmp).replace("{seed}", "1") for a in argv[k]], envs[k])
+        loads = []
+        for _ in range(args.repeats):
+            for seed in args.seeds:
+                for k in argv:
+                    runs[k].append(run_once([a.replace("{tmp}", tmp).replace("{seed}", str(seed)) for a in argv[k]],
+                                            envs[k]))
+                loads.append(os.getloadavg()[0])
+    seeds = "-".join(map(str, args.seeds))
+    for k, r in runs.items():
+        what = "floor: numba cached call" if k == "floor" else f"jam-n64 seeds {seeds}"
+        row = {"label": "alternate " + ("floor" if k == "floor" else (args.label if k == args.label else args.other_label)),
+               "what": what, "wall_median_s": statistics.median(w for w, _ in r), "wall_min_s": min(w for w, _ in r),
+               "cpu_median_s": statistics.median(c for _, c in r), "repeats": len(r), "load": statistics.median(loads)}
+        print(f"{row['label']:18s} {what:26s} wall {row['wall_median_s']:.3f} s (min {row['wall_min_s']:.3f})  "
+              f"cpu {row['cpu_median_s']:.3f} s (min {min(c for _, c in r):.3f})  load {row['load']:.2f}")
+        append_row(Path(args.out), list(row), row)
 
 
 if __name__ == "__main__":
