@@ -42,6 +42,9 @@ def cell_pairs(x, lengths, periodic, rmax):
             home[p, a] = c
             cell[p] += c * stride[a]
     order = np.argsort(cell, kind="mergesort")  # particles grouped by cell, by index within one
+    xs = np.empty((n, d))  # positions in that order: a cell's particles are contiguous in memory
+    for k in range(n):
+        xs[k] = x[order[k]]
     total = stride[d - 1] * nc[d - 1]
     start = np.zeros(total + 1, np.int64)
     for p in range(n):
@@ -55,7 +58,8 @@ def cell_pairs(x, lengths, periodic, rmax):
     visits = 1
     for a in range(d):
         visits *= 2 * reach[a] + 1
-    for p in range(n):
+    for a_sorted in range(n):
+        p = order[a_sorted]
         for v in range(visits):
             code, other, inside = v, 0, True
             for a in range(d):
@@ -76,7 +80,7 @@ def cell_pairs(x, lengths, periodic, rmax):
                     continue
                 r2 = 0.0
                 for a in range(d):
-                    dx = x[p, a] - x[q, a]
+                    dx = xs[a_sorted, a] - xs[k, a]
                     if periodic[a]:
                         half = 0.5 * lengths[a]
                         if dx > half:
