@@ -41,16 +41,20 @@ def cell_pairs(x, lengths, periodic, rmax):
             c = min(max(c, 0), nc[a] - 1)  # walled axes: particles outside the box join the end cells
             home[p, a] = c
             cell[p] += c * stride[a]
-    order = np.argsort(cell, kind="mergesort")  # particles grouped by cell, by index within one
-    xs = np.empty((n, d))  # positions in that order: a cell's particles are contiguous in memory
-    for k in range(n):
-        xs[k] = x[order[k]]
     total = stride[d - 1] * nc[d - 1]
-    start = np.zeros(total + 1, np.int64)
+    start = np.zeros(total + 1, np.int64)  # cell c holds order[start[c]:start[c + 1]]
     for p in range(n):
         start[cell[p] + 1] += 1
     for c in range(total):
         start[c + 1] += start[c]
+    order = np.empty(n, np.int64)  # counting sort: particles grouped by cell, by index within one
+    fill = start[:-1].copy()
+    for p in range(n):
+        order[fill[cell[p]]] = p
+        fill[cell[p]] += 1
+    xs = np.empty((n, d))  # positions in that order: a cell's particles are contiguous in memory
+    for k in range(n):
+        xs[k] = x[order[k]]
     r2max = rmax * rmax
     capacity = 16 * n + 16
     out_i, out_j = np.empty(capacity, np.int64), np.empty(capacity, np.int64)
