@@ -82,3 +82,14 @@ def test_a_disk_jam_does_not_import_scipy_optimize(tmp_path):
             "print(code, *[m in sys.modules for m in ('scipy.optimize', 'scipy.spatial', 'tqdm', 'matplotlib')])")
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert result.stdout.split()[-5:] == ["0", "False", "False", "False", "False"], result.stdout + result.stderr
+
+
+def test_a_jam_without_quiet_shows_its_progress_bar(tmp_path, capsys):
+    """The bar (tqdm, rate and phi) is there without --quiet; --quiet hides it without tqdm."""
+    from jamflow.cli import main
+
+    assert main(["jam", "--n", "16", "--seed", "2", "--out", str(tmp_path / "p.h5")]) == 0
+    err = capsys.readouterr().err
+    assert "jam:" in err and "min/s" in err and "phi=" in err, err
+    assert main(["jam", "--n", "16", "--seed", "2", "--quiet", "--out", str(tmp_path / "q.h5")]) == 0
+    assert "jam:" not in capsys.readouterr().err
