@@ -71,7 +71,7 @@ def chart(stats, path, title):
     ax1.set_ylabel(r"mean $\phi_J$ $\pm$ s.e.")
     ax2.bar(range(len(names)), [stats[k][4] for k in names])
     ax2.set_xticks(range(len(names)), names, rotation=20, ha="right")
-    ax2.set_ylabel("median CPU seconds per packing")
+    ax2.set_ylabel("median seconds per packing (wall, in process)")  # JamResult.seconds
     fig.suptitle(title)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
