@@ -150,7 +150,7 @@ def prepare(args):
     engine_name(start, args.minimizer, args.engine)  # refuse an engine that cannot run the scene, before work
     if start.shape.kind == "rigid" and settings.minimizer.md_damping != "viscous":
         raise ValueError(f"--md-damping {settings.minimizer.md_damping} is for disks and spheres: rigid bodies are "
-                         "damped by fix rigid/small langevin (set its rate with --damping)")
+                         "damped by fix rigid langevin (set its rate with --damping)")
     check_resolution(start, settings)
     return settings, start
 
