@@ -211,29 +211,40 @@ def test_failed_packing_is_recorded_and_not_retried(tmp_path, threaded, monkeypa
     assert calls == [2]
 
 
-def test_full_disk_stops_cleanly_and_a_rerun_finishes(tmp_path, threaded, monkeypatch):
+def test_full_disk_stops_cleanly_and_a_rerun_finishes(tmp_path, monkeypatch):
     """OSError(ENOSPC) in the writer after its temporary file exists: the run stops, finished
-    packings are intact, the temporary file is gone; a rerun with space finishes."""
-    real, saved = ensemble_tasks.save_result, []
+    packings are intact, the temporary file is gone; a rerun with space finishes. Two worker
+    threads: when the first write fails the other task is still running; the run must wait for
+    it (a cancelled Dask task runs on) before it cleans the store and returns, so nothing of
+    the run writes into the store afterwards."""
+    from distributed import Client
+
+    real, saved, failures = ensemble_tasks.save_result, [], []
 
     def disk_fills_after_three(path, result, checks, args, **info):
-        if len(saved) == 3:
+        if len(saved) >= 3:
             with atomic_path(path) as tmp:
                 tmp.write_bytes(b"half a packing")
+                failures.append(path)
+                time.sleep(0 if len(failures) == 1 else 1.0)
                 raise OSError(errno.ENOSPC, "No space left on device", str(tmp))
         saved.append(path)
         return real(path, result, checks, args, **info)
 
     monkeypatch.setattr(ensemble_tasks, "save_result", disk_fills_after_three)
     out = tmp_path / "store"
-    report = run_ensemble(out, "0:8", 8, client=threaded, progress=False)
-    assert "the disk is full" in report.stopped and "rerun" in report.stopped
-    assert report.made == 3 and len(packings(out)) == 3 and not debris(out)
-    for path in packings(out):
-        load_packing(path)
-    monkeypatch.setattr(ensemble_tasks, "save_result", real)
-    again = run_ensemble(out, "0:8", 8, client=threaded, progress=False)
-    assert (again.done_before, again.made, again.stopped) == (3, 5, "")
+    with Client(processes=False, n_workers=1, threads_per_worker=2, dashboard_address=":0") as two_threads:
+        report = run_ensemble(out, "0:8", 8, client=two_threads, progress=False)
+        assert "the disk is full" in report.stopped and "rerun" in report.stopped
+        assert report.made == 3 and len(packings(out)) == 3 and not debris(out)
+        writes_at_return = len(failures)
+        time.sleep(1.5)  # a task of the run still going would write now
+        assert len(failures) == writes_at_return and not debris(out) and len(packings(out)) == 3
+        for path in packings(out):
+            load_packing(path)
+        monkeypatch.setattr(ensemble_tasks, "save_result", real)
+        again = run_ensemble(out, "0:8", 8, client=two_threads, progress=False)
+        assert (again.done_before, again.made, again.stopped) == (3, 5, "")
 
 
 # -- the command line: Ctrl-C and a scheduler in its own process -------------------------------
