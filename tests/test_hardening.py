@@ -499,12 +499,13 @@ def test_ctrl_c_while_the_command_starts(tmp_path):
 
     text = (Path(__file__).resolve().parents[1] / "pyproject.toml").read_text()
     module, function = re.search(r'^jamflow = "([\w.]+):(\w+)"', text, re.M).groups()
-    script = ("import importlib.abc, sys\n"
-              "class Interrupt(importlib.abc.MetaPathFinder):\n"
+    script = ("import importlib.abc, os, signal, sys\n"
+              "class Interrupt(importlib.abc.MetaPathFinder):  # Ctrl-C as jamflow.cli starts to load\n"
               "    def find_spec(self, name, path, target=None):\n"
-              "        if name == 'jamflow.cli':\n            raise KeyboardInterrupt\n"
+              "        if name == 'jamflow.cli':\n            os.kill(os.getpid(), signal.SIGINT)\n"
               "sys.meta_path.insert(0, Interrupt())\n"
               f"from {module} import {function}\nsys.exit({function}())\n")  # what pip's console script does
     done = subprocess.run([sys.executable, "-c", script, "jam"], cwd=tmp_path, capture_output=True, text=True)
     assert done.returncode == 130 and no_traceback(done.stderr), done.stderr
     assert len(done.stderr.strip().splitlines()) == 1 and "interrupted" in done.stderr
+    assert list(tmp_path.iterdir()) == []
