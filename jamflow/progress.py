@@ -6,7 +6,7 @@ import math
 
 from tqdm import tqdm
 
-QUIET_UNTIL_WORK = 1e-3  # tqdm's delay (s): > 0 (and above the round-off of time.time()), so a bar draws nothing until an update
+QUIET_UNTIL_WORK = 1e-3  # tqdm's delay (s): > 0 and above the round-off of time.time(), so nothing draws early
 
 
 def progress_bar(**kwargs) -> tqdm:
