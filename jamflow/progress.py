@@ -4,11 +4,21 @@ from __future__ import annotations
 
 import math
 
+QUIET_UNTIL_WORK = 1e-3  # tqdm's delay (s): > 0 and above the round-off of time.time(), so nothing draws early
 
-class _Hidden:
-    """What a disabled bar does (nothing), without importing tqdm: ``--quiet`` start-up."""
 
-    n, total = 0, None
+class HiddenBar:
+    """What a disabled bar does (counts, draws nothing), without importing tqdm: a ``--quiet``
+    run's start-up (issue 17) does not pay for it."""
+
+    def __init__(self, total=None):
+        self.n, self.total = 0, total
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
 
     def set_postfix_str(self, *args, **kwargs):
         pass
@@ -20,13 +30,16 @@ class _Hidden:
         pass
 
 
-def _bar(desc: str, unit: str, disable: bool):
-    """A tqdm bar with rate and ETA, or a hidden one."""
+def progress_bar(disable: bool = False, **kwargs):
+    """A tqdm bar (rate, ETA) that draws nothing before its first update: a run refused before
+    any work prints its one error line only (tqdm draws a delayed bar neither on creation nor,
+    if never drawn, on close). Like every tqdm bar it draws at most every 0.1 s. Disabled: a
+    ``HiddenBar``."""
     if disable:
-        return _Hidden()
+        return HiddenBar(kwargs.get("total"))
     from tqdm import tqdm
 
-    return tqdm(desc=desc, unit=unit, dynamic_ncols=True)
+    return tqdm(delay=QUIET_UNTIL_WORK, dynamic_ncols=True, **kwargs)
 
 
 class CompressionProgress:
@@ -37,7 +50,7 @@ class CompressionProgress:
     """
 
     def __init__(self, disable: bool = False):
-        self.bar = _bar("jam", "min", disable)
+        self.bar = progress_bar(desc="jam", unit="min", disable=disable)
 
     def __enter__(self):
         return self
@@ -59,7 +72,7 @@ class ShearProgress:
     number of steps whose contact network changed so far."""
 
     def __init__(self, disable: bool = False):
-        self.bar = _bar("shear", "step", disable)
+        self.bar = progress_bar(desc="shear", unit="step", disable=disable)
         self.changes = 0
 
     def __enter__(self):

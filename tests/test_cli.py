@@ -84,12 +84,20 @@ def test_a_disk_jam_does_not_import_scipy_optimize(tmp_path):
     assert result.stdout.split()[-5:] == ["0", "False", "False", "False", "False"], result.stdout + result.stderr
 
 
-def test_a_jam_without_quiet_shows_its_progress_bar(tmp_path, capsys):
-    """The bar (tqdm, rate and phi) is there without --quiet; --quiet hides it without tqdm."""
-    from jamflow.cli import main
+def test_a_jam_without_quiet_has_a_tqdm_bar_and_with_it_a_hidden_one():
+    """The bar (tqdm: rate, ETA) is there without --quiet; --quiet's counts and draws nothing
+    (and needs no tqdm, see above). Both take the updates the protocols and commands make."""
+    from tqdm import tqdm
 
-    assert main(["jam", "--n", "16", "--seed", "2", "--out", str(tmp_path / "p.h5")]) == 0
-    err = capsys.readouterr().err
-    assert "jam:" in err and "min/s" in err and "phi=" in err, err
-    assert main(["jam", "--n", "16", "--seed", "2", "--quiet", "--out", str(tmp_path / "q.h5")]) == 0
-    assert "jam:" not in capsys.readouterr().err
+    from jamflow.progress import CompressionProgress, HiddenBar, progress_bar
+
+    step = {"step": 0, "phi": 0.8, "dphi": 1e-4, "result": type("R", (), {"energy_per_particle": 1e-12})()}
+    with CompressionProgress(disable=False) as shown, CompressionProgress(disable=True) as hidden:
+        for observe in (shown, hidden):
+            observe(step)
+    assert isinstance(shown.bar, tqdm) and shown.bar.n == 1
+    assert isinstance(hidden.bar, HiddenBar) and hidden.bar.n == 1
+    with progress_bar(total=5, desc="x", disable=True) as bar:
+        bar.update(2)
+        bar.set_postfix_str("y", refresh=False)
+    assert (bar.n, bar.total) == (2, 5)

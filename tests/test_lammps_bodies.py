@@ -1,4 +1,5 @@
-"""Rigid bodies in LAMMPS (issue 14): sites as atoms with molecule ids, damped fix rigid/small.
+"""Rigid bodies in LAMMPS (issue 14): sites as atoms with molecule ids, damped fix rigid (not
+fix rigid/small: engine/lammps_bodies.py says why).
 Cross-checked against LAMMPS's own rigid-body accounting (compute rigid/local), the numpy
 reference and the compiled engine; box changes keep bodies rigid; minimisers that LAMMPS runs
 without rigid bodies are refused."""
@@ -86,7 +87,7 @@ def test_box_changes_move_centres_and_keep_bodies_rigid(dim):
 
 @pytest.mark.parametrize("dim", [2, 3])
 def test_damped_rigid_bodies_reach_force_and_torque_balance(dim):
-    """An overcompressed packing relaxed by LAMMPS (damped fix rigid/small) through jamflow's
+    """An overcompressed packing relaxed by LAMMPS (damped fix rigid) through jamflow's
     stopping rules: every force and generalized torque below 1e-12 by the independent reference."""
     p = bodies("nmer:2:1.5", dim, phi=0.9 if dim == 2 else 0.72, n=40)
     start = energy_forces_pressure(p)
