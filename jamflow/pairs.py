@@ -4,11 +4,9 @@
 strain of a Lees-Edwards cell; the search runs in the reduced cell), any box size. It
 returns integer image vectors so engines can build exact separations
 ``x_i - x_j + h @ image`` without a second minimum-image pass. Orthogonal (reduced) cells use
-the compiled cell list of ``jamflow.engine.compiled.cells`` (the distance test of scipy's
-periodic cKDTree, which it replaced so that a disk jam does not import scipy); tilted ones a
-cKDTree over the wrapped positions plus the ghost images that lie within ``rmax`` of the
-cell. See docs/shear-cell.md. Walled axes (``Box.periodic``) have no images: the search is not
-periodic along them and no ghost crosses them.
+scipy's periodic cKDTree; tilted ones a cKDTree over the wrapped positions plus the ghost
+images that lie within ``rmax`` of the cell. See docs/shear-cell.md. Walled axes
+(``Box.periodic``) have no images: the tree is not periodic along them and no ghost crosses them.
 """
 
 from __future__ import annotations
@@ -16,6 +14,7 @@ from __future__ import annotations
 from itertools import product
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from .box import Box
 from .packing import Packing
@@ -59,11 +58,11 @@ def neighbor_pairs(positions: np.ndarray, box: Box, rmax: float) -> tuple[np.nda
     if cell.is_triclinic:
         i, j, shift = _ghost_search(wrapped, cell, rmax)
     else:
-        from .engine.compiled.cells import cell_pairs  # numba: loaded on the first search
-
         periodic = np.array(cell.periodic)
-        wrapped = np.ascontiguousarray(np.where(periodic & (wrapped >= cell.lengths), 0.0, wrapped))  # [0, L)
-        i, j = cell_pairs(wrapped, np.array(cell.lengths, float), periodic.astype(np.int64), rmax)
+        wrapped = np.where(periodic & (wrapped >= cell.lengths), 0.0, wrapped)  # cKDTree wants [0, L)
+        tree = cKDTree(wrapped, boxsize=np.where(periodic, cell.lengths, 0.0))  # 0: no images (walls)
+        pairs = tree.query_pairs(rmax, output_type="ndarray")
+        i, j = pairs[:, 0], pairs[:, 1]
         shift = -np.round((wrapped[i] - wrapped[j]) / cell.lengths).astype(np.int64) * periodic
     # wrapped = x - cell.h @ n: fold the wrap offsets into the image, then express it in h's cells
     offset = np.round(cell.to_fractional(x - wrapped)).astype(np.int64)
@@ -79,8 +78,6 @@ def _ghost_search(wrapped: np.ndarray, cell: Box, rmax: float):
     Ghost images x_j + h m (m in {-1, 0, 1}^d, m != 0) are kept only if their fractional
     coordinates lie within rmax / width_k of the unit cell, the reach of any point inside it.
     """
-    from scipy.spatial import cKDTree
-
     dim = cell.dim
     tree = cKDTree(wrapped)
     inside = tree.query_pairs(rmax, output_type="ndarray")

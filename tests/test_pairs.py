@@ -128,31 +128,3 @@ def test_no_pairs_gives_empty_arrays():
 def test_bad_input_is_refused(positions, rmax, match):
     with pytest.raises(ValueError, match=match):
         neighbor_pairs(positions, Box([[10.0, 27.0], [0, 10.0]]), rmax)
-
-
-@pytest.mark.parametrize("dim,lengths,periodic,n,rmax", [
-    (2, (6.0, 6.0), (True, True), 80, 2.9),  # two cells per axis: one cell each
-    (2, (6.0, 40.0), (True, True), 150, 1.3),  # 4 and 30 cells
-    (2, (9.0, 9.0), (True, False), 120, 1.4),  # a walled axis, positions beyond the walls
-    (3, (5.0, 7.0, 12.0), (True, True, True), 150, 1.6),  # 3, 4 and 7 cells
-    (3, (8.0, 8.0, 8.0), (False, True, False), 150, 1.5),
-    (3, (100.0, 100.0, 100.0), (True, True, True), 1500, 3.0),  # sparse: most cells empty
-])
-def test_cell_list_matches_the_periodic_kdtree(dim, lengths, periodic, n, rmax):
-    """The compiled cell list (the orthogonal branch of neighbor_pairs) finds the same set as
-    scipy's cKDTree (periodic only along periodic axes), including pairs at exactly rmax."""
-    from jamflow.engine.compiled.cells import cell_pairs
-
-    rng = np.random.default_rng(n + dim)
-    L, per = np.array(lengths), np.array(periodic)
-    x = rng.uniform(0, 1, (n, dim)) * L
-    x[:, ~per] = rng.uniform(-0.3, 1.3, (n, int((~per).sum()))) * L[~per]  # outside the walls too
-    x[1] = x[0] + np.eye(dim)[0] * rmax  # a pair at exactly rmax (along x) and a periodic one
-    x[3] = x[2] + np.eye(dim)[-1] * rmax
-    x[:, per] = np.mod(x[:, per], L[per])
-    x[:, per] = np.where(x[:, per] >= L[per], 0.0, x[:, per])
-    i, j = cell_pairs(np.ascontiguousarray(x), L, per.astype(np.int64), rmax)
-    kd = cKDTree(x, boxsize=np.where(per, L, 0.0))  # 0: not periodic
-    ref = kd.query_pairs(rmax, output_type="ndarray")
-    assert np.all(i < j) and len(ref) > 10
-    assert sorted(zip(i.tolist(), j.tolist())) == sorted(map(tuple, ref.tolist()))

@@ -216,7 +216,7 @@ def run(args) -> int:
 def checked(result, minimizer, v_tol, out):
     """The packing checks of a result; JammingFailed (nothing written) if any fails.
     ``v_tol`` None skips the energy-window check (piles under gravity, constant pressure)."""
-    from ..checks import check_packing  # imported here: its pair search (numba) is not needed for --help
+    from ..checks import check_packing  # imported here: its pair search (scipy.spatial) is not needed for --help
 
     packing = result.packing
     ftol = minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness, packing.shape.force_tol_base)

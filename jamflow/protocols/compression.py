@@ -396,7 +396,7 @@ def _check_start(packing: Packing) -> None:
 
 def _deepest_overlap(packing: Packing) -> float:
     """Smallest r/sigma over overlapping pairs (of sites, for rigid bodies); 1.0 without overlaps."""
-    from ..pairs import overlapping_pairs, overlapping_sites  # here, like resolution: the pair search loads lazily
+    from ..pairs import overlapping_pairs, overlapping_sites  # here, like resolution: scipy.spatial loads lazily
 
     r, sigma = (overlapping_sites(packing) if packing.shape.kind == "rigid" else overlapping_pairs(packing))[-2:]
     return float((r / sigma).min()) if len(r) else 1.0
@@ -416,7 +416,7 @@ def check_resolution(packing: Packing, settings: CompressionSettings) -> None:
                          f"for alpha outside [{low:g}, {high:g}] (measured for alpha = 1.5, 4, 6, 8, 10: net forces "
                          "3-66% of the contact forces, docs/hardening.md); use spring, hertz or spring:ALPHA "
                          f"with {low:g} <= ALPHA <= {high:g}")
-    from ..checks import resolution  # imported here: the checks load the pair search, not needed for --help
+    from ..checks import resolution  # imported here: the checks load scipy.spatial, not needed for --help
 
     ftol = settings.minimizer.resolved_force_tol(packing.box, pot.contact_stiffness, packing.shape.force_tol_base)
     problem = resolution(packing, settings.v_tol, ftol).problem()
@@ -427,7 +427,7 @@ def check_resolution(packing: Packing, settings: CompressionSettings) -> None:
 def _check_contact_range(packing: Packing) -> None:
     """sigma_ij depends on the direction r_hat = r_ij / |r_ij|, known to ~1e-16 L / |r_ij| in a box of
     side L; at r_ij = 0 it is undefined (the contact-distance solver would return NaN)."""
-    from ..pairs import candidate_pairs  # here, like resolution: the pair search loads lazily
+    from ..pairs import candidate_pairs  # here, like resolution: scipy.spatial loads lazily
 
     reach = packing.shape.reach(packing.diameters)
     i, j = candidate_pairs(packing, 2.0 * float(reach.max()))
