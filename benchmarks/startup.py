@@ -58,7 +58,7 @@ jam(n=16, seed=1); mark()
 res = jam(n=64, seed=1); mark()
 print(*[f"{b - a:.4f}" for a, b in zip(t, t[1:])], res.iterations)
 """
-PHASE_NAMES = ["numpy", "jam command (parser)", "numba", "compiled engine (+ scipy.spatial before the cell list)",
+PHASE_NAMES = ["numpy", "jam command (parser)", "numba", "compiled engine + scipy.spatial",
                "first jam (numba cache load, N = 16)", "jam N = 64 warm"]
 
 
