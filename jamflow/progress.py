@@ -6,6 +6,15 @@ import math
 
 from tqdm import tqdm
 
+QUIET_UNTIL_WORK = 1e-3  # tqdm's delay (s): > 0 and above the round-off of time.time(), so nothing draws early
+
+
+def progress_bar(**kwargs) -> tqdm:
+    """A tqdm bar (rate, ETA) that draws nothing before its first update: a run refused before
+    any work prints its one error line only (tqdm draws a delayed bar neither on creation nor,
+    if never drawn, on close). Like every tqdm bar it draws at most every 0.1 s."""
+    return tqdm(delay=QUIET_UNTIL_WORK, dynamic_ncols=True, **kwargs)
+
 
 class CompressionProgress:
     """A tqdm bar over minimisations with rate, phi, V and the current increment.
@@ -15,7 +24,7 @@ class CompressionProgress:
     """
 
     def __init__(self, disable: bool = False):
-        self.bar = tqdm(desc="jam", unit="min", disable=disable, dynamic_ncols=True)
+        self.bar = progress_bar(desc="jam", unit="min", disable=disable)
 
     def __enter__(self):
         return self
@@ -37,7 +46,7 @@ class ShearProgress:
     number of steps whose contact network changed so far."""
 
     def __init__(self, disable: bool = False):
-        self.bar = tqdm(desc="shear", unit="step", disable=disable, dynamic_ncols=True)
+        self.bar = progress_bar(desc="shear", unit="step", disable=disable)
         self.changes = 0
 
     def __enter__(self):

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from jamflow.ensemble import Store, Task, jam_parameters, run_ensemble, seed_range
+from jamflow.ensemble import runner as ensemble_runner
 from jamflow.ensemble import tasks as ensemble_tasks
 from jamflow.io import atomic_path, load_packing, read_attrs
 from jamflow.protocols.compression import JammingFailed
@@ -148,19 +149,37 @@ def test_corrupt_and_partial_files_are_detected_and_redone(tmp_path, cluster):
     assert summary_seeds(out) == [(8, s) for s in range(4)]
 
 
-def test_killed_worker_loses_nothing(tmp_path, cluster):
-    """SIGKILL one worker process while it runs a task: the task is redone elsewhere."""
+def test_killed_worker_loses_nothing(tmp_path, cluster, monkeypatch):
+    """SIGKILL one worker process while it runs a task: the task is redone elsewhere and the run
+    counts the worker lost. The runner counts a worker lost when an address it listed at one poll
+    (workers_state) is gone at a later one, so the kill picks a busy worker the runner has listed
+    and then waits until the scheduler has removed it: the order that made this test flaky
+    (warm workers gave the first result, and the kill, before the runner's first poll; when the
+    scheduler removed the worker before the next poll, it was never counted) now happens every run."""
     out = tmp_path / "store"
-    killed = []
+    listed, killed = set(), []
+    polled = ensemble_runner.workers_state
+
+    def listing(client):
+        state = polled(client)
+        listed.update(state or ())
+        return state
 
     def kill_a_busy_worker(task, row, client):
         if killed:
             return
-        busy = [w for w, keys in client.processing().items() if keys]
+        busy = [w for w, keys in client.processing().items() if keys and w in listed]
+        if not busy:
+            return  # the runner has not listed a busy worker yet: try at the next result
         pid = client.run(os.getpid, workers=busy[:1])[busy[0]]
         os.kill(pid, signal.SIGKILL)
         killed.append(pid)
+        deadline = time.monotonic() + 60
+        while busy[0] in (polled(client) or busy[:1]) and time.monotonic() < deadline:
+            time.sleep(0.02)
+        assert busy[0] not in (polled(client) or busy[:1]), "the scheduler kept the killed worker for 60 s"
 
+    monkeypatch.setattr(ensemble_runner, "workers_state", listing)
     report = run_ensemble(out, "0:12", 12, client=cluster, progress=False, on_result=kill_a_busy_worker)
     assert killed and report.workers_lost >= 1
     assert (report.made, report.failed, report.errors) == (12, 0, [])

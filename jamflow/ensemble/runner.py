@@ -159,7 +159,8 @@ def _run(client, store, fixed, todo, report, progress, on_result, interrupted, m
     bar = tqdm(total=len(todo), desc="ensemble", unit="packing", disable=not progress, dynamic_ncols=True)
     line = tqdm(bar_format="{desc}", position=1, disable=not progress, leave=False)
     bar.set_postfix_str(f"failed={report.failed}, done before={report.done_before}")
-    seen, last_write = set(), time.monotonic()  # worker addresses at the last poll
+    seen = set(workers_state(client) or {})  # worker addresses at the last poll (a worker lost before the first counts)
+    last_write = time.monotonic()
     try:
         while pending and not report.stopped:
             if interrupted.is_set():
