@@ -4,15 +4,41 @@ from __future__ import annotations
 
 import math
 
-from tqdm import tqdm
-
 QUIET_UNTIL_WORK = 1e-3  # tqdm's delay (s): > 0 and above the round-off of time.time(), so nothing draws early
 
 
-def progress_bar(**kwargs) -> tqdm:
+class HiddenBar:
+    """What a disabled bar does (counts, draws nothing), without importing tqdm: a ``--quiet``
+    run's start-up (issue 17) does not pay for it."""
+
+    def __init__(self, total=None):
+        self.n, self.total = 0, total
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def set_postfix_str(self, *args, **kwargs):
+        pass
+
+    def update(self, k=1):
+        self.n += k
+
+    def close(self):
+        pass
+
+
+def progress_bar(disable: bool = False, **kwargs):
     """A tqdm bar (rate, ETA) that draws nothing before its first update: a run refused before
     any work prints its one error line only (tqdm draws a delayed bar neither on creation nor,
-    if never drawn, on close). Like every tqdm bar it draws at most every 0.1 s."""
+    if never drawn, on close). Like every tqdm bar it draws at most every 0.1 s. Disabled: a
+    ``HiddenBar``."""
+    if disable:
+        return HiddenBar(kwargs.get("total"))
+    from tqdm import tqdm
+
     return tqdm(delay=QUIET_UNTIL_WORK, dynamic_ncols=True, **kwargs)
 
 
