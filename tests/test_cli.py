@@ -100,3 +100,19 @@ def test_a_jam_without_quiet_has_a_tqdm_bar_and_with_it_a_hidden_one():
         bar.update(2)
         bar.set_postfix_str("y", refresh=False)
     assert (bar.n, bar.total) == (2, 5)
+
+
+def test_a_bar_closed_before_its_first_draw_still_shows_its_final_line():
+    """tqdm draws at most every 0.1 s and a delayed bar never drawn prints nothing on close: a
+    run faster than that (a warm N = 64 jam) would show no progress at all. Updated once and
+    closed at once: the final line; never updated (a refusal): nothing."""
+    import io
+
+    from jamflow.progress import progress_bar
+
+    shown, refused = io.StringIO(), io.StringIO()
+    with progress_bar(desc="jam", unit="min", file=shown) as bar:
+        bar.update(1)
+    with progress_bar(desc="jam", unit="min", file=refused):
+        pass
+    assert "jam: 1min" in shown.getvalue() and "min/s" in shown.getvalue() and refused.getvalue() == ""
