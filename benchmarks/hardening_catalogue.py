@@ -616,6 +616,92 @@ def _():
     return "; ".join(problems) or f"ok ({len(probes)} probes)"
 
 
+@case(59, "not-finite strains: families --spacing/--gamma-min/--gamma-max, shear --dgamma/--to (message names the option)")
+def _():
+    s = Scratch()
+    s.packing()
+    probes = [(["families", opt, v], opt) for opt, v in (("--spacing", "nan"), ("--gamma-min", "nan"), ("--gamma-max", "inf"))]
+    probes += [(["shear", "p.h5", "--dgamma", "nan", "--to", "1e-3"], "--dgamma"),
+               (["shear", "p.h5", "--dgamma", "1e-3", "--to", "inf"], "--to")]
+    problems = []
+    for args, option in probes:
+        v = verdict(s.run(*args, "--out", "d", "--quiet"), 2, [re.escape(option) + ".*finite"], s, [s.dir / "d"])
+        if v != "ok":
+            problems.append(f"{' '.join(args)}: {v}")
+    return "; ".join(problems) or f"ok ({len(probes)} probes)"
+
+
+@case(60, "a refusal without --quiet (jam, shear, families): stderr holds only the error line")
+def _():
+    s = Scratch()
+    s.packing()
+    probes = [["jam", "--vtol", "1e-30", "--out", "x.h5"], ["jam", "--walls", "y", "--gamma", "0.1", "--out", "x.h5"],
+              ["shear", "p.h5", "--vtol", "1e-30", "--dgamma", "1e-3", "--to", "2e-3", "--out", "d"],
+              ["families", "--n", "1", "--out", "d"]]
+    problems = []
+    for args in probes:
+        done = s.run(*args)
+        lines = done.stderr.strip().splitlines()
+        extra = "" if len(lines) == 1 else f"{len(lines) - 1} lines before the error ({lines[0][:40]!r})"
+        v = outcome(verdict(done, 2, ["error:"], s), extra)
+        if v != "ok":
+            problems.append(f"{args[0]} {args[1]}: {v}")
+    return "; ".join(problems) or f"ok ({len(probes)} probes)"
+
+
+@case(61, "jam --contact gaussian/cleaver on disks, spheres, ellipse:1, n-mers (ignored before)")
+def _():
+    probes = [["--contact", "gaussian"], ["--contact", "cleaver", "--dim", 3], ["--contact", "linear", "--shape", "ellipse:1"],
+              ["--contact", "gaussian", "--shape", "nmer:2:1.5"]]
+    problems = [f"{' '.join(map(str, a))}: {v}" for a in probes
+                if (v := refused(a, ["applies to ellipses/spheroids"], n=16)) != "ok"]
+    return "; ".join(problems) or f"ok ({len(probes)} probes)"
+
+
+@case(62, "SIGKILL during the write of --out leaves .NAME.*.tmp; the same command again removes it")
+def _():
+    s = Scratch()
+    killed = s.python("""
+        import os, signal
+        from jamflow.io import atomic_path
+        with atomic_path("p.h5") as tmp:
+            tmp.write_bytes(b"half a file")
+            os.kill(os.getpid(), signal.SIGKILL)
+    """)
+    debris = sorted(p.name for p in s.dir.glob(".p.h5.*.tmp"))
+    if killed.returncode != -signal.SIGKILL or not debris:
+        return f"the SIGKILLed write left no debris (exit {killed.returncode}): case not set up"
+    done = s.run("jam", "--n", 16, "--quiet", "--out", "p.h5")
+    return verdict(done, 0, ["phi_J"], s)  # leftovers() includes .*.tmp
+
+
+@case(63, "Ctrl-C during start-up: SIGINT 4-60 ms after the start, 5 runs at each of 15 delays")
+def _():
+    counts = {"exit 130, one line": 0, "killed before Python's handler": 0, "finished": 0,
+              "traceback in Python's own start-up": 0}
+    jamflow_tracebacks = []
+    for k in range(75):
+        s = Scratch()
+        proc = subprocess.Popen([str(BIN), "jam", "--n", "64", "--out", "x.h5"], cwd=s.dir, env=s.env,
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        time.sleep(0.004 * (1 + k % 15))
+        proc.send_signal(signal.SIGINT)
+        err = proc.communicate(timeout=300)[1]
+        frames = [line.strip() for line in err.splitlines() if line.strip().startswith("File ")]
+        if "Traceback" not in err:
+            key = {130: "exit 130, one line", -signal.SIGINT: "killed before Python's handler", 0: "finished"}.get(
+                proc.returncode, f"exit {proc.returncode}")
+            counts[key] = counts.get(key, 0) + 1
+        elif frames and (str(BIN) in frames[0] or f"{os.sep}jamflow{os.sep}" in frames[0]):
+            jamflow_tracebacks.append(frames[0][:80])  # in the console script or jamflow's modules
+        else:
+            counts["traceback in Python's own start-up"] += 1  # site, .pth files: before any jamflow code
+    summary = ", ".join(f"{v} {k}" for k, v in counts.items())
+    if jamflow_tracebacks:
+        return f"{len(jamflow_tracebacks)} tracebacks in jamflow's start-up ({jamflow_tracebacks[0]}); {summary}"
+    return f"ok ({summary})"
+
+
 def main(only=()) -> int:
     rows = []
     for number, title, fn in CASES:

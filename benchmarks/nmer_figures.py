@@ -4,10 +4,11 @@
         --q6 docs/nmers/q6.csv --routes docs/nmers/routes.csv --out docs/nmers
 
 - ``q6-alpha.png`` / ``q6.csv`` rows: Q6 (global, ``jamflow.analysis.order.BondOrder`` on the body
-  centres, neighbours within the first minimum of the ensemble's g(r)) against alpha for N = 256
-  monodisperse 2D dimers (chapter Figure 2.25, dashed line); mean and standard error per alpha.
-- ``packings-figure-2-26.png``: the first packing at alpha = 1.04, 1.1, 1.2, 1.3, 1.4, 1.6
-  (chapter Figure 2.26), coloured by the director angle.
+  centres, neighbours within the first minimum of the ensemble's g(r)) against alpha for
+  monodisperse 2D dimers, one series per N (chapter Figure 2.25, dashed line: N = 256); mean and
+  standard error per alpha.
+- ``packings-figure-2-26.png``: seed 0 at alpha = 1.04, 1.1, 1.2, 1.3, 1.4, 1.6 (chapter Figure
+  2.26) from the largest N that has it, coloured by the director angle.
 - ``phi-z-alpha.png``: phi_J and <z> (site contacts among non-floaters) against alpha, 2D and 3D,
   mean and standard error, with the isostatic values 2 d_f and 2 d.
 - ``acceptance.png`` and the acceptance table (issue 14, "How we will know"): per packing the
@@ -40,6 +41,7 @@ from jamflow.io import atomic_path, load_packing  # noqa: E402
 from jamflow.drawing import draw_into  # noqa: E402
 
 FIGURE_2_26 = (1.04, 1.1, 1.2, 1.3, 1.4, 1.6)
+MIN_NEIGHBOURS = 3  # Q6 of fewer neighbours within the first minimum of g(r) measures bond alignment, not order
 
 
 def rows(path) -> list[dict]:
@@ -107,34 +109,54 @@ def plot_bodies(path: Path) -> None:
     save(fig, path)
 
 
+def q6_cutoff(packings) -> float:
+    """The first minimum of the centres' g(r) (r_max 2.5: N = 32 cells are 5.5 wide), at the
+    finest bin width (0.02, 0.05, 0.1) where it is significant for these few packings."""
+    for dr in (0.02, 0.05, 0.1):
+        try:
+            return first_minimum(RDF(dr=dr, r_max=2.5).compute(packings))
+        except ValueError as err:
+            last = err
+    raise last
+
+
 def q6_table(q6_rows) -> list[tuple]:
-    """(alpha, mean Q6, stderr, r_min, n) per alpha from the packing files."""
+    """(N, alpha, mean Q6, stderr, r_min, packings, mean neighbours within r_min) per N and alpha
+    from the packing files."""
     out = []
-    for alpha, group in grouped(q6_rows, alpha_of).items():
+    for (n, alpha), group in sorted(grouped(q6_rows, lambda r: (int(r["n"]), alpha_of(r))).items()):
         packings = [load_packing(r["file"]) for r in group]
-        r_min = first_minimum(RDF(dr=0.02, r_max=3.0).compute(packings))
-        values = [BondOrder(r_min=r_min).compute(p).global_order for p in packings]
-        out.append((alpha, *mean_err(values), r_min, len(values)))
+        r_min = q6_cutoff(packings)
+        results = [BondOrder(r_min=r_min).compute(p) for p in packings]
+        values = [r.global_order for r in results]
+        neighbours = float(np.mean([r.n_neighbours.mean() for r in results]))
+        out.append((n, alpha, *mean_err(values), r_min, len(values), neighbours))
     return out
 
 
 def plot_q6(table, path: Path) -> None:
-    a, m, e = (np.array([t[k] for t in table]) for k in range(3))
     fig, ax = plt.subplots(figsize=(5, 3.6))
-    ax.errorbar(a, m, yerr=e, fmt="o--", color="C0", capsize=3, label="2D dimers, N = 256 (this work)")
+    for k, n in enumerate(sorted({t[0] for t in table})):
+        shown = [t for t in table if t[0] == n and t[6] >= MIN_NEIGHBOURS]
+        a, m, e = (np.array([t[j] for t in shown]) for j in (1, 2, 3))
+        ax.errorbar(a, m, yerr=e, fmt="os"[k % 2] + "--", color=f"C{k}", capsize=3,
+                    label=f"2D monodisperse dimers, N = {n}")
     ax.axvline(1.2, color="0.6", lw=0.8, ls=":")
-    ax.text(1.21, 0.9 * max(m), "chapter: amorphous\nfor alpha > 1.2", fontsize=7, color="0.4", va="top")
+    ax.text(1.21, 0.02, "chapter: amorphous for alpha > 1.2", fontsize=7, color="0.4", va="bottom")
     ax.set_xlabel("alpha = L / D")
-    ax.set_ylabel("Q6 (global)")
+    ax.set_ylabel("Q6 (global, body centres)")
     ax.set_ylim(0, None)
     ax.set_title("Q6 against aspect ratio (chapter Figure 2.25, dashed)", fontsize=9)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="upper right")
     fig.tight_layout()
     save(fig, path)
 
 
 def plot_packings(q6_rows, path: Path) -> None:
-    first = {alpha_of(r): r for r in reversed(q6_rows) if r["seed"] == "0"}
+    """Seed 0 at the alphas of Figure 2.26, from the largest N that has it."""
+    first = {}
+    for r in sorted((r for r in q6_rows if r["seed"] == "0"), key=lambda r: int(r["n"])):
+        first[alpha_of(r)] = r
     fig, axes = plt.subplots(2, 3, figsize=(9, 6.3))
     for ax, alpha, label in zip(axes.ravel(), FIGURE_2_26, "abcdef"):
         if alpha not in first:
@@ -144,74 +166,103 @@ def plot_packings(q6_rows, path: Path) -> None:
         draw_into(ax, p, color_by="orientation", contacts=False)
         ax.set_xticks([])
         ax.set_yticks([])
-        ax.set_title(f"({label}) alpha = {alpha:g}, phi_J = {p.phi:.4f}", fontsize=9)
-    fig.suptitle("Jammed packings of N = 256 dimers (chapter Figure 2.26); colour: director angle mod pi",
+        ax.set_title(f"({label}) alpha = {alpha:g}, N = {p.n}, phi_J = {p.phi:.4f}", fontsize=9)
+    fig.suptitle("Jammed packings of monodisperse 2D dimers (chapter Figure 2.26); colour: director angle mod pi",
                  fontsize=9)
     fig.tight_layout()
     save(fig, path)
 
 
 def alpha_table(ens_rows) -> dict:
-    """{dim: [(alpha, phi mean, err, z mean, err, z corrected mean, err, n, sizes)]}."""
+    """{(dim, N): [(alpha, phi mean, err, z mean, err, z corrected mean, err, packings, sizes)]}."""
     out = defaultdict(list)
-    for (dim, sizes, alpha), group in grouped(ens_rows, lambda r: (int(r["dim"]), r["sizes"], alpha_of(r))).items():
+    key = lambda r: (int(r["dim"]), int(r["n"]), r["sizes"], alpha_of(r))  # noqa: E731
+    for (dim, n, sizes, alpha), group in sorted(grouped(ens_rows, key).items()):
         if group[0]["engine"] != "numba":
             continue
         phi = [float(r["phi_j"]) for r in group]
         n_kept = [int(r["n"]) - int(r["floaters"]) for r in group]
         z = [2 * int(r["contacts"]) / k for r, k in zip(group, n_kept)]
         zc = [2 * (int(r["contacts"]) + int(r["free_rotations"])) / k for r, k in zip(group, n_kept)]
-        out[dim].append((alpha, *mean_err(phi), *mean_err(z), *mean_err(zc), len(group), sizes))
+        out[dim, n].append((alpha, *mean_err(phi), *mean_err(z), *mean_err(zc), len(group), sizes))
     return dict(out)
 
 
 def plot_alpha(table, path: Path) -> None:
     fig, axes = plt.subplots(2, 2, figsize=(8.5, 6), sharex=True)
     for col, dim in enumerate((2, 3)):
-        if dim not in table:
+        series = sorted(n for d, n in table if d == dim)
+        for k, n in enumerate(series):
+            t = np.array([row[:7] for row in table[dim, n]], float)
+            label = f"N = {n}, {table[dim, n][0][-1]}"
+            axes[0, col].errorbar(t[:, 0], t[:, 1], yerr=t[:, 2], fmt="os"[k % 2] + "-", capsize=3, color=f"C{k}",
+                                  label=label)
+            axes[1, col].errorbar(t[:, 0], t[:, 3], yerr=t[:, 4], fmt="os"[k % 2] + "-", capsize=3, color=f"C{k}",
+                                  label=f"<z>, site contacts ({label})")
+            axes[1, col].errorbar(t[:, 0], t[:, 5], yerr=t[:, 6], fmt="os"[k % 2] + ":", capsize=3, ms=4,
+                                  color=f"C{k}", mfc="none", label=f"<z> + free rotations ({label})")
+        if not series:
             continue
-        t = np.array([row[:7] for row in table[dim]], float)
-        sizes = table[dim][0][-1]
-        axes[0, col].errorbar(t[:, 0], t[:, 1], yerr=t[:, 2], fmt="o-", capsize=3, color="C0")
-        axes[0, col].set_title(f"{dim}D dimers, N = 128, sizes {sizes}", fontsize=9)
+        axes[0, col].set_title(f"{dim}D dimers", fontsize=9)
         axes[0, col].set_ylabel("phi_J")
-        axes[1, col].errorbar(t[:, 0], t[:, 3], yerr=t[:, 4], fmt="o-", capsize=3, color="C1",
-                              label="<z>, site contacts")
-        axes[1, col].errorbar(t[:, 0], t[:, 5], yerr=t[:, 6], fmt="s:", capsize=3, color="C2", ms=4,
-                              label="<z> + free rotations of one-site bodies")
+        axes[0, col].legend(fontsize=7)
         d_f = 3 if dim == 2 else 5
         axes[1, col].axhline(2 * d_f, color="0.5", lw=0.8, ls="--")
         axes[1, col].axhline(2 * dim, color="0.5", lw=0.8, ls=":")
-        axes[1, col].text(t[0, 0], 2 * d_f + 0.1, "2 d_f (alpha > 1)", fontsize=7, color="0.4")
-        axes[1, col].text(t[0, 0], 2 * dim + 0.1, "2 d (disks/spheres)", fontsize=7, color="0.4")
+        x0 = min(row[0] for n in series for row in table[dim, n])
+        axes[1, col].text(x0, 2 * d_f + 0.1, "2 d_f (alpha > 1)", fontsize=7, color="0.4")
+        axes[1, col].text(x0, 2 * dim + 0.1, "2 d (disks/spheres)", fontsize=7, color="0.4")
         axes[1, col].set_xlabel("alpha = L / D")
         axes[1, col].set_ylabel("<z>")
-        axes[1, col].legend(fontsize=7, loc="lower right")
+        axes[1, col].legend(fontsize=6, loc="lower right")
     fig.tight_layout()
     save(fig, path)
 
 
-def plot_routes(route_rows, path: Path) -> tuple:
-    by = grouped(route_rows, lambda r: r["engine"])
-    if set(by) != {"numba", "lammps"}:
-        return ()
-    seeds = sorted(set(r["seed"] for r in by["numba"]) & set(r["seed"] for r in by["lammps"]), key=int)
-    phi = {e: np.array([float(next(r["phi_j"] for r in by[e] if r["seed"] == s)) for s in seeds]) for e in by}
+def paired_routes(route_rows) -> dict:
+    """{N: (seeds, {engine: phi_J array}, {engine: CPU s array})} for the seeds both engines jammed."""
+    out = {}
+    for n, group in sorted(grouped(route_rows, lambda r: int(r["n"])).items()):
+        by = grouped(group, lambda r: r["engine"])
+        if set(by) != {"numba", "lammps"}:
+            continue
+        seeds = sorted(set(r["seed"] for r in by["numba"]) & set(r["seed"] for r in by["lammps"]), key=int)
+        row = {e: {r["seed"]: r for r in by[e]} for e in by}
+        phi = {e: np.array([float(row[e][s]["phi_j"]) for s in seeds]) for e in by}
+        cpu = {e: np.array([float(row[e][s]["cpu_seconds"]) for s in seeds]) for e in by}
+        out[n] = (seeds, phi, cpu)
+    return out
+
+
+def plot_routes(route_rows, path: Path) -> list[tuple]:
+    """Paired phi_J of the same starts by both routes; returns per N (N, packings, compiled mean,
+    err, LAMMPS mean, err, paired difference mean, err, compiled CPU s mean, LAMMPS CPU s mean)."""
+    pairs = paired_routes(route_rows)
+    if not pairs:
+        return []
     fig, axes = plt.subplots(1, 2, figsize=(8.5, 3.6))
-    axes[0].plot(phi["numba"], phi["lammps"], "o", ms=4)
-    lo, hi = min(phi["numba"].min(), phi["lammps"].min()), max(phi["numba"].max(), phi["lammps"].max())
+    lo = min(min(v.min() for v in phi.values()) for _, phi, _ in pairs.values())
+    hi = max(max(v.max() for v in phi.values()) for _, phi, _ in pairs.values())
+    summary = []
+    for k, (n, (seeds, phi, cpu)) in enumerate(pairs.items()):
+        axes[0].plot(phi["numba"], phi["lammps"], "os"[k % 2], ms=4, color=f"C{k}", label=f"N = {n}")
+        summary.append((n, len(seeds), *mean_err(phi["numba"]), *mean_err(phi["lammps"]),
+                        *mean_err(phi["lammps"] - phi["numba"]), cpu["numba"].mean(), cpu["lammps"].mean()))
     axes[0].plot([lo, hi], [lo, hi], "k:", lw=0.8)
     axes[0].set_xlabel("phi_J, compiled FIRE")
     axes[0].set_ylabel("phi_J, LAMMPS damped rigid bodies")
+    axes[0].legend(fontsize=8)
+    n, (seeds, phi, _) = max(pairs.items())
     bins = np.linspace(lo, hi, 12)
     axes[1].hist(phi["numba"], bins, alpha=0.6, label="compiled FIRE")
     axes[1].hist(phi["lammps"], bins, alpha=0.6, label="LAMMPS damped")
-    axes[1].set_xlabel("phi_J")
+    axes[1].set_xlabel(f"phi_J (N = {n})")
+    axes[1].set_ylabel("packings")
     axes[1].legend(fontsize=8)
-    fig.suptitle(f"Same {len(seeds)} starts, 2D dimers alpha = 1.5, N = {by['numba'][0]['n']}", fontsize=9)
+    fig.suptitle("Same starts jammed by both routes, 2D dimers alpha = 1.5, bidisperse", fontsize=9)
     fig.tight_layout()
     save(fig, path)
-    return len(seeds), *mean_err(phi["numba"]), *mean_err(phi["lammps"]), *mean_err(phi["lammps"] - phi["numba"])
+    return summary
 
 
 def stability_table(stab_rows) -> list[tuple]:
@@ -230,7 +281,13 @@ def stability_table(stab_rows) -> list[tuple]:
 
 
 ACCEPTANCE_SETS = ((2, 1.2), (2, 1.5), (2, 2.0), (3, 1.5))  # issue 14: 20 packings each
+ACCEPTANCE_N = 128
 F_LIMIT = 1e-12
+
+
+def acceptance_rows(ens_rows, dim: int, alpha: float) -> list[dict]:
+    return [r for r in ens_rows if int(r["dim"]) == dim and alpha_of(r) == alpha and r["engine"] == "numba"
+            and int(r["n"]) == ACCEPTANCE_N]
 
 
 def acceptance_table(ens_rows, stab_rows) -> list[tuple]:
@@ -240,7 +297,7 @@ def acceptance_table(ens_rows, stab_rows) -> list[tuple]:
     stab = {r["file"]: r for r in stab_rows}
     out = []
     for dim, alpha in ACCEPTANCE_SETS:
-        group = [r for r in ens_rows if int(r["dim"]) == dim and alpha_of(r) == alpha and r["engine"] == "numba"]
+        group = acceptance_rows(ens_rows, dim, alpha)
         checked = [stab[r["file"]] for r in group if r["file"] in stab]
         if not group:
             continue
@@ -259,7 +316,7 @@ def plot_acceptance(ens_rows, stab_rows, path: Path) -> None:
     stab = {r["file"]: r for r in stab_rows}
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.8))
     for k, (dim, alpha) in enumerate(ACCEPTANCE_SETS):
-        group = [r for r in ens_rows if int(r["dim"]) == dim and alpha_of(r) == alpha and r["engine"] == "numba"]
+        group = acceptance_rows(ens_rows, dim, alpha)
         if not group:
             continue
         x = k + np.linspace(-0.25, 0.25, len(group))
@@ -300,18 +357,18 @@ def main(argv=None) -> int:
     if Path(args.q6).exists():
         q6_rows = rows(args.q6)
         table = q6_table(q6_rows)
-        print("alpha  Q6_global  stderr  r_min  n")
+        print(f"N  alpha  Q6_global  stderr  r_min  packings  neighbours (< {MIN_NEIGHBOURS}: not plotted)")
         for t in table:
-            print(f"{t[0]:<6g} {t[1]:.4f}  {t[2]:.4f}  {t[3]:.3f}  {t[4]}")
+            print(f"{t[0]}  {t[1]:<6g} {t[2]:.4f}  {t[3]:.4f}  {t[4]:.3f}  {t[5]}  {t[6]:.2f}")
         plot_q6(table, out / "q6-alpha.png")
         plot_packings(q6_rows, out / "packings-figure-2-26.png")
     ens = [r for path in args.csv if Path(path).exists() for r in rows(path)]
     if ens:
         table = alpha_table(ens)
         print("dim alpha  phi_J  stderr  <z>  stderr  <z>+free  stderr  n  sizes")
-        for dim, t in table.items():
+        for (dim, n), t in table.items():
             for r in t:
-                print(f"{dim}  {r[0]:<5g} {r[1]:.5f} {r[2]:.5f}  {r[3]:.3f} {r[4]:.3f}  {r[5]:.3f} {r[6]:.3f}  {r[7]}  {r[8]}")
+                print(f"{dim} N={n}  {r[0]:<5g} {r[1]:.5f} {r[2]:.5f}  {r[3]:.3f} {r[4]:.3f}  {r[5]:.3f} {r[6]:.3f}  {r[7]}  {r[8]}")
         plot_alpha(table, out / "phi-z-alpha.png")
     if Path(args.stability).exists():
         print("dim alpha packings extra_zero=free N_c+free=iso (min..max of N_c+free-iso) free lowest_e power")
@@ -327,9 +384,10 @@ def main(argv=None) -> int:
                   f"{t[11]}..{t[12]}  {t[13]:.1e}")
         plot_acceptance(ens, stab_rows, out / "acceptance.png")
     if Path(args.routes).exists():
-        summary = plot_routes(rows(args.routes), out / "routes.png")
-        if summary:
-            print("routes: n {} numba {:.5f} +- {:.5f} lammps {:.5f} +- {:.5f} paired diff {:.5f} +- {:.5f}".format(*summary))
+        print("routes: N packings compiled(phi_J +- se) lammps(phi_J +- se) paired lammps-compiled (+- se) "
+              "CPU s per packing compiled lammps")
+        for s in plot_routes(rows(args.routes), out / "routes.png"):
+            print("{} {}  {:.5f} +- {:.5f}  {:.5f} +- {:.5f}  {:+.5f} +- {:.5f}  {:.2f} {:.2f}".format(*s))
     return 0
 
 

@@ -53,9 +53,12 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import datetime
+import glob
 import json
 import math
 import os
+import re
+import socket
 import stat
 import tempfile
 from pathlib import Path
@@ -98,7 +101,8 @@ def atomic_path(path, force: bool = False):
     check_writable(path, force)
     keep = path.is_file() and not path.is_symlink()
     mode = path.stat().st_mode & 0o7777 if keep else 0o666 & ~_umask()
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    remove_stale_temporaries(path)
+    fd, tmp = tempfile.mkstemp(prefix=_temporary_prefix(path, os.getpid()), suffix=".tmp", dir=path.parent)
     os.close(fd)
     try:
         os.chmod(tmp, mode | 0o200)  # mkstemp makes 0600; the owner writes it, then it gets the final mode
@@ -111,6 +115,42 @@ def atomic_path(path, force: bool = False):
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+
+
+def _temporary_prefix(path: Path, pid: int) -> str:
+    """``.NAME.HOST.PID.`` : atomic_path's temporary files name the output, the host and the
+    process writing them (mkstemp adds 8 random characters and ``.tmp``)."""
+    return f".{path.name}.{_HOST}.{pid}."
+
+
+_HOST = re.sub(r"[^A-Za-z0-9_-]", "-", socket.gethostname()) or "host"
+_RANDOM = r"[a-z0-9_]{8}"  # tempfile's random part
+
+
+def remove_stale_temporaries(path) -> list[Path]:
+    """Remove the temporary files that atomic_path left beside ``path`` in processes that are
+    gone (a SIGKILL, a power cut): only names of atomic_path's pattern for this output, written
+    on this host by a process id that no longer exists (a live writer's file is kept, also
+    another user's). Returns the files removed."""
+    path = Path(path)
+    mine = re.compile(re.escape(f".{path.name}.{_HOST}.") + r"(\d+)\." + _RANDOM + r"\.tmp")
+    removed = []
+    for tmp in path.parent.glob(f".{glob.escape(path.name)}.*.tmp"):
+        match = mine.fullmatch(tmp.name)
+        if match and not _alive(int(match.group(1))) and tmp.is_file() and not tmp.is_symlink():
+            tmp.unlink(missing_ok=True)
+            removed.append(tmp)
+    return removed
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True  # another user's process
+    return True
 
 
 @contextlib.contextmanager

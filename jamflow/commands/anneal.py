@@ -8,11 +8,11 @@ from __future__ import annotations
 
 import time
 
-from tqdm import tqdm
 
 from ..engine.base import ENGINES
 from ..io import check_writable, load_packing, replacing, save_packing
 from ..minimize import MinimizerSettings
+from ..progress import progress_bar
 from ..protocols.anneal import anneal, anneal_alphas, check_anneal
 from ..protocols.compression import DEFAULT_PROTOCOL, MAX_SEED, PROTOCOLS
 from ..shapes.contact_distance import METHODS as METHODS_CONTACT
@@ -47,7 +47,7 @@ def run(args) -> int:
     settings = PROTOCOLS[args.protocol](v_tol=args.vtol, minimizer=MinimizerSettings(v_min=args.vtol))
     steps = len(anneal_alphas(alpha0, args.to, args.dalpha))
     t0 = time.perf_counter()
-    with tqdm(total=steps, desc="anneal", unit="step", disable=args.quiet, dynamic_ncols=True) as bar:
+    with progress_bar(total=steps, desc="anneal", unit="step", disable=args.quiet) as bar:
         def progress(row):
             bar.set_postfix_str(f"alpha={row['alpha']:g} phi_J={row['phi_j']:.6f} <z>={row['mean_z']:.3f}",
                                 refresh=False)

@@ -11,11 +11,11 @@ from __future__ import annotations
 import csv
 from pathlib import Path
 
-from tqdm import tqdm
 
 from ..analysis.families import convergence, join, mirror_by_sightings, mirror_check, richness
 from ..engine.base import ENGINES
 from ..io import atomic_path, check_writable, output_directory, replacing
+from ..progress import progress_bar
 from ..protocols.families import FamilySampling, sample
 from ..shear_file import load_family_points, save_family_points, save_family_table
 
@@ -58,7 +58,7 @@ def run(args) -> int:
         raise ValueError(f"{points_file} exists; pass --resume to continue it or choose another --out")
     total = plan.starts * len(plan.grid)
     with output_directory(out), replacing(outputs if args.force else []):  # an empty new --out is removed on failure
-        with tqdm(total=total, desc="families", unit="start", disable=args.quiet, dynamic_ncols=True) as bar:
+        with progress_bar(total=total, desc="families", unit="start", disable=args.quiet) as bar:
             bar.update(0 if done is None else len(set(done["start"].tolist())) * len(plan.grid))
             points, failures = sample(plan, done=done, failures=failures, observers=[lambda k, s: bar.update(1)],
                                       checkpoint=lambda cols, why: save_family_points(points_file, plan, cols, why))

@@ -20,6 +20,7 @@ from ..protocols.compression import (DEFAULT_PROTOCOL, PROTOCOLS, CompressionSet
 from ..progress import CompressionProgress
 from ..protocols.above import check_dphi, compress_above
 from ..shapes.contact_distance import METHODS as METHODS_CONTACT
+from ..shapes.shape import parse_shape
 from ..walls import WALL_TYPES, wall_loads
 
 
@@ -127,10 +128,22 @@ def check_boundary_args(args) -> None:
                              "--pressure, --gravity or --emit-deck")
 
 
+def check_contact_arg(args) -> None:
+    """Refuse a --contact method other than the default for a shape that has no contact-distance
+    approximation (disks, spheres, ellipse:1, rigid bodies of spherical sites): it would be ignored."""
+    if args.contact == "exact":
+        return
+    shape = parse_shape(args.shape, args.dim)
+    if shape.kind != "ellipsoid":
+        raise ValueError(f"--contact {args.contact} applies to ellipses/spheroids (--shape ellipse:ALPHA or "
+                         f"spheroid:ALPHA, ALPHA != 1), not to {shape.name(args.dim)} particles: leave --contact out")
+
+
 def prepare(args):
     """Validated settings and random start from parsed options: every refusal comes here,
     before any work (shared by ``jamflow jam`` and ``jamflow ensemble``)."""
     check_boundary_args(args)
+    check_contact_arg(args)
     settings = settings_from_args(args)
     gamma = getattr(args, "gamma", None)
     if gamma is not None and args.pressure is not None:
@@ -150,7 +163,7 @@ def prepare(args):
     engine_name(start, args.minimizer, args.engine)  # refuse an engine that cannot run the scene, before work
     if start.shape.kind == "rigid" and settings.minimizer.md_damping != "viscous":
         raise ValueError(f"--md-damping {settings.minimizer.md_damping} is for disks and spheres: rigid bodies are "
-                         "damped by fix rigid/small langevin (set its rate with --damping)")
+                         "damped by fix rigid langevin (set its rate with --damping)")
     check_resolution(start, settings)
     return settings, start
 

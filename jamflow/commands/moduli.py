@@ -13,7 +13,6 @@ from pathlib import Path
 
 import h5py
 import numpy as np
-from tqdm import tqdm
 
 from .. import __version__
 from ..analysis.moduli import Moduli
@@ -22,6 +21,7 @@ from ..analysis.sweeps import JUMP_TOL, LINEAR_TOL, PAST_YIELD, SweepSettings
 from ..engine.base import ENGINES
 from ..io import atomic_path, check_writable, load_packing, read_attrs, replacing
 from ..minimize import MinimizerSettings
+from ..progress import progress_bar
 
 SCHEMA, SCHEMA_VERSION = "jamflow.moduli", 1
 
@@ -84,11 +84,10 @@ def run(args) -> int:
 def _measure(args, moduli, packings, outputs, checks) -> None:
     """Sweep, write and report each checked packing."""
     for path, packing, out, checked in zip(args.files, packings, outputs, checks):
-        with tqdm(total=moduli.total_relaxations(), desc=Path(path).name, unit="relax", disable=args.quiet,
-                  dynamic_ncols=True) as bar:
+        with progress_bar(total=moduli.total_relaxations(), desc=Path(path).name, unit="relax",
+                          disable=args.quiet) as bar:
             result = moduli.compute(packing, observers=[_progress(bar)], checked=checked)
-            bar.total = bar.n  # the sweeps stop a few amplitudes past a yield
-            bar.refresh()
+            bar.total = bar.n  # the sweeps stop a few amplitudes past a yield (drawn on close)
         dphi = float(read_attrs(path).get("dphi_above", math.nan))
         save_moduli(out, path, packing, result, dphi, moduli)
         print(summary_line(path, result))

@@ -61,7 +61,7 @@ RESTORE_VELOCITIES = ("set group all vx v_jf_vx vy v_jf_vy vz v_jf_vz", "unfix j
 
 ROTATIONS_WHY = ("no LAMMPS minimiser moves orientations (min_style fire and cg act on positions only); "
                  "damped dynamics with rotations (fix nve/asphere + fix langevin at T = 0 with angmom) does")
-RIGID_WHY = "LAMMPS's minimisers ignore fix rigid; damped rigid-body dynamics (fix rigid/small langevin) relaxes them"
+RIGID_WHY = "LAMMPS's minimisers ignore fix rigid; damped rigid-body dynamics (fix rigid langevin) relaxes them"
 ANGMOM_FACTOR = 1.0  # fix langevin ... angmom F: rotational drag rate F / damp, like the translational one
 
 
@@ -380,7 +380,7 @@ class LammpsEngine:
         if rigid and not md:
             raise ValueError(f"LAMMPS's minimisers ignore rigid bodies; minimise them with method md, not {s.method}")
         if rigid and s.md_damping != "viscous":
-            raise ValueError(f"rigid bodies in LAMMPS are damped by fix rigid/small langevin; md_damping "
+            raise ValueError(f"rigid bodies in LAMMPS are damped by fix rigid langevin; md_damping "
                              f"{s.md_damping!r} is for disks and spheres, use md_damping 'viscous'")
         if md and s.md_damping == "pairwise" and not load_plugin(lmp):
             raise ValueError("md_damping 'pairwise' needs jamflow's LAMMPS plugin (fix jamflow/damping), which "
@@ -437,7 +437,7 @@ class LammpsEngine:
         lmp, done = self.lmp, 0
         while True:
             start, chunk = lmp.extract_global("ntimestep"), min(RIGID_CHECK, steps - done)
-            self.command(f"run {chunk}")  # (with 'pre no' fix rigid/small blew up: keep the setup)
+            self.command(f"run {chunk}")  # (keep the setup: 'pre no' blew up with fix rigid/small)
             ran = lmp.extract_global("ntimestep") - start
             done += ran
             state = self.state()

@@ -2,9 +2,13 @@
 
 LAMMPS has no minimiser for rigid bodies (``minimize`` ignores ``fix rigid``; docs: the wheel
 notes), so ``LammpsEngine`` relaxes them by damped rigid-body dynamics at zero temperature,
-``fix rigid/small molecule langevin 0 0 DAMP SEED`` (drag -m v / DAMP on each centre and
+``fix rigid molecule langevin 0 0 DAMP SEED`` (drag -m v / DAMP on each centre and
 -I omega / DAMP on each rotation, no noise at T = 0), with DAMP = 1 / ``damping``: the body mass is
 1, so the translational drag coefficient is the ``MinimizerSettings.damping`` of damped MD.
+Not ``fix rigid/small``: its ``setup()`` allocates the Langevin force array and adds it to the body
+forces before ``post_force`` first fills it, so the first half-step of a run integrates
+uninitialised memory (found by valgrind; it made the dimer deck blow up or give NaN pressures
+depending on the environment's size: docs/nmers.md). ``fix rigid`` zeroes that array in setup.
 Intra-body site pairs are excluded (``neigh_modify exclude molecule/intra all``).
 
 LAMMPS computes site forces; this module does the rigid-body bookkeeping from the sites:
@@ -85,7 +89,7 @@ class BodySites:
         """The zero-temperature damped rigid-body dynamics of a minimisation session (fix
         enforce2d must follow fix rigid, so it is defined again)."""
         lines = ["velocity all set 0.0 0.0 0.0",
-                 f"fix {RIGID_FIX} all rigid/small molecule langevin 0.0 0.0 {1.0 / settings.damping:.17g} "
+                 f"fix {RIGID_FIX} all rigid molecule langevin 0.0 0.0 {1.0 / settings.damping:.17g} "
                  f"{LANGEVIN_SEED}"]
         if fix_2d:
             lines += [f"unfix {fix_2d}", f"fix {fix_2d} all enforce2d"]

@@ -36,7 +36,7 @@ from pathlib import Path
 
 PLUGIN_DIR = Path(__file__).with_name("plugin")
 SOURCES = ("pair_jamflow.cpp", "fix_jamflow_damping.cpp", "lammpsplugin.h", "pair_jamflow_ellipsoid.h",
-           "contact_distance.h")
+           "contact_distance.h", "plugin_common.h")
 LIBRARY_NAME = "jamflow_pairs.so"
 STYLES = ("jamflow/spring", "jamflow/rlj", "jamflow/ellipsoid")  # pair styles
 FIX_STYLES = ("jamflow/damping",)

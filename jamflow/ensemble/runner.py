@@ -22,6 +22,7 @@ from .store import Store, Task, failure_row, write_failure
 TASK_KEYS = ("n", "seed", "out", "quiet", "emit_deck", "force")  # set per task, not store parameters
 SUMMARY_EVERY = 10.0  # seconds between summary.csv rewrites during a run
 MAX_ERRORS_BEFORE_SUCCESS = 3  # the same broken set-up fails every task: stop early
+STOP_GRACE = 30.0  # seconds a stopped run waits for the tasks already running (cancelling cannot stop them)
 
 
 @dataclass
@@ -158,7 +159,8 @@ def _run(client, store, fixed, todo, report, progress, on_result, interrupted, m
     bar = tqdm(total=len(todo), desc="ensemble", unit="packing", disable=not progress, dynamic_ncols=True)
     line = tqdm(bar_format="{desc}", position=1, disable=not progress, leave=False)
     bar.set_postfix_str(f"failed={report.failed}, done before={report.done_before}")
-    seen, last_write = set(), time.monotonic()  # worker addresses at the last poll
+    seen = set(workers_state(client) or {})  # worker addresses at the last poll (a worker lost before the first counts)
+    last_write = time.monotonic()
     try:
         while pending and not report.stopped:
             if interrupted.is_set():
@@ -186,9 +188,30 @@ def _run(client, store, fixed, todo, report, progress, on_result, interrupted, m
                 _write_summary(store, report)
                 last_write = time.monotonic()
     finally:
+        if report.stopped and not report.interrupted:
+            _drain_running(client, pending, futures, store, fixed, report)
         client.cancel(list(pending))
         line.close()
         bar.close()
+
+
+def _drain_running(client, pending, futures, store, fixed, report):
+    """After a stop (disk full, broken set-up): cancel the tasks not started and wait up to
+    STOP_GRACE for those running, so none writes a file after the store is cleaned and unlocked."""
+    from distributed import wait
+
+    running = set().union(*(workers_state(client) or {}).values())
+    started = {fut for fut in pending if fut.key in running}
+    client.cancel(list(pending - started))
+    pending -= pending - started
+    if started:
+        with contextlib.suppress(TimeoutError):  # still running after the grace: left to the next run
+            wait(started, timeout=STOP_GRACE)
+    for fut in [f for f in started if f.done()]:
+        pending.discard(fut)
+        row = _outcome(fut, futures[fut], store, fixed, report)
+        if row is not None:
+            report.rows[row["file"]] = row
 
 
 def _check_mpi(ranks, engine):

@@ -221,11 +221,11 @@ def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | 
     return result if gamma is None else with_accumulated_strain(result, gamma)
 
 
-def check_strain(gamma) -> float:
-    """A finite shear strain as a float; ValueError otherwise."""
+def check_strain(gamma, name: str = "shear strain gamma") -> float:
+    """A finite shear strain as a float; ValueError (naming the value as ``name``) otherwise."""
     if isinstance(gamma, bool) or not isinstance(gamma, (int, float, np.integer, np.floating)) \
             or not math.isfinite(gamma):
-        raise ValueError(f"shear strain gamma must be a finite number, got {gamma!r}")
+        raise ValueError(f"{name} must be a finite number, got {gamma!r}")
     return float(gamma)
 
 

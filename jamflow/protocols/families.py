@@ -45,7 +45,7 @@ class FamilySampling:
 
     def __post_init__(self):
         for name in ("gamma_min", "gamma_max", "spacing"):
-            check_strain(getattr(self, name))
+            check_strain(getattr(self, name), f"{name} (--{name.replace('_', '-')})")
         if not self.spacing > 0:
             raise ValueError(f"the grid spacing must be positive, got {self.spacing}")
         if not self.gamma_max > self.gamma_min:

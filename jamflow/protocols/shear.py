@@ -145,7 +145,7 @@ class ShearPath:
 def shear_strains(gamma0: float, dgamma, to) -> np.ndarray:
     """The strains of a path, gamma0 + k dgamma, ending exactly at ``to``; ValueError for
     bad input (non-finite, dgamma 0 or pointing away from ``to``, too many steps)."""
-    dgamma, to = check_strain(dgamma), check_strain(to)
+    dgamma, to = check_strain(dgamma, "the strain step dgamma (--dgamma)"), check_strain(to, "the final strain to (--to)")
     if dgamma == 0.0:
         raise ValueError("dgamma must not be zero; the seed's quasistatic steps are ~1e-3 (Delta gamma / n)")
     if to == gamma0:

@@ -25,35 +25,24 @@
    is a derivative of LAMMPS and is distributed under the GNU General Public License,
    version 2 (GPL-2.0), like LAMMPS. */
 
-#include "lammpsplugin.h"
+#include "plugin_common.h"
 
-#include "atom.h"
 #include "comm.h"
-#include "error.h"
 #include "fix.h"
 #include "force.h"
-#include "neigh_list.h"
 #include "neighbor.h"
 #include "pair.h"
 #include "update.h"
-#include "utils.h"
-
-#include <cmath>
-
-#ifndef JAMFLOW_LAMMPS_VERSION
-#define JAMFLOW_LAMMPS_VERSION "unknown"
-#endif
 
 namespace LAMMPS_NS {
+using namespace jamflow_common;
 
 class FixJamflowDamping : public Fix {
  public:
   FixJamflowDamping(LAMMPS *lmp, int narg, char **arg) : Fix(lmp, narg, arg)
   {
     if (narg != 4) error->all(FLERR, "Illegal fix jamflow/damping command: expected fix ID group jamflow/damping B");
-    damping = utils::numeric(FLERR, arg[3], false, lmp);
-    if (!(damping >= 0.0) || !std::isfinite(damping))
-      error->all(FLERR, "fix jamflow/damping: B must be a finite number >= 0");
+    damping = checked_number(lmp, arg[3], 0.0, true, "fix jamflow/damping: B must be a finite number >= 0");
   }
 
   int setmask() override { return FixConst::POST_FORCE; }
@@ -67,14 +56,10 @@ class FixJamflowDamping : public Fix {
       error->all(FLERR, "fix jamflow/damping supports run_style verlet only");
     if (force->pair == nullptr)
       error->all(FLERR, "fix jamflow/damping needs a pair style (its neighbour cutoff must cover the largest diameter)");
-    double rmax_local = 0.0, rmax = 0.0;
-    for (int i = 0; i < atom->nlocal; i++)
-      if (atom->radius[i] > rmax_local) rmax_local = atom->radius[i];
-    MPI_Allreduce(&rmax_local, &rmax, 1, MPI_DOUBLE, MPI_MAX, world);
-    if (force->pair->cutforce < 2.0 * rmax)
+    const double dmax = largest_diameter(atom, world);
+    if (force->pair->cutforce < dmax)
       error->all(FLERR, "fix jamflow/damping: the pair cutoff " + std::to_string(force->pair->cutforce) +
-                            " is below the largest diameter " + std::to_string(2.0 * rmax) +
-                            ", so contacts would be missed");
+                            " is below the largest diameter " + std::to_string(dmax) + ", so contacts would be missed");
     neighbor->add_request(this, NeighConst::REQ_FULL);
   }
 
@@ -89,32 +74,25 @@ class FixJamflowDamping : public Fix {
     double **f = atom->f;
     const double *radius = atom->radius;
     const int *mask = atom->mask;
-    const int inum = list->inum;
-    const int *ilist = list->ilist;
-    const int *numneigh = list->numneigh;
-    int **firstneigh = list->firstneigh;
+    const Neighbours nb(list);
 
-    for (int ii = 0; ii < inum; ii++) {
-      const int i = ilist[ii];
+    for (int ii = 0; ii < nb.inum; ii++) {
+      const int i = nb.ilist[ii];
       if (!(mask[i] & groupbit)) continue;
-      const int *jlist = firstneigh[i];
+      const int *jlist = nb.firstneigh[i];
       double fx = 0.0, fy = 0.0, fz = 0.0;
-      for (int jj = 0; jj < numneigh[i]; jj++) {
+      for (int jj = 0; jj < nb.numneigh[i]; jj++) {
         const int j = jlist[jj] & NEIGHMASK;
         if (!(mask[j] & groupbit)) continue;
-        const double delx = x[i][0] - x[j][0];
-        const double dely = x[i][1] - x[j][1];
-        const double delz = x[i][2] - x[j][2];
-        const double rsq = delx * delx + dely * dely + delz * delz;
-        const double sigma = radius[i] + radius[j];
-        if (rsq >= sigma * sigma || rsq == 0.0) continue;
+        const SpherePair p(x[i], radius[i], x[j], radius[j]);
+        if (!p.overlapping() || p.rsq == 0.0) continue;
         // -B (v_ij . del) del / r^2 = -B (v_ij . rhat) rhat
-        const double vdotdel = (v[i][0] - v[j][0]) * delx + (v[i][1] - v[j][1]) * dely +
-            (v[i][2] - v[j][2]) * delz;
-        const double scale = -damping * vdotdel / rsq;
-        fx += scale * delx;
-        fy += scale * dely;
-        fz += scale * delz;
+        const double vdotdel = (v[i][0] - v[j][0]) * p.delx + (v[i][1] - v[j][1]) * p.dely +
+            (v[i][2] - v[j][2]) * p.delz;
+        const double scale = -damping * vdotdel / p.rsq;
+        fx += scale * p.delx;
+        fy += scale * p.dely;
+        fz += scale * p.delz;
       }
       f[i][0] += fx;
       f[i][1] += fy;
@@ -137,13 +115,9 @@ using namespace LAMMPS_NS;
 
 void jamflow_register_fixes(void *lmp, void *handle, lammpsplugin_regfunc reg)
 {
-  lammpsplugin_t plugin;
-  plugin.version = JAMFLOW_LAMMPS_VERSION;
-  plugin.style = "fix";
-  plugin.name = "jamflow/damping";
-  plugin.info = "jamflow pairwise normal damping -B (v_ij . rhat) rhat of contacting pairs (seed eq. 2.3)";
-  plugin.author = "jamflow";
+  lammpsplugin_t plugin = jamflow_common::plugin_record(
+      "fix", "jamflow/damping", "jamflow pairwise normal damping -B (v_ij . rhat) rhat of contacting pairs (seed eq. 2.3)",
+      handle);
   plugin.creator.v2 = (lammpsplugin_factory2 *) &create_damping;
-  plugin.handle = handle;
   (*reg)(&plugin, lmp);
 }

@@ -23,27 +23,16 @@
    the contact distance of ellipses and spheroids. The plugin refuses to load into a LAMMPS
    version other than the one whose headers it was compiled against. */
 
-#include "lammpsplugin.h"
+#include "plugin_common.h"
 
-#include "atom.h"
 #include "comm.h"
-#include "error.h"
 #include "force.h"
 #include "memory.h"
-#include "neigh_list.h"
 #include "neighbor.h"
 #include "pair.h"
-#include "lammps.h"
-#include "utils.h"
-
-#include <cmath>
-#include <string>
-
-#ifndef JAMFLOW_LAMMPS_VERSION
-#define JAMFLOW_LAMMPS_VERSION "unknown"
-#endif
 
 namespace LAMMPS_NS {
+using namespace jamflow_common;
 
 namespace {
 enum Law { SPRING2 = 0, HERTZ = 1, SPRING_POW = 2, RLJ = 3 };
@@ -152,19 +141,15 @@ template <int LAW, int EVFLAG, int NEWTON> void PairJamflow::eval()
   const int *type = atom->type;
   const int nlocal = atom->nlocal;
   const double *special_lj = force->special_lj;
+  const Neighbours nb(list);
 
-  const int inum = list->inum;
-  const int *ilist = list->ilist;
-  const int *numneigh = list->numneigh;
-  int **firstneigh = list->firstneigh;
-
-  for (int ii = 0; ii < inum; ii++) {
-    const int i = ilist[ii];
-    const double xi = x[i][0], yi = x[i][1], zi = x[i][2];
+  for (int ii = 0; ii < nb.inum; ii++) {
+    const int i = nb.ilist[ii];
+    const double xi[3] = {x[i][0], x[i][1], x[i][2]};
     const double radi = radius[i];
     const int itype = type[i];
-    const int *jlist = firstneigh[i];
-    const int jnum = numneigh[i];
+    const int *jlist = nb.firstneigh[i];
+    const int jnum = nb.numneigh[i];
     double fxi = 0.0, fyi = 0.0, fzi = 0.0;
 
     for (int jj = 0; jj < jnum; jj++) {
@@ -172,15 +157,12 @@ template <int LAW, int EVFLAG, int NEWTON> void PairJamflow::eval()
       const double factor_lj = special_lj[sbmask(j)];
       j &= NEIGHMASK;
 
-      const double delx = xi - x[j][0];
-      const double dely = yi - x[j][1];
-      const double delz = zi - x[j][2];
-      const double rsq = delx * delx + dely * dely + delz * delz;
-      const double sigma = radi + radius[j];
-      if (rsq >= sigma * sigma) continue;
+      const SpherePair p(xi, radi, x[j], radius[j]);
+      if (!p.overlapping()) continue;
+      const double delx = p.delx, dely = p.dely, delz = p.delz;
 
       double fpair;
-      double evdwl = pair_law<LAW>(rsq, sigma, itype, type[j], fpair);
+      double evdwl = pair_law<LAW>(p.rsq, p.sigma, itype, type[j], fpair);
       fpair *= factor_lj;
 
       fxi += delx * fpair;
@@ -264,17 +246,14 @@ bool PairJamflowLaw::parse_law(bool rlj, int narg, char **arg)
 {
   if (narg != (rlj ? 1 : 2)) return false;
   if (!rlj) {
-    alpha = utils::numeric(FLERR, arg[0], false, lmp);
-    if (!(alpha > 1.0) || !std::isfinite(alpha))
-      error->all(FLERR, "pair_style " + name() + ": ALPHA must be a finite number > 1");
+    alpha = checked_number(lmp, arg[0], 1.0, false, "pair_style " + name() + ": ALPHA must be a finite number > 1");
     law = (alpha == 2.0) ? SPRING2 : (alpha == 2.5) ? HERTZ : SPRING_POW;
   } else {
     law = RLJ;
   }
-  cut_global = utils::numeric(FLERR, arg[narg - 1], false, lmp);
-  if (!(cut_global > 0.0) || !std::isfinite(cut_global))
-    error->all(FLERR, "pair_style " + name() + ": CUTOFF must be a positive number "
-                      "(use the largest contact distance: diameter, or long axis)");
+  cut_global = checked_number(lmp, arg[narg - 1], 0.0, false,
+                              "pair_style " + name() + ": CUTOFF must be a positive number "
+                              "(use the largest contact distance: diameter, or long axis)");
   return true;
 }
 
@@ -298,9 +277,8 @@ void PairJamflowLaw::coeff(int narg, char **arg)
   int ilo, ihi, jlo, jhi;
   utils::bounds(FLERR, arg[0], 1, atom->ntypes, ilo, ihi, error);
   utils::bounds(FLERR, arg[1], 1, atom->ntypes, jlo, jhi, error);
-  const double eps_one = utils::numeric(FLERR, arg[2], false, lmp);
-  if (!(eps_one > 0.0) || !std::isfinite(eps_one))
-    error->all(FLERR, "pair_coeff for " + name() + ": EPSILON must be a positive number");
+  const double eps_one =
+      checked_number(lmp, arg[2], 0.0, false, "pair_coeff for " + name() + ": EPSILON must be a positive number");
 
   int count = 0;
   for (int i = ilo; i <= ihi; i++)
@@ -320,15 +298,10 @@ void PairJamflow::init_style()
     error->all(FLERR, "Pair style " + name() + " requires atom_style sphere (per-atom radius)");
   neighbor->add_request(this);
 
-  double rmax_local = 0.0;
-  for (int i = 0; i < atom->nlocal; i++)
-    if (atom->radius[i] > rmax_local) rmax_local = atom->radius[i];
-  double rmax = 0.0;
-  MPI_Allreduce(&rmax_local, &rmax, 1, MPI_DOUBLE, MPI_MAX, world);
-  if (2.0 * rmax > cut_global)
+  const double dmax = largest_diameter(atom, world);
+  if (dmax > cut_global)
     error->all(FLERR, "Pair style " + name() + ": CUTOFF " + std::to_string(cut_global) +
-                          " is below the largest diameter " + std::to_string(2.0 * rmax) +
-                          "; pass the largest diameter as CUTOFF");
+                          " is below the largest diameter " + std::to_string(dmax) + "; pass the largest diameter as CUTOFF");
 }
 
 double PairJamflowLaw::init_one(int i, int j)
@@ -360,14 +333,8 @@ using namespace LAMMPS_NS;
 static void register_style(LAMMPS *lmp, void *handle, lammpsplugin_regfunc reg, const char *name,
                            const char *info, Pair *(*creator)(LAMMPS *))
 {
-  lammpsplugin_t plugin;
-  plugin.version = JAMFLOW_LAMMPS_VERSION;
-  plugin.style = "pair";
-  plugin.name = name;
-  plugin.info = info;
-  plugin.author = "jamflow";
+  lammpsplugin_t plugin = jamflow_common::plugin_record("pair", name, info, handle);
   plugin.creator.v1 = (lammpsplugin_factory1 *) creator;
-  plugin.handle = handle;
   (*reg)(&plugin, lmp);
 }
 

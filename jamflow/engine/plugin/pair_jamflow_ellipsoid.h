@@ -200,15 +200,12 @@ template <int LAW> void PairJamflowEllipsoid::eval(int /*eflag*/, int /*vflag*/)
   const int dim = domain->dimension;
   double virial9[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
 
-  const int inum = list->inum;
-  const int *ilist = list->ilist;
-  const int *numneigh = list->numneigh;
-  int **firstneigh = list->firstneigh;
+  const jamflow_common::Neighbours nb(list);
 
-  for (int ii = 0; ii < inum; ii++) {
-    const int i = ilist[ii];
-    const int *jlist = firstneigh[i];
-    const int jnum = numneigh[i];
+  for (int ii = 0; ii < nb.inum; ii++) {
+    const int i = nb.ilist[ii];
+    const int *jlist = nb.firstneigh[i];
+    const int jnum = nb.numneigh[i];
     double ui[3], uj[3];
     director(props[i], ui);
     const double reach_i = 0.5 * std::sqrt(std::fmax(props[i][0], props[i][1]));
