@@ -4,6 +4,8 @@
     python benchmarks/anneal_vs_compression.py --n 64 --seeds 10 --to 2.0 --dalpha 0.05 --out docs/anneal.csv
     python benchmarks/anneal_vs_compression.py --n 64 --seeds 4 --to 1.4 --dalpha 0.005 --out docs/anneal.csv
     python benchmarks/anneal_vs_compression.py --n 64 --seeds 10 --compress 1.0 1.2 1.4 1.6 1.8 2.0 --out docs/anneal.csv
+    python benchmarks/anneal_vs_compression.py --n 32 --seeds 2 --to 2.0 --dalpha 0.005 --chunk 0.1 --keep /tmp/anneal \
+        --out docs/anneal.csv          # legs of 0.1 in alpha, resumable: the same steps as one run
     python benchmarks/anneal_vs_compression.py --report docs/anneal.csv
 
 Annealing: seed s jams disks (``jam(seed=s)``, the default protocol), then
@@ -26,6 +28,7 @@ from tqdm import tqdm
 from jamflow import jam
 from jamflow.analysis.order import Nematic
 from jamflow.checks import check_packing
+from jamflow.io import load_packing, save_packing
 from jamflow.protocols.anneal import anneal
 
 from ellipse_ensembles import SIZES, pyplot, read_rows, run_or_report, save_figure, stats, write_rows  # (benchmarks/ is the script's directory)
@@ -42,11 +45,20 @@ def _row(protocol, dalpha, seed, n, alpha, packing, checks, cpu) -> dict:
                 load=os.getloadavg()[0])
 
 
-def run_anneal(n, seed, target, dalpha) -> list[dict]:
-    t = time.process_time()
-    disks = jam(n=n, sizes=SIZES, seed=seed)
-    cpu0 = time.process_time() - t
-    rows = [_row("compression", 0.0, seed, n, 1.0, disks.packing, check_packing(disks.packing), cpu0)]
+def run_anneal(n, seed, target, dalpha, keep: Path | None = None, chunk: float | None = None, save=None) -> list[dict]:
+    """Seed ``seed`` annealed to ``target``; ``save(rows)`` takes the new rows as they come.
+    ``chunk``: anneal in legs of this many alpha (a multiple of dalpha: the steps are those of one
+    run), the last packing kept in ``keep`` after each leg; a kept packing is resumed from."""
+    path = keep / f"anneal-n{n}-d{dalpha:g}-seed{seed}.h5" if keep else None
+    rows = []
+    if path is not None and path.is_file():
+        start = load_packing(path)
+    else:
+        t = time.process_time()
+        disks = jam(n=n, sizes=SIZES, seed=seed)
+        rows.append(_row("compression", 0.0, seed, n, 1.0, disks.packing, check_packing(disks.packing),
+                         time.process_time() - t))
+        start = disks.packing
     clock = [time.process_time()]
 
     def record(step):
@@ -58,8 +70,30 @@ def run_anneal(n, seed, target, dalpha) -> list[dict]:
                          load=os.getloadavg()[0]))
         clock[0] = now
 
-    anneal(disks.packing, target, dalpha, seed=seed, observers=[record])
+    alpha = 1.0 if start.shape.kind == "sphere" else float(start.shape.alpha)
+    while alpha < target - 1e-12:
+        stop = min(target, round(alpha + chunk, 12)) if chunk else target
+        start, alpha = anneal(start, stop, dalpha, seed=seed, observers=[record]).packing, stop
+        if path is not None:
+            save_packing(path, start)
+        if save:
+            save(rows)
+            rows = []
     return rows
+
+
+def _key(r) -> tuple:
+    return r["protocol"], float(r["dalpha"]), int(r["seed"]), int(r["n"]), float(r["alpha"])
+
+
+def merged(rows: list[dict], new: list[dict]) -> list[dict]:
+    """``rows`` and the rows of ``new`` whose (protocol, dalpha, seed, n, alpha) it lacks; a row
+    it has already is compared (phi_J of a rerun step: the protocol is deterministic)."""
+    have = {_key(r): r for r in rows}
+    for r in new:
+        if _key(r) in have and float(have[_key(r)]["phi_j"]) != float(r["phi_j"]):
+            tqdm.write(f"rerun of {_key(r)} gives phi_J {float(r['phi_j'])!r}, the CSV has {have[_key(r)]['phi_j']}")
+    return rows + [r for r in new if _key(r) not in have]
 
 
 def run_compress(n, seed, alpha) -> dict:
@@ -72,7 +106,7 @@ def run_compress(n, seed, alpha) -> dict:
 def run(args) -> None:
     out = Path(args.out)
     rows = read_rows(out)
-    done = {(r["protocol"], float(r["dalpha"]), int(r["seed"]), int(r["n"]), float(r["alpha"])) for r in rows}
+    done = {_key(r) for r in rows}
     if args.compress:
         todo = [(s, a) for a in args.compress for s in range(args.seeds)
                 if ("compression", 0.0, s, args.n, a) not in done]
@@ -81,11 +115,16 @@ def run(args) -> None:
             write_rows(out, rows, COLUMNS)
         return
     todo = [s for s in range(args.seeds) if ("anneal", args.dalpha, s, args.n, args.to) not in done]
-    for seed in tqdm(todo, desc=f"anneal dalpha={args.dalpha:g}", unit="packing"):
-        new = run_anneal(args.n, seed, args.to, args.dalpha)
-        keys = {(r["protocol"], float(r["dalpha"]), int(r["seed"]), int(r["n"]), float(r["alpha"])) for r in rows}
-        rows += [r for r in new if (r["protocol"], r["dalpha"], r["seed"], r["n"], r["alpha"]) not in keys]
+    keep = Path(args.keep) if args.keep else None
+    if keep:
+        keep.mkdir(parents=True, exist_ok=True)
+
+    def save(new):
+        rows[:] = merged(rows, new)
         write_rows(out, rows, COLUMNS)
+
+    for seed in tqdm(todo, desc=f"anneal dalpha={args.dalpha:g}", unit="packing"):
+        save(run_anneal(args.n, seed, args.to, args.dalpha, keep, args.chunk, save))
 
 
 # ----- report -------------------------------------------------------------------------------------
@@ -160,6 +199,9 @@ def add_arguments(ap) -> None:
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--to", type=float, default=2.0)
     ap.add_argument("--dalpha", type=float, default=0.05)
+    ap.add_argument("--keep", default=None, metavar="DIR", help="keep each seed's last annealed packing here (resume)")
+    ap.add_argument("--chunk", type=float, default=None, metavar="A",
+                    help="anneal in legs of A in alpha, rows and packing saved after each (with --keep: resumable)")
     ap.add_argument("--compress", type=float, nargs="+", default=None, metavar="ALPHA",
                     help="jam by compression at these alphas instead of annealing")
 

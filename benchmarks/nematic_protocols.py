@@ -1,0 +1,150 @@
+"""Nematic order P2 of jammed monodisperse ellipses at alpha = 3 made by two protocols (seed
+section 4.3, Figure 2.23(c, d): "two different packing-generation methods", one giving roughly
+aligned ellipses with P2 = 0.64, the other randomly oriented ones with P2 = 0.11, N = 256).
+
+    flock /tmp/jamflow-bench.lock python benchmarks/nematic_protocols.py --n 64 --alpha 3 --seeds 10 \
+        --protocol compression --out docs/nematic-protocols.csv --keep /tmp/nematic
+    flock /tmp/jamflow-bench.lock python benchmarks/nematic_protocols.py --n 64 --alpha 3 --seeds 5 \
+        --protocol anneal --dalpha 0.1 --out docs/nematic-protocols.csv --keep /tmp/nematic
+    python benchmarks/nematic_protocols.py --report docs/nematic-protocols.csv --keep /tmp/nematic
+
+``compression``: ``jam(shape="ellipse:ALPHA", sizes="mono", seed=s)``, isotropic compression from a
+random start with orientations uniform on the circle. ``anneal``: seed s jams monodisperse disks,
+then ``jamflow.protocols.anneal.anneal`` grows alpha to ALPHA in steps of DALPHA (random
+major-axis directions at the first step, re-jammed at each step). Default protocol, compiled FIRE,
+exact contact distance. One row per final packing (``anneal_vs_compression``'s columns; CPU
+seconds of the whole protocol), written as it finishes; a done (protocol, dalpha, seed) is
+skipped. ``--keep``: the final packings as HDF5 (``--report`` draws the most and least ordered).
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+from jamflow import jam
+from jamflow.checks import check_packing
+from jamflow.io import load_packing, save_packing
+from jamflow.protocols.anneal import anneal
+
+from anneal_vs_compression import COLUMNS, _row  # (benchmarks/ is the script's directory)
+from ellipse_ensembles import pyplot, read_rows, save_figure, stats, write_rows
+
+SIZES = "mono"
+
+
+def one(protocol: str, n: int, alpha: float, seed: int, dalpha: float):
+    """(row, final packing) of one protocol run."""
+    t = time.process_time()
+    if protocol == "compression":
+        packing = jam(n=n, sizes=SIZES, seed=seed, shape=f"ellipse:{alpha:g}").packing
+    else:
+        disks = jam(n=n, sizes=SIZES, seed=seed)
+        packing = anneal(disks.packing, alpha, dalpha, seed=seed).packing
+    cpu = time.process_time() - t
+    return _row(protocol, dalpha if protocol == "anneal" else 0.0, seed, n, alpha, packing, check_packing(packing),
+                cpu), packing
+
+
+def name(protocol, dalpha, seed) -> str:
+    return f"{protocol}-d{dalpha:g}-seed{seed}.h5"
+
+
+def run(args) -> None:
+    out, keep = Path(args.out), Path(args.keep) if args.keep else None
+    if keep:
+        keep.mkdir(parents=True, exist_ok=True)
+    rows = read_rows(out)
+    dalpha = args.dalpha if args.protocol == "anneal" else 0.0
+    done = {(r["protocol"], float(r["dalpha"]), int(r["seed"])) for r in rows}
+    todo = [s for s in range(args.seeds) if (args.protocol, dalpha, s) not in done]
+    for seed in tqdm(todo, desc=f"{args.protocol} alpha {args.alpha:g}", unit="packing"):
+        row, packing = one(args.protocol, args.n, args.alpha, seed, dalpha)
+        if keep:
+            save_packing(keep / name(args.protocol, dalpha, seed), packing)
+        rows.append(row)
+        write_rows(out, rows, COLUMNS)
+
+
+def report(path: Path, keep: Path | None) -> None:
+    rows = read_rows(path)
+    groups = {}
+    for r in rows:
+        groups.setdefault((r["protocol"], float(r["dalpha"])), []).append(r)
+    print("| protocol | N | alpha | packings | P2 +- s.e. | P2 min .. max | <phi_J> +- s.e. | <z> +- s.e. | "
+          "checks passed | median CPU s / packing |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for (protocol, dalpha), g in sorted(groups.items()):
+        p2, p2_se, k = stats(r["p2"] for r in g)
+        phi, phi_se, _ = stats(r["phi_j"] for r in g)
+        z, z_se, _ = stats(r["mean_z"] for r in g)
+        label = protocol if protocol == "compression" else f"anneal (dalpha = {dalpha:g})"
+        print(f"| {label} | {g[0]['n']} | {float(g[0]['alpha']):g} | {k} | {p2:.3f} +- {p2_se:.3f} | "
+              f"{min(float(r['p2']) for r in g):.3f} .. {max(float(r['p2']) for r in g):.3f} | {phi:.4f} +- {phi_se:.4f} | "
+              f"{z:.3f} +- {z_se:.3f} | {sum(r['checks_passed'] == 'True' for r in g)}/{k} | "
+              f"{np.median([float(r['cpu_seconds']) for r in g]):.0f} |")
+    keys = sorted(groups)
+    if len(keys) == 2:
+        (a, sa, _), (b, sb, _) = (stats(r["p2"] for r in groups[k]) for k in keys)
+        print(f"\n{keys[1][0]} - {keys[0][0]}: P2 {b - a:+.3f} +- {np.hypot(sa, sb):.3f}; "
+              f"1/sqrt(N) = {1 / np.sqrt(int(rows[0]['n'])):.3f}")
+    chart(groups, keep, path.with_suffix(".png"))
+
+
+def chart(groups, keep, path: Path) -> None:
+    from jamflow.drawing import draw_into
+
+    plt = pyplot()
+    keys = sorted(groups)
+    drawn = [(k, max(groups[k], key=lambda r: float(r["p2"]))) for k in keys] if keep else []
+    fig, axes = plt.subplots(1, 1 + len(drawn), figsize=(4.2 * (1 + len(drawn)), 4.2))
+    axes = np.atleast_1d(axes)
+    for x, k in enumerate(keys):
+        p2 = [float(r["p2"]) for r in groups[k]]
+        m, se, _ = stats(p2)
+        axes[0].plot(np.full(len(p2), x) + np.linspace(-0.1, 0.1, len(p2)), p2, "o", alpha=0.6)
+        axes[0].errorbar([x + 0.25], [m], yerr=[se], fmt="s", color="k", capsize=3)
+    n = int(next(iter(groups.values()))[0]["n"])
+    axes[0].axhline(1 / np.sqrt(n), ls=":", color="gray", lw=0.8, label=r"$1/\sqrt{N}$")
+    for value, text in ((0.64, "Fig. 2.23(c)"), (0.11, "Fig. 2.23(d)")):
+        axes[0].axhline(value, ls="--", color="tab:red", lw=0.8)
+        axes[0].text(len(keys) - 0.6, value + 0.01, text, color="tab:red", fontsize=7)
+    axes[0].set_xticks(range(len(keys)), [k[0] if k[0] == "compression" else f"anneal {k[1]:g}" for k in keys])
+    axes[0].set_xlim(-0.5, len(keys) - 0.3)
+    axes[0].set_ylim(0, 1)
+    axes[0].set_ylabel("nematic order $P_2$")
+    axes[0].legend(fontsize=8)
+    for ax, (k, r) in zip(axes[1:], drawn):
+        packing = load_packing(keep / name(k[0], k[1], int(r["seed"])))
+        draw_into(ax, packing, color_by="orientation", contacts=False)
+        ax.set_title(f"{k[0]}, seed {r['seed']}: $P_2$ = {float(r['p2']):.2f}", fontsize=9)
+        ax.set_xticks([])
+        ax.set_yticks([])
+    fig.suptitle(f"monodisperse ellipses, alpha = {float(r['alpha']) if drawn else 3:g}, N = {n} (cf. seed Figure 2.23(c, d))")
+    save_figure(fig, path)
+
+
+def main() -> None:
+    import argparse
+
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--n", type=int, default=64)
+    ap.add_argument("--alpha", type=float, default=3.0)
+    ap.add_argument("--seeds", type=int, default=10)
+    ap.add_argument("--protocol", choices=("compression", "anneal"), default="compression")
+    ap.add_argument("--dalpha", type=float, default=0.1)
+    ap.add_argument("--out", default="docs/nematic-protocols.csv")
+    ap.add_argument("--keep", default=None, help="directory of the final packings (HDF5)")
+    ap.add_argument("--report", default=None, metavar="CSV")
+    args = ap.parse_args()
+    if args.report:
+        report(Path(args.report), Path(args.keep) if args.keep else None)
+    else:
+        run(args)
+
+
+if __name__ == "__main__":
+    main()
