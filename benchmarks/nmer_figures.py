@@ -111,13 +111,13 @@ def plot_bodies(path: Path) -> None:
 
 def q6_cutoff(packings) -> float:
     """The first minimum of the centres' g(r) (r_max 2.5: N = 32 cells are 5.5 wide), at the
-    finest bin width (0.02, 0.05, 0.1) where it is significant for these few packings."""
+    finest bin width (0.02, 0.05, 0.1) where it is significant for these few packings; NaN if none is."""
     for dr in (0.02, 0.05, 0.1):
         try:
             return first_minimum(RDF(dr=dr, r_max=2.5).compute(packings))
-        except ValueError as err:
-            last = err
-    raise last
+        except ValueError:
+            continue
+    return math.nan  # no significant first minimum: no neighbour shell to measure Q6 on
 
 
 def q6_table(q6_rows) -> list[tuple]:
@@ -127,6 +127,9 @@ def q6_table(q6_rows) -> list[tuple]:
     for (n, alpha), group in sorted(grouped(q6_rows, lambda r: (int(r["n"]), alpha_of(r))).items()):
         packings = [load_packing(r["file"]) for r in group]
         r_min = q6_cutoff(packings)
+        if math.isnan(r_min):
+            out.append((n, alpha, math.nan, math.nan, r_min, len(packings), 0.0))
+            continue
         results = [BondOrder(r_min=r_min).compute(p) for p in packings]
         values = [r.global_order for r in results]
         neighbours = float(np.mean([r.n_neighbours.mean() for r in results]))
@@ -346,7 +349,8 @@ def plot_acceptance(ens_rows, stab_rows, path: Path) -> None:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--csv", nargs="+", default=["docs/nmers/ensembles.csv", "docs/nmers/ensembles3d.csv"])
+    ap.add_argument("--csv", nargs="+", default=["docs/nmers/ensembles.csv", "docs/nmers/ensembles3d.csv",
+                                                "docs/nmers/sweep3d.csv"])
     ap.add_argument("--q6", default="docs/nmers/q6.csv")
     ap.add_argument("--routes", default="docs/nmers/routes.csv")
     ap.add_argument("--stability", default="docs/nmers/stability.csv")
