@@ -1,9 +1,17 @@
 """Start-up cost of the ``jamflow`` command (issue 17, item 1): whole-process wall and CPU
-seconds of ``jamflow --help``, ``jamflow jam --help`` and ``jamflow jam --n 64``, and what a
-jam's first second is made of (imports, numba's first call, the jam itself).
+seconds of ``jamflow --help``, ``jamflow jam --help`` and ``jamflow jam --n 64`` (each of
+``--seeds``, every repeat), the floors any such process stands on (the bare interpreter,
+``import numpy``, and the smallest numba process: one cached njit function called once), and
+what a jam's first second is made of (imports, numba's first call, the jam itself).
 
     python benchmarks/startup.py --repeats 5 --out docs/startup.csv
     python benchmarks/startup.py --repeats 5 --source /tmp/main-src --label main --out docs/startup.csv
+    python benchmarks/startup.py --repeats 3 --seeds 1 2 3 4 5 --floors --out docs/startup.csv
+    python benchmarks/startup.py --repeats 3 --seeds 1 2 3 4 5 --alternate /tmp/main-src --out docs/startup.csv
+
+``--alternate DIR`` runs, for each repeat and seed in turn, the numba floor, ``jamflow jam --n 64``
+of DIR (label ``DIR``) and of the installed jamflow, so that both see the same load (on a
+shared machine the load drifts between two separate runs).
 
 ``--source DIR`` runs the jamflow found in DIR (e.g. ``git archive main | tar -x -C DIR``)
 instead of the installed one, for a before/after table on the same machine and venv.
@@ -25,8 +33,17 @@ from pathlib import Path
 
 from speed_accuracy import append_row  # (benchmarks/ is the script's directory)
 
-COMMANDS = {"help": ["--help"], "jam-help": ["jam", "--help"],
-            "jam-n64": ["jam", "--n", "64", "--seed", "1", "--quiet", "--out", "{tmp}/p.h5", "--force"]}
+CLI = ["-m", "jamflow.cli"]
+COMMANDS = {"help": CLI + ["--help"], "jam-help": CLI + ["jam", "--help"],
+            "jam-n64": CLI + ["jam", "--n", "64", "--seed", "{seed}", "--quiet", "--out", "{tmp}/p.h5", "--force"]}
+NUMBA_FLOOR = """import numba, numpy
+@numba.njit(cache=True)
+def total(x):
+    return x.sum()
+total(numpy.ones(3))
+"""
+FLOORS = {"floor: python": ["-c", "pass"], "floor: import numpy": ["-c", "import numpy"],
+          "floor: numba cached call": ["{tmp}/numba_floor.py"]}
 
 # in-process phases of one N = 64 jam, each timed after the previous (fresh interpreter)
 PHASES = """import time, sys
@@ -46,10 +63,10 @@ PHASE_NAMES = ["numpy", "jam command (parser)", "numba", "compiled engine + scip
 
 
 def run_once(argv, env) -> tuple[float, float]:
-    """(wall s, user + sys CPU s) of one ``python -m jamflow.cli ARGV`` process."""
+    """(wall s, user + sys CPU s) of one ``python ARGV`` process."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    subprocess.run([sys.executable, "-m", "jamflow.cli", *argv], env=env, check=True, stdout=subprocess.DEVNULL)
+    subprocess.run([sys.executable, *argv], env=env, check=True, stdout=subprocess.DEVNULL)
     wall = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
@@ -61,20 +78,30 @@ def main():
     ap.add_argument("--source", default=None, help="directory holding the jamflow package to time")
     ap.add_argument("--label", default="branch")
     ap.add_argument("--out", default="docs/startup.csv")
+    ap.add_argument("--seeds", type=int, nargs="+", default=[1], help="seeds of the jam-n64 command")
+    ap.add_argument("--floors", action="store_true", help="also time the floors (python, numpy, numba)")
+    ap.add_argument("--alternate", default=None, help="directory of another jamflow: jam-n64 of both, alternating")
+    ap.add_argument("--other-label", default="main", help="label of the --alternate jamflow")
     args = ap.parse_args()
+    if args.alternate:
+        return alternate(args)
     env = dict(os.environ)
     if args.source:
         env["PYTHONPATH"] = str(Path(args.source).resolve())
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
-        for name, argv in COMMANDS.items():
-            argv = [a.replace("{tmp}", tmp) for a in argv]
-            run_once(argv, env)  # warm the file cache and numba's disk cache
-            runs = [run_once(argv, env) for _ in range(args.repeats)]
+        Path(tmp, "numba_floor.py").write_text(NUMBA_FLOOR)
+        commands = {**(FLOORS if args.floors else {}), **COMMANDS}
+        for name, argv in commands.items():
+            seeds = args.seeds if any("{seed}" in a for a in argv) else [None]
+            variants = [[a.replace("{tmp}", tmp).replace("{seed}", str(seed)) for a in argv] for seed in seeds]
+            run_once(variants[0], env)  # warm the file cache and numba's disk cache
+            runs = [run_once(v, env) for _ in range(args.repeats) for v in variants]
+            name = name if seeds == [None] else f"{name} seeds {'-'.join(map(str, seeds))}"
             rows.append({"label": args.label, "what": name, "wall_median_s": statistics.median(w for w, _ in runs),
                          "wall_min_s": min(w for w, _ in runs), "cpu_median_s": statistics.median(c for _, c in runs),
-                         "repeats": args.repeats, "load": os.getloadavg()[0]})
-            print(f"{args.label:8s} {name:9s} wall {rows[-1]['wall_median_s']:.3f} s (min {rows[-1]['wall_min_s']:.3f})"
+                         "repeats": len(runs), "load": os.getloadavg()[0]})
+            print(f"{args.label:8s} {name:24s} wall {rows[-1]['wall_median_s']:.3f} s (min {rows[-1]['wall_min_s']:.3f})"
                   f"  cpu {rows[-1]['cpu_median_s']:.3f} s  load {rows[-1]['load']:.2f}")
     phases = [subprocess.run([sys.executable, "-c", PHASES], env=env, check=True, capture_output=True,
                              text=True).stdout.split() for _ in range(args.repeats)]
@@ -86,6 +113,35 @@ def main():
         print(f"{args.label:8s} phase {name:40s} {value:.3f} s")
     for row in rows:
         append_row(Path(args.out), list(rows[0]), row)
+
+
+def alternate(args) -> None:
+    """The numba floor, DIR's jam --n 64 and the installed one's, interleaved run by run."""
+    envs = {"floor": dict(os.environ), args.alternate: {**os.environ, "PYTHONPATH": str(Path(args.alternate).resolve())},
+            args.label: dict(os.environ)}
+    with tempfile.TemporaryDirectory() as tmp:
+        Path(tmp, "numba_floor.py").write_text(NUMBA_FLOOR)
+        argv = {"floor": FLOORS["floor: numba cached call"], args.alternate: COMMANDS["jam-n64"],
+                args.label: COMMANDS["jam-n64"]}
+        runs = {k: [] for k in argv}
+        for k in argv:  # warm-up: file cache, numba's disk cache of each source tree
+            run_once([a.replace("{tmp}", tmp).replace("{seed}", "1") for a in argv[k]], envs[k])
+        loads = []
+        for _ in range(args.repeats):
+            for seed in args.seeds:
+                for k in argv:
+                    runs[k].append(run_once([a.replace("{tmp}", tmp).replace("{seed}", str(seed)) for a in argv[k]],
+                                            envs[k]))
+                loads.append(os.getloadavg()[0])
+    seeds = "-".join(map(str, args.seeds))
+    for k, r in runs.items():
+        what = "floor: numba cached call" if k == "floor" else f"jam-n64 seeds {seeds}"
+        row = {"label": "alternate " + ("floor" if k == "floor" else (args.label if k == args.label else args.other_label)),
+               "what": what, "wall_median_s": statistics.median(w for w, _ in r), "wall_min_s": min(w for w, _ in r),
+               "cpu_median_s": statistics.median(c for _, c in r), "repeats": len(r), "load": statistics.median(loads)}
+        print(f"{row['label']:18s} {what:26s} wall {row['wall_median_s']:.3f} s (min {row['wall_min_s']:.3f})  "
+              f"cpu {row['cpu_median_s']:.3f} s (min {min(c for _, c in r):.3f})  load {row['load']:.2f}")
+        append_row(Path(args.out), list(row), row)
 
 
 if __name__ == "__main__":

@@ -15,8 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .box import Box
-from .deck import OPTIONAL, _num, optional_values, protocol_values, render, start_values, system_values
+from .deck import OPTIONAL, _atoms_table, _data_box, _num, _section_rows, optional_values, protocol_values, render, start_values, system_values
 from .io import atomic_path, write_lammps_data
 from .packing import Packing
 from .potentials import Potential, Spring
@@ -88,49 +87,24 @@ def read_ellipsoid_data(path, potential: Potential | None = None, contact: str =
     ``write_data`` writes it: Atoms id type ellipsoidflag density x y z, Ellipsoids id a b c qw qx
     qy qz, full axis lengths), float64, atom-ID order; 2D when every z is 0. ``contact``: the
     method to attach (a data file does not say)."""
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"no LAMMPS data file {path}")
-    lines = path.read_text().splitlines()
-    bounds, tilts = {}, (0.0, 0.0, 0.0)
-    for line in lines[1:]:
-        words = line.split("#")[0].split()
-        if len(words) == 4 and words[2][1:] == "lo":
-            bounds[words[2][0]] = (float(words[0]), float(words[1]))
-        elif len(words) == 6 and words[3:] == ["xy", "xz", "yz"]:
-            tilts = tuple(float(w) for w in words[:3])
-    atoms, shapes = _section(lines, "Atoms", 7), _section(lines, "Ellipsoids", 8)
-    if atoms is None or shapes is None:
-        raise ValueError(f"{path} needs 'Atoms # ellipsoid' and 'Ellipsoids' sections (atom_style ellipsoid)")
+    bounds, tilts, atoms = _atoms_table(path, "ellipsoid", "ellipsoid", 7)
+    lines = Path(path).read_text().splitlines()
+    k = next((k for k, line in enumerate(lines) if line.split("#")[0].strip() == "Ellipsoids"), None)
+    if k is None:
+        raise ValueError(f"{path} has no 'Ellipsoids' section; write it with atom_style ellipsoid")
+    shapes = np.array(_section_rows(lines, k, 8), dtype=float)
     atoms, shapes = atoms[np.argsort(atoms[:, 0])], shapes[np.argsort(shapes[:, 0])]
-    dim = 2 if np.all(atoms[:, 6] == 0.0) else 3
+    box, origin = _data_box(bounds, tilts, atoms[:, 6])
     a, b = shapes[:, 1], shapes[:, 2]
     ratio = a / b
     if np.ptp(ratio) > 1e-12 * ratio.max():
         raise ValueError(f"{path}: particles of different aspect ratios ({ratio.min()} .. {ratio.max()})")
     alpha = float(np.round(ratio[0], 12))
     quat = shapes[:, 4:8] / np.linalg.norm(shapes[:, 4:8], axis=1, keepdims=True)
-    orientations = 2.0 * np.arctan2(quat[:, 3], quat[:, 0]) if dim == 2 else quat
-    box = Box.from_lammps(dim, [bounds[x][1] - bounds[x][0] for x in "xyz"[:dim]], tilts)
-    positions = atoms[:, 4:4 + dim] - np.array([bounds[x][0] for x in "xyz"[:dim]])
+    orientations = 2.0 * np.arctan2(quat[:, 3], quat[:, 0]) if box.dim == 2 else quat
+    positions = atoms[:, 4:4 + box.dim] - origin
     return Packing(positions, b, box, potential or Spring(), {"source": str(path)}, shape=Ellipsoid(alpha, contact),
                    orientations=orientations)
-
-
-def _section(lines, title: str, width: int):
-    """The numeric table under a data-file section header (its first ``width`` columns)."""
-    start = next((k for k, line in enumerate(lines) if line.strip().split("#")[0].strip() == title), None)
-    if start is None:
-        return None
-    rows = []
-    for line in lines[start + 1:]:
-        words = line.split()
-        if not words:
-            if rows:
-                break
-            continue
-        rows.append(words[:width])
-    return np.array(rows, dtype=float)
 
 
 def default_deck_path() -> Path:

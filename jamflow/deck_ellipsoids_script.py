@@ -10,7 +10,7 @@ stopping rules and the bisection that follows each minimisation are the disk dec
 (``deck_script.RULES``, ``deck_script.DECIDE``, ``JAM_SUCCESS``, ``FAIL``).
 """
 
-from .deck_script import DECIDE, FAIL, JAM_START_OPTIONS, JAM_SUCCESS, LOG_OPEN, RULES
+from .deck_script import DECIDE, FAIL, JAM_START_OPTIONS, JAM_SUCCESS, LOG_OPEN, RULES, WINDOW_OPEN, random_atoms
 
 HEADER = """\
 # jamflow deck: jam N soft ellipses (dim 2) or spheroids (dim 3) at onset by isotropic
@@ -94,19 +94,7 @@ variable jf_ntypes internal $(ternary(v_d1==v_d2,1,2))
 if "${jf_hasdata} == 1" then "jump SELF jf_read"
 
 # ---- random start (seed step 1): uniform positions and orientations at phi0 ----
-if "${jf_autophi} == 1" then "variable phi0 delete" "variable phi0 string $(ternary(v_dim==2,0.80,0.55))"
-if "$(v_phi0 <= 0 || v_phi0 >= 1)" then "variable jf_bad string 'phi0 must lie in (0, 1)'" "jump SELF jf_fail"
-if "$(v_seed < 0 || v_N < 2)" then "variable jf_bad string 'need seed >= 0 and N >= 2'" "jump SELF jf_fail"
-variable jf_n1 internal $(ternary(v_jf_ntypes==1,v_N,round(v_fsmall*v_N)))
-variable jf_n2 internal $(v_N-v_jf_n1)
-variable jf_len internal $(((v_jf_n1*v_jf_v1+v_jf_n2*v_jf_v2)/v_phi0)^(1.0/v_dim):%.17g)
-variable jf_zlo internal $(ternary(v_dim==2,-0.5,0.0))
-variable jf_zhi internal $(ternary(v_dim==2,0.5,v_jf_len):%.17g)
-region jf_box block 0 $(v_jf_len:%.17g) 0 $(v_jf_len:%.17g) ${jf_zlo} $(v_jf_zhi:%.17g) units box
-create_box ${jf_ntypes} jf_box
-create_atoms 1 random $(v_jf_n1) $(v_seed+1) NULL
-if "$(v_jf_n2 > 0)" then "create_atoms 2 random $(v_jf_n2) $(v_seed+1000001) NULL"
-set type 1 shape ${jf_a1} ${d1} ${d1}
+""" + random_atoms("jf_v") + r"""set type 1 shape ${jf_a1} ${d1} ${d1}
 if "$(v_jf_n2 > 0)" then "set type 2 shape ${jf_a2} ${d2} ${d2}"
 set group all quat/random $(v_seed+2)
 jump SELF jf_atoms_ready
@@ -194,14 +182,7 @@ set group all angmom 0.0 0.0 0.0
 fix jf_nve all nve/asphere
 fix jf_lang all langevin 0.0 0.0 $(1.0/v_damping:%.17g) 4928459 angmom 1.0
 if "${dim} == 2" then "unfix jf_2d" "fix jf_2d all enforce2d"
-variable jf_done internal 0
-variable jf_first internal 1
-variable jf_eprev internal 0
-variable jf_fmprev internal 0
-label jf_window
-variable jf_nsteps internal $(ternary(v_window<v_maxiter-v_jf_done,v_window,v_maxiter-v_jf_done))
-variable jf_before internal $(step)
-run $(v_jf_nsteps)
+""" + WINDOW_OPEN + r"""run $(v_jf_nsteps)
 variable jf_ran internal $(step-v_jf_before)
 variable jf_done internal $(v_jf_done+v_jf_ran)
 # forces and torques without the drag: its fix out, one force evaluation

@@ -190,22 +190,43 @@ variable jf_a2 internal $(ternary(v_dim==2,PI*v_d2^2/4.0,PI*v_d2^3/6.0):%.17g)
 variable jf_ntypes internal $(ternary(v_d1==v_d2,1,2))
 """
 
-_RANDOM_START = r"""if "${jf_hasdata} == 1" then "jump SELF jf_read"
-
-# ---- random start (seed step 1): uniform positions in a square/cubic box at phi0 ----
-if "${jf_autophi} == 1" then "variable phi0 delete" "variable phi0 string $(ternary(v_dim==2,0.80,0.55))"
+# shared with the ellipse deck through random_atoms
+_RANDOM_ATOMS = r"""if "${jf_autophi} == 1" then "variable phi0 delete" "variable phi0 string $(ternary(v_dim==2,0.80,0.55))"
 if "$(v_phi0 <= 0 || v_phi0 >= 1)" then "variable jf_bad string 'phi0 must lie in (0, 1)'" "jump SELF jf_fail"
 if "$(v_seed < 0 || v_N < 2)" then "variable jf_bad string 'need seed >= 0 and N >= 2'" "jump SELF jf_fail"
 variable jf_n1 internal $(ternary(v_jf_ntypes==1,v_N,round(v_fsmall*v_N)))
 variable jf_n2 internal $(v_N-v_jf_n1)
-variable jf_len internal $(((v_jf_n1*v_jf_a1+v_jf_n2*v_jf_a2)/v_phi0)^(1.0/v_dim):%.17g)
+variable jf_len internal $(((v_jf_n1*v_VOLUME1+v_jf_n2*v_VOLUME2)/v_phi0)^(1.0/v_dim):%.17g)
 variable jf_zlo internal $(ternary(v_dim==2,-0.5,0.0))
 variable jf_zhi internal $(ternary(v_dim==2,0.5,v_jf_len):%.17g)
 region jf_box block 0 $(v_jf_len:%.17g) 0 $(v_jf_len:%.17g) ${jf_zlo} $(v_jf_zhi:%.17g) units box
 create_box ${jf_ntypes} jf_box
 create_atoms 1 random $(v_jf_n1) $(v_seed+1) NULL
 if "$(v_jf_n2 > 0)" then "create_atoms 2 random $(v_jf_n2) $(v_seed+1000001) NULL"
-set type 1 diameter ${d1}
+"""
+
+
+def random_atoms(volume: str) -> str:
+    """The deck lines that create N random atoms of types 1 and 2 at phi0 (seed step 1);
+    ``volume``: the stem of the deck's per-type particle-volume variables (``jf_a``, ``jf_v``)."""
+    return _RANDOM_ATOMS.replace("VOLUME", volume)
+
+
+# a minimisation's window loop opens (its counters, the label, the steps of this window); shared
+# with the ellipse deck
+WINDOW_OPEN = r"""variable jf_done internal 0
+variable jf_first internal 1
+variable jf_eprev internal 0
+variable jf_fmprev internal 0
+label jf_window
+variable jf_nsteps internal $(ternary(v_window<v_maxiter-v_jf_done,v_window,v_maxiter-v_jf_done))
+variable jf_before internal $(step)
+"""
+
+_RANDOM_START = r"""if "${jf_hasdata} == 1" then "jump SELF jf_read"
+
+# ---- random start (seed step 1): uniform positions in a square/cubic box at phi0 ----
+""" + random_atoms("jf_a") + r"""set type 1 diameter ${d1}
 if "$(v_jf_n2 > 0)" then "set type 2 diameter ${d2}"
 jump SELF jf_atoms_ready
 
@@ -325,14 +346,7 @@ variable jf_vrms equal sqrt(ave(v_jf_vdev))
 variable jf_vx atom f_jf_vstore[1]
 variable jf_vy atom f_jf_vstore[2]
 variable jf_vz atom f_jf_vstore[3]
-variable jf_done internal 0
-variable jf_first internal 1
-variable jf_eprev internal 0
-variable jf_fmprev internal 0
-label jf_window
-variable jf_nsteps internal $(ternary(v_window<v_maxiter-v_jf_done,v_window,v_maxiter-v_jf_done))
-variable jf_before internal $(step)
-if "${minimizer} == md" then "fix jf_vsamples all vector ${mdsample} v_jf_pe"
+""" + WINDOW_OPEN + r"""if "${minimizer} == md" then "fix jf_vsamples all vector ${mdsample} v_jf_pe"
 if "${minimizer} == md" then "run $(v_jf_nsteps)" else "minimize 0.0 $(v_jf_ftol:%.17g) $(v_jf_nsteps) $(10*v_jf_nsteps)"
 variable jf_ran internal $(step-v_jf_before)
 # md: mean and rms of the energies sampled on the window's steps that are multiples of mdsample

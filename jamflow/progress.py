@@ -2,18 +2,58 @@
 
 from __future__ import annotations
 
+import functools
 import math
-
-from tqdm import tqdm
 
 QUIET_UNTIL_WORK = 1e-3  # tqdm's delay (s): > 0 and above the round-off of time.time(), so nothing draws early
 
 
-def progress_bar(**kwargs) -> tqdm:
+class HiddenBar:
+    """What a disabled bar does (counts, draws nothing), without importing tqdm: a ``--quiet``
+    run's start-up (issue 17) does not pay for it."""
+
+    def __init__(self, total=None):
+        self.n, self.total = 0, total
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def set_postfix_str(self, *args, **kwargs):
+        pass
+
+    def update(self, k=1):
+        self.n += k
+
+    def close(self):
+        pass
+
+
+def progress_bar(disable: bool = False, **kwargs):
     """A tqdm bar (rate, ETA) that draws nothing before its first update: a run refused before
     any work prints its one error line only (tqdm draws a delayed bar neither on creation nor,
-    if never drawn, on close). Like every tqdm bar it draws at most every 0.1 s."""
-    return tqdm(delay=QUIET_UNTIL_WORK, dynamic_ncols=True, **kwargs)
+    if never drawn, on close). Like every tqdm bar it draws at most every 0.1 s; a bar updated
+    but closed before its first draw (a run shorter than 0.1 s) draws its final line on close.
+    Disabled: a ``HiddenBar``."""
+    if disable:
+        return HiddenBar(kwargs.get("total"))
+    return _shown_bar_class()(delay=QUIET_UNTIL_WORK, dynamic_ncols=True, **kwargs)
+
+
+@functools.cache
+def _shown_bar_class():
+    from tqdm import tqdm
+
+    class ShownBar(tqdm):
+        def close(self):
+            never_drawn = not self.disable and self.last_print_t < self.start_t + self.delay
+            if never_drawn and self.n > 0:
+                self.last_print_t = self.start_t + self.delay  # tqdm's close() then writes the final line
+            super().close()
+
+    return ShownBar
 
 
 class CompressionProgress:

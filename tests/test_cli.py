@@ -72,12 +72,47 @@ def test_help_loads_only_its_subcommand(argv, lists_commands, jam_options):
 
 def test_a_disk_jam_does_not_import_scipy_optimize(tmp_path):
     """Start-up (issue 17): a disk jam needs neither scipy.optimize (the blow-up bound is a
-    bisection) nor the analyze command's modules."""
+    bisection), tqdm (--quiet) nor the analyze command's modules."""
     import subprocess
     import sys
 
     code = ("import sys; from jamflow.cli import main; "
             f"code = main(['jam', '--n', '16', '--quiet', '--out', {str(tmp_path / 'p.h5')!r}]); "
-            "print(code, 'scipy.optimize' in sys.modules, 'matplotlib' in sys.modules)")
+            "print(code, *[m in sys.modules for m in ('scipy.optimize', 'tqdm', 'matplotlib')])")
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
-    assert result.stdout.split()[-3:] == ["0", "False", "False"], result.stdout + result.stderr
+    assert result.stdout.split()[-4:] == ["0", "False", "False", "False"], result.stdout + result.stderr
+
+
+def test_a_jam_without_quiet_has_a_tqdm_bar_and_with_it_a_hidden_one():
+    """The bar (tqdm: rate, ETA) is there without --quiet; --quiet's counts and draws nothing
+    (and needs no tqdm, see above). Both take the updates the protocols and commands make."""
+    from tqdm import tqdm
+
+    from jamflow.progress import CompressionProgress, HiddenBar, progress_bar
+
+    step = {"step": 0, "phi": 0.8, "dphi": 1e-4, "result": type("R", (), {"energy_per_particle": 1e-12})()}
+    with CompressionProgress(disable=False) as shown, CompressionProgress(disable=True) as hidden:
+        for observe in (shown, hidden):
+            observe(step)
+    assert isinstance(shown.bar, tqdm) and shown.bar.n == 1
+    assert isinstance(hidden.bar, HiddenBar) and hidden.bar.n == 1
+    with progress_bar(total=5, desc="x", disable=True) as bar:
+        bar.update(2)
+        bar.set_postfix_str("y", refresh=False)
+    assert (bar.n, bar.total) == (2, 5)
+
+
+def test_a_bar_closed_before_its_first_draw_still_shows_its_final_line():
+    """tqdm draws at most every 0.1 s and a delayed bar never drawn prints nothing on close: a
+    run faster than that (a warm N = 64 jam) would show no progress at all. Updated once and
+    closed at once: the final line; never updated (a refusal): nothing."""
+    import io
+
+    from jamflow.progress import progress_bar
+
+    shown, refused = io.StringIO(), io.StringIO()
+    with progress_bar(desc="jam", unit="min", file=shown) as bar:
+        bar.update(1)
+    with progress_bar(desc="jam", unit="min", file=refused):
+        pass
+    assert "jam: 1min" in shown.getvalue() and "min/s" in shown.getvalue() and refused.getvalue() == ""
