@@ -176,12 +176,21 @@ def plot_packings(q6_rows, path: Path) -> None:
     save(fig, path)
 
 
+def balanced(row) -> bool:
+    """Force and generalized-torque balance on non-floaters below F_LIMIT (the reference's)."""
+    return float(row["max_force"]) < F_LIMIT and float(row["max_torque"]) < F_LIMIT
+
+
 def alpha_table(ens_rows) -> dict:
-    """{(dim, N): [(alpha, phi mean, err, z mean, err, z corrected mean, err, packings, sizes)]}."""
+    """{(dim, N): [(alpha, phi mean, err, z mean, err, z corrected mean, err, packings, sizes)]},
+    packings that are not balanced (``balanced``) left out (main() lists them)."""
     out = defaultdict(list)
     key = lambda r: (int(r["dim"]), int(r["n"]), r["sizes"], alpha_of(r))  # noqa: E731
     for (dim, n, sizes, alpha), group in sorted(grouped(ens_rows, key).items()):
         if group[0]["engine"] != "numba":
+            continue
+        group = [r for r in group if balanced(r)]
+        if not group:
             continue
         phi = [float(r["phi_j"]) for r in group]
         n_kept = [int(r["n"]) - int(r["floaters"]) for r in group]
@@ -369,6 +378,10 @@ def main(argv=None) -> int:
     ens = [r for path in args.csv if Path(path).exists() for r in rows(path)]
     if ens:
         table = alpha_table(ens)
+        for r in ens:
+            if not balanced(r):
+                print(f"left out, not balanced: {r['shape']} {r['dim']}D N={r['n']} seed {r['seed']} max|F| "
+                      f"{float(r['max_force']):.1e} max|tau/d_k| {float(r['max_torque']):.1e} ({r['reason']})")
         print("dim alpha  phi_J  stderr  <z>  stderr  <z>+free  stderr  n  sizes")
         for (dim, n), t in table.items():
             for r in t:
