@@ -111,13 +111,13 @@ def plot_bodies(path: Path) -> None:
 
 def q6_cutoff(packings) -> float:
     """The first minimum of the centres' g(r) (r_max 2.5: N = 32 cells are 5.5 wide), at the
-    finest bin width (0.02, 0.05, 0.1) where it is significant for these few packings."""
+    finest bin width (0.02, 0.05, 0.1) where it is significant for these few packings; NaN if none is."""
     for dr in (0.02, 0.05, 0.1):
         try:
             return first_minimum(RDF(dr=dr, r_max=2.5).compute(packings))
-        except ValueError as err:
-            last = err
-    raise last
+        except ValueError:
+            continue
+    return math.nan  # no significant first minimum: no neighbour shell to measure Q6 on
 
 
 def q6_table(q6_rows) -> list[tuple]:
@@ -127,6 +127,9 @@ def q6_table(q6_rows) -> list[tuple]:
     for (n, alpha), group in sorted(grouped(q6_rows, lambda r: (int(r["n"]), alpha_of(r))).items()):
         packings = [load_packing(r["file"]) for r in group]
         r_min = q6_cutoff(packings)
+        if math.isnan(r_min):
+            out.append((n, alpha, math.nan, math.nan, r_min, len(packings), 0.0))
+            continue
         results = [BondOrder(r_min=r_min).compute(p) for p in packings]
         values = [r.global_order for r in results]
         neighbours = float(np.mean([r.n_neighbours.mean() for r in results]))
@@ -173,12 +176,21 @@ def plot_packings(q6_rows, path: Path) -> None:
     save(fig, path)
 
 
+def balanced(row) -> bool:
+    """Force and generalized-torque balance on non-floaters below F_LIMIT (the reference's)."""
+    return float(row["max_force"]) < F_LIMIT and float(row["max_torque"]) < F_LIMIT
+
+
 def alpha_table(ens_rows) -> dict:
-    """{(dim, N): [(alpha, phi mean, err, z mean, err, z corrected mean, err, packings, sizes)]}."""
+    """{(dim, N): [(alpha, phi mean, err, z mean, err, z corrected mean, err, packings, sizes)]},
+    packings that are not balanced (``balanced``) left out (main() lists them)."""
     out = defaultdict(list)
     key = lambda r: (int(r["dim"]), int(r["n"]), r["sizes"], alpha_of(r))  # noqa: E731
     for (dim, n, sizes, alpha), group in sorted(grouped(ens_rows, key).items()):
         if group[0]["engine"] != "numba":
+            continue
+        group = [r for r in group if balanced(r)]
+        if not group:
             continue
         phi = [float(r["phi_j"]) for r in group]
         n_kept = [int(r["n"]) - int(r["floaters"]) for r in group]
@@ -346,7 +358,8 @@ def plot_acceptance(ens_rows, stab_rows, path: Path) -> None:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--csv", nargs="+", default=["docs/nmers/ensembles.csv", "docs/nmers/ensembles3d.csv"])
+    ap.add_argument("--csv", nargs="+", default=["docs/nmers/ensembles.csv", "docs/nmers/ensembles3d.csv",
+                                                "docs/nmers/sweep3d.csv"])
     ap.add_argument("--q6", default="docs/nmers/q6.csv")
     ap.add_argument("--routes", default="docs/nmers/routes.csv")
     ap.add_argument("--stability", default="docs/nmers/stability.csv")
@@ -365,6 +378,10 @@ def main(argv=None) -> int:
     ens = [r for path in args.csv if Path(path).exists() for r in rows(path)]
     if ens:
         table = alpha_table(ens)
+        for r in ens:
+            if not balanced(r):
+                print(f"left out, not balanced: {r['shape']} {r['dim']}D N={r['n']} seed {r['seed']} max|F| "
+                      f"{float(r['max_force']):.1e} max|tau/d_k| {float(r['max_torque']):.1e} ({r['reason']})")
         print("dim alpha  phi_J  stderr  <z>  stderr  <z>+free  stderr  n  sizes")
         for (dim, n), t in table.items():
             for r in t:
