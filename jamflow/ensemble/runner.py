@@ -22,6 +22,7 @@ from .store import Store, Task, failure_row, write_failure
 TASK_KEYS = ("n", "seed", "out", "quiet", "emit_deck", "force")  # set per task, not store parameters
 SUMMARY_EVERY = 10.0  # seconds between summary.csv rewrites during a run
 MAX_ERRORS_BEFORE_SUCCESS = 3  # the same broken set-up fails every task: stop early
+SETTLED = ("finished", "error", "cancelled")  # future states with an outcome ("lost": being recomputed)
 STOP_GRACE = 30.0  # seconds a stopped run waits for the tasks already running (cancelling cannot stop them)
 
 
@@ -171,8 +172,11 @@ def _run(client, store, fixed, todo, report, progress, on_result, interrupted, m
             except TimeoutError:
                 finished = set()
             for fut in finished:
+                status = fut.status  # read once: a result lost with its worker turns a future back to pending
+                if status not in SETTLED:  # lost after wait() returned: Dask computes it again
+                    continue
                 pending.discard(fut)
-                row = _outcome(fut, futures[fut], store, fixed, report)
+                row = _outcome(fut, status, futures[fut], store, fixed, report)
                 if row is not None:
                     report.rows[row["file"]] = row
                     bar.update(1)
@@ -207,9 +211,11 @@ def _drain_running(client, pending, futures, store, fixed, report):
     if started:
         with contextlib.suppress(TimeoutError):  # still running after the grace: left to the next run
             wait(started, timeout=STOP_GRACE)
-    for fut in [f for f in started if f.done()]:
+    for fut, status in [(f, f.status) for f in started]:
+        if status not in SETTLED:
+            continue
         pending.discard(fut)
-        row = _outcome(fut, futures[fut], store, fixed, report)
+        row = _outcome(fut, status, futures[fut], store, fixed, report)
         if row is not None:
             report.rows[row["file"]] = row
 
@@ -234,18 +240,18 @@ def _make_packing(*args):
     return make_packing(*args)
 
 
-def _outcome(fut, task, store, fixed, report):
+def _outcome(fut, status, task, store, fixed, report):
     """The row of a finished future; records failures, notes errors, stops the run on a write failure."""
     from distributed.scheduler import KilledWorker
 
-    if fut.status == "finished":
-        row = fut.result()
+    if status == "finished":
+        row = fut.result()  # a result lost since is computed again and waited for
         if row["status"] == "ok":
             report.made += 1
         else:
             report.failed += 1
         return row
-    if fut.status == "cancelled":
+    if status == "cancelled":
         return None
     exc = fut.exception()
     if isinstance(exc, KilledWorker):  # the task killed every worker it ran on: record it, do not retry
