@@ -172,13 +172,8 @@ def _run(client, store, fixed, todo, report, progress, on_result, interrupted, m
             except TimeoutError:
                 finished = set()
             for fut in finished:
-                status = fut.status  # read once: a result lost with its worker turns a future back to pending
-                if status not in SETTLED:  # lost after wait() returned: Dask computes it again
-                    continue
-                pending.discard(fut)
-                row = _outcome(fut, status, futures[fut], store, fixed, report)
+                row = _settle(fut, pending, futures, store, fixed, report)
                 if row is not None:
-                    report.rows[row["file"]] = row
                     bar.update(1)
                     if on_result is not None:
                         on_result(futures[fut], row, client)
@@ -207,17 +202,26 @@ def _drain_running(client, pending, futures, store, fixed, report):
     running = set().union(*(workers_state(client) or {}).values())
     started = {fut for fut in pending if fut.key in running}
     client.cancel(list(pending - started))
-    pending -= pending - started
+    pending.intersection_update(started)
     if started:
         with contextlib.suppress(TimeoutError):  # still running after the grace: left to the next run
             wait(started, timeout=STOP_GRACE)
-    for fut, status in [(f, f.status) for f in started]:
-        if status not in SETTLED:
-            continue
-        pending.discard(fut)
-        row = _outcome(fut, status, futures[fut], store, fixed, report)
-        if row is not None:
-            report.rows[row["file"]] = row
+    for fut in started:
+        _settle(fut, pending, futures, store, fixed, report)
+
+
+def _settle(fut, pending, futures, store, fixed, report):
+    """Take a done future out of ``pending`` and record its row (returned, or None). Its status
+    is read once: a result lost with its worker after wait() returned it turns the future back
+    to pending (Dask computes it again), and it stays pending."""
+    status = fut.status
+    if status not in SETTLED:
+        return None
+    pending.discard(fut)
+    row = _outcome(fut, status, futures[fut], store, fixed, report)
+    if row is not None:
+        report.rows[row["file"]] = row
+    return row
 
 
 def _check_mpi(ranks, engine):
