@@ -41,6 +41,8 @@ from jamflow.io import atomic_path, load_packing  # noqa: E402
 from jamflow.drawing import draw_into  # noqa: E402
 
 FIGURE_2_26 = (1.04, 1.1, 1.2, 1.3, 1.4, 1.6)
+CHAPTER_N = 256  # Figure 2.25's system size
+Q6_MARKERS = "os^D"  # one marker per N, so the series stay apart where they overlap
 MIN_NEIGHBOURS = 3  # Q6 of fewer neighbours within the first minimum of g(r) measures bond alignment, not order
 
 
@@ -122,9 +124,12 @@ def q6_cutoff(packings) -> float:
 
 def q6_table(q6_rows) -> list[tuple]:
     """(N, alpha, mean Q6, stderr, r_min, packings, mean neighbours within r_min) per N and alpha
-    from the packing files."""
+    from the packing files; packings that are not balanced (``balanced``) left out (main() lists them)."""
     out = []
     for (n, alpha), group in sorted(grouped(q6_rows, lambda r: (int(r["n"]), alpha_of(r))).items()):
+        group = [r for r in group if balanced(r)]
+        if not group:
+            continue
         packings = [load_packing(r["file"]) for r in group]
         r_min = q6_cutoff(packings)
         if math.isnan(r_min):
@@ -142,8 +147,9 @@ def plot_q6(table, path: Path) -> None:
     for k, n in enumerate(sorted({t[0] for t in table})):
         shown = [t for t in table if t[0] == n and t[6] >= MIN_NEIGHBOURS]
         a, m, e = (np.array([t[j] for t in shown]) for j in (1, 2, 3))
-        ax.errorbar(a, m, yerr=e, fmt="os"[k % 2] + "--", color=f"C{k}", capsize=3,
-                    label=f"2D monodisperse dimers, N = {n}")
+        ax.errorbar(a, m, yerr=e, fmt=Q6_MARKERS[k % len(Q6_MARKERS)] + "--", color=f"C{k}", capsize=3,
+                    ms=7 if n == CHAPTER_N else 5, lw=1.6 if n == CHAPTER_N else 1.0,
+                    label=f"2D monodisperse dimers, N = {n}" + (" (chapter's N)" if n == CHAPTER_N else ""))
     ax.axvline(1.2, color="0.6", lw=0.8, ls=":")
     ax.text(1.21, 0.02, "chapter: amorphous for alpha > 1.2", fontsize=7, color="0.4", va="bottom")
     ax.set_xlabel("alpha = L / D")
@@ -373,6 +379,9 @@ def main(argv=None) -> int:
         print(f"N  alpha  Q6_global  stderr  r_min  packings  neighbours (< {MIN_NEIGHBOURS}: not plotted)")
         for t in table:
             print(f"{t[0]}  {t[1]:<6g} {t[2]:.4f}  {t[3]:.4f}  {t[4]:.3f}  {t[5]}  {t[6]:.2f}")
+        for r in q6_rows:
+            if not balanced(r):
+                print(f"Q6: left out, not balanced: {r['shape']} N={r['n']} seed {r['seed']} ({r['reason']})")
         plot_q6(table, out / "q6-alpha.png")
         plot_packings(q6_rows, out / "packings-figure-2-26.png")
     ens = [r for path in args.csv if Path(path).exists() for r in rows(path)]
