@@ -5,14 +5,17 @@ that made it.
         --packings /tmp/nmers/packings --out docs/nmers/ensembles.csv
     python benchmarks/nmer_ensembles.py ... --engine lammps --minimizer md --damping 0.1   # the LAMMPS route
 
-One row per packing (appended; a row already in the CSV is skipped, so runs resume): phi_J, V,
+One row per packing (appended; a row already in the CSV or in ``--rejects`` is skipped, so runs
+resume): phi_J, V,
 P, the largest force and generalized torque tau_a / d_k on non-floaters from the all-pairs site
 sum of the numpy reference (``jamflow.engine.reference``, independent of both engines), the
 contacts between bodies and between sites (``jamflow.analysis.contacts``), floaters by the convex
 rule d_f + 1, bodies touched on one site only (their free rotations), the isostatic count
 N' d_f - d + 1, the engine, CPU seconds and wall seconds (the machine load is in the log), and
 the packing file (``--packings``; HDF5, schema jamflow.packing v2) for the figures
-(``benchmarks/nmer_figures.py``).
+(``benchmarks/nmer_figures.py``). With ``--rejects R.csv`` the rows of packings that fail the
+checks (``failed_checks``: not stopped by force, unbalanced, outside the energy window, or every body
+a floater) go to R.csv instead, so --out holds checked packings only and every failure stays on record.
 """
 
 from __future__ import annotations
@@ -36,6 +39,26 @@ from jamflow.checks import generalized_torques
 COLUMNS = ["shape", "dim", "n", "sizes", "engine", "minimizer", "damping", "seed", "phi_j", "v", "pressure",
            "max_force", "max_torque", "floaters", "contacts", "body_contacts", "one_site", "free_rotations",
            "isostatic_count", "z", "cpu_seconds", "seconds", "minimizations", "iterations", "reason", "file"]
+
+
+F_LIMIT = 1e-12  # issue 14: max force and generalized torque on non-floaters (the reference's), eps/diameter
+
+
+def failed_checks(row: dict, v_tol: float) -> list[str]:
+    """Why a packing's row (``checked_row``, or read back from a CSV) fails the checks; empty if it
+    passes: the last minimisation stopped by the force rule (not the iteration cap), max |F| and
+    tau_a/d_k on non-floaters below F_LIMIT, V/N in the window (v_tol, 2 v_tol), and at least one
+    body not a floater (else the force check is empty)."""
+    why = []
+    if row["reason"] != "force":
+        why.append(f"stopped by {row['reason']}")
+    if not (float(row["max_force"]) < F_LIMIT and float(row["max_torque"]) < F_LIMIT):
+        why.append(f"max |F| {float(row['max_force']):.1e}, tau/d_k {float(row['max_torque']):.1e} >= {F_LIMIT:g}")
+    if not v_tol < float(row["v"]) < 2 * v_tol:
+        why.append(f"V/N {float(row['v']):.2e} outside the window")
+    if int(row["floaters"]) >= int(row["n"]):
+        why.append("every body a floater")
+    return why
 
 
 def seeds(text: str) -> list[int]:
@@ -92,14 +115,17 @@ def main(argv=None) -> int:
     ap.add_argument("--protocol", default="fast", choices=sorted(PROTOCOLS))
     ap.add_argument("--packings", required=True, help="directory for the packing files")
     ap.add_argument("--out", required=True, help="CSV, appended")
+    ap.add_argument("--rejects", help="CSV for the rows of packings that fail the checks (default: --out)")
     args = ap.parse_args(argv)
     out, where = Path(args.out), Path(args.packings)
+    rejects = Path(args.rejects) if args.rejects else out
     where.mkdir(parents=True, exist_ok=True)
     check_writable(out)
+    check_writable(rejects)
     settings = PROTOCOLS[args.protocol](minimizer=MinimizerSettings(method=args.minimizer, damping=args.damping))
     base = {"shape": args.shape, "dim": args.dim, "n": args.n, "sizes": args.sizes, "engine": args.engine,
             "minimizer": args.minimizer, "damping": args.damping if args.minimizer == "md" else ""}
-    have = done_keys(out)
+    have = done_keys(out) | done_keys(rejects)
     todo = [s for s in seeds(args.seeds) if tuple(str(v) for v in (*[base[k] for k in
             ("shape", "dim", "n", "sizes", "engine", "damping")], s)) not in have]
     print(f"{len(todo)} packings to make; load {os.getloadavg()[0]:.1f}", flush=True)
@@ -114,9 +140,11 @@ def main(argv=None) -> int:
                             protocol={**settings.as_dict(), "engine": result.engine},
                             lammps_version=result.lammps_version)
         row = checked_row(result.packing, result, base, seed, cpu, path)
-        append(out, row)
+        why = failed_checks(row, settings.v_tol)
+        append(rejects if why else out, row)
         tqdm.write(f"seed {seed}: phi_J {float(row['phi_j']):.5f} z {row['z']:.3f} max|F| {row['max_force']:.1e} "
-                   f"max|g| {row['max_torque']:.1e} cpu {cpu:.1f} s load {os.getloadavg()[0]:.1f}")
+                   f"max|g| {row['max_torque']:.1e} cpu {cpu:.1f} s load {os.getloadavg()[0]:.1f}"
+                   + (f" FAILED: {'; '.join(why)}" + (f" (row in {rejects})" if args.rejects else "") if why else ""))
     return 0
 
 

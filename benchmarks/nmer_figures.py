@@ -39,6 +39,7 @@ from jamflow.analysis.order import BondOrder, first_minimum  # noqa: E402
 from jamflow.analysis.structure import RDF  # noqa: E402
 from jamflow.io import atomic_path, load_packing  # noqa: E402
 from jamflow.drawing import draw_into  # noqa: E402
+from nmer_ensembles import F_LIMIT  # noqa: E402  (benchmarks/ is the script's directory)
 
 FIGURE_2_26 = (1.04, 1.1, 1.2, 1.3, 1.4, 1.6)
 CHAPTER_N = 256  # Figure 2.25's system size
@@ -300,7 +301,6 @@ def stability_table(stab_rows) -> list[tuple]:
 
 ACCEPTANCE_SETS = ((2, 1.2), (2, 1.5), (2, 2.0), (3, 1.5))  # issue 14: 20 packings each
 ACCEPTANCE_N = 128
-F_LIMIT = 1e-12
 
 
 def acceptance_rows(ens_rows, dim: int, alpha: float) -> list[dict]:
