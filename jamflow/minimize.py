@@ -81,7 +81,8 @@ class MinimizerSettings:
     # (docs/ellipses.md)
     rotating_damping: float = 0.01
     # Newton steps along the softest modes once a minimisation creeps (``jamflow.soft_modes``):
-    # "auto" = rigid bodies under FIRE at a fixed box (where they were measured to pay, docs/nmers.md),
+    # "auto" = shapes that turn (rigid bodies, ellipses, spheroids) under FIRE at a fixed box (where they
+    # were measured to pay; disks and spheres gain nothing: docs/soft-modes.md),
     # "on" = every shape at a fixed box, "off"; first after soft_mode_after iterations, then every as many
     soft_modes: str = "auto"
     soft_mode_after: int = 50_000
@@ -204,7 +205,7 @@ def _soft_mode_steps(engine, settings: MinimizerSettings, stiffness: float):
     """The soft-mode stepper of this minimisation, or None (``MinimizerSettings.soft_modes``)."""
     template = engine.template
     fixed_box = settings.pressure is None and not template.box.walls and template.gravity == 0 and template.fixed is None
-    wanted = {"on": True, "off": False, "auto": template.shape.kind == "rigid" and settings.method == "fire"}
+    wanted = {"on": True, "off": False, "auto": template.shape.oriented and settings.method == "fire"}
     if not (wanted[settings.soft_modes] and fixed_box):
         return None
     from .soft_modes import SoftModeSteps  # scipy.sparse.linalg: loaded only where it runs

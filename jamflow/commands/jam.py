@@ -52,8 +52,8 @@ def add_arguments(p) -> None:
     add_md_damping_argument(p)
     p.add_argument("--soft-modes", choices=SOFT_MODES, default="auto",
                    help="Newton steps along the softest modes of a creeping minimisation (jamflow.soft_modes): auto = "
-                        "rigid bodies under FIRE (3D dimers: 4.9e-11 iteration-cap failures became converged "
-                        "packings, docs/nmers.md), on = every shape at a fixed box, off")
+                        "shapes that turn (rigid bodies, ellipses, spheroids) under FIRE; on = every shape at a "
+                        "fixed box; off. docs/soft-modes.md")
     p.add_argument("--engine", choices=ENGINES, default="auto",
                    help="auto: the compiled engine (FIRE, in process) wherever it runs the scene, else LAMMPS "
                         "(docs/speed.md). The engines sum forces in different orders, so from one start they "
