@@ -1,0 +1,342 @@
+"""Gauss-Newton active-set polish for the final creep of disk minimisations (issue 17, next method
+of docs/speed-2.md sections 3-4), measured against plain FIRE on the same seeds.
+
+Method. With the linear spring (alpha = 2) the energy is a nonlinear least-squares objective,
+V = 1/2 sum_pairs max(0, delta_ij)^2 with delta = 1 - r_ij / sigma_ij (eps = 1). Its Gauss-Newton
+model about x, m(dx) = 1/2 sum_pairs max(0, delta + J dx)^2 (J = d delta / dx, one row per pair
+within sigma + skin), is convex and piecewise quadratic; any dx with m(dx) < m(0) = V is a descent
+direction of V (grad V . dx = grad m(0) . dx <= m(dx) - m(0) < 0). Each polish step minimises m by
+a semismooth Newton (active-set) iteration: A = {pairs with delta + J dx > 0} (starting from the
+overlapping pairs, so gaps that the step would close join it), solve
+(J_A^T J_A + mu I) dx = -J_A^T delta_A (sparse LU; the tiny shift mu fixes the d translations and
+the rattlers' free coordinates, whose right-hand side is zero), recompute A, until A repeats.
+The step is accepted by Armijo backtracking on the exact energy (the engine's kernel); where the
+predicted decrease is below the energy's round-off (total V ~ 1e-13 near onset, each delta ~ 1e-8
+known to ~1e-16) the step must also lower the max force. Contacts are recomputed every step; the
+polish stops at max force < the minimiser's tolerance, or when no step length is accepted (then
+FIRE resumes). The Hessian's tension terms (-delta / (r sigma) (I - n n^T), of order -P) are left
+out, so J^T J is positive semidefinite and every step is a descent direction: the difference from
+the Newton on the active set of docs/speed-2.md section 4, which used the full (indefinite) Hessian
+and found no descent (alpha <= 0.03). Idea: semismooth Newton for squared positive parts
+(active-set Gauss-Newton for max(0, r)^2 least squares), named as the next method in
+docs/speed-2.md section 3; the chunked FIRE wrapper follows benchmarks/saddle_escape.py.
+
+Trigger (``--trigger``): ``chunk`` runs each minimisation of ``jam()`` in chunks of ``--after``
+FIRE iterations and polishes after a chunk that ends near force balance (max force < 1e-9) but
+unconverged (the saddle escape's trigger); ``reach`` first runs FIRE to max force < 1e-9 (the
+minimiser's rules, with force_tol 1e-9), polishes, then lets FIRE finish with the usual rules;
+``none`` is the default protocol. After a polish the plain minimiser always runs once more, so
+the stopping rule (max force, V_min) is FIRE's own, applied to the polished state.
+
+    python benchmarks/gauss_newton_polish.py --check
+    python benchmarks/gauss_newton_polish.py --n 1024 --seeds 1 2 3 4 5 --trigger none chunk reach --out docs/gauss-newton-polish.csv
+    python benchmarks/gauss_newton_polish.py --n 256 --seeds 1 2 3 4 5 --trigger none chunk reach --out docs/gauss-newton-polish.csv
+    python benchmarks/gauss_newton_polish.py --n 1024 --seeds 1 --trigger chunk --steps
+
+``--check`` runs the closed cases (two and three overlapping disks, exact minima known; a jammed
+N = 256 packing compressed 1e-3 above onset and displaced by 1e-6). ``--steps`` prints every
+polish step (active set size, accepted step length, max force before/after). CPU seconds are
+process time (one core, OPENBLAS_NUM_THREADS=1).
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+from speed_accuracy import append_row  # (benchmarks/ is the script's directory)
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from jamflow.engine.compiled import spheres
+from jamflow.engine.compiled.engine import CompiledEngine
+from jamflow.minimize import MinimizerSettings
+
+CREEP_FORCE = 1e-9  # the trigger: FIRE has reached this max force
+SKIN = 0.05  # candidate pairs within sigma + SKIN (diameters): gaps a step may close
+SHIFT = 1e-12  # mu >= this x the largest diagonal of J^T J, and >= |grad V| (Levenberg-Marquardt)
+ARMIJO = 1e-4
+LM = 0.0  # mu >= LM x |grad V| (Levenberg-Marquardt damping)
+ALPHAS = 0.5 ** np.arange(0, 14)  # backtracking 1 ... 1.2e-4
+INNER = 10  # active-set (semismooth Newton) iterations per step
+PLAIN_MINIMIZE = CompiledEngine.minimize
+
+
+@dataclass
+class PolishLog:
+    """One entry per polish step: (active pairs, inner iterations, alpha or 0 if refused, fmax before, after)."""
+
+    steps: list = field(default_factory=list)
+    polishes: int = 0
+    converged: int = 0
+    seconds: float = 0.0
+
+
+def supported(packing) -> str:
+    """'' if the polish applies to this packing, else why not."""
+    pot = packing.potential
+    if packing.shape.kind != "sphere":
+        return f"shape {packing.shape.kind}"
+    if getattr(pot, "name", "") != "spring" or float(pot.alpha) != 2.0:
+        return "not the linear spring (alpha = 2)"
+    if packing.fixed is not None or not all(packing.box.periodic):
+        return "walls or fixed particles"
+    return ""
+
+
+def residuals(x: np.ndarray, pairs) -> tuple[np.ndarray, sp.csr_matrix]:
+    """delta = 1 - r / sigma over the pairs and its Jacobian J (P x N d), eps = 1."""
+    n, d = x.shape
+    dr = x[pairs.i] - x[pairs.j] + pairs.shift
+    r = np.sqrt(np.einsum("ij,ij->i", dr, dr))
+    delta = 1.0 - r / pairs.sigma
+    g = dr / (r * pairs.sigma)[:, None]  # d delta / d x_j = +g, d delta / d x_i = -g
+    rows = np.repeat(np.arange(len(r)), 2 * d)
+    cols = np.concatenate([pairs.i[:, None] * d + np.arange(d), pairs.j[:, None] * d + np.arange(d)], axis=1)
+    vals = np.concatenate([-g, g], axis=1)
+    return delta, sp.csr_matrix((vals.ravel(), (rows, cols.ravel())), shape=(len(r), n * d))
+
+
+def model_value(delta, jac, dx, mu) -> float:
+    """m(dx) = 1/2 sum max(0, delta + J dx)^2 + mu/2 |dx|^2."""
+    lin = delta + jac @ dx
+    return 0.5 * float(np.sum(np.maximum(lin, 0.0) ** 2)) + 0.5 * mu * float(dx @ dx)
+
+
+def model_line_minimum(a: np.ndarray, b: np.ndarray, dx: np.ndarray, p: np.ndarray, mu: float) -> float:
+    """The exact minimiser t >= 0 of m(dx + t p) = 1/2 sum max(0, a + t b)^2 + mu/2 |dx + t p|^2
+    (a = delta + J dx, b = J p): a convex piecewise quadratic in t, so m' is increasing; bisection."""
+    c0, c1 = mu * float(dx @ p), mu * float(p @ p)
+
+    def slope(t):
+        r = a + t * b
+        on = r > 0
+        return float(b[on] @ r[on]) + c0 + t * c1
+
+    hi = 1.0
+    while slope(hi) < 0 and hi < 1e6:
+        hi *= 2.0
+    lo = 0.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if slope(mid) < 0 else (lo, mid)
+    return lo if lo > 0 else hi * (slope(hi) < 0)
+
+
+def model_step(delta: np.ndarray, jac: sp.csr_matrix, mu: float) -> tuple[np.ndarray, int, int]:
+    """Minimise the convex model m(dx) by semismooth Newton with an exact line search on m: on the
+    active set A = {delta + J dx > 0}, p = -(J_A^T J_A + mu I)^-1 grad m, dx += t p with t the
+    minimiser of m along p (gaps that p closes stop it); ends when a full step keeps A.
+    Returns (dx, pairs in the last active set, inner iterations)."""
+    dx = np.zeros(jac.shape[1])
+    eye = sp.identity(jac.shape[1], format="csc")
+    k = 0
+    for k in range(INNER):
+        lin = delta + jac @ dx
+        active = lin > 0
+        ja = jac[active]
+        grad = ja.T @ lin[active] + mu * dx
+        p = spla.splu((ja.T @ ja + mu * eye).tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                      options=dict(SymmetricMode=True)).solve(-grad)
+        if float(grad @ p) >= 0:
+            break
+        t = model_line_minimum(lin, jac @ p, dx, p, mu)
+        if t <= 0:
+            break
+        dx = dx + t * p
+        if t >= 1.0 and np.array_equal(delta + jac @ dx > 0, active):
+            return dx, int(active.sum()), k + 1
+    return dx, int((delta + jac @ dx > 0).sum()), k + 1
+
+
+def polish(engine, ftol: float, log: PolishLog, max_steps: int = 40, verbose: bool = False) -> bool:
+    """Gauss-Newton steps until max force < ftol or no step is accepted; True if converged.
+    The engine holds the last accepted configuration, forces evaluated."""
+    c0 = time.process_time()
+    log.polishes += 1
+    packing = engine.packing()
+    state = engine.evaluate()
+    x = engine.positions()
+    n, d = x.shape
+    converged = state.max_force < ftol
+    for _ in range(max_steps):
+        if converged:
+            break
+        pairs = spheres.build(packing.with_positions(x), x, SKIN)
+        delta, jac = residuals(x, pairs)
+        grad = -state.forces.ravel()
+        mu = max(SHIFT * float(np.abs(jac.multiply(jac).sum(axis=0)).max()), LM * float(np.linalg.norm(grad)))
+        dx, n_active, inner = model_step(delta, jac, mu)
+        slope = float(grad @ dx)
+        noise = 8 * np.finfo(float).eps * float(np.sum(np.abs(np.maximum(delta, 0.0))))  # round-off of V
+        fmax0, accepted = state.max_force, 0.0
+        for alpha in ALPHAS:
+            engine.set_positions(x + alpha * dx.reshape(n, d))
+            trial = engine.evaluate()
+            decrease = trial.energy - state.energy
+            if -alpha * slope > noise:
+                ok = decrease <= ARMIJO * alpha * slope
+            else:  # the predicted decrease is below the energy's round-off: the max force decides
+                ok = decrease <= noise and trial.max_force < fmax0
+            if ok:
+                accepted = alpha
+                break
+        log.steps.append((n_active, inner, accepted, fmax0, trial.max_force if accepted else fmax0))
+        if verbose:
+            print(f"    GN step: active {n_active} (inner {inner}), alpha {accepted:.3g}, "
+                  f"max force {fmax0:.3e} -> {log.steps[-1][-1]:.3e}, V {state.energy:.6e}", flush=True)
+        if not accepted:
+            engine.set_positions(x)
+            state = engine.evaluate()
+            break
+        x, state = engine.positions(), trial
+        converged = state.max_force < ftol
+    log.converged += int(converged)
+    log.seconds += time.process_time() - c0
+    return converged
+
+
+def tolerance(engine, settings: MinimizerSettings) -> float:
+    t = engine.template
+    return settings.resolved_force_tol(engine.box, t.potential.contact_stiffness, t.shape.force_tol_base)
+
+
+def install(trigger: str, after: int, log: PolishLog, verbose: bool = False) -> None:
+    """Make CompiledEngine.minimize polish per ``trigger`` (none | chunk | reach)."""
+    plain = PLAIN_MINIMIZE
+
+    def finish(self, settings, done, seconds):
+        result = plain(self, replace(settings, max_iterations=max(1, settings.max_iterations - done)))
+        return replace(result, iterations=done + result.iterations, seconds=seconds + result.seconds)
+
+    def minimize(self, settings=None):
+        settings = settings or MinimizerSettings()
+        if trigger == "none" or settings.pressure is not None or supported(self.template):
+            return plain(self, settings)
+        ftol = tolerance(self, settings)
+        if trigger == "reach":
+            if ftol >= CREEP_FORCE:
+                return plain(self, settings)
+            first = plain(self, replace(settings, force_tol=CREEP_FORCE))
+            if first.reason != "force":  # V_min, cap, no progress: FIRE's own verdict stands
+                return first
+            polish(self, ftol, log, verbose=verbose)
+            return finish(self, settings, first.iterations, first.seconds)
+        done, seconds = 0, 0.0
+        while True:
+            chunk = replace(settings, max_iterations=min(after, settings.max_iterations - done))
+            result = plain(self, chunk)
+            done, seconds = done + result.iterations, seconds + result.seconds
+            if result.reason != "iteration-cap" or done >= settings.max_iterations:
+                return replace(result, iterations=done, seconds=seconds)
+            if result.max_force < CREEP_FORCE:
+                polish(self, ftol, log, verbose=verbose)
+                return finish(self, settings, done, seconds)
+
+    CompiledEngine.minimize = minimize
+
+
+# --- closed cases -----------------------------------------------------------------------------------
+def _engine_at(positions, diameters, length):
+    from jamflow.box import Box
+    from jamflow.packing import Packing
+    from jamflow.potentials import Spring
+
+    box = Box.cube(float(length), 2)
+    return CompiledEngine(Packing(np.asarray(positions, float), np.asarray(diameters, float), box, Spring()))
+
+
+def check() -> None:
+    """Closed cases and a displaced jammed packing; raises AssertionError on failure."""
+    # two disks of diameter 1 at distance 0.9 in a large box: the minimum is r = 1 (V = 0); GN is
+    # exact for one pair: delta + J dx = 0 in one step (the model is the exact linearisation)
+    eng = _engine_at([[5.0, 5.0], [5.9, 5.0]], [1.0, 1.0], 10.0)
+    log = PolishLog()
+    polish(eng, 1e-14, log)
+    r = np.linalg.norm(eng.positions()[1] - eng.positions()[0])
+    print(f"two disks: {len(log.steps)} steps, r = {r:.15f}, V = {eng.evaluate().energy:.3e}")
+    assert abs(r - 1.0) < 1e-12 and len(log.steps) <= 6
+    # three disks on a line, outer ones pushed in: the minimum is all gaps open (V = 0)
+    eng = _engine_at([[4.2, 5.0], [5.0, 5.0], [5.7, 5.0]], [1.0, 1.0, 1.0], 10.0)
+    log = PolishLog()
+    polish(eng, 1e-14, log)
+    x = eng.positions()
+    print(f"three disks: {len(log.steps)} steps, gaps {np.diff(x[:, 0]) - 1}, V = {eng.evaluate().energy:.3e}")
+    assert eng.evaluate().max_force < 1e-14 and np.all(np.diff(x[:, 0]) >= 1 - 1e-12)
+    # a jammed packing 1e-3 above onset, minimised by FIRE, displaced randomly by 1e-6
+    from jamflow.protocols.compression import jam
+
+    res = jam(n=256, seed=2, engine="numba")  # seed 1 unjams (V -> 7e-31) when compressed by 1e-3
+    p = res.packing
+    eng = CompiledEngine(p)
+    from jamflow.box import Box
+
+    eng.set_box(Box(p.box.h * (res.phi_j / (res.phi_j + 1e-3)) ** 0.5))
+    first = eng.minimize(MinimizerSettings(v_min=1e-30))
+    assert first.reason == "force" and first.energy_per_particle > 1e-9, first
+    x0 = eng.positions()
+    e0 = eng.evaluate().energy
+    rng = np.random.default_rng(0)
+    eng.set_positions(x0 + 1e-6 * rng.standard_normal(x0.shape))
+    ftol = tolerance(eng, MinimizerSettings())
+    log = PolishLog()
+    ok = polish(eng, ftol, log, verbose=True)
+    from jamflow.analysis.contacts import Contacts
+
+    kept = Contacts().compute(eng.packing()).kept  # rattlers keep their displacement (no force on them)
+    dx = eng.box.minimum_image(eng.positions() - x0)[kept]
+    dx -= dx.mean(axis=0)
+    print(f"jammed N = 256, phi_J + 1e-3 (V/N = {first.energy_per_particle:.2e}): GN {len(log.steps)} steps, "
+          f"converged {ok}, |x - x_min|_max = {np.abs(dx).max():.2e} ({len(kept)} non-rattlers), V/V_min - 1 = {eng.evaluate().energy / e0 - 1:.2e}")
+    assert ok and len(log.steps) <= 15 and np.abs(dx).max() < 1e-8
+
+
+def run(args) -> None:
+    from jamflow.checks import check_packing
+    from jamflow.protocols.compression import jam
+
+    jam(n=16, seed=0, engine="numba")
+    out = Path(args.out) if args.out else None
+    for seed in args.seeds:
+        for trigger in args.trigger:
+            log = PolishLog()
+            install(trigger, args.after, log, verbose=args.steps)
+            c0 = time.process_time()
+            res = jam(n=args.n, seed=seed, engine="numba")
+            cpu = time.process_time() - c0
+            CompiledEngine.minimize = PLAIN_MINIMIZE
+            checks = check_packing(res.packing, res.energy_per_particle, None, res.settings.v_tol)
+            steps = log.steps
+            row = {"n": args.n, "seed": seed, "trigger": trigger, "after": args.after if trigger == "chunk" else "",
+                   "phi_j": f"{res.phi_j:.10f}", "iterations": res.iterations,
+                   "final_iterations": int(res.history["iterations"][-1]), "minimizations": res.minimizations,
+                   "polishes": log.polishes, "polish_converged": log.converged, "gn_steps": len(steps),
+                   "gn_refused": sum(s[2] == 0 for s in steps), "polish_cpu_s": round(log.seconds, 3),
+                   "cpu_s": round(cpu, 3), "max_force": f"{res.max_force:.2e}", "checks": checks.passed}
+            print(" ".join(f"{k}={v}" for k, v in row.items()), flush=True)
+            if out:
+                append_row(out, list(row), row)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--check", action="store_true", help="closed cases and a displaced jammed packing")
+    ap.add_argument("--n", type=int, default=1024)
+    ap.add_argument("--seeds", type=int, nargs="+", default=[1])
+    ap.add_argument("--trigger", nargs="+", choices=("none", "chunk", "reach"), default=["none", "chunk"])
+    ap.add_argument("--after", type=int, default=20000, help="chunk length of the chunk trigger")
+    ap.add_argument("--steps", action="store_true", help="print every polish step")
+    ap.add_argument("--out", default=None)
+    args = ap.parse_args()
+    if args.check:
+        check()
+    else:
+        run(args)
+
+
+if __name__ == "__main__":
+    main()
