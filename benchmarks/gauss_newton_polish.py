@@ -49,26 +49,18 @@ from pathlib import Path
 from speed_accuracy import append_row  # (benchmarks/ is the script's directory)
 
 import numpy as np
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
-from jamflow.engine.compiled import spheres
 from jamflow.engine.compiled.engine import CompiledEngine
 from jamflow.minimize import MinimizerSettings
+from jamflow.polish import CREEP_FORCE, polish_reason
+from jamflow.polish import polish as gn_polish
 
-CREEP_FORCE = 1e-9  # the trigger: FIRE has reached this max force
-SKIN = 0.05  # candidate pairs within sigma + SKIN (diameters): gaps a step may close
-SHIFT = 1e-12  # mu >= this x the largest diagonal of J^T J, and >= |grad V| (Levenberg-Marquardt)
-ARMIJO = 1e-4
-LM = 0.0  # mu >= LM x |grad V| (Levenberg-Marquardt damping)
-ALPHAS = 0.5 ** np.arange(0, 14)  # backtracking 1 ... 1.2e-4
-INNER = 10  # active-set (semismooth Newton) iterations per step
 PLAIN_MINIMIZE = CompiledEngine.minimize
 
 
 @dataclass
 class PolishLog:
-    """One entry per polish step: (active pairs, inner iterations, alpha or 0 if refused, fmax before, after)."""
+    """Every polish step of a run (``jamflow.polish.PolishStep``), polishes, converged ones, CPU s."""
 
     steps: list = field(default_factory=list)
     polishes: int = 0
@@ -76,128 +68,20 @@ class PolishLog:
     seconds: float = 0.0
 
 
-def supported(packing) -> str:
-    """'' if the polish applies to this packing, else why not."""
-    pot = packing.potential
-    if packing.shape.kind != "sphere":
-        return f"shape {packing.shape.kind}"
-    if getattr(pot, "name", "") != "spring" or float(pot.alpha) != 2.0:
-        return "not the linear spring (alpha = 2)"
-    if packing.fixed is not None or not all(packing.box.periodic):
-        return "walls or fixed particles"
-    return ""
+def polish(engine, ftol: float, log: PolishLog, verbose: bool = False, newton: bool = False) -> bool:
+    """``jamflow.polish.polish`` with the steps logged (and printed with ``verbose``)."""
 
-
-def residuals(x: np.ndarray, pairs) -> tuple[np.ndarray, sp.csr_matrix]:
-    """delta = 1 - r / sigma over the pairs and its Jacobian J (P x N d), eps = 1."""
-    n, d = x.shape
-    dr = x[pairs.i] - x[pairs.j] + pairs.shift
-    r = np.sqrt(np.einsum("ij,ij->i", dr, dr))
-    delta = 1.0 - r / pairs.sigma
-    g = dr / (r * pairs.sigma)[:, None]  # d delta / d x_j = +g, d delta / d x_i = -g
-    rows = np.repeat(np.arange(len(r)), 2 * d)
-    cols = np.concatenate([pairs.i[:, None] * d + np.arange(d), pairs.j[:, None] * d + np.arange(d)], axis=1)
-    vals = np.concatenate([-g, g], axis=1)
-    return delta, sp.csr_matrix((vals.ravel(), (rows, cols.ravel())), shape=(len(r), n * d))
-
-
-def model_value(delta, jac, dx, mu) -> float:
-    """m(dx) = 1/2 sum max(0, delta + J dx)^2 + mu/2 |dx|^2."""
-    lin = delta + jac @ dx
-    return 0.5 * float(np.sum(np.maximum(lin, 0.0) ** 2)) + 0.5 * mu * float(dx @ dx)
-
-
-def model_line_minimum(a: np.ndarray, b: np.ndarray, dx: np.ndarray, p: np.ndarray, mu: float) -> float:
-    """The exact minimiser t >= 0 of m(dx + t p) = 1/2 sum max(0, a + t b)^2 + mu/2 |dx + t p|^2
-    (a = delta + J dx, b = J p): a convex piecewise quadratic in t, so m' is increasing; bisection."""
-    c0, c1 = mu * float(dx @ p), mu * float(p @ p)
-
-    def slope(t):
-        r = a + t * b
-        on = r > 0
-        return float(b[on] @ r[on]) + c0 + t * c1
-
-    hi = 1.0
-    while slope(hi) < 0 and hi < 1e6:
-        hi *= 2.0
-    lo = 0.0
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if slope(mid) < 0 else (lo, mid)
-    return lo if lo > 0 else hi * (slope(hi) < 0)
-
-
-def model_step(delta: np.ndarray, jac: sp.csr_matrix, mu: float) -> tuple[np.ndarray, int, int]:
-    """Minimise the convex model m(dx) by semismooth Newton with an exact line search on m: on the
-    active set A = {delta + J dx > 0}, p = -(J_A^T J_A + mu I)^-1 grad m, dx += t p with t the
-    minimiser of m along p (gaps that p closes stop it); ends when a full step keeps A.
-    Returns (dx, pairs in the last active set, inner iterations)."""
-    dx = np.zeros(jac.shape[1])
-    eye = sp.identity(jac.shape[1], format="csc")
-    k = 0
-    for k in range(INNER):
-        lin = delta + jac @ dx
-        active = lin > 0
-        ja = jac[active]
-        grad = ja.T @ lin[active] + mu * dx
-        p = spla.splu((ja.T @ ja + mu * eye).tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                      options=dict(SymmetricMode=True)).solve(-grad)
-        if float(grad @ p) >= 0:
-            break
-        t = model_line_minimum(lin, jac @ p, dx, p, mu)
-        if t <= 0:
-            break
-        dx = dx + t * p
-        if t >= 1.0 and np.array_equal(delta + jac @ dx > 0, active):
-            return dx, int(active.sum()), k + 1
-    return dx, int((delta + jac @ dx > 0).sum()), k + 1
-
-
-def polish(engine, ftol: float, log: PolishLog, max_steps: int = 40, verbose: bool = False) -> bool:
-    """Gauss-Newton steps until max force < ftol or no step is accepted; True if converged.
-    The engine holds the last accepted configuration, forces evaluated."""
-    c0 = time.process_time()
-    log.polishes += 1
-    packing = engine.packing()
-    state = engine.evaluate()
-    x = engine.positions()
-    n, d = x.shape
-    converged = state.max_force < ftol
-    for _ in range(max_steps):
-        if converged:
-            break
-        pairs = spheres.build(packing.with_positions(x), x, SKIN)
-        delta, jac = residuals(x, pairs)
-        grad = -state.forces.ravel()
-        mu = max(SHIFT * float(np.abs(jac.multiply(jac).sum(axis=0)).max()), LM * float(np.linalg.norm(grad)))
-        dx, n_active, inner = model_step(delta, jac, mu)
-        slope = float(grad @ dx)
-        noise = 8 * np.finfo(float).eps * float(np.sum(np.abs(np.maximum(delta, 0.0))))  # round-off of V
-        fmax0, accepted = state.max_force, 0.0
-        for alpha in ALPHAS:
-            engine.set_positions(x + alpha * dx.reshape(n, d))
-            trial = engine.evaluate()
-            decrease = trial.energy - state.energy
-            if -alpha * slope > noise:
-                ok = decrease <= ARMIJO * alpha * slope
-            else:  # the predicted decrease is below the energy's round-off: the max force decides
-                ok = decrease <= noise and trial.max_force < fmax0
-            if ok:
-                accepted = alpha
-                break
-        log.steps.append((n_active, inner, accepted, fmax0, trial.max_force if accepted else fmax0))
+    def on_step(step):
+        log.steps.append(step)
         if verbose:
-            print(f"    GN step: active {n_active} (inner {inner}), alpha {accepted:.3g}, "
-                  f"max force {fmax0:.3e} -> {log.steps[-1][-1]:.3e}, V {state.energy:.6e}", flush=True)
-        if not accepted:
-            engine.set_positions(x)
-            state = engine.evaluate()
-            break
-        x, state = engine.positions(), trial
-        converged = state.max_force < ftol
-    log.converged += int(converged)
-    log.seconds += time.process_time() - c0
-    return converged
+            print(f"    {step.kind} step: active {step.active} (inner {step.inner}), alpha {step.alpha:.3g}, "
+                  f"max force {step.force_before:.3e} -> {step.force_after:.3e}", flush=True)
+
+    result = gn_polish(engine, ftol, on_step=on_step, newton=newton)
+    log.polishes += 1
+    log.converged += int(result.converged)
+    log.seconds += result.seconds
+    return result.converged
 
 
 def tolerance(engine, settings: MinimizerSettings) -> float:
@@ -205,7 +89,7 @@ def tolerance(engine, settings: MinimizerSettings) -> float:
     return settings.resolved_force_tol(engine.box, t.potential.contact_stiffness, t.shape.force_tol_base)
 
 
-def install(trigger: str, after: int, log: PolishLog, verbose: bool = False) -> None:
+def install(trigger: str, after: int, log: PolishLog, verbose: bool = False, newton: bool = False) -> None:
     """Make CompiledEngine.minimize polish per ``trigger`` (none | chunk | reach)."""
     plain = PLAIN_MINIMIZE
 
@@ -215,7 +99,7 @@ def install(trigger: str, after: int, log: PolishLog, verbose: bool = False) -> 
 
     def minimize(self, settings=None):
         settings = settings or MinimizerSettings()
-        if trigger == "none" or settings.pressure is not None or supported(self.template):
+        if trigger == "none" or settings.pressure is not None or polish_reason(self.template):
             return plain(self, settings)
         ftol = tolerance(self, settings)
         if trigger == "reach":
@@ -224,7 +108,7 @@ def install(trigger: str, after: int, log: PolishLog, verbose: bool = False) -> 
             first = plain(self, replace(settings, force_tol=CREEP_FORCE))
             if first.reason != "force":  # V_min, cap, no progress: FIRE's own verdict stands
                 return first
-            polish(self, ftol, log, verbose=verbose)
+            polish(self, ftol, log, verbose=verbose, newton=newton)
             return finish(self, settings, first.iterations, first.seconds)
         done, seconds = 0, 0.0
         while True:
@@ -234,7 +118,7 @@ def install(trigger: str, after: int, log: PolishLog, verbose: bool = False) -> 
             if result.reason != "iteration-cap" or done >= settings.max_iterations:
                 return replace(result, iterations=done, seconds=seconds)
             if result.max_force < CREEP_FORCE:
-                polish(self, ftol, log, verbose=verbose)
+                polish(self, ftol, log, verbose=verbose, newton=newton)
                 return finish(self, settings, done, seconds)
 
     CompiledEngine.minimize = minimize
@@ -304,7 +188,7 @@ def run(args) -> None:
     for seed in args.seeds:
         for trigger in args.trigger:
             log = PolishLog()
-            install(trigger, args.after, log, verbose=args.steps)
+            install(trigger, args.after, log, verbose=args.steps, newton=args.newton)
             c0 = time.process_time()
             res = jam(n=args.n, seed=seed, engine="numba")
             cpu = time.process_time() - c0
@@ -312,10 +196,11 @@ def run(args) -> None:
             checks = check_packing(res.packing, res.energy_per_particle, None, res.settings.v_tol)
             steps = log.steps
             row = {"n": args.n, "seed": seed, "trigger": trigger, "after": args.after if trigger == "chunk" else "",
+                   "newton": args.newton if trigger != "none" else "",
                    "phi_j": f"{res.phi_j:.10f}", "iterations": res.iterations,
                    "final_iterations": int(res.history["iterations"][-1]), "minimizations": res.minimizations,
                    "polishes": log.polishes, "polish_converged": log.converged, "gn_steps": len(steps),
-                   "gn_refused": sum(s[2] == 0 for s in steps), "polish_cpu_s": round(log.seconds, 3),
+                   "gn_refused": sum(s.alpha == 0 for s in steps), "polish_cpu_s": round(log.seconds, 3),
                    "cpu_s": round(cpu, 3), "max_force": f"{res.max_force:.2e}", "checks": checks.passed}
             print(" ".join(f"{k}={v}" for k, v in row.items()), flush=True)
             if out:
@@ -330,6 +215,7 @@ def main():
     ap.add_argument("--trigger", nargs="+", choices=("none", "chunk", "reach"), default=["none", "chunk"])
     ap.add_argument("--after", type=int, default=20000, help="chunk length of the chunk trigger")
     ap.add_argument("--steps", action="store_true", help="print every polish step")
+    ap.add_argument("--newton", action="store_true", help="try a full Newton step first where the Hessian is positive definite")
     ap.add_argument("--out", default=None)
     args = ap.parse_args()
     if args.check:
