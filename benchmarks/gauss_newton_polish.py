@@ -1,25 +1,15 @@
-"""Gauss-Newton active-set polish for the final creep of disk minimisations (issue 17, next method
-of docs/speed-2.md sections 3-4), measured against plain FIRE on the same seeds.
+"""Gauss-Newton active-set polish for the creep of disk minimisations (issue 17; docs/speed-2.md
+section 8), measured against plain FIRE on the same seeds.
 
-Method. With the linear spring (alpha = 2) the energy is a nonlinear least-squares objective,
-V = 1/2 sum_pairs max(0, delta_ij)^2 with delta = 1 - r_ij / sigma_ij (eps = 1). Its Gauss-Newton
-model about x, m(dx) = 1/2 sum_pairs max(0, delta + J dx)^2 (J = d delta / dx, one row per pair
-within sigma + skin), is convex and piecewise quadratic; any dx with m(dx) < m(0) = V is a descent
-direction of V (grad V . dx = grad m(0) . dx <= m(dx) - m(0) < 0). Each polish step minimises m by
-a semismooth Newton (active-set) iteration: A = {pairs with delta + J dx > 0} (starting from the
-overlapping pairs, so gaps that the step would close join it), solve
-(J_A^T J_A + mu I) dx = -J_A^T delta_A (sparse LU; the tiny shift mu fixes the d translations and
-the rattlers' free coordinates, whose right-hand side is zero), recompute A, until A repeats.
-The step is accepted by Armijo backtracking on the exact energy (the engine's kernel); where the
-predicted decrease is below the energy's round-off (total V ~ 1e-13 near onset, each delta ~ 1e-8
-known to ~1e-16) the step must also lower the max force. Contacts are recomputed every step; the
-polish stops at max force < the minimiser's tolerance, or when no step length is accepted (then
-FIRE resumes). The Hessian's tension terms (-delta / (r sigma) (I - n n^T), of order -P) are left
-out, so J^T J is positive semidefinite and every step is a descent direction: the difference from
-the Newton on the active set of docs/speed-2.md section 4, which used the full (indefinite) Hessian
-and found no descent (alpha <= 0.03). Idea: semismooth Newton for squared positive parts
-(active-set Gauss-Newton for max(0, r)^2 least squares), named as the next method in
-docs/speed-2.md section 3; the chunked FIRE wrapper follows benchmarks/saddle_escape.py.
+Method (``jamflow.polish``): with the linear spring V = 1/2 sum max(0, delta)^2, delta = 1 - r/sigma,
+a nonlinear least-squares objective; each step minimises the convex Gauss-Newton model
+m(dx) = 1/2 sum max(0, delta + J dx)^2 by semismooth Newton over an active set that includes the
+gaps the step would close (exact line search on m), then Armijo backtracking on the exact energy.
+The Hessian's tension terms (~ -P) are left out, so J^T J is positive semidefinite and every step
+descends: unlike the Newton on the active set of docs/speed-2.md section 4 (full, indefinite
+Hessian: no descent, alpha <= 0.03). Idea: semismooth Newton for squared positive parts, named as
+the next method in docs/speed-2.md section 3; the chunked FIRE wrapper follows
+benchmarks/saddle_escape.py (minimize.py unchanged).
 
 Trigger (``--trigger``): ``chunk`` runs each minimisation of ``jam()`` in chunks of ``--after``
 FIRE iterations and polishes after a chunk that ends near force balance (max force < 1e-9) but
@@ -29,9 +19,12 @@ minimiser's rules, with force_tol 1e-9), polishes, then lets FIRE finish with th
 the stopping rule (max force, V_min) is FIRE's own, applied to the polished state.
 
     python benchmarks/gauss_newton_polish.py --check
-    python benchmarks/gauss_newton_polish.py --n 1024 --seeds 1 2 3 4 5 --trigger none chunk reach --out docs/gauss-newton-polish.csv
-    python benchmarks/gauss_newton_polish.py --n 256 --seeds 1 2 3 4 5 --trigger none chunk reach --out docs/gauss-newton-polish.csv
+    python benchmarks/gauss_newton_polish.py --n 1024 --seeds 1 2 3 4 5 --trigger none chunk --after 20000 --out docs/gauss-newton-polish.csv
+    python benchmarks/gauss_newton_polish.py --n 1024 --seeds 1 2 3 4 5 --trigger chunk --after 10000 --out docs/gauss-newton-polish.csv
+    python benchmarks/gauss_newton_polish.py --n 1024 --seeds 1 2 3 4 5 --trigger reach [--newton] --out docs/gauss-newton-polish.csv
+    (the same with --n 256; docs/speed-2.md section 8 lists the repeat and the 20-seed runs)
     python benchmarks/gauss_newton_polish.py --n 1024 --seeds 1 --trigger chunk --steps
+    python benchmarks/gauss_newton_polish.py --plot docs/gauss-newton-polish.csv --out docs/gauss-newton-polish.png
 
 ``--check`` runs the closed cases (two and three overlapping disks, exact minima known; a jammed
 N = 256 packing compressed 1e-3 above onset and displaced by 1e-6). ``--steps`` prints every
@@ -207,6 +200,42 @@ def run(args) -> None:
                 append_row(out, list(row), row)
 
 
+def variant(row: dict) -> str:
+    if row["trigger"] == "none":
+        return "FIRE only"
+    name = f"chunk {int(row['after']) // 1000}k" if row["trigger"] == "chunk" else "reach 1e-9"
+    return name + (" + Newton" if row.get("newton") == "True" else "")
+
+
+def plot(path: Path, png: Path) -> None:
+    """CPU seconds per seed and variant, one panel per N (the CSV of ``run``)."""
+    import csv
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = list(csv.DictReader(path.open()))
+    sizes = sorted({int(r["n"]) for r in rows}, reverse=True)
+    names = list(dict.fromkeys(variant(r) for r in rows))
+    fig, axes = plt.subplots(1, len(sizes), figsize=(5.5 * len(sizes), 4), squeeze=False)
+    for ax, n in zip(axes[0], sizes):
+        seeds = sorted({int(r["seed"]) for r in rows if int(r["n"]) == n})
+        width = 0.8 / len(names)
+        for k, name in enumerate(names):
+            cpu = {int(r["seed"]): float(r["cpu_s"]) for r in rows if int(r["n"]) == n and variant(r) == name}
+            xs = [s + (k - (len(names) - 1) / 2) * width for s in seeds if s in cpu]
+            ax.bar(xs, [cpu[s] for s in seeds if s in cpu], width, label=name)
+        ax.set_xticks(seeds)
+        ax.set_xlabel("seed")
+        ax.set_ylabel("CPU seconds of jam() (one core)")
+        ax.set_title(f"N = {n}, 2D bidisperse, default protocol")
+    axes[0][0].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(png, dpi=110)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--check", action="store_true", help="closed cases and a displaced jammed packing")
@@ -217,8 +246,11 @@ def main():
     ap.add_argument("--steps", action="store_true", help="print every polish step")
     ap.add_argument("--newton", action="store_true", help="try a full Newton step first where the Hessian is positive definite")
     ap.add_argument("--out", default=None)
+    ap.add_argument("--plot", default=None, help="draw CPU seconds per seed from this CSV into --out (png)")
     args = ap.parse_args()
-    if args.check:
+    if args.plot:
+        plot(Path(args.plot), Path(args.out))
+    elif args.check:
         check()
     else:
         run(args)

@@ -11,16 +11,21 @@ then accepts x + alpha dx by Armijo backtracking on the engine's exact energy; w
 decrease is below the energy's round-off, the step must lower the max force instead. The
 Hessian's tension terms (-delta / (r sigma) (I - n n^T), of order -P) are left out: J^T J is
 positive semidefinite, so a step never heads for a saddle, which is why this converges where
-Newton on the full active-set Hessian did not (docs/speed-2.md sections 3-4, 8). The shift mu
+Newton on the full active-set Hessian did not (docs/speed-2.md sections 3-4 and 8). The shift mu
 (1e-12 of the largest diagonal) fixes the d translations and the rattlers, whose right-hand
 side is zero. Convergence is linear near a minimum (rate ~ tension / stiffness along the
 softest mode); its use is the creep of the final minimisations near onset, where FIRE spends
 1e4-1e5 iterations rolling off a saddle whose soft mode (J^T J ~ 1e-11, Hessian ~ -P) ends at a
 contact change that the model's active set finds in one step.
 
+Optionally (``newton=True``) a full Newton step with the exact Hessian is tried first wherever
+H + mu I is positive definite: quadratic far above onset, but near onset H is indefinite at
+almost every state and the option was never accepted in the N = 256 / 1024 jams, so it is off.
+
 Only disks and spheres with the linear spring at a fixed periodic box (``polish_reason``); the
 engine is any ``jamflow.engine.base.Engine`` (positions, set_positions, evaluate, packing);
-pairs come from the compiled disk kernel's builder. Measured in benchmarks/gauss_newton_polish.py.
+pairs come from the compiled disk kernel's builder. Measured in benchmarks/gauss_newton_polish.py
+(docs/speed-2.md section 8: N = 1024 median CPU time -19% to -38%, phi_J statistically equal).
 """
 
 from __future__ import annotations
@@ -171,7 +176,7 @@ def _line_search(engine, x, dx, state, noise: float):
     return 0.0, state
 
 
-def polish(engine, ftol: float, max_steps: int = MAX_STEPS, on_step=None, newton: bool = True) -> PolishResult:
+def polish(engine, ftol: float, max_steps: int = MAX_STEPS, on_step=None, newton: bool = False) -> PolishResult:
     """Gauss-Newton steps on ``engine``'s configuration until its max force component is below
     ``ftol`` (eps/diameter) or no step length is accepted; the engine keeps the last accepted
     configuration, evaluated. With ``newton`` a full Newton step is tried first wherever the
@@ -182,6 +187,8 @@ def polish(engine, ftol: float, max_steps: int = MAX_STEPS, on_step=None, newton
     reason = polish_reason(engine.template)
     if reason:
         raise ValueError(f"{reason}; minimise with FIRE alone")
+    if not (np.isfinite(ftol) and ftol > 0):
+        raise ValueError(f"the polish's force tolerance must be a finite positive number (eps/diameter), got {ftol!r}")
     c0 = time.process_time()
     x = engine.positions()
     engine.set_positions(x)  # the states compared below are all evaluated from arrays set here

@@ -99,13 +99,13 @@ def test_newton_returns_a_displaced_compressed_packing_to_the_fire_minimum(confi
     assert first.reason == "force" and first.energy_per_particle > 1e-6  # jammed
     x0, e0 = eng.positions(), eng.evaluate().energy
     eng.set_positions(x0 + 1e-6 * np.random.default_rng(0).standard_normal(x0.shape))
-    out = polish(eng, 1e-13)
+    out = polish(eng, 1e-13, newton=True)
     assert out.converged and len(out.steps) <= 4 and out.steps[0].kind == "newton"
     assert _back_at_minimum(eng, x0) < 1e-9
     assert eng.evaluate().energy == pytest.approx(e0, rel=1e-10)
     # below the round-off floor no step helps: refused, and the engine keeps the best state
     x1, f1 = eng.positions(), eng.evaluate().max_force
-    again = polish(eng, 1e-30)
+    again = polish(eng, 1e-30, newton=True)
     assert not again.converged and again.steps[-1].alpha == 0.0 and again.max_force <= f1
     assert eng.evaluate().max_force == again.max_force and _back_at_minimum(eng, x1) < 1e-12
 
@@ -118,3 +118,9 @@ def test_unsupported_packings_are_refused_before_work(config, change, words):
     assert words in polish_reason(p)
     with pytest.raises(ValueError, match="minimise with FIRE alone"):
         polish(CompiledEngine(p), 1e-14)
+
+
+def test_a_bad_tolerance_is_refused():
+    eng = _engine([[5.0, 5.0], [5.9, 5.0]], [1.0, 1.0])
+    with pytest.raises(ValueError, match="finite positive"):
+        polish(eng, 0.0)
