@@ -15,8 +15,10 @@ Trigger (``--trigger``): ``chunk`` runs each minimisation of ``jam()`` in chunks
 FIRE iterations and polishes after a chunk that ends near force balance (max force < 1e-9) but
 unconverged (the saddle escape's trigger); ``reach`` first runs FIRE to max force < 1e-9 (the
 minimiser's rules, with force_tol 1e-9), polishes, then lets FIRE finish with the usual rules;
-``none`` is the default protocol. After a polish the plain minimiser always runs once more, so
-the stopping rule (max force, V_min) is FIRE's own, applied to the polished state.
+``none`` is the default protocol; ``soft`` is the default protocol with the lead's soft-mode
+Newton steps on (``MinimizerSettings(soft_modes="on")``, ``jamflow.soft_modes``), no polish.
+After a polish the plain minimiser always runs once more, so the stopping rule (max force,
+V_min) is FIRE's own, applied to the polished state.
 
     python benchmarks/gauss_newton_polish.py --check
     python benchmarks/gauss_newton_polish.py --n 1024 --seeds 1 2 3 4 5 --trigger none chunk --after 20000 --out docs/gauss-newton-polish.csv
@@ -92,7 +94,7 @@ def install(trigger: str, after: int, log: PolishLog, verbose: bool = False, new
 
     def minimize(self, settings=None):
         settings = settings or MinimizerSettings()
-        if trigger == "none" or settings.pressure is not None or polish_reason(self.template):
+        if trigger in ("none", "soft") or settings.pressure is not None or polish_reason(self.template):
             return plain(self, settings)
         ftol = tolerance(self, settings)
         if trigger == "reach":
@@ -174,7 +176,7 @@ def check() -> None:
 
 def run(args) -> None:
     from jamflow.checks import check_packing
-    from jamflow.protocols.compression import jam
+    from jamflow.protocols.compression import fast_protocol, jam
 
     jam(n=16, seed=0, engine="numba")
     out = Path(args.out) if args.out else None
@@ -183,13 +185,14 @@ def run(args) -> None:
             log = PolishLog()
             install(trigger, args.after, log, verbose=args.steps, newton=args.newton)
             c0 = time.process_time()
-            res = jam(n=args.n, seed=seed, engine="numba")
+            settings = fast_protocol(minimizer=MinimizerSettings(soft_modes="on")) if trigger == "soft" else None
+            res = jam(n=args.n, seed=seed, engine="numba", settings=settings)
             cpu = time.process_time() - c0
             CompiledEngine.minimize = PLAIN_MINIMIZE
             checks = check_packing(res.packing, res.energy_per_particle, None, res.settings.v_tol)
             steps = log.steps
             row = {"n": args.n, "seed": seed, "trigger": trigger, "after": args.after if trigger == "chunk" else "",
-                   "newton": args.newton if trigger != "none" else "",
+                   "newton": args.newton if trigger not in ("none", "soft") else "",
                    "phi_j": f"{res.phi_j:.10f}", "iterations": res.iterations,
                    "final_iterations": int(res.history["iterations"][-1]), "minimizations": res.minimizations,
                    "polishes": log.polishes, "polish_converged": log.converged, "gn_steps": len(steps),
@@ -201,8 +204,8 @@ def run(args) -> None:
 
 
 def variant(row: dict) -> str:
-    if row["trigger"] == "none":
-        return "FIRE only"
+    if row["trigger"] in ("none", "soft"):
+        return "FIRE only" if row["trigger"] == "none" else "soft modes on"
     name = f"chunk {int(row['after']) // 1000}k" if row["trigger"] == "chunk" else "reach 1e-9"
     return name + (" + Newton" if row.get("newton") == "True" else "")
 
@@ -241,7 +244,7 @@ def main():
     ap.add_argument("--check", action="store_true", help="closed cases and a displaced jammed packing")
     ap.add_argument("--n", type=int, default=1024)
     ap.add_argument("--seeds", type=int, nargs="+", default=[1])
-    ap.add_argument("--trigger", nargs="+", choices=("none", "chunk", "reach"), default=["none", "chunk"])
+    ap.add_argument("--trigger", nargs="+", choices=("none", "chunk", "reach", "soft"), default=["none", "chunk"])
     ap.add_argument("--after", type=int, default=20000, help="chunk length of the chunk trigger")
     ap.add_argument("--steps", action="store_true", help="print every polish step")
     ap.add_argument("--newton", action="store_true", help="try a full Newton step first where the Hessian is positive definite")
