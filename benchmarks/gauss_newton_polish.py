@@ -186,12 +186,12 @@ def run(args) -> None:
             install(trigger, args.after, log, verbose=args.steps, newton=args.newton)
             c0 = time.process_time()
             settings = fast_protocol(minimizer=MinimizerSettings(soft_modes="on")) if trigger == "soft" else None
-            res = jam(n=args.n, seed=seed, engine="numba", settings=settings)
+            res = jam(n=args.n, dim=args.dim, seed=seed, engine="numba", settings=settings)
             cpu = time.process_time() - c0
             CompiledEngine.minimize = PLAIN_MINIMIZE
             checks = check_packing(res.packing, res.energy_per_particle, None, res.settings.v_tol)
             steps = log.steps
-            row = {"n": args.n, "seed": seed, "trigger": trigger, "after": args.after if trigger == "chunk" else "",
+            row = {"n": args.n, **({"dim": args.dim} if args.dim != 2 else {}), "seed": seed, "trigger": trigger, "after": args.after if trigger == "chunk" else "",
                    "newton": args.newton if trigger not in ("none", "soft") else "",
                    "phi_j": f"{res.phi_j:.10f}", "iterations": res.iterations,
                    "final_iterations": int(res.history["iterations"][-1]), "minimizations": res.minimizations,
@@ -243,6 +243,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--check", action="store_true", help="closed cases and a displaced jammed packing")
     ap.add_argument("--n", type=int, default=1024)
+    ap.add_argument("--dim", type=int, default=2, choices=(2, 3), help="3: spheres, default (bidisperse) sizes; adds a dim column")
     ap.add_argument("--seeds", type=int, nargs="+", default=[1])
     ap.add_argument("--trigger", nargs="+", choices=("none", "chunk", "reach", "soft"), default=["none", "chunk"])
     ap.add_argument("--after", type=int, default=20000, help="chunk length of the chunk trigger")
