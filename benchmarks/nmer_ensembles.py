@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import logging
 import os
 import time
 from pathlib import Path
@@ -92,11 +93,20 @@ def main(argv=None) -> int:
     ap.add_argument("--protocol", default="fast", choices=sorted(PROTOCOLS))
     ap.add_argument("--packings", required=True, help="directory for the packing files")
     ap.add_argument("--out", required=True, help="CSV, appended")
+    ap.add_argument("--soft-modes", default="auto", choices=("auto", "on", "off"),
+                    help="MinimizerSettings.soft_modes (docs/soft-modes.md); rows before 2026-12-02 were made without")
+    ap.add_argument("--max-iterations", type=int, default=MinimizerSettings().max_iterations,
+                    help="per minimisation (a creeping one that reaches it fails its packing)")
+    ap.add_argument("--verbose", action="store_true", help="log every soft-mode step")
     args = ap.parse_args(argv)
+    if args.verbose:
+        logging.basicConfig(level=logging.INFO, format="  %(message)s")
     out, where = Path(args.out), Path(args.packings)
     where.mkdir(parents=True, exist_ok=True)
     check_writable(out)
-    settings = PROTOCOLS[args.protocol](minimizer=MinimizerSettings(method=args.minimizer, damping=args.damping))
+    settings = PROTOCOLS[args.protocol](minimizer=MinimizerSettings(method=args.minimizer, damping=args.damping,
+                                                                      soft_modes=args.soft_modes,
+                                                                      max_iterations=args.max_iterations))
     base = {"shape": args.shape, "dim": args.dim, "n": args.n, "sizes": args.sizes, "engine": args.engine,
             "minimizer": args.minimizer, "damping": args.damping if args.minimizer == "md" else ""}
     have = done_keys(out)
