@@ -198,7 +198,7 @@ def polish(engine, ftol: float, max_steps: int = MAX_STEPS, on_step=None, newton
         at = packing.with_positions(x)
         delta, jac = overlaps(x, build(at, x, SKIN))
         mu = SHIFT * max(float(np.asarray(jac.multiply(jac).sum(axis=0)).max()), 1.0)
-        noise = 8 * np.finfo(float).eps * float(np.sum(np.maximum(delta, 0.0)))  # round-off of V (~ sum delta^2)
+        noise = 8 * np.finfo(float).eps * float(np.sum(np.maximum(delta, 0.0)))  # V = sum delta^2 / 2, each delta to ~eps
         accepted, kind = 0.0, "newton"
         dx = newton_step(at, -state.forces.ravel(), mu) if newton else None
         if dx is not None:
