@@ -16,7 +16,9 @@ FIRE iterations and polishes after a chunk that ends near force balance (max for
 unconverged (the saddle escape's trigger); ``reach`` first runs FIRE to max force < 1e-9 (the
 minimiser's rules, with force_tol 1e-9), polishes, then lets FIRE finish with the usual rules;
 ``none`` is the default protocol; ``soft`` is the default protocol with the lead's soft-mode
-Newton steps on (``MinimizerSettings(soft_modes="on")``, ``jamflow.soft_modes``), no polish.
+Newton steps on (``MinimizerSettings(creep="soft-modes")``, ``jamflow.soft_modes``), no polish;
+``hook`` the polish as jamflow runs it by default (``MinimizerSettings(creep="auto")``: ``jamflow.polish.Polisher``
+inside ``minimize``), no wrapper. Every other trigger runs with ``creep="off"``.
 After a polish the plain minimiser always runs once more, so the stopping rule (max force,
 V_min) is FIRE's own, applied to the polished state.
 
@@ -94,7 +96,7 @@ def install(trigger: str, after: int, log: PolishLog, verbose: bool = False, new
 
     def minimize(self, settings=None):
         settings = settings or MinimizerSettings()
-        if trigger in ("none", "soft") or settings.pressure is not None or polish_reason(self.template):
+        if trigger in ("none", "soft", "hook") or settings.pressure is not None or polish_reason(self.template):
             return plain(self, settings)
         ftol = tolerance(self, settings)
         if trigger == "reach":
@@ -185,14 +187,15 @@ def run(args) -> None:
             log = PolishLog()
             install(trigger, args.after, log, verbose=args.steps, newton=args.newton)
             c0 = time.process_time()
-            settings = fast_protocol(minimizer=MinimizerSettings(soft_modes="on")) if trigger == "soft" else None
+            creep = {"soft": "soft-modes", "hook": "auto"}.get(trigger, "off")  # jamflow's own creep method: hook only
+            settings = fast_protocol(minimizer=MinimizerSettings(creep=creep))
             res = jam(n=args.n, dim=args.dim, seed=seed, engine="numba", settings=settings)
             cpu = time.process_time() - c0
             CompiledEngine.minimize = PLAIN_MINIMIZE
             checks = check_packing(res.packing, res.energy_per_particle, None, res.settings.v_tol)
             steps = log.steps
             row = {"n": args.n, **({"dim": args.dim} if args.dim != 2 else {}), "seed": seed, "trigger": trigger, "after": args.after if trigger == "chunk" else "",
-                   "newton": args.newton if trigger not in ("none", "soft") else "",
+                   "newton": args.newton if trigger not in ("none", "soft", "hook") else "",
                    "phi_j": f"{res.phi_j:.10f}", "iterations": res.iterations,
                    "final_iterations": int(res.history["iterations"][-1]), "minimizations": res.minimizations,
                    "polishes": log.polishes, "polish_converged": log.converged, "gn_steps": len(steps),
@@ -204,8 +207,8 @@ def run(args) -> None:
 
 
 def variant(row: dict) -> str:
-    if row["trigger"] in ("none", "soft"):
-        return "FIRE only" if row["trigger"] == "none" else "soft modes on"
+    if row["trigger"] in ("none", "soft", "hook"):
+        return {"none": "FIRE only", "soft": "soft modes on", "hook": "polish in minimize (default)"}[row["trigger"]]
     name = f"chunk {int(row['after']) // 1000}k" if row["trigger"] == "chunk" else "reach 1e-9"
     return name + (" + Newton" if row.get("newton") == "True" else "")
 
@@ -245,7 +248,7 @@ def main():
     ap.add_argument("--n", type=int, default=1024)
     ap.add_argument("--dim", type=int, default=2, choices=(2, 3), help="3: spheres, default (bidisperse) sizes; adds a dim column")
     ap.add_argument("--seeds", type=int, nargs="+", default=[1])
-    ap.add_argument("--trigger", nargs="+", choices=("none", "chunk", "reach", "soft"), default=["none", "chunk"])
+    ap.add_argument("--trigger", nargs="+", choices=("none", "chunk", "reach", "soft", "hook"), default=["none", "chunk"])
     ap.add_argument("--after", type=int, default=20000, help="chunk length of the chunk trigger")
     ap.add_argument("--steps", action="store_true", help="print every polish step")
     ap.add_argument("--newton", action="store_true", help="try a full Newton step first where the Hessian is positive definite")

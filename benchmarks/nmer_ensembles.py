@@ -30,7 +30,7 @@ from tqdm import tqdm
 from jamflow.analysis.contacts import Contacts
 from jamflow.engine.reference import energy_forces_pressure
 from jamflow.io import atomic_path, check_writable, save_packing
-from jamflow.minimize import MinimizerSettings
+from jamflow.minimize import CREEP_METHODS, MinimizerSettings
 from jamflow.protocols.compression import PROTOCOLS, compress, initial_packing
 from jamflow.checks import generalized_torques
 
@@ -93,8 +93,8 @@ def main(argv=None) -> int:
     ap.add_argument("--protocol", default="fast", choices=sorted(PROTOCOLS))
     ap.add_argument("--packings", required=True, help="directory for the packing files")
     ap.add_argument("--out", required=True, help="CSV, appended")
-    ap.add_argument("--soft-modes", default="auto", choices=("auto", "on", "off"),
-                    help="MinimizerSettings.soft_modes (docs/soft-modes.md); rows before 2026-12-02 were made without")
+    ap.add_argument("--creep", default="auto", choices=CREEP_METHODS,
+                    help="MinimizerSettings.creep (docs/soft-modes.md); rows before 2026-12-02 were made without")
     ap.add_argument("--max-iterations", type=int, default=MinimizerSettings().max_iterations,
                     help="per minimisation (a creeping one that reaches it fails its packing)")
     ap.add_argument("--verbose", action="store_true", help="log every soft-mode step")
@@ -105,7 +105,7 @@ def main(argv=None) -> int:
     where.mkdir(parents=True, exist_ok=True)
     check_writable(out)
     settings = PROTOCOLS[args.protocol](minimizer=MinimizerSettings(method=args.minimizer, damping=args.damping,
-                                                                      soft_modes=args.soft_modes,
+                                                                      creep=args.creep,
                                                                       max_iterations=args.max_iterations))
     base = {"shape": args.shape, "dim": args.dim, "n": args.n, "sizes": args.sizes, "engine": args.engine,
             "minimizer": args.minimizer, "damping": args.damping if args.minimizer == "md" else ""}

@@ -34,8 +34,6 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 CREEP_FORCE = 1e-9  # a minimisation below this max force (eps/diameter) that has not converged creeps
 SKIN = 0.05  # candidate pairs within sigma + SKIN (diameters): the gaps a step may close
@@ -44,6 +42,7 @@ ARMIJO = 1e-4
 ALPHAS = 0.5 ** np.arange(14)  # backtracking 1 ... 1.2e-4
 INNER = 10  # active-set iterations per step
 MAX_STEPS = 40
+AFTER = 20_000  # MinimizerSettings.creep_after default: iterations before a minimisation is polished (measured)
 
 
 @dataclass(frozen=True)
@@ -81,6 +80,8 @@ def polish_reason(packing) -> str:
 
 def overlaps(x: np.ndarray, pairs) -> tuple[np.ndarray, sp.csr_matrix]:
     """delta = 1 - r / sigma over ``pairs`` (i, j, shift, sigma) and its Jacobian J (P x N d)."""
+    import scipy.sparse as sp  # loaded only when a polish runs
+
     n, d = x.shape
     dr = x[pairs.i] - x[pairs.j] + pairs.shift
     r = np.sqrt(np.einsum("ij,ij->i", dr, dr))
@@ -123,6 +124,9 @@ def line_minimum(a: np.ndarray, b: np.ndarray, dx: np.ndarray, p: np.ndarray, mu
 def model_step(delta: np.ndarray, jac: sp.csr_matrix, mu: float) -> tuple[np.ndarray, int, int]:
     """Minimise m(dx) by semismooth Newton with exact line searches on m; ends when a full step
     keeps the active set. Returns (dx, pairs in the last active set, active-set iterations)."""
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla  # loaded only when a polish runs
+
     dx = np.zeros(jac.shape[1])
     eye = sp.identity(jac.shape[1], format="csc")
     k = 0
@@ -147,6 +151,8 @@ def newton_step(packing, grad: np.ndarray, mu: float) -> np.ndarray | None:
     """The Newton step -(H + mu I)^-1 grad with the full Hessian of the overlapping pairs
     (``analysis.hessian``: tension terms included), or None where H + mu I is not positive definite
     (read off the pivots of a symmetric, diagonally pivoted LU: Sylvester's law of inertia)."""
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla  # loaded only when a polish runs
     from .analysis.hessian import hessian
 
     h = hessian(packing)
@@ -220,3 +226,25 @@ def polish(engine, ftol: float, max_steps: int = MAX_STEPS, on_step=None, newton
             break
         x, state = x + accepted * dx.reshape(x.shape), trial
     return PolishResult(state.max_force < ftol, tuple(steps), state.max_force, time.process_time() - c0)
+
+
+@dataclass
+class Polisher:
+    """The creep method "polish" of one minimisation (``MinimizerSettings.creep``): at most one
+    ``polish`` per minimisation, at the first multiple of ``after`` iterations where the max force
+    is below ``CREEP_FORCE`` (the form measured in docs/speed-2.md section 8)."""
+
+    after: int
+    ftol: float
+    accepted: int = 0
+    polished: bool = False
+
+    def due(self, done: int, max_force: float) -> bool:
+        return not self.polished and done % self.after == 0 and max_force < CREEP_FORCE
+
+    def step(self, engine, done: int) -> bool:
+        self.polished = True
+        result = polish(engine, self.ftol)
+        kept = sum(1 for s in result.steps if s.alpha > 0)
+        self.accepted += kept
+        return kept > 0
