@@ -209,7 +209,8 @@ def _creep_method(engine, settings: MinimizerSettings, stiffness: float, ftol: f
         return None
     method = settings.creep
     if method == "auto":
-        method = {True: "soft-modes", False: "polish"}[template.shape.oriented] if settings.method == "fire" else "off"
+        compiled_fire = settings.method == "fire" and getattr(engine, "name", "") == "numba"  # LAMMPS: decks replay it
+        method = {True: "soft-modes", False: "polish"}[template.shape.oriented] if compiled_fire else "off"
         if method == "polish" and (template.dim != 2 or _polish_reason(template)):
             method = "off"
     if method == "soft-modes":
