@@ -210,7 +210,7 @@ def _creep_method(engine, settings: MinimizerSettings, stiffness: float, ftol: f
     method = settings.creep
     if method == "auto":
         compiled_fire = settings.method == "fire" and getattr(engine, "name", "") == "numba"  # LAMMPS: decks replay it
-        method = {True: "soft-modes", False: "polish"}[template.shape.oriented] if compiled_fire else "off"
+        method = ("soft-modes" if template.shape.oriented else "polish") if compiled_fire else "off"
         if method == "polish" and (template.dim != 2 or _polish_reason(template)):
             method = "off"
     if method == "soft-modes":
@@ -223,7 +223,7 @@ def _creep_method(engine, settings: MinimizerSettings, stiffness: float, ftol: f
 
         reason = _polish_reason(template)
         if reason:
-            raise ValueError(f"creep method 'polish': {reason}; use creep='soft-modes' or 'off'")
+            raise ValueError(f"creep method 'polish': {reason}; use the creep method soft-modes or off")
         return Polisher(settings.creep_after or AFTER, ftol)
     return None
 
