@@ -205,9 +205,12 @@ def minimize(engine, settings: MinimizerSettings) -> MinimizeResult:
 def _creep_method(engine, settings: MinimizerSettings, stiffness: float, ftol: float):
     """The creep method of this minimisation (``MinimizerSettings.creep``), or None."""
     template = engine.template
-    if settings.pressure is not None or template.box.walls or template.gravity or template.fixed is not None:
-        return None
     method = settings.creep
+    if settings.pressure is not None or template.box.walls or template.gravity or template.fixed is not None:
+        if method in ("auto", "off"):
+            return None
+        raise ValueError(f"creep method {method!r} runs at a fixed periodic box without walls, gravity or fixed "
+                         "particles; use the creep method auto or off here")
     if method == "auto":
         compiled_fire = settings.method == "fire" and getattr(engine, "name", "") == "numba"  # LAMMPS: decks replay it
         method = ("soft-modes" if template.shape.oriented else "polish") if compiled_fire else "off"

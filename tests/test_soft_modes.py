@@ -61,6 +61,14 @@ def test_a_creeping_minimisation_takes_the_step(displaced_dimers):
     assert off.creep_steps == 0 and off.iterations > on.iterations
 
 
+def test_an_explicit_creep_method_is_refused_where_it_cannot_run(displaced_dimers):
+    *_, moved = displaced_dimers
+    with CompiledEngine(moved) as engine, pytest.raises(ValueError, match="fixed periodic box"):
+        minimize(engine, MinimizerSettings(creep="soft-modes", pressure=1e-3))
+    with CompiledEngine(moved) as engine, pytest.raises(ValueError, match="needs disks or spheres"):
+        minimize(engine, MinimizerSettings(creep="polish"))
+
+
 def test_soft_mode_settings_are_checked():
     with pytest.raises(ValueError, match="creep method"):
         MinimizerSettings(creep="yes")
