@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import logging
 import os
 import time
 from pathlib import Path
@@ -32,7 +33,7 @@ from tqdm import tqdm
 from jamflow.analysis.contacts import Contacts
 from jamflow.engine.reference import energy_forces_pressure
 from jamflow.io import atomic_path, check_writable, save_packing
-from jamflow.minimize import MinimizerSettings
+from jamflow.minimize import CREEP_METHODS, MinimizerSettings
 from jamflow.protocols.compression import PROTOCOLS, compress, initial_packing
 from jamflow.checks import generalized_torques
 
@@ -116,13 +117,22 @@ def main(argv=None) -> int:
     ap.add_argument("--packings", required=True, help="directory for the packing files")
     ap.add_argument("--out", required=True, help="CSV, appended")
     ap.add_argument("--rejects", help="CSV for the rows of packings that fail the checks (default: --out)")
+    ap.add_argument("--creep", default="auto", choices=CREEP_METHODS,
+                    help="MinimizerSettings.creep (docs/soft-modes.md); rows before 2026-12-02 were made without")
+    ap.add_argument("--max-iterations", type=int, default=MinimizerSettings().max_iterations,
+                    help="per minimisation (a creeping one that reaches it fails its packing)")
+    ap.add_argument("--verbose", action="store_true", help="log every soft-mode step")
     args = ap.parse_args(argv)
+    if args.verbose:
+        logging.basicConfig(level=logging.INFO, format="  %(message)s")
     out, where = Path(args.out), Path(args.packings)
     rejects = Path(args.rejects) if args.rejects else out
     where.mkdir(parents=True, exist_ok=True)
     check_writable(out)
     check_writable(rejects)
-    settings = PROTOCOLS[args.protocol](minimizer=MinimizerSettings(method=args.minimizer, damping=args.damping))
+    settings = PROTOCOLS[args.protocol](minimizer=MinimizerSettings(method=args.minimizer, damping=args.damping,
+                                                                      creep=args.creep,
+                                                                      max_iterations=args.max_iterations))
     base = {"shape": args.shape, "dim": args.dim, "n": args.n, "sizes": args.sizes, "engine": args.engine,
             "minimizer": args.minimizer, "damping": args.damping if args.minimizer == "md" else ""}
     have = done_keys(out) | done_keys(rejects)

@@ -2,13 +2,13 @@
 (docs/soft-modes.md).
 
     python benchmarks/soft_modes.py PACKING.h5                 # spectrum bands, gradient shares, energy along the mode
-    python benchmarks/soft_modes.py PACKING.h5 --minimize on off   # then minimise from it with and without the steps
+    python benchmarks/soft_modes.py PACKING.h5 --minimize soft-modes off   # then minimise from it with and without the steps
 
 For a packing file (typically the last state of a minimisation that hit the iteration cap): the
 eigenvalues of the dynamical matrix of the non-floaters in bands, the norm of the gradient in each
 band, the mode carrying most of it, and the exact energy change along that mode (numpy reference)
 against the Newton prediction -c^2 / (2 lambda). With ``--minimize``, ``minimize()`` from the file
-with ``soft_modes`` on / off (CPU seconds, iterations, stop reason, final energy per particle).
+with ``creep`` soft-modes / off (CPU seconds, iterations, stop reason, final energy per particle).
 """
 
 from __future__ import annotations
@@ -52,12 +52,12 @@ def analyse(packing) -> None:
         print(f"  {factor:4.2f} x Newton length: energy change {energy_forces_pressure(moved).energy - ref.energy:.4g}")
 
 
-def run(packing, soft_modes: str, max_iterations: int) -> None:
+def run(packing, creep: str, max_iterations: int) -> None:
     cpu = time.process_time()
     with CompiledEngine(packing) as engine:
-        result = minimize(engine, MinimizerSettings(soft_modes=soft_modes, soft_mode_after=10_000,
+        result = minimize(engine, MinimizerSettings(creep=creep, creep_after=10_000,
                                                     max_iterations=max_iterations))
-    print(f"soft_modes {soft_modes}: {result.reason}, {result.iterations} iterations, {result.soft_mode_steps} steps "
+    print(f"creep {creep}: {result.reason}, {result.iterations} iterations, {result.creep_steps} steps "
           f"kept, V/N {result.energy_per_particle:.4g}, max F {result.max_force:.2g}, max tau/d "
           f"{result.max_torque:.2g}, {time.process_time() - cpu:.1f} CPU s")
 
@@ -65,14 +65,15 @@ def run(packing, soft_modes: str, max_iterations: int) -> None:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("packing")
-    ap.add_argument("--minimize", nargs="*", choices=("on", "off"), default=[])
+    ap.add_argument("--minimize", nargs="*", choices=("soft-modes", "off"), default=[],
+                    help="minimise from the file with each creep method")
     ap.add_argument("--max-iterations", type=int, default=500_000)
     args = ap.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="  %(message)s")
     packing = load_packing(args.packing)
     analyse(packing)
-    for soft_modes in args.minimize:
-        run(packing, soft_modes, args.max_iterations)
+    for creep in args.minimize:
+        run(packing, creep, args.max_iterations)
     return 0
 
 

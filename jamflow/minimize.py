@@ -55,7 +55,7 @@ import numpy as np
 METHODS = ("fire", "cg", "md")
 STRESS_MODES = ("iso", "aniso", "tri")  # box relaxation at a target pressure
 MD_DAMPINGS = ("viscous", "pairwise")
-SOFT_MODES = ("auto", "on", "off")
+CREEP_METHODS = ("auto", "soft-modes", "polish", "off")
 
 
 @dataclass(frozen=True)
@@ -80,11 +80,13 @@ class MinimizerSettings:
     # and rotations). Near onset 0.01 reached the force tolerance where 0.3 was 500x off after 3e5 steps
     # (docs/ellipses.md)
     rotating_damping: float = 0.01
-    # Newton steps along the softest modes once a minimisation creeps (``jamflow.soft_modes``):
-    # "auto" = rigid bodies under FIRE at a fixed box (where they were measured to pay, docs/nmers.md),
-    # "on" = every shape at a fixed box, "off"; first after soft_mode_after iterations, then every as many
-    soft_modes: str = "auto"
-    soft_mode_after: int = 50_000
+    # what a creeping minimisation (max force < 1e-9, not converged) does between FIRE windows at a fixed box:
+    # "soft-modes": Newton steps along its softest modes (``jamflow.soft_modes``), "polish": Gauss-Newton
+    # active-set steps (``jamflow.polish``; disks/spheres, linear spring), "off"; "auto" = what was measured
+    # to pay: soft modes for shapes that turn (rigid bodies, ellipses, spheroids), the polish for 2D disks
+    # with the linear spring (docs/soft-modes.md, docs/speed-2.md section 8), nothing otherwise
+    creep: str = "auto"
+    creep_after: int | None = None  # iterations before the first attempt; None: the method's measured value
 
     def __post_init__(self):
         if self.method not in METHODS:
@@ -95,10 +97,10 @@ class MinimizerSettings:
                 raise ValueError(f"minimizer {name} must be a finite positive number, got {value}")
         if self.force_tol is not None and not (math.isfinite(self.force_tol) and self.force_tol > 0):
             raise ValueError(f"force_tol must be a finite positive number, got {self.force_tol}")
-        if self.soft_modes not in SOFT_MODES:
-            raise ValueError(f"unknown soft_modes {self.soft_modes!r}; use one of {', '.join(SOFT_MODES)}")
-        if self.soft_mode_after < 1:
-            raise ValueError(f"soft_mode_after must be a positive number of iterations, got {self.soft_mode_after}")
+        if self.creep not in CREEP_METHODS:
+            raise ValueError(f"unknown creep method {self.creep!r}; use one of {', '.join(CREEP_METHODS)}")
+        if self.creep_after is not None and self.creep_after < 1:
+            raise ValueError(f"creep_after must be a positive number of iterations, got {self.creep_after}")
         if self.md_damping not in MD_DAMPINGS:
             raise ValueError(f"unknown md_damping {self.md_damping!r}; use one of {', '.join(MD_DAMPINGS)}")
         if self.max_iterations < 1 or self.window < 1 or self.md_sample_every < 1:
@@ -155,7 +157,7 @@ class MinimizeResult:
     max_force: float
     seconds: float
     max_torque: float = 0.0  # largest generalized torque component tau_a / d_k (eps/diameter)
-    soft_mode_steps: int = 0  # soft-mode Newton steps kept (``jamflow.soft_modes``)
+    creep_steps: int = 0  # steps of the creep method kept (``MinimizerSettings.creep``)
 
 
 CONVERGED_REASONS = ("force", "energy-below-vmin")
@@ -178,7 +180,7 @@ def minimize(engine, settings: MinimizerSettings) -> MinimizeResult:
     ftol = settings.resolved_force_tol(engine.box, stiffness, engine.template.shape.force_tol_base)
     fmax_at_vmin = _force_bound(engine.template, n * settings.v_min)
     done, energy_prev, fmax_prev = 0, math.inf, math.inf
-    soft = _soft_mode_steps(engine, settings, stiffness)
+    creep = _creep_method(engine, settings, stiffness, ftol)
     with engine.minimizer_session(settings, ftol) as run_window:
         while True:
             steps = min(settings.window, settings.max_iterations - done)
@@ -194,22 +196,45 @@ def minimize(engine, settings: MinimizerSettings) -> MinimizeResult:
                 if settings.pressure is not None:  # report the potential energy, not the enthalpy
                     energy = engine.state().energy / n
                 return MinimizeResult(reason in CONVERGED_REASONS, reason, done, energy, fmax,
-                                      time.perf_counter() - start, gmax, soft.accepted if soft else 0)
+                                      time.perf_counter() - start, gmax, creep.accepted if creep else 0)
             energy_prev, fmax_prev = mechanical, worst
-            if soft is not None and soft.due(done, worst):
-                soft.step(engine, done)
+            if creep is not None and creep.due(done, worst) and creep.step(engine, done):
+                energy_prev, fmax_prev = math.inf, math.inf  # a new state: the next window must not read "no-progress"
 
 
-def _soft_mode_steps(engine, settings: MinimizerSettings, stiffness: float):
-    """The soft-mode stepper of this minimisation, or None (``MinimizerSettings.soft_modes``)."""
+def _creep_method(engine, settings: MinimizerSettings, stiffness: float, ftol: float):
+    """The creep method of this minimisation (``MinimizerSettings.creep``), or None."""
     template = engine.template
-    fixed_box = settings.pressure is None and not template.box.walls and template.gravity == 0 and template.fixed is None
-    wanted = {"on": True, "off": False, "auto": template.shape.kind == "rigid" and settings.method == "fire"}
-    if not (wanted[settings.soft_modes] and fixed_box):
-        return None
-    from .soft_modes import SoftModeSteps  # scipy.sparse.linalg: loaded only where it runs
+    method = settings.creep
+    if settings.pressure is not None or template.box.walls or template.gravity or template.fixed is not None:
+        if method in ("auto", "off"):
+            return None
+        raise ValueError(f"creep method {method!r} runs at a fixed periodic box without walls, gravity or fixed "
+                         "particles; use the creep method auto or off here")
+    if method == "auto":
+        compiled_fire = settings.method == "fire" and getattr(engine, "name", "") == "numba"  # LAMMPS: decks replay it
+        method = ("soft-modes" if template.shape.oriented else "polish") if compiled_fire else "off"
+        if method == "polish" and (template.dim != 2 or _polish_reason(template)):
+            method = "off"
+    if method == "soft-modes":
+        from .soft_modes import AFTER, SoftModeSteps  # scipy.sparse.linalg: loaded only where it runs
 
-    return SoftModeSteps(settings.soft_mode_after, settings.soft_mode_after, max(1.0, stiffness))
+        after = settings.creep_after or AFTER
+        return SoftModeSteps(after, after, max(1.0, stiffness))
+    if method == "polish":
+        from .polish import AFTER, Polisher
+
+        reason = _polish_reason(template)
+        if reason:
+            raise ValueError(f"creep method 'polish': {reason}; use the creep method soft-modes or off")
+        return Polisher(settings.creep_after or AFTER, ftol)
+    return None
+
+
+def _polish_reason(template) -> str:
+    from .polish import polish_reason
+
+    return polish_reason(template)
 
 
 def _force_bound(packing, energy: float) -> float:

@@ -32,6 +32,7 @@ from .analysis.deformation import displaced
 from .analysis.hessian import Coordinates, DynamicalMatrix
 from .checks import generalized_torques
 
+AFTER = 50_000  # MinimizerSettings.creep_after default: iterations before the first attempt, and between attempts
 CREEP_FORCE = 1e-9  # max force (eps/diameter) below which an unconverged minimisation counts as creeping
 MODES = 12  # lowest eigenpairs computed (beyond the d translations)
 ZERO_MODE = 1e-10  # |lambda| below this x stiffness: a zero mode (no restoring force), left alone

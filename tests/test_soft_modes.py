@@ -52,20 +52,28 @@ def test_a_creeping_minimisation_takes_the_step(displaced_dimers):
     stall at max force 2.4e-11 ('no-progress' after 2100 iterations)."""
     *_, moved = displaced_dimers
     results = {}
-    for soft_modes in ("on", "off"):
+    for creep in ("soft-modes", "off"):
         with CompiledEngine(moved) as engine:
-            results[soft_modes] = minimize(engine, MinimizerSettings(soft_modes=soft_modes, soft_mode_after=100,
+            results[creep] = minimize(engine, MinimizerSettings(creep=creep, creep_after=100,
                                                                      window=100))
-    on, off = results["on"], results["off"]
-    assert on.reason == "force" and on.soft_mode_steps >= 1 and on.iterations < 1000
-    assert off.soft_mode_steps == 0 and off.iterations > on.iterations
+    on, off = results["soft-modes"], results["off"]
+    assert on.reason == "force" and on.creep_steps >= 1 and on.iterations < 1000
+    assert off.creep_steps == 0 and off.iterations > on.iterations
+
+
+def test_an_explicit_creep_method_is_refused_where_it_cannot_run(displaced_dimers):
+    *_, moved = displaced_dimers
+    with CompiledEngine(moved) as engine, pytest.raises(ValueError, match="fixed periodic box"):
+        minimize(engine, MinimizerSettings(creep="soft-modes", pressure=1e-3))
+    with CompiledEngine(moved) as engine, pytest.raises(ValueError, match="needs disks or spheres"):
+        minimize(engine, MinimizerSettings(creep="polish"))
 
 
 def test_soft_mode_settings_are_checked():
-    with pytest.raises(ValueError, match="soft_modes"):
-        MinimizerSettings(soft_modes="yes")
-    with pytest.raises(ValueError, match="soft_mode_after"):
-        MinimizerSettings(soft_mode_after=0)
+    with pytest.raises(ValueError, match="creep method"):
+        MinimizerSettings(creep="yes")
+    with pytest.raises(ValueError, match="creep_after"):
+        MinimizerSettings(creep_after=0)
 
 
 def test_the_creeping_3d_dimer_state_is_resolved():
@@ -75,10 +83,10 @@ def test_the_creeping_3d_dimer_state_is_resolved():
     iterations leave it creeping."""
     packing = load_packing(DATA / "dimer3d_a1.5_n128_s8_creeping.h5")
     results = {}
-    for soft_modes in ("on", "off"):
+    for creep in ("soft-modes", "off"):
         with CompiledEngine(packing) as engine:
-            results[soft_modes] = minimize(engine, MinimizerSettings(soft_modes=soft_modes, soft_mode_after=10_000,
+            results[creep] = minimize(engine, MinimizerSettings(creep=creep, creep_after=10_000,
                                                                      max_iterations=20_000))
-    assert results["on"].converged and results["on"].soft_mode_steps == 1
-    assert results["on"].energy_per_particle < 1e-16
+    assert results["soft-modes"].converged and results["soft-modes"].creep_steps == 1
+    assert results["soft-modes"].energy_per_particle < 1e-16
     assert results["off"].reason == "iteration-cap" and results["off"].energy_per_particle > 1e-16

@@ -14,7 +14,7 @@ import time
 
 from ..engine.base import ENGINES, engine_name
 from ..io import check_writable, replacing, save_packing
-from ..minimize import MD_DAMPINGS, METHODS, SOFT_MODES, MinimizerSettings
+from ..minimize import CREEP_METHODS, MD_DAMPINGS, METHODS, MinimizerSettings
 from ..protocols.compression import (DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, JammingFailed, at_shear_strain,
                                      check_resolution, initial_packing, jam, with_accumulated_strain)
 from ..progress import CompressionProgress
@@ -50,10 +50,11 @@ def add_arguments(p) -> None:
     p.add_argument("--damping", type=float, default=MinimizerSettings().damping,
                    help="md only: drag coefficient (sqrt(m eps)/diameter); rigid bodies: damping time 1/DAMPING")
     add_md_damping_argument(p)
-    p.add_argument("--soft-modes", choices=SOFT_MODES, default="auto",
-                   help="Newton steps along the softest modes of a creeping minimisation (jamflow.soft_modes): auto = "
-                        "rigid bodies under FIRE (3D dimers: 4.9e-11 iteration-cap failures became converged "
-                        "packings, docs/nmers.md), on = every shape at a fixed box, off")
+    p.add_argument("--creep", choices=CREEP_METHODS, default="auto",
+                   help="what a creeping minimisation (max force < 1e-9, unconverged) does between FIRE windows: "
+                        "soft-modes (Newton steps along its softest modes, docs/soft-modes.md), polish (Gauss-Newton "
+                        "active-set steps, disks/spheres with the linear spring, docs/speed-2.md section 8), off; "
+                        "auto: soft-modes for shapes that turn, polish for 2D disks, in the compiled engine"),
     p.add_argument("--engine", choices=ENGINES, default="auto",
                    help="auto: the compiled engine (FIRE, in process) wherever it runs the scene, else LAMMPS "
                         "(docs/speed.md). The engines sum forces in different orders, so from one start they "
@@ -107,7 +108,7 @@ def settings_from_args(args) -> CompressionSettings:
         raise ValueError(f"--md-damping {args.md_damping} applies to --minimizer md only, not {args.minimizer}")
     minimizer = MinimizerSettings(method=args.minimizer, force_tol=args.ftol, v_min=args.vtol,
                                   damping=getattr(args, "damping", MinimizerSettings().damping),  # crosscheck: none
-                                  md_damping=args.md_damping, soft_modes=getattr(args, "soft_modes", "auto"))
+                                  md_damping=args.md_damping, creep=getattr(args, "creep", "auto"))
     protocol = args.protocol or ("seed" if args.emit_deck else DEFAULT_PROTOCOL)
     return PROTOCOLS[protocol](phi0=args.phi0, dphi0=args.dphi0, v_tol=args.vtol, minimizer=minimizer)
 

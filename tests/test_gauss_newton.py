@@ -1,0 +1,126 @@
+"""The Gauss-Newton active-set polish (jamflow.polish): closed cases, derivatives against finite
+differences and the engine's forces, and a displaced jammed packing back at FIRE's minimum."""
+
+import numpy as np
+import pytest
+
+from jamflow.analysis.contacts import Contacts
+from jamflow.box import Box
+from jamflow.engine.compiled import spheres
+from jamflow.engine.compiled.engine import CompiledEngine
+from jamflow.minimize import MinimizerSettings
+from jamflow.packing import Packing
+from jamflow.polish import model_step, model_value, overlaps, polish, polish_reason
+from jamflow.potentials import Spring, parse_potential
+
+from conftest import tilted
+
+
+def _engine(positions, diameters, length=10.0):
+    box = Box.cube(length, len(positions[0]))
+    return CompiledEngine(Packing(np.asarray(positions, float), np.asarray(diameters, float), box, Spring()))
+
+
+def test_two_disks_end_exactly_at_contact():
+    eng = _engine([[5.0, 5.0], [5.9, 5.0]], [1.0, 1.0])
+    res = polish(eng, 1e-14)
+    x = eng.positions()
+    assert res.converged and len(res.steps) <= 3
+    assert np.linalg.norm(x[1] - x[0]) == pytest.approx(1.0, abs=1e-12)
+    assert np.allclose(x.mean(axis=0), [5.45, 5.0], atol=1e-12)  # forces are central: the centre stays
+
+
+def test_three_disks_in_a_line_open_every_overlap():
+    eng = _engine([[4.2, 5.0, 5.0], [5.0, 5.0, 5.0], [5.7, 5.0, 5.0]], [1.0, 1.0, 1.0])
+    res = polish(eng, 1e-14)
+    gaps = np.diff(eng.positions()[:, 0]) - 1.0
+    assert res.converged and np.all(gaps > -1e-12) and eng.evaluate().energy < 1e-28
+
+
+@pytest.mark.parametrize("dim,tilt", [(2, 0.0), (2, 0.3), (3, 0.0)])
+def test_jacobian_matches_finite_differences_and_the_engine_forces(config, dim, tilt):
+    p = tilted(config(24, dim, 0.9 if dim == 2 else 0.7, seed=3), tilt)
+    eng = CompiledEngine(p)
+    x = eng.positions()
+    pairs = spheres.build(eng.packing(), x, 0.05)
+    delta, jac = overlaps(x, pairs)
+    assert np.any(delta > 0) and np.any(delta < 0)
+    forces = eng.evaluate().forces.ravel()
+    assert np.allclose(jac.T @ np.maximum(delta, 0.0), -forces, atol=1e-13)  # grad V = J^T delta_+
+    rng = np.random.default_rng(0)
+    v = rng.standard_normal(x.size)
+    h = 1e-6
+    fd = (overlaps(x + h * v.reshape(x.shape), pairs)[0] - overlaps(x - h * v.reshape(x.shape), pairs)[0]) / (2 * h)
+    assert np.allclose(jac @ v, fd, atol=1e-8)
+
+
+def test_model_step_lowers_the_model_and_descends(config):
+    eng = CompiledEngine(config(64, 2, 0.86, seed=4))
+    x = eng.positions()
+    delta, jac = overlaps(x, spheres.build(eng.packing(), x, 0.05))
+    dx, active, inner = model_step(delta, jac, 1e-12)
+    grad = -eng.evaluate().forces.ravel()
+    assert model_value(delta, jac, dx, 1e-12) < 0.5 * model_value(delta, jac, 0 * dx, 1e-12)
+    assert grad @ dx < 0 and active > 0 and inner >= 1
+
+
+def _back_at_minimum(eng, x0) -> float:
+    """Largest displacement of the non-rattlers from x0 (net translation removed)."""
+    kept = Contacts().compute(eng.packing()).kept  # rattlers keep their displacement: no force on them
+    dx = eng.box.minimum_image(eng.positions() - x0)[kept]
+    return float(np.abs(dx - dx.mean(axis=0)).max())
+
+
+def test_gauss_newton_returns_a_displaced_packing_near_onset_to_its_minimum():
+    """A jammed N = 64 packing compressed 1e-3 above onset (P ~ 1e-3), displaced by 1e-6:
+    Gauss-Newton alone converges linearly (rate ~ tension / stiffness, small near onset)."""
+    from jamflow.protocols.compression import jam
+
+    res = jam(n=64, seed=3, engine="numba")
+    eng = CompiledEngine(res.packing)
+    eng.set_box(Box(res.packing.box.h * (res.phi_j / (res.phi_j + 1e-3)) ** 0.5))
+    first = eng.minimize(MinimizerSettings(v_min=1e-30, force_tol=1e-14))
+    assert first.reason == "force" and first.energy_per_particle > 1e-8  # still jammed
+    x0, e0 = eng.positions(), eng.evaluate().energy
+    eng.set_positions(x0 + 1e-6 * np.random.default_rng(0).standard_normal(x0.shape))
+    out = polish(eng, 1e-14, newton=False)
+    assert out.converged and len(out.steps) <= 12 and {s.kind for s in out.steps} == {"gauss-newton"}
+    assert all(b.force_after < a.force_after for a, b in zip(out.steps, out.steps[1:]))
+    assert _back_at_minimum(eng, x0) < 1e-9
+    assert eng.evaluate().energy == pytest.approx(e0, rel=1e-9)
+
+
+@pytest.mark.parametrize("dim,phi", [(2, 0.88), (3, 0.70)])
+def test_newton_returns_a_displaced_compressed_packing_to_the_fire_minimum(config, dim, phi):
+    """Far above onset (P ~ 1e-2) the Hessian is positive definite: full Newton steps, quadratic."""
+    d = np.where(np.arange(64) % 2 == 0, 1.0, 1.4)
+    eng = CompiledEngine(config(64, dim, phi, seed=1, diameters=d))
+    first = eng.minimize(MinimizerSettings(force_tol=1e-13))
+    assert first.reason == "force" and first.energy_per_particle > 1e-6  # jammed
+    x0, e0 = eng.positions(), eng.evaluate().energy
+    eng.set_positions(x0 + 1e-6 * np.random.default_rng(0).standard_normal(x0.shape))
+    out = polish(eng, 1e-13, newton=True)
+    assert out.converged and len(out.steps) <= 4 and out.steps[0].kind == "newton"
+    assert _back_at_minimum(eng, x0) < 1e-9
+    assert eng.evaluate().energy == pytest.approx(e0, rel=1e-10)
+    # below the round-off floor no step helps: refused, and the engine keeps the best state
+    x1, f1 = eng.positions(), eng.evaluate().max_force
+    again = polish(eng, 1e-30, newton=True)
+    assert not again.converged and again.steps[-1].alpha == 0.0 and again.max_force <= f1
+    assert eng.evaluate().max_force == again.max_force and _back_at_minimum(eng, x1) < 1e-12
+
+
+@pytest.mark.parametrize("change,words", [(dict(potential=parse_potential("hertz")), "linear spring"),
+                                          (dict(box=Box(np.eye(2) * 8.0, periodic=(True, False))), "walls")])
+def test_unsupported_packings_are_refused_before_work(config, change, words):
+    p = config(16, 2, 0.8, seed=0)
+    p = Packing(p.positions, p.diameters, change.get("box", p.box), change.get("potential", p.potential))
+    assert words in polish_reason(p)
+    with pytest.raises(ValueError, match="minimise with FIRE alone"):
+        polish(CompiledEngine(p), 1e-14)
+
+
+def test_a_bad_tolerance_is_refused():
+    eng = _engine([[5.0, 5.0], [5.9, 5.0]], [1.0, 1.0])
+    with pytest.raises(ValueError, match="finite positive"):
+        polish(eng, 0.0)
