@@ -54,7 +54,7 @@ def add_arguments(p) -> None:
                    help="what a creeping minimisation (max force < 1e-9, unconverged) does between FIRE windows: "
                         "soft-modes (Newton steps along its softest modes, docs/soft-modes.md), polish (Gauss-Newton "
                         "active-set steps, disks/spheres with the linear spring, docs/speed-2.md section 8), off; "
-                        "auto: soft-modes for shapes that turn, polish for 2D disks, in the compiled engine"),
+                        "auto: soft-modes for shapes that turn, polish for 2D disks, in the compiled engine")
     p.add_argument("--engine", choices=ENGINES, default="auto",
                    help="auto: the compiled engine (FIRE, in process) wherever it runs the scene, else LAMMPS "
                         "(docs/speed.md). The engines sum forces in different orders, so from one start they "
