@@ -212,29 +212,32 @@ def _creep_method(engine, settings: MinimizerSettings, stiffness: float, ftol: f
         raise ValueError(f"creep method {method!r} runs at a fixed periodic box without walls, gravity or fixed "
                          "particles; use the creep method auto or off here")
     if method == "auto":
-        compiled_fire = settings.method == "fire" and getattr(engine, "name", "") == "numba"  # LAMMPS: decks replay it
-        method = ("soft-modes" if template.shape.oriented else "polish") if compiled_fire else "off"
-        if method == "polish" and (template.dim != 2 or _polish_reason(template)):
-            method = "off"
+        method = _auto_creep(engine, settings)
     if method == "soft-modes":
         from .soft_modes import AFTER, SoftModeSteps  # scipy.sparse.linalg: loaded only where it runs
 
         after = settings.creep_after or AFTER
         return SoftModeSteps(after, after, max(1.0, stiffness))
     if method == "polish":
-        from .polish import AFTER, Polisher
+        from .polish import AFTER, Polisher, polish_reason
 
-        reason = _polish_reason(template)
+        reason = polish_reason(template)
+        if reason and settings.creep == "auto":  # e.g. the Hertz law: FIRE alone, as measured
+            return None
         if reason:
             raise ValueError(f"creep method 'polish': {reason}; use the creep method soft-modes or off")
         return Polisher(settings.creep_after or AFTER, ftol)
     return None
 
 
-def _polish_reason(template) -> str:
-    from .polish import polish_reason
-
-    return polish_reason(template)
+def _auto_creep(engine, settings: MinimizerSettings) -> str:
+    """What ``creep="auto"`` runs: what was measured to pay, in the compiled engine only (a LAMMPS
+    run must stay equal to its deck)."""
+    if settings.method != "fire" or getattr(engine, "name", "") != "numba":
+        return "off"
+    if engine.template.shape.oriented:
+        return "soft-modes"
+    return "polish" if engine.template.dim == 2 else "off"
 
 
 def _force_bound(packing, energy: float) -> float:
