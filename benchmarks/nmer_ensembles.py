@@ -121,7 +121,7 @@ def main(argv=None) -> int:
                     help="MinimizerSettings.creep (docs/soft-modes.md); rows before 2026-12-02 were made without")
     ap.add_argument("--max-iterations", type=int, default=MinimizerSettings().max_iterations,
                     help="per minimisation (a creeping one that reaches it fails its packing)")
-    ap.add_argument("--verbose", action="store_true", help="log every soft-mode step")
+    ap.add_argument("--verbose", action="store_true", help="log every soft-mode step and polish")
     args = ap.parse_args(argv)
     if args.verbose:
         logging.basicConfig(level=logging.INFO, format="  %(message)s")

@@ -24,7 +24,8 @@ from jamflow.engine.compiled.engine import CompiledEngine
 from jamflow.engine.reference import energy_forces_pressure
 from jamflow.io import load_packing
 from jamflow.minimize import MinimizerSettings, minimize
-from jamflow.soft_modes import _moved, generalized_forces
+from jamflow.checks import generalized_forces
+from jamflow.soft_modes import _moved
 
 BANDS = [(-np.inf, 1e-15), (1e-15, 1e-11), (1e-11, 1e-8), (1e-8, 1e-5), (1e-5, np.inf)]
 
@@ -32,7 +33,7 @@ BANDS = [(-np.inf, 1e-15), (1e-15, 1e-11), (1e-11, 1e-8), (1e-8, 1e-5), (1e-5, n
 def analyse(packing) -> None:
     dyn = DynamicalMatrix().compute(packing)
     ref = energy_forces_pressure(packing)
-    grad = -generalized_forces(dyn, ref, packing)
+    grad = -generalized_forces(packing, ref, dyn.particles)
     values, vectors = np.linalg.eigh(dyn.matrix.toarray())
     c = vectors.T @ grad
     print(f"N' = {len(dyn.particles)} of {packing.n}, {dyn.n_dof} coordinates, energy {ref.energy:.4g}, "

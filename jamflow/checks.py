@@ -130,6 +130,18 @@ def generalized_torques(packing: Packing, torques: np.ndarray) -> np.ndarray:
                         packing.shape.rotation_mask(packing.dim))
 
 
+def generalized_forces(packing: Packing, state, rows=None) -> np.ndarray:
+    """-dV/dxi in the coordinates of ``analysis.hessian.Coordinates`` (eps/diameter): the forces,
+    then tau_a / d_k about each rotational axis that is a degree of freedom; of ``rows`` only
+    (particle indices) if given. ``state`` holds the forces and torques of the whole packing."""
+    rows = slice(None) if rows is None else rows
+    forces = np.asarray(state.forces, float)[rows].ravel()
+    axes = np.flatnonzero(packing.shape.rotation_mask(packing.dim))
+    if not len(axes):
+        return forces
+    return np.concatenate([forces, generalized_torques(packing, state.torques)[rows][:, axes].ravel()])
+
+
 # The refusal thresholds (benchmarks/vtol_resolution.py, docs/vtol-resolution.csv, 96 runs at
 # N = 64 and 256, springs and Hertz): net force / contact force ~ 1.1 / (window force / ftol),
 # and at window force / ftol <= 1.8e3 at least half of the N = 256 packings failed their

@@ -82,9 +82,11 @@ class MinimizerSettings:
     rotating_damping: float = 0.01
     # what a creeping minimisation (max force < 1e-9, not converged) does between FIRE windows at a fixed box:
     # "soft-modes": Newton steps along its softest modes (``jamflow.soft_modes``), "polish": Gauss-Newton
-    # active-set steps (``jamflow.polish``; disks/spheres, linear spring), "off"; "auto" = what was measured
-    # to pay: soft modes for shapes that turn (rigid bodies, ellipses, spheroids), the polish for 2D disks
-    # with the linear spring (docs/soft-modes.md, docs/speed-2.md section 8), nothing otherwise
+    # active-set steps (``jamflow.polish``; disks/spheres and rigid bodies, linear spring), "off"; "auto" =
+    # what was measured to pay: the polish for rigid bodies (repeated every creep_after iterations) and for
+    # 2D disks (once) with the linear spring, soft modes for the other shapes that turn (ellipses, spheroids,
+    # rigid bodies with other laws) (docs/nmers.md, docs/soft-modes.md, docs/speed-2.md section 8), nothing
+    # otherwise
     creep: str = "auto"
     creep_after: int | None = None  # iterations before the first attempt; None: the method's measured value
 
@@ -219,25 +221,33 @@ def _creep_method(engine, settings: MinimizerSettings, stiffness: float, ftol: f
         after = settings.creep_after or AFTER
         return SoftModeSteps(after, after, max(1.0, stiffness))
     if method == "polish":
-        from .polish import AFTER, Polisher, polish_reason
+        from .polish import AFTER, RIGID_CREEP_FORCE, Polisher, polish_reason
 
         reason = polish_reason(template)
         if reason and settings.creep == "auto":  # e.g. the Hertz law: FIRE alone, as measured
             return None
         if reason:
             raise ValueError(f"creep method 'polish': {reason}; use the creep method soft-modes or off")
-        return Polisher(settings.creep_after or AFTER, ftol)
+        after = settings.creep_after or AFTER
+        if template.shape.kind == "rigid":  # repeated, and from a higher force (docs/nmers.md)
+            return Polisher(after, ftol, every=after, creep_force=RIGID_CREEP_FORCE)
+        return Polisher(after, ftol)
     return None
 
 
 def _auto_creep(engine, settings: MinimizerSettings) -> str:
     """What ``creep="auto"`` runs: what was measured to pay, in the compiled engine only (a LAMMPS
     run must stay equal to its deck)."""
+    from .polish import polish_reason
+
+    template = engine.template
     if settings.method != "fire" or getattr(engine, "name", "") != "numba":
         return "off"
-    if engine.template.shape.oriented:
+    if template.shape.kind == "rigid" and not polish_reason(template):
+        return "polish"
+    if template.shape.oriented:
         return "soft-modes"
-    return "polish" if engine.template.dim == 2 else "off"
+    return "polish" if template.dim == 2 else "off"
 
 
 def _force_bound(packing, energy: float) -> float:

@@ -128,16 +128,17 @@ def contact_distances(packing: Packing, i: np.ndarray, j: np.ndarray, dr: np.nda
     raise ValueError(f"{packing.shape.name(packing.dim)} particles touch site by site; use overlapping_sites")
 
 
-def overlapping_pairs(packing: Packing):
+def overlapping_pairs(packing: Packing, skin: float = 0.0):
     """(i, j, dr, r, sigma) for every pair of disks, spheres, ellipses or spheroids with
-    r_ij < sigma_ij (no tolerance; float64 separations dr = r_i - r_j)."""
+    r_ij < sigma_ij + skin (skin 0: the overlapping pairs, no tolerance; float64 separations
+    dr = r_i - r_j; skin in diameters, for the gaps a step may close)."""
     if packing.n < 2:
         return (np.empty(0, int), np.empty(0, int), np.empty((0, packing.dim)), np.empty(0), np.empty(0))
-    i, j = candidate_pairs(packing, 2.0 * float(packing.shape.reach(packing.diameters).max()))
+    i, j = candidate_pairs(packing, 2.0 * float(packing.shape.reach(packing.diameters).max()) + skin)
     dr = separations(packing, i, j)
     r = np.linalg.norm(dr, axis=1)
     sigma = contact_distances(packing, i, j, dr)
-    keep = r < sigma
+    keep = r < sigma + skin
     return i[keep], j[keep], dr[keep], r[keep], sigma[keep]
 
 
@@ -151,11 +152,12 @@ def site_packing(packing: Packing) -> tuple[Packing, np.ndarray]:
     return sites, np.repeat(np.arange(packing.n), shape.n_sites)
 
 
-def overlapping_sites(packing: Packing):
+def overlapping_sites(packing: Packing, skin: float = 0.0):
     """Rigid bodies: (body_i, body_j, site_s, site_t, dr, r, sigma) for every overlapping pair of
-    sites of different bodies (body_i < body_j; dr = site separation r_s - r_t)."""
+    sites of different bodies (body_i < body_j; dr = site separation r_s - r_t); with ``skin``,
+    every site pair with r < sigma + skin (``overlapping_pairs``)."""
     sites, body = site_packing(packing)
-    s, t, dr, r, sigma = overlapping_pairs(sites)
+    s, t, dr, r, sigma = overlapping_pairs(sites, skin)
     other = body[s] != body[t]
     s, t, dr, r, sigma = s[other], t[other], dr[other], r[other], sigma[other]
     swap = body[s] > body[t]

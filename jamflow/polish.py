@@ -22,26 +22,39 @@ Optionally (``newton=True``) a full Newton step with the exact Hessian is tried 
 H + mu I is positive definite: quadratic far above onset, but near onset H is indefinite at
 almost every state and the option was never accepted in the N = 256 / 1024 jams, so it is off.
 
-Only disks and spheres with the linear spring at a fixed periodic box (``polish_reason``); the
-engine is any ``jamflow.engine.base.Engine`` (positions, set_positions, evaluate, packing);
+Rigid bodies of fused sites (n-mers, issue 14) are polished the same way: their energy is the same
+sum over site pairs of different bodies, delta = 1 - s with s = |r_s - r_t| / sigma, and J is
+ds/dxi in the generalized coordinates of ``analysis.hessian.Coordinates`` (centres, then the
+rotations d_k theta; ``hessian.distance_jacobian``, the rows the dynamical matrix uses), so the
+model is linear in the rotations too and a step moves and turns the bodies rigidly
+(``analysis.deformation.displaced``); its neglected terms are the tensions and the rotations'
+second order, which the exact-energy line search absorbs. The creep it is for is the
+contact-change kind that the soft-mode steps (``jamflow.soft_modes``) undo: 3D dimers creeping
+1e5-1e6 iterations per minimisation at max force 1e-11 to 5e-9 (docs/nmers.md).
+
+Only the linear spring at a fixed periodic box (``polish_reason``); the engine is any
+``jamflow.engine.base.Engine`` (positions, set_positions, evaluate, packing); disk and sphere
 pairs come from the compiled disk kernel's builder. Measured in benchmarks/gauss_newton_polish.py
 (docs/speed-2.md section 8: N = 1024 median CPU time -19% to -38%, phi_J statistically equal).
 """
 
 from __future__ import annotations
 
+import logging
 import time
 from dataclasses import dataclass
 
 import numpy as np
 
 CREEP_FORCE = 1e-9  # a minimisation below this max force (eps/diameter) that has not converged creeps
+RIGID_CREEP_FORCE = 1e-6  # rigid bodies: their minimisations also creep at 1e-9 - 5e-9 (docs/nmers.md)
 SKIN = 0.05  # candidate pairs within sigma + SKIN (diameters): the gaps a step may close
 SHIFT = 1e-12  # mu, relative to the largest diagonal of J^T J
 ARMIJO = 1e-4
 ALPHAS = 0.5 ** np.arange(14)  # backtracking 1 ... 1.2e-4
 INNER = 10  # active-set iterations per step
 MAX_STEPS = 40
+log = logging.getLogger(__name__)
 AFTER = 20_000  # MinimizerSettings.creep_after default: iterations before a minimisation is polished (measured)
 
 
@@ -69,8 +82,9 @@ class PolishResult:
 def polish_reason(packing) -> str:
     """'' if ``polish`` applies to this packing, else why not (one phrase)."""
     pot = packing.potential
-    if packing.shape.kind != "sphere":
-        return f"the Gauss-Newton polish needs disks or spheres, not {packing.shape.kind} particles"
+    if packing.shape.kind not in ("sphere", "rigid"):
+        return (f"the Gauss-Newton polish needs disks, spheres or rigid bodies of fused sites, not "
+                f"{packing.shape.kind} particles")
     if getattr(pot, "name", "") != "spring" or float(pot.alpha) != 2.0:
         return "the Gauss-Newton polish needs the linear spring (alpha = 2), the least-squares energy"
     if packing.fixed is not None or not all(packing.box.periodic) or packing.gravity:
@@ -91,6 +105,34 @@ def overlaps(x: np.ndarray, pairs) -> tuple[np.ndarray, sp.csr_matrix]:
     cols = np.concatenate([pairs.i[:, None] * d + np.arange(d), pairs.j[:, None] * d + np.arange(d)], axis=1)
     return delta, sp.csr_matrix((np.concatenate([-g, g], axis=1).ravel(), (rows, cols.ravel())),
                                 shape=(len(r), n * d))
+
+
+def model(packing, x: np.ndarray):
+    """(delta, J) of the pairs within sigma + ``SKIN`` at ``packing`` (positions ``x``, wrapped):
+    disks/spheres by ``overlaps`` on the compiled builder's pair list, rigid bodies over site pairs
+    in generalized coordinates (``hessian.distance_jacobian``)."""
+    if packing.shape.kind == "sphere":
+        from .engine.compiled.spheres import build  # the disk/sphere pair list (i, j, shift, sigma)
+
+        return overlaps(x, build(packing, x, SKIN))
+    from .analysis.hessian import distance_jacobian
+
+    s, jac = distance_jacobian(packing, SKIN)
+    return 1.0 - s, -jac
+
+
+def moved(packing, dx: np.ndarray):
+    """The packing after the generalized displacement dx (centres, then rotations d_k theta)."""
+    if not packing.shape.oriented:
+        return packing.with_positions(packing.positions + dx.reshape(packing.positions.shape))
+    from .analysis.deformation import displaced
+    from .analysis.hessian import Coordinates
+
+    return displaced(packing, *Coordinates.of(packing).split(dx))
+
+
+def _place(engine, packing) -> None:
+    engine.set_positions(packing.positions, packing.orientations)
 
 
 def model_value(delta: np.ndarray, jac, dx: np.ndarray, mu: float) -> float:
@@ -163,32 +205,44 @@ def newton_step(packing, grad: np.ndarray, mu: float) -> np.ndarray | None:
     return lu.solve(-grad)
 
 
-def _line_search(engine, x, dx, state, noise: float):
-    """Armijo backtracking on the exact energy along dx, ``noise`` its round-off; (alpha, trial
-    state), alpha 0 if no step length is accepted."""
-    slope = -float(state.forces.ravel() @ dx)
+def _line_search(engine, packing, dx, state, grad, noise: float):
+    """Armijo backtracking on the exact energy along dx from ``packing`` (gradient ``grad``),
+    ``noise`` the energy's round-off; (alpha, trial state, trial packing), alpha 0 if no step
+    length is accepted."""
+    slope = float(grad @ dx)
     if slope >= 0:
-        return 0.0, state
+        return 0.0, state, packing
+    worst = float(np.abs(grad).max())
     for alpha in ALPHAS:
-        engine.set_positions(x + alpha * dx.reshape(x.shape))
+        trial_packing = moved(packing, alpha * dx)
+        _place(engine, trial_packing)
         trial = engine.evaluate()
         rise = trial.energy - state.energy
         if -alpha * slope > noise:
             ok = rise <= ARMIJO * alpha * slope
         else:  # the predicted decrease is below the energy's round-off: the max force decides
-            ok = rise <= noise and trial.max_force < state.max_force
+            ok = rise <= noise and _worst(trial_packing, trial) < worst
         if ok:
-            return float(alpha), trial
-    return 0.0, state
+            return float(alpha), trial, trial_packing
+    return 0.0, state, packing
+
+
+def _worst(packing, state) -> float:
+    """Max |component| of -dV/dxi at ``packing``: forces and generalized torques tau_a / d_k
+    (eps/diameter)."""
+    from .checks import generalized_forces
+
+    return float(np.abs(generalized_forces(packing, state)).max(initial=0.0))
 
 
 def polish(engine, ftol: float, max_steps: int = MAX_STEPS, on_step=None, newton: bool = False) -> PolishResult:
-    """Gauss-Newton steps on ``engine``'s configuration until its max force component is below
-    ``ftol`` (eps/diameter) or no step length is accepted; the engine keeps the last accepted
-    configuration, evaluated. With ``newton`` a full Newton step is tried first wherever the
-    Hessian is positive definite (quadratic convergence at a stable minimum; near a saddle it is
-    not, and the Gauss-Newton step is taken). ``on_step(PolishStep)`` is called after every step."""
-    from .engine.compiled.spheres import build  # the disk/sphere pair list (i, j, shift, sigma)
+    """Gauss-Newton steps on ``engine``'s configuration until its max force and generalized torque
+    component is below ``ftol`` (eps/diameter) or no step length is accepted; the engine keeps the
+    last accepted configuration, evaluated. With ``newton`` a full Newton step is tried first
+    wherever the Hessian is positive definite (quadratic convergence at a stable minimum; near a
+    saddle it is not, and the Gauss-Newton step is taken). ``on_step(PolishStep)`` is called after
+    every step."""
+    from .checks import generalized_forces
 
     reason = polish_reason(engine.template)
     if reason:
@@ -196,55 +250,67 @@ def polish(engine, ftol: float, max_steps: int = MAX_STEPS, on_step=None, newton
     if not (np.isfinite(ftol) and ftol > 0):
         raise ValueError(f"the polish's force tolerance must be a finite positive number (eps/diameter), got {ftol!r}")
     c0 = time.process_time()
-    x = engine.positions()
-    engine.set_positions(x)  # the states compared below are all evaluated from arrays set here
-    state, packing = engine.evaluate(), engine.packing()
+    packing = engine.packing()
+    _place(engine, packing)  # the states compared below are all evaluated from arrays set here
+    state = engine.evaluate()
+    grad = -generalized_forces(packing, state)
     steps = []
-    while state.max_force >= ftol and len(steps) < max_steps:
-        at = packing.with_positions(x)
-        delta, jac = overlaps(x, build(at, x, SKIN))
-        mu = SHIFT * max(float(np.asarray(jac.multiply(jac).sum(axis=0)).max()), 1.0)
+    while np.abs(grad).max(initial=0.0) >= ftol and len(steps) < max_steps:
+        delta, jac = model(packing, packing.positions)
+        mu = SHIFT * max(float(np.asarray(jac.multiply(jac).sum(axis=0)).max(initial=0.0)), 1.0)
         noise = 8 * np.finfo(float).eps * float(np.sum(np.maximum(delta, 0.0)))  # V = sum delta^2 / 2, each delta to ~eps
-        accepted, kind = 0.0, "newton"
-        dx = newton_step(at, -state.forces.ravel(), mu) if newton else None
+        accepted, kind, before = 0.0, "newton", float(np.abs(grad).max())
+        dx = newton_step(packing, grad, mu) if newton else None
         if dx is not None:
-            accepted, trial = _line_search(engine, x, dx, state, noise)
+            accepted, trial, trial_packing = _line_search(engine, packing, dx, state, grad, noise)
             accepted = accepted if accepted == 1.0 else 0.0  # a damped Newton step: take Gauss-Newton's
             n_active, inner = int((delta > 0).sum()), 0
         if not accepted:
             kind = "gauss-newton"
             dx, n_active, inner = model_step(delta, jac, mu)
-            accepted, trial = _line_search(engine, x, dx, state, noise)
-        step = PolishStep(n_active, inner, accepted, state.max_force, trial.max_force if accepted else state.max_force,
-                          kind)
+            accepted, trial, trial_packing = _line_search(engine, packing, dx, state, grad, noise)
+        if accepted:
+            packing, state = trial_packing, trial
+            grad = -generalized_forces(packing, state)
+        step = PolishStep(n_active, inner, accepted, before, float(np.abs(grad).max()), kind)
         steps.append(step)
         if on_step is not None:
             on_step(step)
         if not accepted:
-            engine.set_positions(x)
+            _place(engine, packing)
             state = engine.evaluate()
             break
-        x, state = x + accepted * dx.reshape(x.shape), trial
-    return PolishResult(state.max_force < ftol, tuple(steps), state.max_force, time.process_time() - c0)
+    worst = float(np.abs(grad).max(initial=0.0))
+    return PolishResult(worst < ftol, tuple(steps), worst, time.process_time() - c0)
 
 
 @dataclass
 class Polisher:
-    """The creep method "polish" of one minimisation (``MinimizerSettings.creep``): at most one
-    ``polish`` per minimisation, at the first multiple of ``after`` iterations where the max force
-    is below ``CREEP_FORCE`` (the form measured in docs/speed-2.md section 8)."""
+    """The creep method "polish" of one minimisation (``MinimizerSettings.creep``): a ``polish``
+    at the first multiple of ``after`` iterations where the max force is below ``CREEP_FORCE``
+    (the form measured in docs/speed-2.md section 8), once per minimisation, or again every
+    ``every`` iterations after that (None: once)."""
 
     after: int
     ftol: float
+    every: int | None = None
+    creep_force: float = CREEP_FORCE  # max force (eps/diameter) below which a minimisation counts as creeping
     accepted: int = 0
-    polished: bool = False
+    attempts: int = 0
+    next_at: int = 0
 
     def due(self, done: int, max_force: float) -> bool:
-        return not self.polished and done % self.after == 0 and max_force < CREEP_FORCE
+        if self.attempts and (self.every is None or done < self.next_at):
+            return False
+        return done % self.after == 0 and max_force < self.creep_force
 
     def step(self, engine, done: int) -> bool:
-        self.polished = True
+        self.attempts += 1
+        self.next_at = done + (self.every or 0)
         result = polish(engine, self.ftol)
         kept = sum(1 for s in result.steps if s.alpha > 0)
         self.accepted += kept
+        first = result.steps[0].force_before if result.steps else result.max_force
+        log.info("polish %d at iteration %d: %d of %d steps kept, max force %.3g -> %.3g, %.2f CPU s", self.attempts,
+                 done, kept, len(result.steps), first, result.max_force, result.seconds)
         return kept > 0

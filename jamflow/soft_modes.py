@@ -30,7 +30,7 @@ import scipy.sparse.linalg as spla
 
 from .analysis.deformation import displaced
 from .analysis.hessian import Coordinates, DynamicalMatrix
-from .checks import generalized_torques
+from .checks import generalized_forces
 
 AFTER = 50_000  # MinimizerSettings.creep_after default: iterations before the first attempt, and between attempts
 CREEP_FORCE = 1e-9  # max force (eps/diameter) below which an unconverged minimisation counts as creeping
@@ -96,7 +96,7 @@ def newton_step(dyn, state, packing, stiffness: float = 1.0) -> np.ndarray | Non
     non-floaters, or None when no mode qualifies. ``state`` holds the forces and torques of
     the whole ``packing``."""
     values, vectors = lowest_modes(dyn.matrix, MODES + dyn.dim, stiffness)
-    grad = -generalized_forces(dyn, state, packing)
+    grad = -generalized_forces(packing, state, dyn.particles)
     live = np.abs(values) > ZERO_MODE * stiffness
     if not live.any():
         return None
@@ -110,17 +110,6 @@ def lowest_modes(matrix, k: int, stiffness: float) -> tuple[np.ndarray, np.ndarr
     if n <= DENSE_LIMIT or k >= n - 1:
         return np.linalg.eigh(matrix.toarray())
     return spla.eigsh(matrix.tocsc(), k=k, sigma=-SHIFT * stiffness, which="LM")
-
-
-def generalized_forces(dyn, state, packing) -> np.ndarray:
-    """-dV/dxi of the non-floaters: forces, then tau_a / d_k about the rotational axes."""
-    rows = dyn.particles
-    forces = np.asarray(state.forces, float)[rows].ravel()
-    axes = list(Coordinates.of(dyn.packing).axes)
-    if not axes:
-        return forces
-    torques = generalized_torques(packing, state.torques)[rows]
-    return np.concatenate([forces, torques[:, axes].ravel()])
 
 
 def _moved(packing, dyn, xi: np.ndarray):

@@ -65,7 +65,8 @@ def test_an_explicit_creep_method_is_refused_where_it_cannot_run(displaced_dimer
     *_, moved = displaced_dimers
     with CompiledEngine(moved) as engine, pytest.raises(ValueError, match="fixed periodic box"):
         minimize(engine, MinimizerSettings(creep="soft-modes", pressure=1e-3))
-    with CompiledEngine(moved) as engine, pytest.raises(ValueError, match="needs disks or spheres"):
+    ellipses = load_packing(DATA / "ellipse1.5_n16_s0.h5")
+    with CompiledEngine(ellipses) as engine, pytest.raises(ValueError, match="rigid bodies of fused sites, not ellipsoid"):
         minimize(engine, MinimizerSettings(creep="polish"))
 
 

@@ -131,12 +131,13 @@ class ReducedDistances(NamedTuple):
     d2s: np.ndarray  # (P, L, L)
 
 
-def reduced_distances(packing: Packing) -> ReducedDistances:
-    """Contacts in the order of ``overlapping_pairs`` (``overlapping_sites`` for rigid bodies)."""
+def reduced_distances(packing: Packing, skin: float = 0.0) -> ReducedDistances:
+    """Contacts in the order of ``overlapping_pairs`` (``overlapping_sites`` for rigid bodies);
+    with ``skin`` (diameters) also the pairs apart by less than it (s may then exceed 1)."""
     if packing.box.walls or packing.fixed is not None or packing.gravity > 0:
         raise ValueError("the dynamical matrix has no wall, gravity or fixed-particle terms yet; it covers periodic "
                          "boxes (use jamflow.analysis.contacts for the contact count of walled packings)")
-    return ReducedDistances(*_REDUCED[packing.shape.kind](packing, Coordinates.of(packing)))
+    return ReducedDistances(*_REDUCED[packing.shape.kind](packing, Coordinates.of(packing), skin))
 
 
 class PairTerms(NamedTuple):
@@ -169,6 +170,17 @@ def hessian(packing: Packing) -> sp.csr_matrix:
     return _assemble(Coordinates.of(packing), terms.i, terms.j, terms.hessian)
 
 
+def distance_jacobian(packing: Packing, skin: float = 0.0) -> tuple[np.ndarray, sp.csr_matrix]:
+    """(s, J): reduced distances s = r / sigma of the contacts (site pairs for rigid bodies) and
+    of the pairs within ``skin`` of touching (``reduced_distances``), and the sparse Jacobian
+    J = ds / dxi (P x d_f N) in the coordinates of ``Coordinates.of(packing)``."""
+    red = reduced_distances(packing, skin)
+    coords = Coordinates.of(packing)
+    idx = _local_index(coords, red.i, red.j)
+    rows = np.repeat(np.arange(len(red.s)), idx.shape[1])
+    return red.s, sp.csr_matrix((red.ds.ravel(), (rows, idx.ravel())), shape=(len(red.s), coords.size))
+
+
 def _local_index(coords: Coordinates, i: np.ndarray, j: np.ndarray) -> np.ndarray:
     """(P, 2d + 2r) global rows of a pair's local coordinates [x_i, x_j, rot_i, rot_j]."""
     d, r, n = coords.dim, coords.n_rot, coords.n
@@ -188,10 +200,10 @@ def _assemble(coords: Coordinates, i, j, blocks) -> sp.csr_matrix:
     return sp.coo_matrix((blocks.ravel(), (rows, cols)), shape).tocsr()
 
 
-def _sphere_reduced(packing: Packing, coords: Coordinates):
+def _sphere_reduced(packing: Packing, coords: Coordinates, skin: float = 0.0):
     """s = r / sigma: ds = (n, -n) / sigma, d2s = (I - n n) / (r sigma) in [[+, -], [-, +]]
     (with V(s) this is K = V'' n n^T + V'/r (I - n n^T) per block, ``pair_stiffness``)."""
-    i, j, dr, r, sigma = overlapping_pairs(packing)
+    i, j, dr, r, sigma = overlapping_pairs(packing, skin)
     n = dr / r[:, None]
     q = (np.eye(packing.dim)[None] - n[:, :, None] * n[:, None, :]) / (r * sigma)[:, None, None]
     ds = np.concatenate([n, -n], 1) / sigma[:, None]
@@ -271,11 +283,11 @@ class _PairFrame:
         return first_i, first_j, second_i, second_j
 
 
-def _rigid_reduced(packing: Packing, coords: Coordinates):
+def _rigid_reduced(packing: Packing, coords: Coordinates, skin: float = 0.0):
     """Site pairs: s = |dr| / sigma with dr(xi) from the lever arms (module docstring), so
     ds = B^T n / sigma and d2s = (B^T (I - n n) B / r + n . d2 dr) / sigma."""
     shape, d = packing.shape, packing.dim
-    bi, bj, s, t, dr, r, sigma = overlapping_sites(packing)
+    bi, bj, s, t, dr, r, sigma = overlapping_sites(packing, skin)
     world = shape.world_sites(packing.positions, packing.orientations, packing.diameters).reshape(-1, d)
     lever = _embed(world - np.repeat(packing.positions, shape.n_sites, axis=0))
     frame = _PairFrame.of(packing, coords, bi, bj)
@@ -289,7 +301,7 @@ def _rigid_reduced(packing: Packing, coords: Coordinates):
     return bi, bj, r / sigma, ds, d2s
 
 
-def _ellipsoid_reduced(packing: Packing, coords: Coordinates):
+def _ellipsoid_reduced(packing: Packing, coords: Coordinates, skin: float = 0.0):
     from ..shapes.contact_distance import contact_lambda
 
     shape = packing.shape
@@ -297,7 +309,7 @@ def _ellipsoid_reduced(packing: Packing, coords: Coordinates):
         raise ValueError(f"the dynamical matrix needs the contact-distance method's derivatives; the "
                          f"{shape.contact!r} method's lambda follows a truncated polynomial root and has none here: "
                          f"use contact 'exact' (or 'cleaver'/'gaussian')")
-    i, j, dr, r, sigma = overlapping_pairs(packing)
+    i, j, dr, r, sigma = overlapping_pairs(packing, skin)
     axes, u = shape.axes(packing.diameters), packing.directors
     lam = contact_lambda(axes[i, 0], axes[i, 1], axes[j, 0], axes[j, 1], dr / r[:, None], u[i], u[j],
                          method=shape.contact)
