@@ -51,10 +51,11 @@ def add_arguments(p) -> None:
                    help="md only: drag coefficient (sqrt(m eps)/diameter); rigid bodies: damping time 1/DAMPING")
     add_md_damping_argument(p)
     p.add_argument("--creep", choices=CREEP_METHODS, default="auto",
-                   help="what a creeping minimisation (max force < 1e-9, unconverged) does between FIRE windows: "
-                        "soft-modes (Newton steps along its softest modes, docs/soft-modes.md), polish (Gauss-Newton "
-                        "active-set steps, disks/spheres with the linear spring, docs/speed-2.md section 8), off; "
-                        "auto: soft-modes for shapes that turn, polish for 2D disks, in the compiled engine")
+                   help="what a creeping minimisation (unconverged after 20 000+ iterations near balance) does between FIRE "
+                        "windows: soft-modes (Newton steps along its softest modes, docs/soft-modes.md), polish "
+                        "(Gauss-Newton active-set steps, disks/spheres and rigid bodies with the linear spring, "
+                        "docs/speed-2.md section 8, docs/nmers.md), off; auto: polish for rigid bodies and 2D disks, "
+                        "soft-modes for ellipses and spheroids, in the compiled engine")
     p.add_argument("--engine", choices=ENGINES, default="auto",
                    help="auto: the compiled engine (FIRE, in process) wherever it runs the scene, else LAMMPS "
                         "(docs/speed.md). The engines sum forces in different orders, so from one start they "
