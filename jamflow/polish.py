@@ -107,14 +107,14 @@ def overlaps(x: np.ndarray, pairs) -> tuple[np.ndarray, sp.csr_matrix]:
                                 shape=(len(r), n * d))
 
 
-def model(packing, x: np.ndarray):
-    """(delta, J) of the pairs within sigma + ``SKIN`` at ``packing`` (positions ``x``, wrapped):
+def model(packing):
+    """(delta, J) of the pairs within sigma + ``SKIN`` at ``packing``:
     disks/spheres by ``overlaps`` on the compiled builder's pair list, rigid bodies over site pairs
     in generalized coordinates (``hessian.distance_jacobian``)."""
     if packing.shape.kind == "sphere":
         from .engine.compiled.spheres import build  # the disk/sphere pair list (i, j, shift, sigma)
 
-        return overlaps(x, build(packing, x, SKIN))
+        return overlaps(packing.positions, build(packing, packing.positions, SKIN))
     from .analysis.hessian import distance_jacobian
 
     s, jac = distance_jacobian(packing, SKIN)
@@ -256,7 +256,7 @@ def polish(engine, ftol: float, max_steps: int = MAX_STEPS, on_step=None, newton
     grad = -generalized_forces(packing, state)
     steps = []
     while np.abs(grad).max(initial=0.0) >= ftol and len(steps) < max_steps:
-        delta, jac = model(packing, packing.positions)
+        delta, jac = model(packing)
         mu = SHIFT * max(float(np.asarray(jac.multiply(jac).sum(axis=0)).max(initial=0.0)), 1.0)
         noise = 8 * np.finfo(float).eps * float(np.sum(np.maximum(delta, 0.0)))  # V = sum delta^2 / 2, each delta to ~eps
         accepted, kind, before = 0.0, "newton", float(np.abs(grad).max())

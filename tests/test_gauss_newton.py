@@ -146,10 +146,10 @@ def test_rigid_body_jacobian_against_moved_sites(dim):
     (``analysis.deformation.displaced``, site positions recomputed from the orientations): the
     difference is second order (dx ~ 1e-7: |J dx| ~ 4e-7, measured residual ~1.5e-13)."""
     p = load_packing(DATA / DIMERS[dim])
-    delta, jac = model(p, p.positions)
+    delta, jac = model(p)
     dx = 1e-7 * np.random.default_rng(dim).standard_normal(Coordinates.of(p).size)
     q = moved(p, dx)
-    after, _ = model(q, q.positions)
+    after, _ = model(q)
     assert len(after) == len(delta) and len(delta) > p.n  # the same site pairs within the skin
     assert np.abs((after - delta) - jac @ dx).max() < 1e-5 * np.abs(jac @ dx).max()
 
@@ -160,7 +160,7 @@ def test_rigid_body_model_gradient_is_minus_the_reference_forces_and_torques(dim
     the round-off of site positions in a box of length ~10 (eps x 10 ~ 2e-15; measured 2.3e-15 and
     4.3e-15 where the forces are 9e-15 and 8e-11)."""
     p = load_packing(DATA / DIMERS[dim])
-    delta, jac = model(p, p.positions)
+    delta, jac = model(p)
     expected = generalized_forces(p, energy_forces_pressure(p))
     assert np.abs(jac.T @ np.maximum(delta, 0) + expected).max() < 2e-14
 
