@@ -1,7 +1,7 @@
 """Figures and tables of issue 14 from the ensembles of benchmarks/nmer_ensembles.py.
 
     python benchmarks/nmer_figures.py --csv docs/nmers/ensembles.csv docs/nmers/ensembles3d.csv \
-        --q6 docs/nmers/q6.csv --routes docs/nmers/routes.csv --out docs/nmers
+        --q6 docs/nmers/q6-256.csv --routes docs/nmers/routes.csv --out docs/nmers
 
 - ``q6-alpha.png`` / ``q6.csv`` rows: Q6 (global, ``jamflow.analysis.order.BondOrder`` on the body
   centres, neighbours within the first minimum of the ensemble's g(r)) against alpha for
@@ -366,7 +366,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--csv", nargs="+", default=["docs/nmers/ensembles.csv", "docs/nmers/ensembles3d.csv",
                                                 "docs/nmers/sweep3d.csv"])
-    ap.add_argument("--q6", default="docs/nmers/q6.csv")
+    ap.add_argument("--q6", default="docs/nmers/q6-256.csv")
     ap.add_argument("--routes", default="docs/nmers/routes.csv")
     ap.add_argument("--stability", default="docs/nmers/stability.csv")
     ap.add_argument("--out", default="docs/nmers")
