@@ -80,7 +80,8 @@ class MinimizerSettings:
     # and rotations). Near onset 0.01 reached the force tolerance where 0.3 was 500x off after 3e5 steps
     # (docs/ellipses.md)
     rotating_damping: float = 0.01
-    # what a creeping minimisation (max force < 1e-9, not converged) does between FIRE windows at a fixed box:
+    # what a creeping minimisation (not converged, max force below 1e-9; 1e-6 for the polish of rigid bodies)
+    # does between FIRE windows at a fixed box:
     # "soft-modes": Newton steps along its softest modes (``jamflow.soft_modes``), "polish": Gauss-Newton
     # active-set steps (``jamflow.polish``; disks/spheres and rigid bodies, linear spring), "off"; "auto" =
     # what was measured to pay: the polish for rigid bodies (repeated every creep_after iterations) and for
