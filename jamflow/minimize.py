@@ -222,17 +222,14 @@ def _creep_method(engine, settings: MinimizerSettings, stiffness: float, ftol: f
         after = settings.creep_after or AFTER
         return SoftModeSteps(after, after, max(1.0, stiffness))
     if method == "polish":
-        from .polish import AFTER, RIGID_CREEP_FORCE, Polisher, polish_reason
+        from .polish import AFTER, Polisher, polish_reason
 
         reason = polish_reason(template)
         if reason and settings.creep == "auto":  # e.g. the Hertz law: FIRE alone, as measured
             return None
         if reason:
             raise ValueError(f"creep method 'polish': {reason}; use the creep method soft-modes or off")
-        after = settings.creep_after or AFTER
-        if template.shape.kind == "rigid":  # repeated, and from a higher force (docs/nmers.md)
-            return Polisher(after, ftol, every=after, creep_force=RIGID_CREEP_FORCE)
-        return Polisher(after, ftol)
+        return Polisher.measured(template, settings.creep_after or AFTER, ftol)
     return None
 
 

@@ -212,7 +212,7 @@ def _line_search(engine, packing, dx, state, grad, noise: float):
     slope = float(grad @ dx)
     if slope >= 0:
         return 0.0, state, packing
-    worst = float(np.abs(grad).max())
+    worst = float(np.abs(grad).max(initial=0.0))
     for alpha in ALPHAS:
         trial_packing = moved(packing, alpha * dx)
         _place(engine, trial_packing)
@@ -254,12 +254,13 @@ def polish(engine, ftol: float, max_steps: int = MAX_STEPS, on_step=None, newton
     _place(engine, packing)  # the states compared below are all evaluated from arrays set here
     state = engine.evaluate()
     grad = -generalized_forces(packing, state)
+    worst = float(np.abs(grad).max(initial=0.0))
     steps = []
-    while np.abs(grad).max(initial=0.0) >= ftol and len(steps) < max_steps:
+    while worst >= ftol and len(steps) < max_steps:
         delta, jac = model(packing)
         mu = SHIFT * max(float(np.asarray(jac.multiply(jac).sum(axis=0)).max(initial=0.0)), 1.0)
         noise = 8 * np.finfo(float).eps * float(np.sum(np.maximum(delta, 0.0)))  # V = sum delta^2 / 2, each delta to ~eps
-        accepted, kind, before = 0.0, "newton", float(np.abs(grad).max())
+        accepted, kind, before = 0.0, "newton", worst
         dx = newton_step(packing, grad, mu) if newton else None
         if dx is not None:
             accepted, trial, trial_packing = _line_search(engine, packing, dx, state, grad, noise)
@@ -272,7 +273,8 @@ def polish(engine, ftol: float, max_steps: int = MAX_STEPS, on_step=None, newton
         if accepted:
             packing, state = trial_packing, trial
             grad = -generalized_forces(packing, state)
-        step = PolishStep(n_active, inner, accepted, before, float(np.abs(grad).max()), kind)
+            worst = float(np.abs(grad).max(initial=0.0))
+        step = PolishStep(n_active, inner, accepted, before, worst, kind)
         steps.append(step)
         if on_step is not None:
             on_step(step)
@@ -280,16 +282,15 @@ def polish(engine, ftol: float, max_steps: int = MAX_STEPS, on_step=None, newton
             _place(engine, packing)
             state = engine.evaluate()
             break
-    worst = float(np.abs(grad).max(initial=0.0))
     return PolishResult(worst < ftol, tuple(steps), worst, time.process_time() - c0)
 
 
 @dataclass
 class Polisher:
     """The creep method "polish" of one minimisation (``MinimizerSettings.creep``): a ``polish``
-    at the first multiple of ``after`` iterations where the max force is below ``CREEP_FORCE``
-    (the form measured in docs/speed-2.md section 8), once per minimisation, or again every
-    ``every`` iterations after that (None: once)."""
+    at the first multiple of ``after`` iterations where the max force is below ``creep_force``,
+    once per minimisation, or again every ``every`` iterations after that (None: once).
+    ``measured`` gives the forms that were measured to pay."""
 
     after: int
     ftol: float
@@ -298,6 +299,15 @@ class Polisher:
     accepted: int = 0
     attempts: int = 0
     next_at: int = 0
+
+    @classmethod
+    def measured(cls, packing, after: int, ftol: float) -> "Polisher":
+        """Rigid bodies: every ``after`` iterations from ``RIGID_CREEP_FORCE`` (docs/nmers.md, "The
+        creep of rigid bodies"); disks and spheres: once, below ``CREEP_FORCE`` (docs/speed-2.md
+        sections 8 and 11)."""
+        if packing.shape.kind == "rigid":
+            return cls(after, ftol, every=after, creep_force=RIGID_CREEP_FORCE)
+        return cls(after, ftol)
 
     def due(self, done: int, max_force: float) -> bool:
         if self.attempts and (self.every is None or done < self.next_at):
