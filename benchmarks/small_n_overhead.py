@@ -11,10 +11,11 @@ from __future__ import annotations
 import argparse
 import time
 
+from jamflow.engine.compiled import aot, fire
 from jamflow.engine.compiled import engine as compiled
 from jamflow.protocols.compression import jam
 
-CALLS = {"fire kernel": (compiled.kernels, "fire"), "pair builds": (compiled.CompiledEngine, "_build_pairs"),
+CALLS = {"fire kernel": (fire, "fire"), "fire kernel (AOT)": (aot.AotKernels, "fire"), "pair builds": (compiled.CompiledEngine, "_build_pairs"),
          "engine.packing()": (compiled.CompiledEngine, "packing"), "set_box": (compiled.CompiledEngine, "set_box"),
          "state": (compiled.CompiledEngine, "state")}
 

@@ -4,9 +4,12 @@
 strain of a Lees-Edwards cell; the search runs in the reduced cell), any box size. It
 returns integer image vectors so engines can build exact separations
 ``x_i - x_j + h @ image`` without a second minimum-image pass. Orthogonal (reduced) cells use
-scipy's periodic cKDTree; tilted ones a cKDTree over the wrapped positions plus the ghost
-images that lie within ``rmax`` of the cell. See docs/shear-cell.md. Walled axes
-(``Box.periodic``) have no images: the tree is not periodic along them and no ghost crosses them.
+the cell list compiled ahead of time with the disk kernels (``engine.compiled.cells``; the same
+pair set as scipy's periodic cKDTree, which serves when that module is not built); tilted ones a
+cKDTree over the wrapped positions plus the ghost images that lie within ``rmax`` of the cell.
+scipy.spatial is imported only where a cKDTree is used (0.3 CPU s of a disk jam's start-up).
+See docs/shear-cell.md. Walled axes (``Box.periodic``) have no images: the search is not periodic
+along them and no ghost crosses them.
 """
 
 from __future__ import annotations
@@ -14,7 +17,6 @@ from __future__ import annotations
 from itertools import product
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from .box import Box
 from .packing import Packing
@@ -60,15 +62,29 @@ def neighbor_pairs(positions: np.ndarray, box: Box, rmax: float) -> tuple[np.nda
     else:
         periodic = np.array(cell.periodic)
         wrapped = np.where(periodic & (wrapped >= cell.lengths), 0.0, wrapped)  # cKDTree wants [0, L)
-        tree = cKDTree(wrapped, boxsize=np.where(periodic, cell.lengths, 0.0))  # 0: no images (walls)
-        pairs = tree.query_pairs(rmax, output_type="ndarray")
-        i, j = pairs[:, 0], pairs[:, 1]
+        i, j = _orthogonal_search(wrapped, cell.lengths, periodic, rmax)
         shift = -np.round((wrapped[i] - wrapped[j]) / cell.lengths).astype(np.int64) * periodic
     # wrapped = x - cell.h @ n: fold the wrap offsets into the image, then express it in h's cells
     offset = np.round(cell.to_fractional(x - wrapped)).astype(np.int64)
     image = (offset[j] - offset[i] + shift) @ fold.T
     order = np.lexsort((j, i))
     return i[order].astype(int), j[order].astype(int), image[order].reshape(-1, box.dim)
+
+
+def _orthogonal_search(wrapped: np.ndarray, lengths: np.ndarray, periodic: np.ndarray, rmax: float):
+    """Pairs (i < j, unsorted) within ``rmax`` of positions in [0, L) along the periodic axes (images
+    only along those): the ahead-of-time cell list if it is built, else scipy's cKDTree."""
+    from .engine.compiled import aot
+
+    compiled = aot.loaded()
+    if compiled is not None:
+        return compiled.cell_pairs(np.ascontiguousarray(wrapped, dtype=float), np.asarray(lengths, float),
+                                   periodic.astype(np.int64), float(rmax))
+    from scipy.spatial import cKDTree
+
+    tree = cKDTree(wrapped, boxsize=np.where(periodic, lengths, 0.0))  # 0: no images (walls)
+    pairs = tree.query_pairs(rmax, output_type="ndarray")
+    return pairs[:, 0], pairs[:, 1]
 
 
 def _ghost_search(wrapped: np.ndarray, cell: Box, rmax: float):
@@ -78,6 +94,8 @@ def _ghost_search(wrapped: np.ndarray, cell: Box, rmax: float):
     Ghost images x_j + h m (m in {-1, 0, 1}^d, m != 0) are kept only if their fractional
     coordinates lie within rmax / width_k of the unit cell, the reach of any point inside it.
     """
+    from scipy.spatial import cKDTree
+
     dim = cell.dim
     tree = cKDTree(wrapped)
     inside = tree.query_pairs(rmax, output_type="ndarray")

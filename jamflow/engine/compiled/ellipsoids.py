@@ -30,14 +30,13 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba.extending import register_jitable
 
 from ...packing import Packing
 from ...pairs import candidate_pairs
 from ...shapes.contact_distance import (ENGINE_COUNTERS, METHODS, SAME_SIZE_RTOL, STEP_TOL, h_lambda_derivatives,
                                         jkl_2d, jlm_3d, pw_h, pw_terms, quartic, quintic, root_partials_2d,
                                         root_partials_3d, sigma_partials, truncated_lambda, truncated_root)
-from . import jit
+from . import jit, when_numba_starts
 from .laws import energy_force
 
 KIND = "ellipsoid"
@@ -50,11 +49,18 @@ COUNTERS = ENGINE_COUNTERS
 FALLBACKS, CAPPED, APPROXIMATE, INVALID = range(4)
 MAX_ITER = 100
 
-# numba compiles the numpy module's algebra wherever a kernel calls it (the functions stay plain
-# Python for numpy; register_jitable makes them callable from compiled code, calls among them included)
-for _algebra in (pw_terms, pw_h, sigma_partials, h_lambda_derivatives, jkl_2d, quartic, jlm_3d, quintic, truncated_root,
-                 root_partials_2d, root_partials_3d, truncated_lambda):
-    register_jitable(_algebra)
+
+def _register():
+    """numba compiles the numpy module's algebra wherever a kernel calls it (the functions stay plain
+    Python for numpy; register_jitable makes them callable from compiled code, calls among them included)."""
+    from numba.extending import register_jitable
+
+    for algebra in (pw_terms, pw_h, sigma_partials, h_lambda_derivatives, jkl_2d, quartic, jlm_3d, quintic,
+                    truncated_root, root_partials_2d, root_partials_3d, truncated_lambda):
+        register_jitable(algebra)
+
+
+when_numba_starts(_register)
 
 
 class Pairs(NamedTuple):

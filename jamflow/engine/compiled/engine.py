@@ -5,8 +5,9 @@ It runs every box (orthogonal or tilted: pairs carry their periodic image offset
 are affine, x -> h' h^-1 x) on one core, minimises with FIRE only, and is measured against
 LAMMPS and the numpy reference in tests/test_engines.py and benchmarks/engines.py. Walls,
 gravity and fixed particles (disks and spheres) are the external field of ``compiled.field``;
-at a target pressure (``MinimizerSettings.pressure``) the box joins FIRE's coordinates. The
-interface is ``jamflow.engine.base.Engine``.
+at a target pressure (``MinimizerSettings.pressure``) the box joins FIRE's coordinates. Disks and
+spheres with the spring law run the same kernels compiled ahead of time (``compiled.aot``: no
+numba start-up). The interface is ``jamflow.engine.base.Engine``.
 """
 
 from __future__ import annotations
@@ -18,7 +19,8 @@ import numpy as np
 from ...box import Box
 from ...packing import Packing
 from ..base import Capabilities, State
-from . import fire as kernels
+from . import fire
+from .aot import kernels_for
 from .field import make_field
 from .kernels import BUILDERS, COUNTERS, TURNING_MOVES_SITES
 
@@ -68,6 +70,7 @@ class CompiledEngine:
         self._built_at = self._x.copy()
         self._turned = np.zeros(n)
         self._counts = np.zeros(len(COUNTERS[packing.shape.kind]), np.int64)  # kernel counters of dropped lists
+        self._kernels = kernels_for(packing) or fire  # fire.fire / fire.forces, ahead of time where they exist
 
     # lifecycle ---------------------------------------------------------------------------------
     def __enter__(self):
@@ -132,7 +135,7 @@ class CompiledEngine:
 
     def evaluate(self) -> State:
         """Energy, forces, torques and virial pressure tensor at the current configuration."""
-        self._energy = kernels.forces(self._model(), self._field, self._x, self._f, self._o, self._tau, self._g,
+        self._energy = self._kernels.forces(self._model(), self._field, self._x, self._f, self._o, self._tau, self._g,
                                       self._dk, self._mask, self._virial, self._gb)
         self._check_counters()
         return self.state()
@@ -189,21 +192,21 @@ class CompiledEngine:
             self._energy = None
 
         def window(steps: int):
-            state = kernels.fire_state(settings.timestep)
+            state = fire.fire_state(settings.timestep)
             v, w, u = np.zeros_like(self._x), np.zeros_like(self._g), np.zeros_like(self._gb)
             done = 0
             while True:
-                ran, reason, energy = kernels.fire(self._model(), self._field, self._x, v, self._f, self._o, w,
+                ran, reason, energy = self._kernels.fire(self._model(), self._field, self._x, v, self._f, self._o, w,
                                                    self._tau, self._g, self._dk, self._mask, self._virial, u, self._gb,
                                                    state, self._built_at, self._turned, self._reach, half_skin_sq,
                                                    steps - done, ftol, halt)
                 done += ran
                 self._energy = energy
                 self._sync_box()
-                if reason != kernels.REBUILD or done >= steps:
+                if reason != fire.REBUILD or done >= steps:
                     break
                 self._build_pairs()
-            if reason == kernels.REBUILD:  # the cap fell on a rebuild step: forces with a fresh list
+            if reason == fire.REBUILD:  # the cap fell on a rebuild step: forces with a fresh list
                 self._build_pairs()
                 self.evaluate()
             self._check_counters()

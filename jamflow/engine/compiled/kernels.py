@@ -6,17 +6,16 @@ NamedTuple), ``build(packing, x, skin) -> Pairs`` and the compiled
 kernel counts in ``Pairs.counters`` (an int64 array the engine adds up over pair lists), and
 ``TURNING_MOVES_SITES = False`` when rotations cannot bring a pair into reach of its list (then
 only translations count towards a rebuild). ``evaluate`` picks the kernel by the type
-of the pair list at compile time. A new shape is one more module in ``MODULES``.
+of the pair list at compile time (the kernel is looked up then: before numba starts, a module's
+``forces`` is a ``Deferred``). A new shape is one more module in ``MODULES``.
 """
 
 from __future__ import annotations
 
-from numba.extending import overload
-
-from . import bodies, ellipsoids, spheres
+from . import bodies, ellipsoids, spheres, when_numba_starts
 
 MODULES = (spheres, bodies, ellipsoids)
-KERNELS = {m.Pairs: m.forces for m in MODULES}
+MODULE_OF_PAIRS = {m.Pairs: m for m in MODULES}
 BUILDERS = {m.KIND: m.build for m in MODULES}
 COUNTERS = {m.KIND: getattr(m, "COUNTERS", ()) for m in MODULES}  # names of a kernel's ``Pairs.counters``
 TURNING_MOVES_SITES = {m.KIND: getattr(m, "TURNING_MOVES_SITES", True) for m in MODULES}
@@ -24,14 +23,20 @@ TURNING_MOVES_SITES = {m.KIND: getattr(m, "TURNING_MOVES_SITES", True) for m in 
 
 def evaluate(model, x, o, f, tau, virial):
     """Energy; fills forces f (N, d), world torques tau (N, r) and the virial (d, d)."""
-    return KERNELS[type(model)](model, x, o, f, tau, virial)
+    return MODULE_OF_PAIRS[type(model)].forces(model, x, o, f, tau, virial)
 
 
-@overload(evaluate, jit_options={"cache": True})
-def _evaluate(model, x, o, f, tau, virial):
-    kernel = KERNELS[model.instance_class]
+def _register():
+    from numba.extending import overload
 
-    def impl(model, x, o, f, tau, virial):
-        return kernel(model, x, o, f, tau, virial)
+    @overload(evaluate, jit_options={"cache": True})
+    def _evaluate(model, x, o, f, tau, virial):
+        kernel = MODULE_OF_PAIRS[model.instance_class].forces
 
-    return impl
+        def impl(model, x, o, f, tau, virial):
+            return kernel(model, x, o, f, tau, virial)
+
+        return impl
+
+
+when_numba_starts(_register)

@@ -7,10 +7,8 @@ the law is written once. Kernels call it only inside contact (s < 1).
 
 from __future__ import annotations
 
-import numba
-from numba.extending import overload
-
 from ...potentials import POTENTIALS
+from . import when_numba_starts
 
 _LAWS = {cls.Params: cls.energy_force for cls in POTENTIALS.values()}
 
@@ -20,11 +18,18 @@ def energy_force(params, s):
     return _LAWS[type(params)](s, params)
 
 
-@overload(energy_force, jit_options={"cache": True})
-def _energy_force(params, s):
-    law = numba.njit(_LAWS[params.instance_class])
+def _register():
+    import numba
+    from numba.extending import overload
 
-    def impl(params, s):
-        return law(s, params)
+    @overload(energy_force, jit_options={"cache": True})
+    def _energy_force(params, s):
+        law = numba.njit(_LAWS[params.instance_class])
 
-    return impl
+        def impl(params, s):
+            return law(s, params)
+
+        return impl
+
+
+when_numba_starts(_register)
