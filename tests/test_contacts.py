@@ -55,6 +55,45 @@ def test_positive_span_lp_agrees_with_angular_gap():
         assert positively_spanning(vectors) == gap
 
 
+def positively_spanning_lp(vectors) -> bool:
+    """The LP form (jamflow's test until session 6): rank d and sum_k l_k v_k = 0 feasible with l_k >= 1."""
+    from scipy.optimize import linprog
+
+    k, d = vectors.shape
+    if k <= d or np.linalg.matrix_rank(vectors) < d:
+        return False
+    res = linprog(np.zeros(k), A_eq=vectors.T, b_eq=np.zeros(d), bounds=[(1.0, None)] * k, method="highs")
+    return res.status == 0
+
+
+def _unit(v):
+    return v / np.linalg.norm(v, axis=1)[:, None]
+
+
+def test_positive_span_3d_agrees_with_the_lp():
+    """Random sets (half of them squeezed towards a hemisphere, so both answers occur often) and
+    lattice sets with exactly coplanar contacts, plain and with 1e-13 noise."""
+    rng = np.random.default_rng(2)
+    answers = []
+    for trial in range(1500):
+        k = int(rng.integers(3, 13))
+        v = rng.normal(size=(k, 3))
+        if trial % 2:
+            v[:, 2] = np.abs(v[:, 2]) - rng.uniform(0, 0.6)  # mostly z > 0
+        v = _unit(v)
+        answers.append(positively_spanning(v))
+        assert answers[-1] == positively_spanning_lp(v), v
+    assert 0.2 < np.mean(answers) < 0.8  # both answers well represented
+    octa = np.vstack([np.eye(3), -np.eye(3)])
+    fcc = _unit(np.array([[a, b, 0] for a in (1, -1) for b in (1, -1)] + [[a, 0, b] for a in (1, -1) for b in (1, -1)]
+                         + [[0, a, b] for a in (1, -1) for b in (1, -1)], float))
+    half_fcc = fcc[fcc[:, 2] >= 0]  # the z >= 0 half: 8 contacts, 4 of them in the plane z = 0
+    for lattice, spans in ((octa, True), (octa[:5], False), (fcc, True), (half_fcc, False)):
+        for noise in (0.0, 1e-13):
+            v = _unit(lattice + noise * rng.normal(size=lattice.shape))
+            assert positively_spanning(v) == positively_spanning_lp(v) == spans
+
+
 def test_positive_span_3d_cases():
     tetra = np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]]) / np.sqrt(3)
     assert positively_spanning(tetra)

@@ -357,18 +357,37 @@ def angular_gap_spanning(n: int, owner, vectors) -> np.ndarray:
     return largest < np.pi
 
 
-def positively_spanning(vectors: np.ndarray) -> bool:
-    """True iff the vectors (k, d) positively span R^d: they span R^d linearly and some
-    strictly positive combination vanishes (then the origin is interior to their convex
-    hull). Solved as the LP feasibility problem sum_k l_k v_k = 0, l_k >= 1."""
-    from scipy.optimize import linprog  # imported here: scipy.optimize costs 0.25 s at start-up
+SPAN_TOL = 1e-9  # w . v within this of zero (unit vectors): v on the boundary plane of w
 
-    vectors = np.asarray(vectors, float)
-    k, d = vectors.shape
-    if k <= d or np.linalg.matrix_rank(vectors) < d:
+
+def positively_spanning(vectors: np.ndarray) -> bool:
+    """True iff the vectors (k, d), d = 2 or 3, positively span R^d: some strictly positive
+    combination vanishes and they span R^d (the origin is interior to their convex hull).
+
+    Exact test by Stiemke's lemma: either l > 0 with sum_k l_k v_k = 0 exists, or some w != 0 has
+    v_k . w >= 0 for every k, not both. The cone {w : V w >= 0} of a rank-d set is pointed, so if
+    it is not {0} it has an extreme ray, orthogonal to d - 1 independent v's: w = +-rot90(v_a) in
+    2D, +-(v_a x v_b) in 3D; the vectors span positively iff every such candidate has vectors
+    strictly on both of its sides. Products within ``SPAN_TOL`` of zero count as on the plane
+    (not spanning: the boundary case, which an exact sum of contact forces cannot balance). ~50x
+    faster than the LP feasibility problem sum_k l_k v_k = 0, l_k >= 1 it replaces (HiGHS, 2-3 ms
+    a particle; tests/test_contacts.py compares the two)."""
+    v = np.asarray(vectors, float)
+    k, d = v.shape
+    if d not in (2, 3):
+        raise ValueError(f"positively_spanning needs 2D or 3D vectors, got shape {v.shape}")
+    if k <= d or np.linalg.matrix_rank(v) < d:
         return False
-    res = linprog(np.zeros(k), A_eq=vectors.T, b_eq=np.zeros(d), bounds=[(1.0, None)] * k, method="highs")
-    return res.status == 0
+    v = v / np.linalg.norm(v, axis=1)[:, None]
+    if d == 2:
+        w = np.column_stack([-v[:, 1], v[:, 0]])
+    else:
+        a, b = np.triu_indices(k, 1)
+        w = np.cross(v[a], v[b])
+    norm = np.linalg.norm(w, axis=1)
+    keep = norm > 1e-12  # (anti)parallel pairs define no plane
+    side = v @ (w[keep] / norm[keep, None]).T  # (k, candidates)
+    return not np.any(np.all(side >= -SPAN_TOL, axis=0) | np.all(side <= SPAN_TOL, axis=0))
 
 
 def near_contact_count(packing: Packing, near_tol: float) -> int:
