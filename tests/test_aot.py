@@ -159,11 +159,24 @@ def test_a_failed_build_warns_once_and_runs_numba(built, fresh_cache, monkeypatc
 
 
 def test_a_damaged_module_is_rebuilt(built, fresh_cache, monkeypatch):
+    """... and an interrupted build's directory is removed."""
     good = built.__file__
     path = aot.module_path()
-    path.parent.mkdir(parents=True)
+    (path.parent / "tmpinterrupted").mkdir(parents=True)
     path.write_bytes(b"\x7fELF garbage")
     assert aot.loaded() is None
     monkeypatch.setattr(aot, "build_command", lambda out: [sys.executable, "-c",
                                                            f"import shutil; shutil.copy({good!r}, {out!r})"])
     assert aot.module() is not None and aot.module().__file__ == str(path)
+    assert not (path.parent / "tmpinterrupted").exists()
+
+
+
+def test_an_unwritable_cache_warns_and_runs_numba(built, fresh_cache, monkeypatch):
+    """The cache path is a file (as root, a read-only directory would still be writable): no traceback."""
+    fresh_cache.write_text("not a directory")
+    with pytest.warns(RuntimeWarning, match="could not be built in .*JAMFLOW_CACHE_DIR"):
+        res = jam(n=16, seed=1)
+    monkeypatch.setenv("JAMFLOW_AOT", "0")
+    ref = jam(n=16, seed=1)
+    assert res.phi_j == ref.phi_j and res.iterations == ref.iterations

@@ -24,6 +24,7 @@ import hashlib
 import importlib.util
 import os
 import platform
+import shutil
 import subprocess
 import sys
 import sysconfig
@@ -81,8 +82,14 @@ def module():
     if enabled() and loaded() is None:
         path = module_path()
         failed = path.parent / "failed"
-        if not failed.exists():
-            _build_locked(path, failed)
+        try:
+            if not failed.exists():
+                _build_locked(path, failed)
+        except OSError as err:  # a read-only or full cache: nothing written, numba serves
+            _warn(f"the ahead-of-time disk kernels could not be built in {path.parent} ({err}); using numba's "
+                  "kernels (~1 s more start-up per process). Point JAMFLOW_CACHE_DIR at a writable directory, or "
+                  "set JAMFLOW_AOT=0")
+            return None
         if _intact(path):
             _load(path)
         else:
@@ -100,6 +107,8 @@ def _build_locked(path: Path, failed: Path) -> None:
         fcntl.flock(lock, fcntl.LOCK_EX)
         if _intact(path) or failed.exists():
             return
+        for stale in path.parent.glob("tmp*"):  # an interrupted build's directory (we hold the lock)
+            shutil.rmtree(stale, ignore_errors=True)
         print("jamflow: compiling the ahead-of-time disk kernels once (~20 s) into", path.parent, file=sys.stderr,
               flush=True)
         with tempfile.TemporaryDirectory(dir=path.parent) as tmp:
