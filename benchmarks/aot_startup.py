@@ -9,7 +9,11 @@ user + sys), after one warm-up round:
 - ``jam-numba``: the same with ``JAMFLOW_AOT=0`` (numba's kernels and scipy's cKDTree, as before);
 - ``jam --help``.
 
-The two jams must print the same phi_J (checked). ``--speed N ...`` times, in one process, FIRE on
+The two jams must print the same phi_J (checked). Each set runs twice: first with jamflow's own
+modules compiled from source in every process (its ``__pycache__`` removed and
+``PYTHONDONTWRITEBYTECODE=1``: a fresh clone on a machine that sets it, as this sandbox and its CI
+do; ~0.09 s of compile() for ~80 modules), then with their bytecode cached (``compileall``: any
+normal Python after the first run); the ``bytecode`` column says which. ``--speed N ...`` times, in one process, FIRE on
 the N-particle seed 1 packing compressed by dphi = 0.01 (skin 1: no pair-list rebuild) with the AOT
 kernels and with numba's, alternating, on fresh copies, and checks that they end bit-identical.
 
@@ -23,7 +27,9 @@ module of its own and swapped it into a jam process by stand-ins: ``git show 6ad
 from __future__ import annotations
 
 import argparse
+import compileall
 import os
+import shutil
 import statistics
 import subprocess
 import sys
@@ -73,6 +79,17 @@ def alternate(procs: dict, env: dict, repeats: int) -> tuple[dict, list, bool]:
     return runs, loads, same
 
 
+def set_bytecode(cached: bool) -> None:
+    """jamflow's modules with their bytecode compiled (True) or none at all (False)."""
+    import jamflow
+
+    package = Path(jamflow.__file__).parent
+    for cache in package.rglob("__pycache__"):
+        shutil.rmtree(cache)
+    if cached:
+        compileall.compile_dir(package, quiet=1)
+
+
 def kernel_speed(n: int, repeats: int) -> dict:
     """CPU microseconds per FIRE iteration, AOT and numba, in this process (medians, alternating)."""
     from jamflow.engine.compiled import aot, fire
@@ -119,16 +136,22 @@ def main():
               f"load {os.getloadavg()[0]:.2f})")
     if args.speed_only:
         return
-    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
-    with tempfile.TemporaryDirectory() as tmp:
-        runs, loads, same = alternate(processes(Path(tmp), args.seed), env, args.repeats)
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "PYTHONDONTWRITEBYTECODE": "1"}
+    for cached in (False, True):
+        set_bytecode(cached)
+        with tempfile.TemporaryDirectory() as tmp:
+            runs, loads, same = alternate(processes(Path(tmp), args.seed), env, args.repeats)
+        report(runs, loads, same, cached, args)
+
+
+def report(runs: dict, loads: list, same: bool, cached: bool, args) -> None:
     for k, r in runs.items():
         walls, cpus = [w for w, _ in r], [c for _, c in r]
-        row = {"what": k, "seed": args.seed, "target_cpu": "host",
+        row = {"what": k, "bytecode": "cached" if cached else "none", "seed": args.seed, "target_cpu": "host",
                "wall_median_s": round(statistics.median(walls), 3), "wall_min_s": round(min(walls), 3),
                "cpu_median_s": round(statistics.median(cpus), 3), "cpu_min_s": round(min(cpus), 3), "repeats": len(r),
                "load_median": round(statistics.median(loads), 2), "bit_identical": same, "build_cpu_s": ""}
-        print(f"{k:19s} wall {row['wall_median_s']:.3f} s (min {row['wall_min_s']:.3f})  cpu {row['cpu_median_s']:.3f} s "
+        print(f"{k:19s} {row['bytecode']:6s} wall {row['wall_median_s']:.3f} s (min {row['wall_min_s']:.3f})  cpu {row['cpu_median_s']:.3f} s "
               f"(min {row['cpu_min_s']:.3f})  load {row['load_median']:.2f}")
         if args.out:
             append_row(Path(args.out), list(row), row)

@@ -106,9 +106,10 @@ def summary(csv_path: str) -> None:
         print(f"| {dim}D | {n} | {proc} | {proc_wall} | {inproc} | {phases} | {hand} | {ratio} | {checks} | {load} |")
 
 
-def chart(csv_path: str, png: str) -> None:
+def chart(csv_paths: list[str], png: str) -> None:
     """Median CPU seconds per packing against N (jamflow in process and whole process, the
-    hand-written loop) and jamflow's median iterations per phase, one column per dimension."""
+    hand-written loop) and jamflow's median iterations per phase, one column per dimension;
+    the rows of every CSV together."""
     import statistics
 
     import matplotlib
@@ -116,7 +117,7 @@ def chart(csv_path: str, png: str) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    rows = list(csv.DictReader(open(csv_path)))
+    rows = [row for path in csv_paths for row in csv.DictReader(open(path))]
     dims = sorted({int(r["dim"]) for r in rows})
     fig, axes = plt.subplots(2, len(dims), figsize=(5.5 * len(dims), 8), squeeze=False)
     for col, dim in enumerate(dims):
@@ -158,7 +159,7 @@ def main():
     ap.add_argument("--handwritten-seeds", type=int, nargs="*", default=None, help="seeds of the baseline (default all)")
     ap.add_argument("--process-max", type=int, default=1024, help="whole-process runs only up to this N")
     ap.add_argument("--out", default="docs/speed-table.csv")
-    ap.add_argument("--chart", default=None, metavar="CSV", help="only draw the chart of this CSV")
+    ap.add_argument("--chart", default=None, nargs="+", metavar="CSV", help="only draw the chart of these CSVs' rows")
     ap.add_argument("--png", default="docs/speed-2.png")
     ap.add_argument("--summary", default=None, metavar="CSV", help="only print the markdown rows of this CSV")
     args = ap.parse_args()
