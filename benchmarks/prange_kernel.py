@@ -1,13 +1,15 @@
 """The second core for one large packing (issue 17, item 6): the disk/sphere force kernel and a
 whole FIRE iteration with numba ``prange``, against the serial engine, measured.
 
-    flock /tmp/jamflow-bench.lock python benchmarks/prange_kernel.py --sizes 1024 4096 16384 --dim3 4096 \
-        --out docs/prange-kernel.csv
-    python benchmarks/prange_kernel.py --startup 5        # first-call wall seconds, fresh processes
+    python benchmarks/prange_kernel.py --sizes 1024 4096 16384 --dim3 4096 --states DIR --prepare
+    flock /tmp/jamflow-bench.lock python benchmarks/prange_kernel.py --sizes 1024 4096 16384 \
+        --dim3 4096 --repeats 12 --states DIR --out docs/prange-kernel.csv
+    python benchmarks/prange_kernel.py --summary docs/prange-kernel.csv   # the speed-ups
+    flock /tmp/jamflow-bench.lock python benchmarks/prange_kernel.py --startup 5   # fresh processes
 
-Kernels (each gives the forces, energy and virial of ``compiled.spheres.forces``; same
-arguments ``(model, x, o, f, tau, virial)``, so the engine's FIRE can run any of them):
-``serial``, the engine's kernel over the half pair list (i < j, sorted by i); ``csr``, a
+Kernels (each gives the forces, energy and virial of ``compiled.spheres.forces`` to round-off,
+checked; same arguments ``(model, x, o, f, tau, virial)``, so the engine's FIRE can run any of
+them): ``serial``, the engine's kernel over the half pair list (i < j, sorted by i); ``csr``, a
 per-particle loop over the full (both directions) neighbour list in CSR form, each particle
 summing its own force (every pair evaluated twice), conflict-free under ``prange``; compiled
 with and without ``parallel=True`` (``csr_1core``: the doubled work on one core, no threads);
@@ -17,14 +19,15 @@ The spring law is the potentials' own (``laws.energy_force``), as in the engine.
 
 FIRE: the engine's ``fire.fire`` compiled again from its own code with ``evaluate`` bound to
 one of these kernels (``fire_with``), run from a relaxed state for a fixed number of iterations
-on a fixed pair list (no rebuilds; the state moves far less than the skin, checked);
-``fire_share``: the integration passes' share of a serial iteration.
+on a fixed pair list (no rebuilds; the state moves far less than the skin, reported);
+``passes``: FIRE's passes over the coordinates alone, serial and ``prange``; ``ceiling``: a
+compute-bound ``prange`` loop, what the second core can give at all.
 
-Times: CPU (process time: every thread) and WALL microseconds per force evaluation or FIRE
-iteration, minimum of ``--repeats``, with 1 and 2 threads (``numba.set_num_threads``). Before
-each timed block the script waits until the 1-minute load average is <= ``--max-load`` (up to
-``--wait`` seconds) and records it, and the CPU the other processes used during the block
-(``others``: cores, from /proc/stat minus this process).
+Times: CPU (process time: every thread) and WALL microseconds per force evaluation, FIRE
+iteration or passes call, with 1 and 2 threads (``numba.set_num_threads``), minimum over
+``--repeats`` round-robin rounds (``round_robin``). The run starts when the 1-minute load
+average is <= ``--max-load``; each round starts when the other processes use <= ``--max-others``
+cores (an idle 2 s sample), and the cores they used before and during the rounds are recorded.
 """
 
 from __future__ import annotations
@@ -210,6 +213,18 @@ _passes_par = numba.njit(parallel=True)(_passes)
 _passes_1core = numba.njit(_passes)
 
 
+CEILING_WORK = 2_000_000  # square roots per ``_ceiling`` call (~1 ms)
+
+
+@numba.njit(parallel=True)
+def _ceiling(m):
+    """Compute-bound work with no memory traffic: what a second thread can give on this machine."""
+    acc = 0.0
+    for k in prange(m):
+        acc += math.sqrt(k + 0.5)
+    return acc
+
+
 @numba.njit
 def _repeat_passes(passes, xs, vs, fs, x0, d, reps):
     acc = 0.0
@@ -276,19 +291,37 @@ def _busy_seconds() -> float:
     return (sum(v) - v[3] - v[4]) / os.sysconf("SC_CLK_TCK")
 
 
-def timed(call, count: int, repeats: int) -> dict:
-    """Minimum CPU and wall microseconds per unit (``call()`` runs ``count`` units) and the cores
-    the other processes used meanwhile."""
-    cpu = wall = np.inf
-    b0, c0, t0 = _busy_seconds(), time.process_time(), time.perf_counter()
-    for _ in range(repeats):
-        c, t = time.process_time(), time.perf_counter()
-        call()
-        cpu = min(cpu, (time.process_time() - c) / count * 1e6)
-        wall = min(wall, (time.perf_counter() - t) / count * 1e6)
-    span = time.perf_counter() - t0
-    others = (_busy_seconds() - b0 - (time.process_time() - c0)) / span
-    return {"cpu_us": round(cpu, 3), "wall_us": round(wall, 3), "others": round(max(others, 0.0), 2)}
+class Probe(NamedTuple):
+    """One timed thing: ``call()`` runs ``count`` units (force evaluations, FIRE iterations,
+    passes calls) on ``threads`` threads."""
+
+    key: tuple  # (row name, threads)
+    column: str  # "call" or "fire"
+    threads: int
+    call: object
+    count: int
+
+
+def round_robin(probes: list[Probe], rounds: int, max_others: float, wait: float) -> tuple[dict, dict]:
+    """Every probe once per round, ``rounds`` rounds, starting at the next probe each round
+    (drift in the machine's speed hits every probe alike); the minimum CPU and wall microseconds per unit of each, and per round the
+    cores the other processes used (idle sample before it, and during it)."""
+    best = {}
+    others = {"before": [], "during": []}
+    for r in range(rounds):
+        others["before"].append(wait_for_core(max_others, wait))
+        b0, c0, t0 = _busy_seconds(), time.process_time(), time.perf_counter()
+        probes[0].call()  # warm-up after the idle sample: the first probe paid for it (run 2)
+        for p in probes[r % len(probes):] + probes[:r % len(probes)]:  # each probe first in turn
+            numba.set_num_threads(p.threads)
+            c, t = time.process_time(), time.perf_counter()
+            p.call()
+            cpu, wall = (time.process_time() - c) / p.count * 1e6, (time.perf_counter() - t) / p.count * 1e6
+            old = best.get((p.key, p.column), (np.inf, np.inf))
+            best[(p.key, p.column)] = (min(old[0], cpu), min(old[1], wall))
+        others["during"].append((_busy_seconds() - b0 - (time.process_time() - c0)) / (time.perf_counter() - t0))
+    numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    return best, others
 
 
 def wait_for_load(max_load: float, wait: float) -> float:
@@ -378,70 +411,102 @@ def _report(row: dict) -> dict:
 
 
 def measure(case: Case, label: str, args) -> list[dict]:
-    """Rows for every kernel and its FIRE, and for FIRE's passes alone, at 1 (and, parallel,
-    2) threads: ``call_*`` per force evaluation (or per passes call), ``fire_*`` per iteration."""
+    """Rows for every kernel and its FIRE (``call_*`` per force evaluation, ``fire_*`` per
+    iteration), FIRE's passes alone and the ceiling (per call), at 1 (and, parallel, 2) threads."""
     n, d = case.packing.n, case.packing.dim
-    reps, iterations = max(200, 4_000_000 // n), max(1000, 4_000_000 // n)
+    reps, iterations = max(100, 2_000_000 // n), max(500, 2_000_000 // n)
     x_ref, e_ref, _ = case.fire_run("serial", iterations)
     case.models["counted"].calls[0] = 0
     case.fire_run("counted", iterations)
     head = {"case": label, "n": n, "pairs": len(case.pairs.i),
             "evals_per_iteration": round(case.models["counted"].calls[0] / iterations, 4)}
-    rows = []
+    checks, probes = {}, []
     for name in TIMED:
         case.kernel_call(name, 5)()  # compile
-        case.fire_run(name, 5)
         x_fire, e_fire, ran = case.fire_run(name, iterations)
+        checks[name] = {**agreement(case, name), "fire_dx": float(np.abs(x_fire - x_ref).max()),
+                        "fire_de": abs(e_fire - e_ref) / abs(e_ref),
+                        "fire_moved": float(np.abs(x_ref - case.x).max()), "fire_iterations": ran}
         for threads in ((1, 2) if name in PARALLEL else (1,)):
-            numba.set_num_threads(threads)
-            idle = wait_for_core(args.max_others, args.wait)
-            k = timed(case.kernel_call(name, reps), reps, args.repeats)
-            fi = timed(lambda: case.fire_run(name, iterations), iterations, args.repeats)
-            rows.append(_report({
-                **head, "kernel": name, "threads": threads, "call_cpu_us": k["cpu_us"], "call_wall_us": k["wall_us"],
-                "fire_cpu_us": fi["cpu_us"], "fire_wall_us": fi["wall_us"],
-                "load": round(os.getloadavg()[0], 2), "others_before": idle, "others": max(k["others"], fi["others"]), **agreement(case, name),
-                "fire_dx": float(np.abs(x_fire - x_ref).max()), "fire_de": abs(e_fire - e_ref) / abs(e_ref),
-                "fire_moved": float(np.abs(x_ref - case.x).max()), "fire_iterations": ran}))
+            probes.append(Probe((name, threads), "call", threads, case.kernel_call(name, reps), reps))
+            probes.append(Probe((name, threads), "fire", threads,
+                                lambda name=name: case.fire_run(name, iterations), iterations))
     f = case.evaluate("serial")[0].reshape(-1)
     xs, vs, x0 = case.x.reshape(-1).copy(), 0.05 * f, case.x.reshape(-1).copy()
-    for name, passes in (("passes_1core", _passes_1core), ("passes", _passes_par)):
+    for name, passes, threads in (("passes_1core", _passes_1core, 1), ("passes", _passes_par, 1),
+                                  ("passes", _passes_par, 2)):
         _repeat_passes(passes, xs, vs, f, x0, d, 5)
-        for threads in ((1, 2) if passes is _passes_par else (1,)):
-            numba.set_num_threads(threads)
-            idle = wait_for_core(args.max_others, args.wait)
-            k = timed(lambda: _repeat_passes(passes, xs, vs, f, x0, d, reps), reps, args.repeats)
-            rows.append(_report({**head, "kernel": name, "threads": threads, "call_cpu_us": k["cpu_us"],
-                                 "call_wall_us": k["wall_us"], "load": round(os.getloadavg()[0], 2),
-                                 "others_before": idle, "others": k["others"]}))
-    numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+        probes.append(Probe((name, threads), "call", threads,
+                            lambda passes=passes: _repeat_passes(passes, xs, vs, f, x0, d, reps), reps))
+    _ceiling(1000)
+    for threads in (1, 2):
+        probes.append(Probe(("ceiling", threads), "call", threads, lambda: _ceiling(CEILING_WORK), 1))
+    best, others = round_robin(probes, args.repeats, args.max_others, args.wait)
+    rows = []
+    for key in dict.fromkeys(p.key for p in probes):
+        name, threads = key
+        row = {**head, "kernel": name, "threads": threads}
+        for column in ("call", "fire"):
+            cpu, wall = best.get((key, column), (np.nan, np.nan))
+            row[f"{column}_cpu_us"], row[f"{column}_wall_us"] = round(cpu, 3), round(wall, 3)
+        row.update({"load": round(os.getloadavg()[0], 2), "others_before": round(max(others["before"]), 2),
+                    "others": round(max(others["during"]), 2), **checks.get(name, {})})
+        rows.append(_report(row))
     return rows
 
 
 # start-up ------------------------------------------------------------------------------------------
 def first_call(name: str) -> None:
-    """In this (fresh) process: wall seconds of the first and second call of kernel ``name``."""
+    """In this (fresh) process: wall seconds of the first and second call of kernel ``name``:
+    the engine's cached ``spheres.forces``, or the cached parallel loop itself (``_csr_par``,
+    ``_chunk_par``; the NamedTuple wrappers ``csr`` and ``chunks`` were compiled again in every
+    process in this benchmark, seen with NUMBA_DEBUG_CACHE=1, not diagnosed)."""
     from jamflow.protocols.compression import initial_packing
 
     case = Case(initial_packing(1024, 2, "bi:1.4:0.5", "spring", 0, 0.85))
+    x, f, w, o, tau = case.x, case.f, case.virial, case.eng._o, case.eng._tau
+    m = case.models[name]
+    call = {"serial": lambda: spheres.forces(m, x, o, f, tau, w),
+            "csr": lambda: _csr_par(m.start, m.j, m.shift, m.sigma, m.law, x, f, w),
+            "chunks": lambda: _chunk_par(*m.pairs, m.cuts, m.fbuf, m.wbuf, x, o, f, tau, w)}[name]
     t0 = time.perf_counter()
-    case.evaluate(name)
+    call()
     t1 = time.perf_counter()
-    case.evaluate(name)
+    call()
     t2 = time.perf_counter()
     layer = numba.threading_layer() if name in PARALLEL else "-"
     print(f"{name} first_s={t1 - t0:.4f} second_s={t2 - t1:.6f} layer={layer}", flush=True)
 
 
+def compile_seconds() -> None:
+    """Wall seconds to compile (no cache) the CSR loop without and with ``parallel=True``, and
+    the chunked loop, on the types of a 2D spring state."""
+    from jamflow.protocols.compression import initial_packing
+
+    case = Case(initial_packing(256, 2, "bi:1.4:0.5", "spring", 0, 0.85))
+    x, f, w, o, tau = case.x, case.f, case.virial, case.eng._o, case.eng._tau
+    m, c = case.models["csr"], case.models["chunks"]
+    for label, fn, args in (("csr_1core", numba.njit(_csr_loop), (*m, x, f, w)),
+                            ("csr", numba.njit(parallel=True)(_csr_loop), (*m, x, f, w)),
+                            ("chunks", numba.njit(parallel=True)(_chunk_loop),
+                             (*c.pairs, c.cuts, c.fbuf, c.wbuf, x, o, f, tau, w))):
+        t0 = time.perf_counter()
+        fn(*args)
+        print(f"compile {label}: {time.perf_counter() - t0:.2f} s", flush=True)
+
+
 def startup(times: int) -> None:
-    """``times`` fresh processes per kernel, alternating, after one warm-up each (cache warm)."""
+    """``times`` fresh processes per kernel, alternating, after one warm-up each (cache warm);
+    ``process_s``: the whole process's wall seconds (the same work but for the kernel)."""
     cmd = [sys.executable, __file__, "--first-call"]
     for name in ("serial", *PARALLEL):
         subprocess.run([*cmd, name], check=True, capture_output=True)
     for _ in range(times):
         for name in ("serial", *PARALLEL):
+            t0 = time.perf_counter()
             out = subprocess.run([*cmd, name], check=True, capture_output=True, text=True).stdout
-            print(out.strip(), f"load={os.getloadavg()[0]:.2f}", flush=True)
+            print(out.strip(), f"process_s={time.perf_counter() - t0:.3f} load={os.getloadavg()[0]:.2f}", flush=True)
+    compile_seconds()
 
 
 def state(n: int, dim: int, phi: float, directory: str | None):
@@ -458,6 +523,34 @@ def state(n: int, dim: int, phi: float, directory: str | None):
     return packing
 
 
+def summary(path: str) -> None:
+    """Per case, from a CSV of ``measure`` rows: the wall-time speed-ups at 2 threads of the
+    force loop and of a FIRE iteration over the serial engine, the serial integration share
+    (a FIRE iteration minus its force evaluations) and what a FIRE iteration would take with the
+    measured 2-thread loop and a perfect one (Amdahl: the integration stays serial)."""
+    import csv
+
+    rows = list(csv.DictReader(open(path)))
+    for case in dict.fromkeys((r["case"], r["n"]) for r in rows):
+        at = {(r["kernel"], r["threads"]): r for r in rows if (r["case"], r["n"]) == case}
+        s = at[("serial", "1")]
+        call, fire_us, evals = float(s["call_wall_us"]), float(s["fire_wall_us"]), float(s["evals_per_iteration"])
+        share = 1.0 - evals * call / fire_us
+        print(f"{case[0]} N={case[1]}: serial force {call:.1f} us, FIRE {fire_us:.1f} us/iteration, "
+              f"integration share {share:.2f}; FIRE with a perfect 2-thread force loop at most "
+              f"{fire_us / (fire_us - evals * call / 2):.2f}x")
+        for name in PARALLEL:
+            p = at[(name, "2")]
+            par = float(p["call_wall_us"])
+            predicted = fire_us / (fire_us - evals * (call - par))
+            print(f"  {name}: force loop {call / par:.2f}x, FIRE measured {fire_us / float(p['fire_wall_us']):.2f}x, "
+                  f"predicted {predicted:.2f}x")
+        one, two = float(at[("passes_1core", "1")]["call_wall_us"]), float(at[("passes", "2")]["call_wall_us"])
+        ceiling = float(at[("ceiling", "1")]["call_wall_us"]) / float(at[("ceiling", "2")]["call_wall_us"])
+        print(f"  FIRE's passes alone: {one:.1f} us serial, {two:.1f} us on 2 threads ({one / two:.2f}x); "
+              f"compute-bound ceiling {ceiling:.2f}x")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--sizes", type=int, nargs="*", default=[1024, 4096, 16384])
@@ -470,8 +563,11 @@ def main():
     ap.add_argument("--prepare", action="store_true", help="only build (and keep) the states")
     ap.add_argument("--out", default=None)
     ap.add_argument("--startup", type=int, default=0, help="time the first call in this many fresh processes")
+    ap.add_argument("--summary", default=None, help="print the speed-ups from a CSV this script wrote")
     ap.add_argument("--first-call", default=None, help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.summary:
+        return summary(args.summary)
     if args.first_call:
         return first_call(args.first_call)
     if args.startup:
