@@ -39,8 +39,9 @@ def _repeat(pairs, x, o, f, tau, virial, reps):
     return e
 
 
-def near_jamming_state(n: int, seed: int = 0):
-    start = initial_packing(n, 2, "bi:1.4:0.5", "spring", seed, 0.85)
+def near_jamming_state(n: int, seed: int = 0, dim: int = 2, phi: float = 0.85):
+    """A relaxed (|f| < 1e-9) 50:50 bidisperse state at packing fraction ``phi``."""
+    start = initial_packing(n, dim, "bi:1.4:0.5", "spring", seed, phi)
     with CompiledEngine(start) as eng:
         eng.minimize(MinimizerSettings(force_tol=1e-9, max_iterations=200_000))
         return eng.packing()
