@@ -50,11 +50,13 @@ import numba
 import numpy as np
 from numba import prange
 
-from jamflow.engine.compiled import fire, spheres
+from jamflow.engine.compiled import fire, spheres, start_numba
 from jamflow.engine.compiled.engine import CompiledEngine
 from jamflow.engine.compiled.field import deform
 from jamflow.engine.compiled.laws import energy_force
 from jamflow.minimize import MinimizerSettings
+
+start_numba()  # jamflow's kernels as numba dispatchers (and its overloads registered) before they are recompiled here
 
 CHUNKS = 2  # runs of the half list in ``chunks``: one per core of this machine
 
