@@ -25,10 +25,12 @@ from speed_accuracy import append_row  # (benchmarks/ is the script's directory)
 import numba
 import numpy as np
 
-from jamflow.engine.compiled import spheres
+from jamflow.engine.compiled import spheres, start_numba
 from jamflow.engine.compiled.engine import CompiledEngine
 from jamflow.minimize import MinimizerSettings
 from jamflow.protocols.compression import initial_packing
+
+start_numba()  # spheres.forces as a numba dispatcher (it is Deferred until numba starts), for _repeat
 
 
 @numba.njit

@@ -17,6 +17,10 @@ shared machine the load drifts between two separate runs).
 instead of the installed one, for a before/after table on the same machine and venv.
 Rows are appended to the CSV with the load average; take timings under
 ``flock /tmp/jamflow-bench.lock``.
+
+Since session 6 a disk jam runs ahead-of-time kernels and never starts numba (docs/speed-2.md
+section 12): the in-process phases still import numba explicitly, so the "numba" phase is what
+importing it would cost, not part of a jam; ``aot_startup.py`` times the jam itself.
 """
 
 from __future__ import annotations
