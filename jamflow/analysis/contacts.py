@@ -369,9 +369,9 @@ def positively_spanning(vectors: np.ndarray) -> bool:
     it is not {0} it has an extreme ray, orthogonal to d - 1 independent v's: w = +-rot90(v_a) in
     2D, +-(v_a x v_b) in 3D; the vectors span positively iff every such candidate has vectors
     strictly on both of its sides. Products within ``SPAN_TOL`` of zero count as on the plane
-    (not spanning: the boundary case, which an exact sum of contact forces cannot balance). ~50x
-    faster than the LP feasibility problem sum_k l_k v_k = 0, l_k >= 1 it replaces (HiGHS, 2-3 ms
-    a particle; tests/test_contacts.py compares the two)."""
+    (not spanning: the boundary case, which an exact sum of contact forces cannot balance). ~10x
+    faster than the LP feasibility problem sum_k l_k v_k = 0, l_k >= 1 it replaces (HiGHS: 1.3 ms
+    against 0.14 ms per set of 4-8 vectors; tests/test_contacts.py compares the two)."""
     v = np.asarray(vectors, float)
     k, d = v.shape
     if d not in (2, 3):

@@ -12,8 +12,8 @@ numba is imported on first use, not at import: ``jit`` returns a ``Deferred`` fu
 first call of any of them (``start_numba``) imports numba, swaps every deferred function in jamflow's
 loaded modules for its numba dispatcher (so compiled code calls compiled code, as with
 ``numba.njit`` at import) and runs the registrations (``overload`` and friends) queued by
-``when_numba_starts``. A disk jam served by the ahead-of-time kernels never starts numba (0.6 CPU s of
-start-up; docs/speed-2.md section 10).
+``when_numba_starts``. A disk jam served by the ahead-of-time kernels never starts numba (~1 CPU s of
+start-up; docs/speed-2.md section 12).
 
 Kernels are cached on disk (numba ``cache=True``) under ``<jamflow cache>/numba/<digest>``,
 the digest covering this package's sources, ``jamflow/potentials.py`` and
