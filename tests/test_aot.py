@@ -180,3 +180,13 @@ def test_an_unwritable_cache_warns_and_runs_numba(built, fresh_cache, monkeypatc
     monkeypatch.setenv("JAMFLOW_AOT", "0")
     ref = jam(n=16, seed=1)
     assert res.phi_j == ref.phi_j and res.iterations == ref.iterations
+
+
+def test_no_c_compiler_warns_without_a_build_or_a_marker(built, fresh_cache, monkeypatch):
+    monkeypatch.setenv("CC", "/nonexistent/cc")
+    monkeypatch.setattr(aot, "build_command", lambda out: pytest.fail("no build without a compiler"))
+    with pytest.warns(RuntimeWarning, match="no C compiler found .*apt-get install gcc"):
+        res = jam(n=16, seed=1)
+    assert not (aot.module_path().parent / "failed").exists()  # retried once a compiler exists
+    monkeypatch.setenv("JAMFLOW_AOT", "0")
+    assert jam(n=16, seed=1).phi_j == res.phi_j

@@ -14,7 +14,8 @@ The module is built on first use, like the LAMMPS plugin: ~15-20 CPU s once, in 
 (``compiled.source_digest``), numpy's and Python's versions and this CPU (the build targets the host
 CPU, as numba does); it is moved into place atomically under a lock, so concurrent first jams build it
 once. If it cannot be built (no C compiler, a numba without pycc, a failed build) jamflow warns once,
-leaves a ``failed`` marker (delete it to retry) and runs numba's kernels. ``JAMFLOW_AOT=0`` turns the
+leaves a ``failed`` marker (delete it to retry; none when no C compiler is found, so installing one
+is enough) and runs numba's kernels. ``JAMFLOW_AOT=0`` turns the
 module off. The module is compiled from jamflow's sources and numba's runtime only (no LAMMPS headers).
 """
 
@@ -82,6 +83,11 @@ def module():
     if enabled() and loaded() is None:
         path = module_path()
         failed = path.parent / "failed"
+        if not _intact(path) and c_compiler() is None:  # nothing to build with: no marker, retried once one exists
+            _warn("no C compiler found (looked for $CC, then Python's CC, cc, gcc), so the ahead-of-time disk "
+                  "kernels cannot be built; using numba's kernels (~1 s more start-up per process). Install one, "
+                  "e.g. `apt-get install gcc`, or set JAMFLOW_AOT=0")
+            return None
         try:
             if not failed.exists():
                 _build_locked(path, failed)
@@ -120,6 +126,18 @@ def _build_locked(path: Path, failed: Path) -> None:
                 lines = done.stderr.strip().splitlines() or ["no module written"]
                 reason = next((line for line in reversed(lines) if "Error" in line), lines[-1])
                 failed.write_text(f"exit {done.returncode}: {reason}\n\n{done.stderr[-4000:]}")
+
+
+def c_compiler() -> str | None:
+    """The C compiler pycc would run (``$CC`` if set, else Python's own ``CC``, ``cc``, ``gcc``), or None."""
+    cc = os.environ.get("CC", "").split()
+    if cc:
+        return shutil.which(cc[0])
+    python_cc = (sysconfig.get_config_var("CC") or "").split()
+    for name in python_cc[:1] + ["cc", "gcc"]:
+        if shutil.which(name):
+            return shutil.which(name)
+    return None
 
 
 def build_command(out_dir: str) -> list[str]:
