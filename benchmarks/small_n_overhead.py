@@ -15,8 +15,8 @@ from jamflow.engine.compiled import aot, fire
 from jamflow.engine.compiled import engine as compiled
 from jamflow.protocols.compression import jam
 
-CALLS = {"fire kernel": (fire, "fire"), "fire kernel (AOT)": (aot.AotKernels, "fire"), "pair builds": (compiled.CompiledEngine, "_build_pairs"),
-         "engine.packing()": (compiled.CompiledEngine, "packing"), "set_box": (compiled.CompiledEngine, "set_box"),
+CALLS = {"fire kernel": (fire, "fire"), "fire kernel (AOT)": (aot.AotKernels, "fire"),
+         "pair builds": (compiled.CompiledEngine, "_build_pairs"), "engine.packing()": (compiled.CompiledEngine, "packing"), "set_box": (compiled.CompiledEngine, "set_box"),
          "state": (compiled.CompiledEngine, "state")}
 
 

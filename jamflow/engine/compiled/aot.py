@@ -135,8 +135,9 @@ def c_compiler() -> str | None:
         return shutil.which(cc[0])
     python_cc = (sysconfig.get_config_var("CC") or "").split()
     for name in python_cc[:1] + ["cc", "gcc"]:
-        if shutil.which(name):
-            return shutil.which(name)
+        found = shutil.which(name)
+        if found:
+            return found
     return None
 
 
@@ -153,9 +154,10 @@ def _first_line(path: Path) -> str:
 
 
 def _intact(path: Path) -> bool:
+    """A complete shared library at ``path`` (False if there is none)."""
     from ..plugin_build import _intact as complete_elf
 
-    return path.exists() and complete_elf(path)
+    return complete_elf(path)
 
 
 def _load(path: Path) -> None:

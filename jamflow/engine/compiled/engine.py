@@ -135,8 +135,8 @@ class CompiledEngine:
 
     def evaluate(self) -> State:
         """Energy, forces, torques and virial pressure tensor at the current configuration."""
-        self._energy = self._kernels.forces(self._model(), self._field, self._x, self._f, self._o, self._tau, self._g,
-                                      self._dk, self._mask, self._virial, self._gb)
+        self._energy = self._kernels.forces(self._model(), self._field, self._x, self._f, self._o, self._tau,
+                                            self._g, self._dk, self._mask, self._virial, self._gb)
         self._check_counters()
         return self.state()
 
@@ -196,10 +196,10 @@ class CompiledEngine:
             v, w, u = np.zeros_like(self._x), np.zeros_like(self._g), np.zeros_like(self._gb)
             done = 0
             while True:
-                ran, reason, energy = self._kernels.fire(self._model(), self._field, self._x, v, self._f, self._o, w,
-                                                   self._tau, self._g, self._dk, self._mask, self._virial, u, self._gb,
-                                                   state, self._built_at, self._turned, self._reach, half_skin_sq,
-                                                   steps - done, ftol, halt)
+                ran, reason, energy = self._kernels.fire(self._model(), self._field, self._x, v, self._f, self._o,
+                                                         w, self._tau, self._g, self._dk, self._mask, self._virial, u,
+                                                         self._gb, state, self._built_at, self._turned, self._reach,
+                                                         half_skin_sq, steps - done, ftol, halt)
                 done += ran
                 self._energy = energy
                 self._sync_box()
