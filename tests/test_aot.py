@@ -190,3 +190,15 @@ def test_no_c_compiler_warns_without_a_build_or_a_marker(built, fresh_cache, mon
     assert not (aot.module_path().parent / "failed").exists()  # retried once a compiler exists
     monkeypatch.setenv("JAMFLOW_AOT", "0")
     assert jam(n=16, seed=1).phi_j == res.phi_j
+
+
+def test_a_bad_jamflow_aot_value_is_refused_before_work(tmp_path, monkeypatch, capsys):
+    from jamflow.cli import main
+
+    monkeypatch.setenv("JAMFLOW_AOT", "maybe")
+    code = main(["jam", "--n", "16", "--quiet", "--out", str(tmp_path / "p.h5")])
+    err = capsys.readouterr().err
+    assert code != 0 and "JAMFLOW_AOT='maybe' is neither on nor off" in err and "Traceback" not in err
+    assert not (tmp_path / "p.h5").exists()
+    monkeypatch.setenv("JAMFLOW_AOT", "Off")
+    assert not aot.enabled()

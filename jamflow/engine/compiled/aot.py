@@ -41,9 +41,17 @@ _module = None  # the loaded module, once loaded
 _warned = False
 
 
+_SWITCH = {"": True, "1": True, "on": True, "yes": True, "true": True,
+           "0": False, "off": False, "no": False, "false": False}
+
+
 def enabled() -> bool:
-    """False when ``JAMFLOW_AOT=0``."""
-    return os.environ.get("JAMFLOW_AOT", "1").strip() != "0"
+    """``JAMFLOW_AOT``: unset or 1 / on / yes / true (default) uses the module, 0 / off / no / false turns it off."""
+    value = os.environ.get("JAMFLOW_AOT", "").strip().lower()
+    if value not in _SWITCH:
+        raise ValueError(f"JAMFLOW_AOT={os.environ['JAMFLOW_AOT']!r} is neither on nor off; set it to 0 (numba's "
+                         "kernels) or 1 (the ahead-of-time disk kernels, the default), or unset it")
+    return _SWITCH[value]
 
 
 def _cpu_id() -> str:
