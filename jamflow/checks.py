@@ -27,10 +27,10 @@ from dataclasses import asdict, dataclass, fields
 
 import numpy as np
 
-from .analysis.contacts import Contacts
-from .minimize import MinimizerSettings
-from .packing import Packing
-from .shapes.rotations import generalized_torques as body_torques
+from jamflow.analysis.contacts import Contacts
+from jamflow.minimize import MinimizerSettings
+from jamflow.packing import Packing
+from jamflow.shapes.rotations import generalized_torques as body_torques
 
 BALANCE_RTOL = 1e-3  # max net force / mean contact force above this: not at an energy minimum
 
@@ -99,7 +99,7 @@ def check_packing(packing: Packing, energy_per_particle: float | None = None, ma
     ``energy_per_particle`` and ``max_force`` (the engine's values) are recomputed from the
     packing when None; ``v_tol`` None skips the window check; ``ftol`` is recorded only.
     """
-    from .engine.reference import energy_forces_pressure
+    from jamflow.engine.reference import energy_forces_pressure
 
     ref = energy_forces_pressure(packing, pairs="near")
     v = ref.energy / packing.n if energy_per_particle is None else float(energy_per_particle)

@@ -21,7 +21,7 @@ import sys
 import warnings
 from importlib import import_module
 
-from . import __version__
+from jamflow import __version__
 
 SUBCOMMANDS = {
     "jam": ("jamflow.commands.jam", "jam particles at onset by isotropic compression"),
@@ -107,15 +107,15 @@ def main(argv=None) -> int:
 
 def _classify(err: Exception) -> tuple[int | None, str]:
     """Exit code and one-line message for an expected failure; (None, '') for a bug."""
-    from .engine.lammps import LammpsError
-    from .engine.plugin_build import PluginBuildError
-    from .protocols.compression import JammingFailed
+    from jamflow.engine.lammps import LammpsError
+    from jamflow.engine.plugin_build import PluginBuildError
+    from jamflow.protocols.compression import JammingFailed
 
     if isinstance(err, JammingFailed):
         return EXIT_JAMMING, f"jamming failed: {err}"
     if isinstance(err, LammpsError):
         if "Unrecognized pair style 'jamflow/" in str(err):
-            from .engine.plugin_build import library_path
+            from jamflow.engine.plugin_build import library_path
 
             return EXIT_LAMMPS, (f"LAMMPS failed: {err}. The cached jamflow plugin {library_path()} did not load: "
                                  f"delete {library_path().parent} (it is rebuilt on the next run)")

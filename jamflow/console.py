@@ -20,7 +20,7 @@ signal.signal(signal.SIGINT, _interrupted)
 
 
 def main() -> int:
-    from .cli import main as cli_main
+    from jamflow.cli import main as cli_main
 
     signal.signal(signal.SIGINT, signal.default_int_handler)  # KeyboardInterrupt again, caught by cli.main
     return cli_main()

@@ -18,11 +18,11 @@ from pathlib import Path
 
 import numpy as np
 
-from .deck import DeckResult, deck_variables, run_deck
-from .io import write_lammps_data
-from .packing import Packing
-from .pairs import overlapping_pairs
-from .protocols.compression import CompressionSettings, JamResult, compress, initial_packing
+from jamflow.deck import DeckResult, deck_variables, run_deck
+from jamflow.io import write_lammps_data
+from jamflow.packing import Packing
+from jamflow.pairs import overlapping_pairs
+from jamflow.protocols.compression import CompressionSettings, JamResult, compress, initial_packing
 
 @dataclass(frozen=True)
 class CrossCheck:
@@ -188,9 +188,9 @@ def crosscheck_shear(n: int = 10, dim: int = 2, sizes: str = "bi:1.4:0.5", seed:
     """Jam one random start at strain ``gamma`` (controller, LAMMPS, seed protocol), then shear it
     to ``to`` in steps of ``dgamma`` twice: with the shear deck (``lmp``) and with the controller.
     ``settings``: the bisection after each step (the seed protocol; default dphi0 = 1e-6)."""
-    from .protocols.compression import jam, seed_protocol
-    from .protocols.shear import shear, shear_strains
-    from .shear_deck import run_shear_deck, start_variables
+    from jamflow.protocols.compression import jam, seed_protocol
+    from jamflow.protocols.shear import shear, shear_strains
+    from jamflow.shear_deck import run_shear_deck, start_variables
 
     settings = settings or seed_protocol(dphi0=1e-6)
     if not tolerance > 0:

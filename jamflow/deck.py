@@ -21,14 +21,14 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__
-from .box import Box
-from .io import atomic_path, write_lammps_data
-from .minimize import MinimizerSettings
-from .packing import Packing
-from .potentials import Potential, Spring, parse_potential
-from .protocols.compression import CompressionSettings
-from .sizes import parse_sizes
+from jamflow import __version__
+from jamflow.box import Box
+from jamflow.io import atomic_path, write_lammps_data
+from jamflow.minimize import MinimizerSettings
+from jamflow.packing import Packing
+from jamflow.potentials import Potential, Spring, parse_potential
+from jamflow.protocols.compression import CompressionSettings
+from jamflow.sizes import parse_sizes
 
 DECK_NAME = "jam.lmp"
 OPTIONAL = ("data", "phi0", "ftol", "plugin")
@@ -54,7 +54,7 @@ def deck_variables(n: int = 256, dim: int = 2, sizes="bi:1.4:0.5", seed: int = 0
     packing fraction as jamflow computes it (``Packing.phi``), passed at full precision.
     ``walls``: smooth walls on these axes (``"y"``, ``"x,y"``; ``jamflow.walls``).
     """
-    from .walls import parse_walls
+    from jamflow.walls import parse_walls
 
     settings = settings or CompressionSettings()
     d2, fsmall = system_values(sizes, potential)
@@ -108,7 +108,7 @@ def optional_values(settings: CompressionSettings) -> dict:
 
 def _plugin_path() -> str:
     """The compiled jamflow plugin (fix jamflow/damping) that a pairwise-damping deck loads."""
-    from .engine.plugin_build import plugin_library
+    from jamflow.engine.plugin_build import plugin_library
 
     library = plugin_library()
     if library is None:
@@ -131,7 +131,7 @@ def _check_seed_protocol(settings: CompressionSettings) -> None:
 # --- the deck text -------------------------------------------------------------------------------
 def deck_text(variables: dict | None = None) -> str:
     """The deck with ``variables`` (from ``deck_variables``) as its defaults."""
-    from .deck_script import BODY, HEADER
+    from jamflow.deck_script import BODY, HEADER
 
     return render(HEADER, BODY, OPTIONAL, deck_variables() if variables is None else variables)
 
@@ -172,7 +172,7 @@ class DeckResult:
 
 def lmp_command(lmp=None, ranks: int = 1) -> list[str]:
     """argv prefix for the ``lmp`` executable, under ``mpirun -np ranks`` if ranks > 1."""
-    from .engine.lammps_lib import lmp_executable
+    from jamflow.engine.lammps_lib import lmp_executable
 
     if not isinstance(ranks, int) or ranks < 1:
         raise ValueError(f"ranks must be a positive integer, got {ranks!r}")
@@ -220,7 +220,7 @@ def check_workdir(workdir) -> Path:
 
 def run_lmp(workdir: Path, deck: Path, variables, out_default: str, lmp=None, ranks: int = 1, timeout=None):
     """Run ``lmp -in deck -var ...`` in ``workdir``; return (output prefix, seconds, process)."""
-    from .engine.lammps_lib import lammps_env
+    from jamflow.engine.lammps_lib import lammps_env
 
     variables = dict(variables or {})
     out = str(variables.setdefault("out", out_default))
@@ -301,7 +301,7 @@ def read_body_data(path, shape, potential: Potential | None = None) -> Packing:
     with their image flags, centres are the mass-weighted site centres (``site_masses``: the
     union's centre of mass), orientations the best rotation of the body frame onto the sites
     (``shapes.rotations.fit_orientations``), scales the site diameters over the shape's."""
-    from .shapes.rotations import fit_orientations
+    from jamflow.shapes.rotations import fit_orientations
 
     bounds, tilts, table = _atoms_table(path, "hybrid", "hybrid sphere molecular", 11)
     table = table[np.lexsort((table[:, 0], table[:, 7]))]  # by molecule, then atom id
@@ -395,7 +395,7 @@ def run_pressure_deck(workdir, start: Packing, pressures, *, stress: str = "iso"
     """Run ``lammps_inputs/pressure.lmp`` from ``start`` (written as start.data in ``workdir``)
     through the decreasing target ``pressures``; return (history, the packing at the last one).
     Linear spring (eps = 1), one or two sizes with the small one 1, periodic box."""
-    from .engine.lammps_lib import lammps_env
+    from jamflow.engine.lammps_lib import lammps_env
 
     values = start.species()[0]
     pot = start.potential

@@ -15,12 +15,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .deck import OPTIONAL, _atoms_table, _data_box, _num, _section_rows, optional_values, protocol_values, render, start_values, system_values
-from .io import atomic_path, write_lammps_data
-from .packing import Packing
-from .potentials import Potential, Spring
-from .protocols.compression import CompressionSettings
-from .shapes.shape import Ellipsoid
+from jamflow.deck import OPTIONAL, _atoms_table, _data_box, _num, _section_rows, optional_values, protocol_values, render, start_values, system_values
+from jamflow.io import atomic_path, write_lammps_data
+from jamflow.packing import Packing
+from jamflow.potentials import Potential, Spring
+from jamflow.protocols.compression import CompressionSettings
+from jamflow.shapes.shape import Ellipsoid
 
 DECK_NAME = "jam-ellipses.lmp"
 DEFAULT_PLUGIN = "jamflow_pairs.so"
@@ -49,7 +49,7 @@ def deck_variables(n: int = 64, dim: int = 2, alpha: float = 1.6, sizes="bi:1.4:
 
 def deck_text(variables: dict | None = None) -> str:
     """The deck with ``variables`` (from ``deck_variables``) as its defaults."""
-    from .deck_ellipsoids_script import BODY, HEADER
+    from jamflow.deck_ellipsoids_script import BODY, HEADER
 
     # the plugin is a required variable of this deck (an optional one of the disk deck)
     return render(HEADER, BODY, tuple(k for k in OPTIONAL if k != "plugin"),
@@ -65,7 +65,7 @@ def write_deck(path, variables: dict | None = None) -> Path:
 def emit_deck(path, start: Packing, settings: CompressionSettings | None = None, *, out: str = "jammed"):
     """Write the deck that jams ``start`` (ellipses/spheroids) in ``lmp`` alone, its start as
     PATH_STEM.start.data, and point it at the compiled plugin. Returns (deck path, data path)."""
-    from .engine.plugin_build import plugin_library
+    from jamflow.engine.plugin_build import plugin_library
 
     path = Path(path)
     data = path.with_name(path.stem + ".start.data")

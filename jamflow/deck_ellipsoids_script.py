@@ -10,7 +10,7 @@ stopping rules and the bisection that follows each minimisation are the disk dec
 (``deck_script.RULES``, ``deck_script.DECIDE``, ``JAM_SUCCESS``, ``FAIL``).
 """
 
-from .deck_script import DECIDE, FAIL, JAM_START_OPTIONS, JAM_SUCCESS, LOG_OPEN, RULES, WINDOW_OPEN, random_atoms
+from jamflow.deck_script import DECIDE, FAIL, JAM_START_OPTIONS, JAM_SUCCESS, LOG_OPEN, RULES, WINDOW_OPEN, random_atoms
 
 HEADER = """\
 # jamflow deck: jam N soft ellipses (dim 2) or spheroids (dim 3) at onset by isotropic

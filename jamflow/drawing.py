@@ -33,10 +33,10 @@ from matplotlib.colors import BoundaryNorm, Normalize
 from matplotlib.figure import Figure
 from matplotlib.patches import Polygon
 
-from .analysis.contacts import Contacts
-from .io import atomic_path
-from .packing import Packing
-from .pairs import overlapping_pairs, overlapping_sites, site_packing
+from jamflow.analysis.contacts import Contacts
+from jamflow.io import atomic_path
+from jamflow.packing import Packing
+from jamflow.pairs import overlapping_pairs, overlapping_sites, site_packing
 
 COLOR_BY = ("z", "q6", "orientation")
 MAX_LINE_WIDTH = 3.0  # points, for the largest contact force
@@ -153,7 +153,7 @@ def _colours(packing, contacts, color_by, q6_r_min):
     if color_by == "z":  # non-floaters have z >= d + 1
         low, top = packing.dim + 1, max(int(contacts.z.max()), 2 * packing.dim + 2)
         return contacts.z.astype(float), "contact number z", BoundaryNorm(np.arange(low - 0.5, top + 1.0), 256)
-    from .analysis.order import BondOrder
+    from jamflow.analysis.order import BondOrder
 
     mags = BondOrder(r_min=q6_r_min).compute(packing).magnitudes
     name = "|psi_6|" if packing.dim == 2 else "q_6"

@@ -26,8 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .io import atomic_path
-from .packing import Packing
+from jamflow.io import atomic_path
+from jamflow.packing import Packing
 
 FORMATS = ("lammps-dump", "xyz")
 SUFFIXES = {"lammps-dump": ".dump", "xyz": ".xyz"}

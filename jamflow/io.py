@@ -66,12 +66,12 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from . import __version__
-from .box import Box
-from .packing import Packing
-from .potentials import potential_from_attrs
-from .shapes.shape import shape_from_attrs
-from .walls import face_pressures, parse_walls, wall_type
+from jamflow import __version__
+from jamflow.box import Box
+from jamflow.packing import Packing
+from jamflow.potentials import potential_from_attrs
+from jamflow.shapes.shape import shape_from_attrs
+from jamflow.walls import face_pressures, parse_walls, wall_type
 
 SCHEMA = "jamflow.packing"
 SCHEMA_VERSION = 2
@@ -356,7 +356,7 @@ def read_attrs(path) -> dict:
 
 def read_checks(path):
     """The ``jamflow.checks.PackingChecks`` stored in a packing file, or None if it has none."""
-    from .checks import PackingChecks
+    from jamflow.checks import PackingChecks
 
     with open_hdf5(path) as f:
         return PackingChecks.from_attrs(f["checks"].attrs) if "checks" in f else None

@@ -217,12 +217,12 @@ def _creep_method(engine, settings: MinimizerSettings, stiffness: float, ftol: f
     if method == "auto":
         method = _auto_creep(engine, settings)
     if method == "soft-modes":
-        from .soft_modes import AFTER, SoftModeSteps  # scipy.sparse.linalg: loaded only where it runs
+        from jamflow.soft_modes import AFTER, SoftModeSteps  # scipy.sparse.linalg: loaded only where it runs
 
         after = settings.creep_after or AFTER
         return SoftModeSteps(after, after, max(1.0, stiffness))
     if method == "polish":
-        from .polish import AFTER, Polisher, polish_reason
+        from jamflow.polish import AFTER, Polisher, polish_reason
 
         reason = polish_reason(template)
         if reason and settings.creep == "auto":  # e.g. the Hertz law: FIRE alone, as measured
@@ -236,7 +236,7 @@ def _creep_method(engine, settings: MinimizerSettings, stiffness: float, ftol: f
 def _auto_creep(engine, settings: MinimizerSettings) -> str:
     """What ``creep="auto"`` runs: what was measured to pay, in the compiled engine only (a LAMMPS
     run must stay equal to its deck)."""
-    from .polish import polish_reason
+    from jamflow.polish import polish_reason
 
     template = engine.template
     if settings.method != "fire" or getattr(engine, "name", "") != "numba":

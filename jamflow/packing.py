@@ -23,11 +23,11 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .box import Box
-from .potentials import Potential, Spring
-from .shapes.rotations import check_orientations, directors, random_orientations
-from .shapes.shape import SPHERE
-from .sizes import SizeSpec
+from jamflow.box import Box
+from jamflow.potentials import Potential, Spring
+from jamflow.shapes.rotations import check_orientations, directors, random_orientations
+from jamflow.shapes.shape import SPHERE
+from jamflow.sizes import SizeSpec
 
 # Densest packings of equal disks (hexagonal) and spheres (FCC): pi/(2 sqrt 3), pi/(3 sqrt 2).
 DENSEST_PHI = {2: math.pi / (2 * math.sqrt(3)), 3: math.pi / (3 * math.sqrt(2))}
@@ -130,7 +130,7 @@ class Packing:
         by the fraction inside: ``jamflow.walls.inside_fraction``)."""
         if self.fixed is None:
             return float(self.volumes.sum() / self.box.volume)
-        from .walls import inside_fraction
+        from jamflow.walls import inside_fraction
 
         return float((self.volumes * inside_fraction(self)).sum() / self.box.volume)
 

@@ -18,8 +18,8 @@ from itertools import product
 
 import numpy as np
 
-from .box import Box
-from .packing import Packing
+from jamflow.box import Box
+from jamflow.packing import Packing
 
 
 def all_pairs(n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -74,7 +74,7 @@ def neighbor_pairs(positions: np.ndarray, box: Box, rmax: float) -> tuple[np.nda
 def _orthogonal_search(wrapped: np.ndarray, lengths: np.ndarray, periodic: np.ndarray, rmax: float):
     """Pairs (i < j, unsorted) within ``rmax`` of positions in [0, L) along the periodic axes (images
     only along those): the ahead-of-time cell list if it is built, else scipy's cKDTree."""
-    from .engine.compiled import aot
+    from jamflow.engine.compiled import aot
 
     compiled = aot.loaded()
     if compiled is not None:
@@ -136,7 +136,7 @@ def contact_distances(packing: Packing, i: np.ndarray, j: np.ndarray, dr: np.nda
     if kind == "sphere":
         return 0.5 * (packing.diameters[i] + packing.diameters[j])
     if kind == "ellipsoid":
-        from .shapes.contact_distance import contact_distance
+        from jamflow.shapes.contact_distance import contact_distance
 
         dr = separations(packing, i, j) if dr is None else dr
         axes, u = packing.shape.axes(packing.diameters), packing.directors

@@ -112,10 +112,10 @@ def model(packing):
     disks/spheres by ``overlaps`` on the compiled builder's pair list, rigid bodies over site pairs
     in generalized coordinates (``hessian.distance_jacobian``)."""
     if packing.shape.kind == "sphere":
-        from .engine.compiled.spheres import build  # the disk/sphere pair list (i, j, shift, sigma)
+        from jamflow.engine.compiled.spheres import build  # the disk/sphere pair list (i, j, shift, sigma)
 
         return overlaps(packing.positions, build(packing, packing.positions, SKIN))
-    from .analysis.hessian import distance_jacobian
+    from jamflow.analysis.hessian import distance_jacobian
 
     s, jac = distance_jacobian(packing, SKIN)
     return 1.0 - s, -jac
@@ -125,8 +125,8 @@ def moved(packing, dx: np.ndarray):
     """The packing after the generalized displacement dx (centres, then rotations d_k theta)."""
     if not packing.shape.oriented:
         return packing.with_positions(packing.positions + dx.reshape(packing.positions.shape))
-    from .analysis.deformation import displaced
-    from .analysis.hessian import Coordinates
+    from jamflow.analysis.deformation import displaced
+    from jamflow.analysis.hessian import Coordinates
 
     return displaced(packing, *Coordinates.of(packing).split(dx))
 
@@ -195,7 +195,7 @@ def newton_step(packing, grad: np.ndarray, mu: float) -> np.ndarray | None:
     (read off the pivots of a symmetric, diagonally pivoted LU: Sylvester's law of inertia)."""
     import scipy.sparse as sp
     import scipy.sparse.linalg as spla  # loaded only when a polish runs
-    from .analysis.hessian import hessian
+    from jamflow.analysis.hessian import hessian
 
     h = hessian(packing)
     lu = spla.splu((h + mu * sp.identity(h.shape[0])).tocsc(), permc_spec="MMD_AT_PLUS_A",
@@ -230,7 +230,7 @@ def _line_search(engine, packing, dx, state, grad, noise: float):
 def _worst(packing, state) -> float:
     """Max |component| of -dV/dxi at ``packing``: forces and generalized torques tau_a / d_k
     (eps/diameter)."""
-    from .checks import generalized_forces
+    from jamflow.checks import generalized_forces
 
     return float(np.abs(generalized_forces(packing, state)).max(initial=0.0))
 
@@ -242,7 +242,7 @@ def polish(engine, ftol: float, max_steps: int = MAX_STEPS, on_step=None, newton
     wherever the Hessian is positive definite (quadratic convergence at a stable minimum; near a
     saddle it is not, and the Gauss-Newton step is taken). ``on_step(PolishStep)`` is called after
     every step."""
-    from .checks import generalized_forces
+    from jamflow.checks import generalized_forces
 
     reason = polish_reason(engine.template)
     if reason:

@@ -17,12 +17,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .deck import (DeckFailed, PROTOCOL_COLUMNS, _num, check_workdir, lammps_error, optional_values, protocol_values,
+from jamflow.deck import (DeckFailed, PROTOCOL_COLUMNS, _num, check_workdir, lammps_error, optional_values, protocol_values,
                    read_data_file, render, run_lmp, system_values)
-from .io import atomic_path, write_lammps_data
-from .packing import Packing
-from .protocols.compression import CompressionSettings, seed_protocol
-from .protocols.shear import shear_strains
+from jamflow.io import atomic_path, write_lammps_data
+from jamflow.packing import Packing
+from jamflow.protocols.compression import CompressionSettings, seed_protocol
+from jamflow.protocols.shear import shear_strains
 
 SHEAR_DECK_NAME = "shear.lmp"
 SHEAR_OPTIONAL = ("xy0", "steps", "vsum", "ftol", "plugin")
@@ -53,7 +53,7 @@ def shear_deck_variables(settings: CompressionSettings | None = None, *, dim: in
 
 def shear_deck_text(variables: dict | None = None) -> str:
     """The shear deck with ``variables`` (from ``shear_deck_variables``) as its defaults."""
-    from .deck_script import SHEAR_BODY, SHEAR_HEADER
+    from jamflow.deck_script import SHEAR_BODY, SHEAR_HEADER
 
     return render(SHEAR_HEADER, SHEAR_BODY, SHEAR_OPTIONAL, shear_deck_variables() if variables is None else variables)
 

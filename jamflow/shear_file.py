@@ -32,12 +32,12 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from . import __version__
-from .box import Box
-from .io import _attr, atomic_path
-from .packing import Packing
-from .potentials import potential_from_attrs
-from .shapes.shape import shape_from_attrs
+from jamflow import __version__
+from jamflow.box import Box
+from jamflow.io import _attr, atomic_path
+from jamflow.packing import Packing
+from jamflow.potentials import potential_from_attrs
+from jamflow.shapes.shape import shape_from_attrs
 
 SCHEMA, SCHEMA_VERSION = "jamflow.shear", 1
 COLUMNS = ("gamma", "phi_j", "energy_per_particle", "pressure", "shear_stress", "n_contacts", "n_floaters",

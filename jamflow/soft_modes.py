@@ -28,9 +28,9 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse.linalg as spla
 
-from .analysis.deformation import displaced
-from .analysis.hessian import Coordinates, DynamicalMatrix
-from .checks import generalized_forces
+from jamflow.analysis.deformation import displaced
+from jamflow.analysis.hessian import Coordinates, DynamicalMatrix
+from jamflow.checks import generalized_forces
 
 AFTER = 50_000  # MinimizerSettings.creep_after default: iterations before the first attempt, and between attempts
 CREEP_FORCE = 1e-9  # max force (eps/diameter) below which an unconverged minimisation counts as creeping

@@ -31,7 +31,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .box import AXES, Box
+from jamflow.box import AXES, Box
 
 WALL_TYPES = ("smooth", "rough")
 ON_FACE = 1e-9  # a fixed particle lies on a face when |x_a - face| < ON_FACE * L_a
@@ -161,7 +161,7 @@ def with_walls(packing, axes, wall_type: str = "smooth"):
     none starts on or behind a wall (LAMMPS refuses that). Rough walls add rows of fixed
     particles of the smallest diameter on every walled face (appended after the mobile ones),
     spaced by at least their diameter up to the densest packing of equal disks/spheres."""
-    from .packing import DENSEST_PHI
+    from jamflow.packing import DENSEST_PHI
 
     if wall_type not in WALL_TYPES:
         raise ValueError(f"unknown wall type {wall_type!r}; use one of {', '.join(WALL_TYPES)}")
@@ -194,7 +194,7 @@ def wall_type(packing) -> str:
 
 def wall_loads(packing) -> np.ndarray:
     """(d, 2, d) force of the particles on each face of the walled axes (cell search: any N)."""
-    from .pairs import overlapping_pairs
+    from jamflow.pairs import overlapping_pairs
 
     _, _, _, smooth = smooth_wall_terms(packing)
     if packing.fixed is None:

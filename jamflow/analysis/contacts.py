@@ -51,8 +51,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..packing import Packing
-from ..pairs import (candidate_pairs, contact_distances, overlapping_sites, particle_contacts, separations,
+from jamflow.packing import Packing
+from jamflow.pairs import (candidate_pairs, contact_distances, overlapping_sites, particle_contacts, separations,
                      site_packing)
 
 
@@ -238,7 +238,7 @@ BALANCE_TOL = 1e-3  # |net generalized force| / largest contact term below which
 def contact_wrenches(packing: Packing, i: np.ndarray, j: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(C, d_f) generalized forces (forces, torques tau_a / d_k) that each listed contact (i, j)
     exerts on i and on j; a pair of rigid bodies listed once collects all its site pairs."""
-    from .hessian import pair_terms
+    from jamflow.analysis.hessian import pair_terms
 
     terms = pair_terms(packing)
     d, r = packing.dim, terms.gradient.shape[1] // 2 - packing.dim

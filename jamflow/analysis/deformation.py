@@ -15,10 +15,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..packing import Packing
-from ..pairs import candidate_pairs, contact_distances, separations, site_packing
-from ..shapes.rotations import rotation_change, turned
-from .hessian import Coordinates, shape_matrices
+from jamflow.packing import Packing
+from jamflow.pairs import candidate_pairs, contact_distances, separations, site_packing
+from jamflow.shapes.rotations import rotation_change, turned
+from jamflow.analysis.hessian import Coordinates, shape_matrices
 
 
 def _rotations(packing: Packing, rotations) -> np.ndarray:
@@ -67,7 +67,7 @@ def _rigid_changes(packing: Packing, u: np.ndarray, phi: np.ndarray):
 def _ellipsoid_changes(packing: Packing, u: np.ndarray, phi: np.ndarray):
     """s^2 = max_lambda F (``hessian`` docstring); the change of F is written as differences
     (Delta r, Delta u, Delta lambda) throughout, so it is accurate relative to itself."""
-    from ..shapes.contact_distance import contact_lambda
+    from jamflow.shapes.contact_distance import contact_lambda
 
     shape = packing.shape
     reach = 2.0 * float(shape.reach(packing.diameters).max()) + 2.0 * float(np.linalg.norm(u, axis=1).max())

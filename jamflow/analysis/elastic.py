@@ -28,10 +28,10 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from ..packing import Packing
-from ..pairs import overlapping_pairs, overlapping_sites
-from .hessian import Coordinates, DynamicalMatrix, _local_index, pair_terms
-from .strains import BULK, SHEAR, Strain
+from jamflow.packing import Packing
+from jamflow.pairs import overlapping_pairs, overlapping_sites
+from jamflow.analysis.hessian import Coordinates, DynamicalMatrix, _local_index, pair_terms
+from jamflow.analysis.strains import BULK, SHEAR, Strain
 
 ZERO_TOL = 1e-10  # |e| <= ZERO_TOL * max e: a zero mode (round-off of e is ~1e-16 max e)
 

@@ -18,9 +18,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..packing import Packing
-from ..pairs import overlapping_sites
-from .hessian import Coordinates, DynamicalMatrixResult, world_axes
+from jamflow.packing import Packing
+from jamflow.pairs import overlapping_sites
+from jamflow.analysis.hessian import Coordinates, DynamicalMatrixResult, world_axes
 
 
 def pivot_sites(packing: Packing) -> dict[int, int]:

@@ -46,10 +46,10 @@ from typing import NamedTuple
 import numpy as np
 import scipy.sparse as sp
 
-from ..packing import Packing
-from ..pairs import overlapping_pairs, overlapping_sites
-from ..shapes.rotations import rotation_matrices
-from .contacts import Contacts, ContactsResult, remove_floaters
+from jamflow.packing import Packing
+from jamflow.pairs import overlapping_pairs, overlapping_sites
+from jamflow.shapes.rotations import rotation_matrices
+from jamflow.analysis.contacts import Contacts, ContactsResult, remove_floaters
 
 
 @dataclass(frozen=True)
@@ -302,7 +302,7 @@ def _rigid_reduced(packing: Packing, coords: Coordinates, skin: float = 0.0):
 
 
 def _ellipsoid_reduced(packing: Packing, coords: Coordinates, skin: float = 0.0):
-    from ..shapes.contact_distance import contact_lambda
+    from jamflow.shapes.contact_distance import contact_lambda
 
     shape = packing.shape
     if shape.contact not in ("exact", "cleaver", "gaussian"):

@@ -23,9 +23,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..packing import Packing
-from ..pairs import candidate_pairs, separations
-from ..shapes.rotations import generalized_torques
+from jamflow.packing import Packing
+from jamflow.pairs import candidate_pairs, separations
+from jamflow.shapes.rotations import generalized_torques
 
 GRID = 401  # lambda grid points in (0, 1)
 GOLDEN_STEPS = 80  # golden-section steps in the best two grid cells: 1/200 * 0.618^80 ~ 1e-19

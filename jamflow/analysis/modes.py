@@ -31,10 +31,10 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse.linalg as spla
 
-from ..packing import Packing
-from . import quartic
-from .deformation import energy_change, network_amplitudes, opening_amplitude  # noqa: F401 (public here)
-from .hessian import DynamicalMatrix, DynamicalMatrixResult
+from jamflow.packing import Packing
+from jamflow.analysis import quartic
+from jamflow.analysis.deformation import energy_change, network_amplitudes, opening_amplitude  # noqa: F401 (public here)
+from jamflow.analysis.hessian import DynamicalMatrix, DynamicalMatrixResult
 
 DENSE_MAX_DOF = 4096  # above this many degrees of freedom "auto" uses the sparse solver
 

@@ -24,13 +24,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..engine.base import engine_name
-from ..minimize import MinimizerSettings
-from ..packing import Packing
-from .contacts import Contacts
-from .elastic import HessianModuli, HessianModuliResult
-from .strains import BULK, SHEAR, STRAINS
-from .sweeps import StrainSweep, SweepResult, SweepSettings, roundoff_amplitude, touching
+from jamflow.engine.base import engine_name
+from jamflow.minimize import MinimizerSettings
+from jamflow.packing import Packing
+from jamflow.analysis.contacts import Contacts
+from jamflow.analysis.elastic import HessianModuli, HessianModuliResult
+from jamflow.analysis.strains import BULK, SHEAR, STRAINS
+from jamflow.analysis.sweeps import StrainSweep, SweepResult, SweepSettings, roundoff_amplitude, touching
 
 V_MIN = MinimizerSettings().v_min  # energy per particle below which a packing is not jammed (seed)
 

@@ -31,8 +31,8 @@ import numpy as np
 from scipy.ndimage import gaussian_filter1d
 from scipy.special import sph_harm_y
 
-from ..packing import Packing
-from .structure import UNITS_R, RDF, RDFResult, max_reduced_radius, pair_chunks, positive, rms_contact_distance
+from jamflow.packing import Packing
+from jamflow.analysis.structure import UNITS_R, RDF, RDFResult, max_reduced_radius, pair_chunks, positive, rms_contact_distance
 
 
 # --- r_min: the first minimum of g(r) --------------------------------------------------------

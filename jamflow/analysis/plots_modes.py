@@ -14,7 +14,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from ..io import atomic_path
+from jamflow.io import atomic_path
 
 
 def modes_figure(path, spectra, dos=None, contacts=(), stabilities=()) -> Path:

@@ -19,8 +19,8 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from ..io import atomic_path
-from .strains import STRAINS
+from jamflow.io import atomic_path
+from jamflow.analysis.strains import STRAINS
 
 
 def _save(fig, path) -> Path:

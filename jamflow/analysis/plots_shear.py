@@ -12,7 +12,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.ticker import NullFormatter, ScalarFormatter
 
-from ..io import atomic_path
+from jamflow.io import atomic_path
 
 MAX_LABELS = 12
 

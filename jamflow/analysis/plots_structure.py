@@ -14,9 +14,9 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.ticker import NullFormatter
 
-from ..io import atomic_path
-from .correlations import BondCorrelationResult, ExponentialFit
-from .structure import RDFResult, StructureFactorResult
+from jamflow.io import atomic_path
+from jamflow.analysis.correlations import BondCorrelationResult, ExponentialFit
+from jamflow.analysis.structure import RDFResult, StructureFactorResult
 
 
 def _save(fig: Figure, path) -> Path:

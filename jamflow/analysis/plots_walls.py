@@ -19,10 +19,10 @@ from matplotlib.collections import LineCollection, PatchCollection
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle
 
-from ..packing import Packing
-from ..pairs import overlapping_pairs
-from .plots_structure import _save  # the one Agg save (atomic)
-from .profile import ProfileResult
+from jamflow.packing import Packing
+from jamflow.pairs import overlapping_pairs
+from jamflow.analysis.plots_structure import _save  # the one Agg save (atomic)
+from jamflow.analysis.profile import ProfileResult
 
 
 def contact_forces(packing: Packing):

@@ -18,8 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..packing import Packing
-from ..pairs import overlapping_pairs
+from jamflow.packing import Packing
+from jamflow.pairs import overlapping_pairs
 
 
 @dataclass(frozen=True)

@@ -21,8 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..box import Box
-from ..packing import Packing
+from jamflow.box import Box
+from jamflow.packing import Packing
 
 DATA_SUFFIXES = (".data", ".dat", ".lmp", ".lammps")
 DUMP_SUFFIXES = (".dump", ".lammpstrj", ".lammpsdump", ".trj")

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..box import Box
+from jamflow.box import Box
 
 
 @dataclass(frozen=True)

@@ -30,9 +30,9 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
-from ..box import Box
-from ..packing import Packing
-from ..pairs import candidate_pairs, separations
+from jamflow.box import Box
+from jamflow.packing import Packing
+from jamflow.pairs import candidate_pairs, separations
 
 PAIR_CHUNK = 200_000  # pairs per separation batch (keeps Box.minimum_image memory bounded)
 MAX_SPECIES = 8  # more distinct diameters than this is treated as continuous polydispersity

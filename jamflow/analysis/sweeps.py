@@ -32,12 +32,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..engine.base import open_engine
-from ..minimize import MinimizerSettings
-from ..packing import Packing
-from ..pairs import overlapping_pairs, overlapping_sites
-from .contacts import Contacts
-from .strains import Strain
+from jamflow.engine.base import open_engine
+from jamflow.minimize import MinimizerSettings
+from jamflow.packing import Packing
+from jamflow.pairs import overlapping_pairs, overlapping_sites
+from jamflow.analysis.contacts import Contacts
+from jamflow.analysis.strains import Strain
 
 DEFAULT_AMPLITUDES = tuple(float(a) for a in np.logspace(-9, -3, 13))  # two per decade, 1e-9 .. 1e-3
 LINEAR_TOL = 1e-4  # relative deviation of a central slope from M that still counts as linear

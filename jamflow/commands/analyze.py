@@ -15,17 +15,17 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from .. import __version__
-from ..checks import check_packing
-from ..io import atomic_path, check_writable, load_packing, replacing
-from ..analysis.correlations import BondCorrelation, rdf_correlation_length
-from ..analysis.order import BondOrder, Nematic, first_minimum, translational_order
-from ..analysis.plots_structure import (plot_bond_correlations, plot_bond_order_map, plot_order, plot_rdf,
+from jamflow import __version__
+from jamflow.checks import check_packing
+from jamflow.io import atomic_path, check_writable, load_packing, replacing
+from jamflow.analysis.correlations import BondCorrelation, rdf_correlation_length
+from jamflow.analysis.order import BondOrder, Nematic, first_minimum, translational_order
+from jamflow.analysis.plots_structure import (plot_bond_correlations, plot_bond_order_map, plot_order, plot_rdf,
                                        plot_structure_factor)
-from ..analysis.readers import packings_from_lammps
-from ..ensemble.parallel import add_engine_arguments, expand_inputs, file_mapper
-from ..ensemble.pooling import merge_rdf, merge_structure_factor, pooled_bins, structure_sums
-from ..analysis.structure import MAX_SPECIES, RDF, StructureFactor, positive
+from jamflow.analysis.readers import packings_from_lammps
+from jamflow.ensemble.parallel import add_engine_arguments, expand_inputs, file_mapper
+from jamflow.ensemble.pooling import merge_rdf, merge_structure_factor, pooled_bins, structure_sums
+from jamflow.analysis.structure import MAX_SPECIES, RDF, StructureFactor, positive
 
 FORMATS = ("auto", "jamflow", "data", "dump")
 HDF5_SUFFIXES = (".h5", ".hdf5")

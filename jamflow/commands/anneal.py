@@ -9,13 +9,13 @@ from __future__ import annotations
 import time
 
 
-from ..engine.base import ENGINES
-from ..io import check_writable, load_packing, replacing, save_packing
-from ..minimize import MinimizerSettings
-from ..progress import progress_bar
-from ..protocols.anneal import anneal, anneal_alphas, check_anneal
-from ..protocols.compression import DEFAULT_PROTOCOL, MAX_SEED, PROTOCOLS
-from ..shapes.contact_distance import METHODS as METHODS_CONTACT
+from jamflow.engine.base import ENGINES
+from jamflow.io import check_writable, load_packing, replacing, save_packing
+from jamflow.minimize import MinimizerSettings
+from jamflow.progress import progress_bar
+from jamflow.protocols.anneal import anneal, anneal_alphas, check_anneal
+from jamflow.protocols.compression import DEFAULT_PROTOCOL, MAX_SEED, PROTOCOLS
+from jamflow.shapes.contact_distance import METHODS as METHODS_CONTACT
 
 
 def add_arguments(p) -> None:

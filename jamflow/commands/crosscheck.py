@@ -10,10 +10,10 @@ from __future__ import annotations
 import math
 import sys
 
-from ..crosscheck import crosscheck, crosscheck_shear
-from ..deck import DeckFailed
-from ..minimize import METHODS
-from .jam import add_md_damping_argument, settings_from_args
+from jamflow.crosscheck import crosscheck, crosscheck_shear
+from jamflow.deck import DeckFailed
+from jamflow.minimize import METHODS
+from jamflow.commands.jam import add_md_damping_argument, settings_from_args
 
 
 def add_arguments(p) -> None:

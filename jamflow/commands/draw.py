@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..drawing import COLOR_BY, draw_packing
-from ..io import check_writable, load_packing, replacing
+from jamflow.drawing import COLOR_BY, draw_packing
+from jamflow.io import check_writable, load_packing, replacing
 
 
 def add_arguments(p) -> None:

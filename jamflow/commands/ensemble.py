@@ -10,7 +10,7 @@ from collections import defaultdict
 
 import numpy as np
 
-from . import jam as jam_command
+from jamflow.commands import jam as jam_command
 
 REPLACED = {"n", "seed", "out", "emit_deck", "above", "help"}  # jam options the ensemble sets per task, replaces or lacks (--above)
 
@@ -41,7 +41,7 @@ def add_arguments(p) -> None:
 
 
 def run(args) -> int:
-    from ..ensemble import Store, run_ensemble
+    from jamflow.ensemble import Store, run_ensemble
 
     if args.rebuild_summary:
         if not (Store(args.out).dir / "ensemble.json").exists():

@@ -7,8 +7,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..export import FORMATS, SUFFIXES, export_packing
-from ..io import check_writable, load_packing, replacing
+from jamflow.export import FORMATS, SUFFIXES, export_packing
+from jamflow.io import check_writable, load_packing, replacing
 
 
 def add_arguments(p) -> None:

@@ -12,12 +12,12 @@ import csv
 from pathlib import Path
 
 
-from ..analysis.families import convergence, join, mirror_by_sightings, mirror_check, richness
-from ..engine.base import ENGINES
-from ..io import atomic_path, check_writable, output_directory, replacing
-from ..progress import progress_bar
-from ..protocols.families import FamilySampling, sample
-from ..shear_file import load_family_points, save_family_points, save_family_table
+from jamflow.analysis.families import convergence, join, mirror_by_sightings, mirror_check, richness
+from jamflow.engine.base import ENGINES
+from jamflow.io import atomic_path, check_writable, output_directory, replacing
+from jamflow.progress import progress_bar
+from jamflow.protocols.families import FamilySampling, sample
+from jamflow.shear_file import load_family_points, save_family_points, save_family_table
 
 
 def add_arguments(p) -> None:
@@ -78,7 +78,7 @@ def _resumed(points_file: Path, plan: FamilySampling):
 
 def report(plan: FamilySampling, points: dict, failures: list, out: Path) -> None:
     """Join, check, tabulate and draw; print the summary."""
-    from ..analysis.plots_shear import families_figure
+    from jamflow.analysis.plots_shear import families_figure
 
     families = join(points, plan.step, plan.gamma_min)
     conv = convergence(points, plan.step, plan.gamma_min, lo=max(0.0, plan.gamma_min), hi=min(0.5, plan.gamma_max))

@@ -12,16 +12,16 @@ from __future__ import annotations
 import math
 import time
 
-from ..engine.base import ENGINES, engine_name
-from ..io import check_writable, replacing, save_packing
-from ..minimize import CREEP_METHODS, MD_DAMPINGS, METHODS, MinimizerSettings
-from ..protocols.compression import (DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, JammingFailed, at_shear_strain,
+from jamflow.engine.base import ENGINES, engine_name
+from jamflow.io import check_writable, replacing, save_packing
+from jamflow.minimize import CREEP_METHODS, MD_DAMPINGS, METHODS, MinimizerSettings
+from jamflow.protocols.compression import (DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, JammingFailed, at_shear_strain,
                                      check_resolution, initial_packing, jam, with_accumulated_strain)
-from ..progress import CompressionProgress
-from ..protocols.above import check_dphi, compress_above
-from ..shapes.contact_distance import METHODS as METHODS_CONTACT
-from ..shapes.shape import parse_shape
-from ..walls import WALL_TYPES, wall_loads
+from jamflow.progress import CompressionProgress
+from jamflow.protocols.above import check_dphi, compress_above
+from jamflow.shapes.contact_distance import METHODS as METHODS_CONTACT
+from jamflow.shapes.shape import parse_shape
+from jamflow.walls import WALL_TYPES, wall_loads
 
 
 def add_arguments(p) -> None:
@@ -160,7 +160,7 @@ def prepare(args):
     if gamma is not None:
         start = at_shear_strain(start, gamma)  # refuses a strain that is not finite, or walls with a shear
     if args.pressure is not None:
-        from ..protocols.pressure import PressureSettings, check_pressure_start, pressure_sequence
+        from jamflow.protocols.pressure import PressureSettings, check_pressure_start, pressure_sequence
 
         psettings = PressureSettings(pressure_sequence(args.pressure), args.stress, settings.minimizer)
         check_pressure_start(start, psettings)
@@ -179,7 +179,7 @@ def jam_from_args(args, observers=(), engine_options=None):
     fails or the packing fails its checks (``checked``), so nothing unchecked is written."""
     settings, start = prepare(args)
     if args.pressure is not None:
-        from ..protocols.pressure import jam_at_pressure
+        from jamflow.protocols.pressure import jam_at_pressure
 
         result = jam_at_pressure(start, settings, observers=observers, engine=args.engine,
                                  engine_options=engine_options)
@@ -222,7 +222,7 @@ def run(args) -> int:
 def checked(result, minimizer, v_tol, out):
     """The packing checks of a result; JammingFailed (nothing written) if any fails.
     ``v_tol`` None skips the energy-window check (piles under gravity, constant pressure)."""
-    from ..checks import check_packing  # imported here: its pair search (scipy.spatial) is not needed for --help
+    from jamflow.checks import check_packing  # imported here: its pair search (scipy.spatial) is not needed for --help
 
     packing = result.packing
     ftol = minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness, packing.shape.force_tol_base)
@@ -262,8 +262,8 @@ def emit(args, start, settings) -> int:
     deck, lammps_inputs/jam-ellipses.lmp, which minimises by damped dynamics with rotations)."""
     from pathlib import Path
 
-    from ..deck import emit_deck
-    from ..deck_ellipsoids import emit_deck as emit_ellipsoid_deck
+    from jamflow.deck import emit_deck
+    from jamflow.deck_ellipsoids import emit_deck as emit_ellipsoid_deck
 
     kind = start.shape.kind
     if kind not in ("sphere", "ellipsoid"):

@@ -16,11 +16,11 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from .. import __version__
-from ..analysis.modes import DensityOfStates, Spectrum, Stability, branches
-from ..checks import check_packing
-from ..ensemble.parallel import add_engine_arguments, expand_inputs, map_files
-from ..io import atomic_path, check_writable, load_packing, open_hdf5, read_checks, replacing
+from jamflow import __version__
+from jamflow.analysis.modes import DensityOfStates, Spectrum, Stability, branches
+from jamflow.checks import check_packing
+from jamflow.ensemble.parallel import add_engine_arguments, expand_inputs, map_files
+from jamflow.io import atomic_path, check_writable, load_packing, open_hdf5, read_checks, replacing
 
 SCHEMA, SCHEMA_VERSION = "jamflow.modes", 2  # v2 adds the shape, mode character and per-mode profiles
 
@@ -103,7 +103,7 @@ def checked(path, packing):
 
 
 def _draw(args, rows, dos):
-    from ..analysis.plots_modes import modes_figure
+    from jamflow.analysis.plots_modes import modes_figure
 
     spectra = [s for s, _ in rows]
     density = dos.compute(spectra) if all(s.complete for s in spectra) else None

@@ -14,14 +14,14 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from .. import __version__
-from ..analysis.moduli import Moduli
-from ..analysis.strains import STRAINS
-from ..analysis.sweeps import JUMP_TOL, LINEAR_TOL, PAST_YIELD, SweepSettings
-from ..engine.base import ENGINES
-from ..io import atomic_path, check_writable, load_packing, read_attrs, replacing
-from ..minimize import MinimizerSettings
-from ..progress import progress_bar
+from jamflow import __version__
+from jamflow.analysis.moduli import Moduli
+from jamflow.analysis.strains import STRAINS
+from jamflow.analysis.sweeps import JUMP_TOL, LINEAR_TOL, PAST_YIELD, SweepSettings
+from jamflow.engine.base import ENGINES
+from jamflow.io import atomic_path, check_writable, load_packing, read_attrs, replacing
+from jamflow.minimize import MinimizerSettings
+from jamflow.progress import progress_bar
 
 SCHEMA, SCHEMA_VERSION = "jamflow.moduli", 1
 
@@ -97,7 +97,7 @@ def _measure(args, moduli, packings, outputs, checks) -> None:
                       f"{strain.modulus} is NaN (the Hessian route's is kept); use a smaller --min-amplitude",
                       file=sys.stderr)
         if not args.no_figure:
-            from ..analysis.plots_moduli import stress_strain_figure
+            from jamflow.analysis.plots_moduli import stress_strain_figure
 
             print(f"figure -> {stress_strain_figure(figure_path(path), result, title=f'{Path(path).name}')}")
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 import csv
 from pathlib import Path
 
-from ..io import atomic_path, check_writable
+from jamflow.io import atomic_path, check_writable
 
 # large-N phi_J (O'Hern, Silbert, Liu & Nagel, PRE 68, 011306, 2003; quoted by the seed chapter)
 PUBLISHED = {(2, "bi:1.4:0.5"): 0.842, (3, "mono"): 0.639}
@@ -23,8 +23,8 @@ def add_arguments(p) -> None:
 
 
 def run(args) -> int:
-    from ..ensemble import Store
-    from ..ensemble.onsets import onset_statistics, onsets_figure
+    from jamflow.ensemble import Store
+    from jamflow.ensemble.onsets import onset_statistics, onsets_figure
 
     store = Store(args.directory)
     rows = store.read_summary()

@@ -12,13 +12,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..engine.base import ENGINES, engine_name
-from ..io import check_writable, load_packing, output_directory, replacing
-from ..minimize import MinimizerSettings
-from ..progress import ShearProgress
-from ..protocols.compression import PROTOCOLS
-from ..protocols.shear import shear, shear_protocol, shear_strains
-from ..shear_file import path_columns, save_shear_path
+from jamflow.engine.base import ENGINES, engine_name
+from jamflow.io import check_writable, load_packing, output_directory, replacing
+from jamflow.minimize import MinimizerSettings
+from jamflow.progress import ShearProgress
+from jamflow.protocols.compression import PROTOCOLS
+from jamflow.protocols.shear import shear, shear_protocol, shear_strains
+from jamflow.shear_file import path_columns, save_shear_path
 
 
 def add_arguments(p) -> None:
@@ -91,7 +91,7 @@ def run(args) -> int:
             save_shear_path(data, path, source=args.packing, extra_columns={"checks_passed": passed})
             print(f"{path.summary()}  -> {data}")
             if not args.no_figure:
-                from ..analysis.plots_shear import shear_path_figure
+                from jamflow.analysis.plots_shear import shear_path_figure
 
                 print(f"figure -> {shear_path_figure(figure, path_columns(path))}")
     return 0
@@ -99,7 +99,7 @@ def run(args) -> int:
 
 def emit(args, packing, settings) -> int:
     """--emit-deck: the shear deck and its start data file, no run."""
-    from ..shear_deck import emit_shear_deck
+    from jamflow.shear_deck import emit_shear_deck
 
     outputs = [args.emit_deck, Path(args.emit_deck).with_name(Path(args.emit_deck).stem + ".start.data")]
     for out in outputs:
@@ -114,7 +114,7 @@ def emit(args, packing, settings) -> int:
 
 def step_checks(path, settings) -> np.ndarray:
     """The packing checks of ``jamflow.checks`` (window, force balance, contact count) at every step."""
-    from ..checks import check_packing
+    from jamflow.checks import check_packing
 
     out = []
     for step in path.steps:

@@ -129,10 +129,10 @@ def check_engine(engine: str) -> None:
 
 def engine_class(name: str):
     if name == "numba":
-        from .compiled.engine import CompiledEngine
+        from jamflow.engine.compiled.engine import CompiledEngine
 
         return CompiledEngine
-    from .lammps import LammpsEngine
+    from jamflow.engine.lammps import LammpsEngine
 
     return LammpsEngine
 

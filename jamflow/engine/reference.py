@@ -24,9 +24,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..packing import Packing
-from ..pairs import all_pairs, candidate_pairs, contact_distances, separations, site_packing
-from ..walls import face_loads, gravity_terms, smooth_wall_terms
+from jamflow.packing import Packing
+from jamflow.pairs import all_pairs, candidate_pairs, contact_distances, separations, site_packing
+from jamflow.walls import face_loads, gravity_terms, smooth_wall_terms
 
 
 @dataclass(frozen=True)
@@ -83,7 +83,7 @@ def _spheres(packing: Packing, near: bool):
 
 
 def _ellipsoids(packing: Packing, near: bool):
-    from ..shapes.contact_distance import contact_distance_gradient
+    from jamflow.shapes.contact_distance import contact_distance_gradient
 
     i, j = _pairs(packing, near)
     dr = separations(packing, i, j)

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..checks import check_packing
-from ..io import load_packing, read_attrs, read_checks, read_history, read_protocol
+from jamflow.checks import check_packing
+from jamflow.io import load_packing, read_attrs, read_checks, read_history, read_protocol
 
 
 def packing_row(path, task, fixed: dict) -> dict:

@@ -15,9 +15,9 @@ from mpi4py import MPI  # first: this process is an MPI rank
 
 
 def main(spec: dict) -> int:
-    from ..commands.jam import jam_from_args, save_result
-    from ..protocols.compression import JammingFailed
-    from .store import write_failure
+    from jamflow.commands.jam import jam_from_args, save_result
+    from jamflow.protocols.compression import JammingFailed
+    from jamflow.ensemble.store import write_failure
 
     comm = MPI.COMM_WORLD
     args = argparse.Namespace(**spec["options"])

@@ -45,7 +45,7 @@ def file_mapper(workers=None, scheduler=None, progress=True):
         return
     from distributed import as_completed
 
-    from .cluster import dask_client
+    from jamflow.ensemble.cluster import dask_client
 
     with dask_client(workers, scheduler) as client:
         def run(func, files, *args, desc="packings"):

@@ -14,9 +14,9 @@ import math
 
 import numpy as np
 
-from ..analysis.structure import (RDF, RDFResult, StructureFactor, StructureFactorResult, _partial_pair_numbers,
+from jamflow.analysis.structure import (RDF, RDFResult, StructureFactor, StructureFactorResult, _partial_pair_numbers,
                                   check_r_max, rms_contact_distance)
-from ..io import load_packing
+from jamflow.io import load_packing
 
 
 def pooled_bins(packings, k_max: float) -> tuple[float, float]:

@@ -14,10 +14,10 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from ..commands import jam as jam_command
-from .cluster import WAIT_WORKERS, dask_client, workers_line, workers_state
-from .checks import packing_row
-from .store import Store, Task, failure_row, write_failure
+from jamflow.commands import jam as jam_command
+from jamflow.ensemble.cluster import WAIT_WORKERS, dask_client, workers_line, workers_state
+from jamflow.ensemble.checks import packing_row
+from jamflow.ensemble.store import Store, Task, failure_row, write_failure
 
 TASK_KEYS = ("n", "seed", "out", "quiet", "emit_deck", "force")  # set per task, not store parameters
 SUMMARY_EVERY = 10.0  # seconds between summary.csv rewrites during a run
@@ -239,7 +239,7 @@ def _check_mpi(ranks, engine):
 
 
 def _make_packing(*args):
-    from .tasks import make_packing  # imported on the worker, where the jam runs
+    from jamflow.ensemble.tasks import make_packing  # imported on the worker, where the jam runs
 
     return make_packing(*args)
 

@@ -20,9 +20,9 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from .. import __version__
-from ..io import atomic_path
-from .checks import packing_row
+from jamflow import __version__
+from jamflow.io import atomic_path
+from jamflow.ensemble.checks import packing_row
 
 MANIFEST, SUMMARY, FAILED, CORRUPT, LOCK = "ensemble.json", "summary.csv", "failed", "corrupt", ".lock"
 SCHEMA = "jamflow.ensemble"

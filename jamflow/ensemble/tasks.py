@@ -11,10 +11,10 @@ import time
 import warnings
 from pathlib import Path
 
-from ..commands.jam import jam_from_args, save_result
-from ..protocols.compression import JammingFailed
-from .checks import packing_row
-from .store import Task, failure_row, write_failure
+from jamflow.commands.jam import jam_from_args, save_result
+from jamflow.protocols.compression import JammingFailed
+from jamflow.ensemble.checks import packing_row
+from jamflow.ensemble.store import Task, failure_row, write_failure
 
 TASK_ONLY = {"out": None, "quiet": True, "emit_deck": None, "force": False}  # jam options an ensemble task sets itself
 MPI_LAUNCHER_VARIABLES = ("PMI_", "PMIX_", "HYDRA_", "MPI_LOCALRANKID", "MPI_LOCALNRANKS", "OMPI_")
@@ -52,7 +52,7 @@ def make_packing(fixed: dict, task: Task, path: str, failure_path: str, mpi_rank
 
 
 def _make_on_ranks(options, task, fixed, path, failure_path, ranks):
-    from ..engine.lammps_lib import lammps_env
+    from jamflow.engine.lammps_lib import lammps_env
 
     mpirun = Path(sys.prefix) / "bin" / "mpirun"
     spec = json.dumps({"options": options, "path": path, "failure_path": failure_path})

@@ -21,10 +21,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..engine.base import open_engine
-from ..minimize import MinimizerSettings, MinimizeResult
-from ..packing import Packing
-from .compression import JammingFailed
+from jamflow.engine.base import open_engine
+from jamflow.minimize import MinimizerSettings, MinimizeResult
+from jamflow.packing import Packing
+from jamflow.protocols.compression import JammingFailed
 
 
 @dataclass(frozen=True)

@@ -17,12 +17,12 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..analysis.order import Nematic
-from ..checks import check_packing
-from ..packing import Packing
-from ..shapes.rotations import random_orientations
-from ..shapes.shape import SPHERE, Ellipsoid
-from .compression import (DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, JammingFailed, JamResult, check_resolution,
+from jamflow.analysis.order import Nematic
+from jamflow.checks import check_packing
+from jamflow.packing import Packing
+from jamflow.shapes.rotations import random_orientations
+from jamflow.shapes.shape import SPHERE, Ellipsoid
+from jamflow.protocols.compression import (DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, JammingFailed, JamResult, check_resolution,
                           jam)
 
 STEP_COLUMNS = ("alpha", "phi_j", "mean_z", "n_contacts", "n_floaters", "p2", "energy_per_particle", "max_force",

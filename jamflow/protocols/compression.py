@@ -20,14 +20,14 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
-from ..box import AXES
-from ..engine.base import check_engine, open_engine
-from ..minimize import MinimizerSettings, MinimizeResult
-from ..packing import DENSEST_PHI, Packing, SeparationFailed, random_packing
-from ..potentials import POTENTIALS, Potential, Spring, parse_potential
-from ..shapes.shape import parse_shape
-from ..sizes import SizeSpec, parse_sizes
-from ..walls import parse_walls, wall_loads, with_walls
+from jamflow.box import AXES
+from jamflow.engine.base import check_engine, open_engine
+from jamflow.minimize import MinimizerSettings, MinimizeResult
+from jamflow.packing import DENSEST_PHI, Packing, SeparationFailed, random_packing
+from jamflow.potentials import POTENTIALS, Potential, Spring, parse_potential
+from jamflow.shapes.shape import parse_shape
+from jamflow.sizes import SizeSpec, parse_sizes
+from jamflow.walls import parse_walls, wall_loads, with_walls
 
 DEFAULT_PHI0 = {2: 0.80, 3: 0.55}
 GRAVITY_PHI0 = {2: 0.5, 3: 0.35}  # random starts under gravity: the settled pile stays clear of the ceiling
@@ -153,7 +153,7 @@ class JamResult:
     @property
     def wall_pressures(self) -> np.ndarray:
         """(k, 2) pressure on the lower and upper face of each walled axis (``jamflow.walls``)."""
-        from ..walls import face_pressures
+        from jamflow.walls import face_pressures
 
         return face_pressures(self.packing.box, self.wall_forces) if self.wall_forces is not None else np.empty((0, 2))
 
@@ -214,7 +214,7 @@ def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | 
     if start.potential.soft_start and (random_start or _deepest_overlap(start) < RLJ_MIN_START_RATIO):
         start = remove_overlaps(start, settings.minimizer, engine)
     if start.gravity > 0:
-        from .gravity import settle
+        from jamflow.protocols.gravity import settle
 
         return settle(start, settings.minimizer, observers=observers, engine=engine, engine_options=engine_options)
     result = compress(start, settings, observers=observers, engine=engine, engine_options=engine_options)
@@ -333,7 +333,7 @@ def bisect(sim, settings: CompressionSettings, *, observers=()) -> JamResult:
     """The bisection on an open engine from its current configuration and box, whose shape
     (and shear strain) it keeps: every box is the current one scaled (seed steps 2-4). The
     engine is left holding the jammed packing (the shear protocol continues from it)."""
-    from ..engine.lammps_lib import lammps_version
+    from jamflow.engine.lammps_lib import lammps_version
 
     start_time = time.perf_counter()
     current = sim.packing()  # phi and the volume it counts (walls: between them) of the current state
@@ -396,7 +396,7 @@ def _check_start(packing: Packing) -> None:
 
 def _deepest_overlap(packing: Packing) -> float:
     """Smallest r/sigma over overlapping pairs (of sites, for rigid bodies); 1.0 without overlaps."""
-    from ..pairs import overlapping_pairs, overlapping_sites  # here, like resolution: scipy.spatial loads lazily
+    from jamflow.pairs import overlapping_pairs, overlapping_sites  # here, like resolution: scipy.spatial loads lazily
 
     r, sigma = (overlapping_sites(packing) if packing.shape.kind == "rigid" else overlapping_pairs(packing))[-2:]
     return float((r / sigma).min()) if len(r) else 1.0
@@ -416,7 +416,7 @@ def check_resolution(packing: Packing, settings: CompressionSettings) -> None:
                          f"for alpha outside [{low:g}, {high:g}] (measured for alpha = 1.5, 4, 6, 8, 10: net forces "
                          "3-66% of the contact forces, docs/hardening.md); use spring, hertz or spring:ALPHA "
                          f"with {low:g} <= ALPHA <= {high:g}")
-    from ..checks import resolution  # imported here: the checks load scipy.spatial, not needed for --help
+    from jamflow.checks import resolution  # imported here: the checks load scipy.spatial, not needed for --help
 
     ftol = settings.minimizer.resolved_force_tol(packing.box, pot.contact_stiffness, packing.shape.force_tol_base)
     problem = resolution(packing, settings.v_tol, ftol).problem()
@@ -427,7 +427,7 @@ def check_resolution(packing: Packing, settings: CompressionSettings) -> None:
 def _check_contact_range(packing: Packing) -> None:
     """sigma_ij depends on the direction r_hat = r_ij / |r_ij|, known to ~1e-16 L / |r_ij| in a box of
     side L; at r_ij = 0 it is undefined (the contact-distance solver would return NaN)."""
-    from ..pairs import candidate_pairs  # here, like resolution: scipy.spatial loads lazily
+    from jamflow.pairs import candidate_pairs  # here, like resolution: scipy.spatial loads lazily
 
     reach = packing.shape.reach(packing.diameters)
     i, j = candidate_pairs(packing, 2.0 * float(reach.max()))

@@ -21,8 +21,8 @@ import warnings
 
 import numpy as np
 
-from .compression import JammingFailed, check_strain, jam
-from .shear import shear, shear_protocol
+from jamflow.protocols.compression import JammingFailed, check_strain, jam
+from jamflow.protocols.shear import shear, shear_protocol
 
 SEED_STRIDE = 100_000
 POINT_FIELDS = ("start", "grid", "direction", "step", "segment", "strain_index", "gamma", "phi_j", "mu",

@@ -17,11 +17,11 @@ import warnings
 
 import numpy as np
 
-from ..engine.base import open_engine
-from ..minimize import MinimizerSettings
-from ..packing import Packing
-from ..walls import wall_loads
-from .compression import HISTORY_COLUMNS, CompressionSettings, JamResult, JammingFailed, _record
+from jamflow.engine.base import open_engine
+from jamflow.minimize import MinimizerSettings
+from jamflow.packing import Packing
+from jamflow.walls import wall_loads
+from jamflow.protocols.compression import HISTORY_COLUMNS, CompressionSettings, JamResult, JammingFailed, _record
 
 MAX_RESUMES = 3  # a settling cut off by the iteration cap or the no-progress rule is resumed (at most 3 times)
 
@@ -37,7 +37,7 @@ def pile_fraction(packing: Packing) -> float:
 def settle(start: Packing, minimizer: MinimizerSettings | None = None, *, observers=(), engine: str = "auto",
            engine_options=None) -> JamResult:
     """Minimise ``start`` (with gravity and a floor) to force balance including the weights."""
-    from ..engine.lammps_lib import lammps_version
+    from jamflow.engine.lammps_lib import lammps_version
 
     if start.gravity <= 0:
         raise ValueError("settle needs gravity > 0 (Packing.gravity); compress packings without gravity")

@@ -28,9 +28,9 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..engine.base import open_engine
-from ..minimize import STRESS_MODES, MinimizerSettings
-from ..packing import Packing
+from jamflow.engine.base import open_engine
+from jamflow.minimize import STRESS_MODES, MinimizerSettings
+from jamflow.packing import Packing
 
 FLOOR_MARGIN = 1000.0
 DEFAULT_START_PRESSURE = 1e-4  # from a random start; starting higher raises phi_J (docs/walls-gravity-pressure.md)
@@ -168,7 +168,7 @@ def shear_stress(tensor: np.ndarray) -> float:
 def jam_at_pressure(start: Packing, settings: PressureSettings | None = None, *, observers=(), engine: str = "auto",
                     engine_options=None) -> PressureResult:
     """Minimise the enthalpy at each target pressure in turn, from ``start``."""
-    from ..engine.lammps_lib import lammps_version
+    from jamflow.engine.lammps_lib import lammps_version
 
     settings = settings or PressureSettings()
     check_pressure_start(start, settings)

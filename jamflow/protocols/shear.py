@@ -24,11 +24,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..analysis.contacts import Contacts
-from ..engine.base import open_engine
-from ..packing import Packing
-from ..pairs import separations
-from .compression import CompressionSettings, JamResult, bisect, check_resolution, check_strain, fast_protocol
+from jamflow.analysis.contacts import Contacts
+from jamflow.engine.base import open_engine
+from jamflow.packing import Packing
+from jamflow.pairs import separations
+from jamflow.protocols.compression import CompressionSettings, JamResult, bisect, check_resolution, check_strain, fast_protocol
 
 MAX_STEPS = 1_000_000
 REARRANGED_FRACTION = 0.5  # a first step that removes more than this fraction of the contacts is warned about

@@ -1,7 +1,7 @@
 """Particle shapes (chapter section 2.3): disks/spheres, ellipses/spheroids with the exact
 contact distance, rigid bodies of fused spherical sites; orientations; contact distances."""
 
-from .contact_distance import (
+from jamflow.shapes.contact_distance import (
     APART,
     METHODS,
     OVERLAPPING,
@@ -14,8 +14,8 @@ from .contact_distance import (
     overlap_state,
     truncation_fallbacks,
 )
-from .ellipse_plot import draw_contact_pair, figure_2_12
-from .shape import SPHERE, Ellipsoid, RigidBody, Sphere, parse_shape, shape_from_attrs
+from jamflow.shapes.ellipse_plot import draw_contact_pair, figure_2_12
+from jamflow.shapes.shape import SPHERE, Ellipsoid, RigidBody, Sphere, parse_shape, shape_from_attrs
 
 __all__ = [
     "APART",

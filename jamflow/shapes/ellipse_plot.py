@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .contact_distance import contact_distance
+from jamflow.shapes.contact_distance import contact_distance
 
 
 def draw_contact_pair(ax, a_i, b_i, a_j, b_j, r_hat, u_i, u_j, method="exact", center_i=(0.0, 0.0), **style):

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 
-from .shape import SPHERE, RigidBody
+from jamflow.shapes.shape import SPHERE, RigidBody
 
 NMER_USAGE = "nmer:N:ALPHA (linear, N >= 2 sites, 1 < ALPHA <= N; ALPHA = L/D, L the tip-to-tip length)"
 DIMER_USAGE = "dimer:ALPHA:S (asymmetric, S = D2/D1 in (0, 1], 1 < ALPHA <= 1 + S; ALPHA = L/D1)"

@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .union import union_moments
+from jamflow.shapes.union import union_moments
 
 
 def _scale(scale) -> np.ndarray:
@@ -98,7 +98,7 @@ class Ellipsoid:
     force_tol_base = 5e-13
 
     def __post_init__(self):
-        from .contact_distance import METHODS
+        from jamflow.shapes.contact_distance import METHODS
 
         if not (isinstance(self.alpha, (int, float)) and math.isfinite(self.alpha) and self.alpha > 0):
             raise ValueError(f"aspect ratio ALPHA must be a finite number > 0, got {self.alpha!r}")
@@ -121,7 +121,7 @@ class Ellipsoid:
     def check_sizes(self, scale, dim: int) -> None:
         """Refuse a contact method outside its domain for these sizes (gaussian: identical
         particles only; linear/quadratic in 3D: identical spheroids only)."""
-        from .contact_distance import SAME_SIZE_RTOL, check_method_sizes
+        from jamflow.shapes.contact_distance import SAME_SIZE_RTOL, check_method_sizes
 
         s = _scale(scale)
         identical = len(s) == 0 or bool(np.all(np.abs(s - s[0]) <= SAME_SIZE_RTOL * np.abs(s[0])))
@@ -299,7 +299,7 @@ class RigidBody:
 
     def world_sites(self, positions, orientations, scale) -> np.ndarray:
         """(N, S, d) site positions of every particle."""
-        from .rotations import rotation_matrices
+        from jamflow.shapes.rotations import rotation_matrices
 
         rot = rotation_matrices(orientations, positions.shape[1])
         return positions[:, None, :] + _scale(scale)[:, None, None] * np.einsum("nab,sb->nsa", rot, self.sites)
@@ -380,7 +380,7 @@ def parse_shape(spec, dim: int, contact: str = "exact"):
         shape.check(dim)
         return shape
     if kind in ("nmer", "dimer", "trimer"):
-        from .nmers import parse_body
+        from jamflow.shapes.nmers import parse_body
 
         return parse_body(spec, kind, rest.split(":") if rest else [], dim)
     raise ValueError(f"unknown shape {spec!r}; use {SHAPE_USAGE}")

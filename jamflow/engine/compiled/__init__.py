@@ -52,7 +52,7 @@ def source_digest() -> str:
 
 @lru_cache(maxsize=1)
 def cache_dir() -> Path:
-    from ..plugin_build import cache_root
+    from jamflow.engine.plugin_build import cache_root
 
     return cache_root() / "numba" / source_digest()
 

@@ -34,7 +34,7 @@ import warnings
 from functools import lru_cache
 from pathlib import Path
 
-from ...potentials import SpringParams
+from jamflow.potentials import SpringParams
 
 MODULE = "jamflow_kernels"
 _module = None  # the loaded module, once loaded
@@ -69,8 +69,8 @@ def module_path() -> Path:
     """Where the built module lives in jamflow's cache."""
     import importlib.metadata
 
-    from ..plugin_build import cache_root
-    from . import source_digest
+    from jamflow.engine.plugin_build import cache_root
+    from jamflow.engine.compiled import source_digest
 
     digest = hashlib.sha256("\0".join([source_digest(), importlib.metadata.version("numpy"), sys.version,
                                        _cpu_id()]).encode()).hexdigest()[:16]
@@ -163,7 +163,7 @@ def _first_line(path: Path) -> str:
 
 def _intact(path: Path) -> bool:
     """A complete shared library at ``path`` (False if there is none)."""
-    from ..plugin_build import _intact as complete_elf
+    from jamflow.engine.plugin_build import _intact as complete_elf
 
     return complete_elf(path)
 

@@ -14,12 +14,12 @@ import sys
 import warnings
 from pathlib import Path
 
-from ...potentials import SpringParams
-from . import cells, start_numba
-from .aot import MODULE
-from .field import Field
-from .fire import fire, forces
-from .spheres import Pairs
+from jamflow.potentials import SpringParams
+from jamflow.engine.compiled import cells, start_numba
+from jamflow.engine.compiled.aot import MODULE
+from jamflow.engine.compiled.field import Field
+from jamflow.engine.compiled.fire import fire, forces
+from jamflow.engine.compiled.spheres import Pairs
 
 A1, A2, A3, I1 = "float64[::1]", "float64[:, ::1]", "float64[:, :, ::1]", "int64[::1]"
 _PAIRS_AND_FIELD = (f"{I1}, {I1}, {A2}, {A1}, float64, float64, "  # i, j, shift, sigma, alpha, epsilon

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import jit
+from jamflow.engine.compiled import jit
 
 
 @jit

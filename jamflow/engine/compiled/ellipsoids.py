@@ -31,13 +31,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ...packing import Packing
-from ...pairs import candidate_pairs
-from ...shapes.contact_distance import (ENGINE_COUNTERS, METHODS, SAME_SIZE_RTOL, STEP_TOL, h_lambda_derivatives,
+from jamflow.packing import Packing
+from jamflow.pairs import candidate_pairs
+from jamflow.shapes.contact_distance import (ENGINE_COUNTERS, METHODS, SAME_SIZE_RTOL, STEP_TOL, h_lambda_derivatives,
                                         jkl_2d, jlm_3d, pw_h, pw_terms, quartic, quintic, root_partials_2d,
                                         root_partials_3d, sigma_partials, truncated_lambda, truncated_root)
-from . import jit, when_numba_starts
-from .laws import energy_force
+from jamflow.engine.compiled import jit, when_numba_starts
+from jamflow.engine.compiled.laws import energy_force
 
 KIND = "ellipsoid"
 # the list holds every pair within an orientation-independent bound of its contact distance,

@@ -16,13 +16,13 @@ from contextlib import contextmanager
 
 import numpy as np
 
-from ...box import Box
-from ...packing import Packing
-from ..base import Capabilities, State
-from . import fire
-from .aot import kernels_for
-from .field import make_field
-from .kernels import BUILDERS, COUNTERS, TURNING_MOVES_SITES
+from jamflow.box import Box
+from jamflow.packing import Packing
+from jamflow.engine.base import Capabilities, State
+from jamflow.engine.compiled import fire
+from jamflow.engine.compiled.aot import kernels_for
+from jamflow.engine.compiled.field import make_field
+from jamflow.engine.compiled.kernels import BUILDERS, COUNTERS, TURNING_MOVES_SITES
 
 
 def _orientation_array(packing: Packing) -> np.ndarray:
@@ -170,7 +170,7 @@ class CompiledEngine:
     # minimisation -------------------------------------------------------------------------------------
     def minimize(self, settings=None):
         """Minimise at fixed box with the seed's stopping rules; returns MinimizeResult."""
-        from ...minimize import MinimizerSettings, minimize
+        from jamflow.minimize import MinimizerSettings, minimize
 
         return minimize(self, settings or MinimizerSettings())
 

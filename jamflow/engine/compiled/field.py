@@ -23,9 +23,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ...minimize import STRESS_MODES
-from . import jit
-from .laws import energy_force
+from jamflow.minimize import STRESS_MODES
+from jamflow.engine.compiled import jit
+from jamflow.engine.compiled.laws import energy_force
 
 
 class Field(NamedTuple):

@@ -27,10 +27,10 @@ import math
 
 import numpy as np
 
-from . import jit
-from .field import box_forces, deform, external
-from .kernels import evaluate
-from .rotation import generalized_torques, rotate
+from jamflow.engine.compiled import jit
+from jamflow.engine.compiled.field import box_forces, deform, external
+from jamflow.engine.compiled.kernels import evaluate
+from jamflow.engine.compiled.rotation import generalized_torques, rotate
 
 DELAYSTEP, DTGROW, DTSHRINK, ALPHA0, ALPHASHRINK, TMAX, TMIN, DMAX = 20, 1.1, 0.5, 0.25, 0.99, 10.0, 0.02, 0.1
 

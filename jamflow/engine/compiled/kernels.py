@@ -12,7 +12,7 @@ of the pair list at compile time (the kernel is looked up then: before numba sta
 
 from __future__ import annotations
 
-from . import bodies, ellipsoids, spheres, when_numba_starts
+from jamflow.engine.compiled import bodies, ellipsoids, spheres, when_numba_starts
 
 MODULES = (spheres, bodies, ellipsoids)
 MODULE_OF_PAIRS = {m.Pairs: m for m in MODULES}

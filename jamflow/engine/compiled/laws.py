@@ -7,8 +7,8 @@ the law is written once. Kernels call it only inside contact (s < 1).
 
 from __future__ import annotations
 
-from ...potentials import POTENTIALS
-from . import when_numba_starts
+from jamflow.potentials import POTENTIALS
+from jamflow.engine.compiled import when_numba_starts
 
 _LAWS = {cls.Params: cls.energy_force for cls in POTENTIALS.values()}
 

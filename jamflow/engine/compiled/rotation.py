@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 
-from . import jit
+from jamflow.engine.compiled import jit
 
 
 @jit

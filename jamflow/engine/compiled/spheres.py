@@ -8,10 +8,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ...packing import Packing
-from ...pairs import candidate_pairs
-from . import jit
-from .laws import energy_force
+from jamflow.packing import Packing
+from jamflow.pairs import candidate_pairs
+from jamflow.engine.compiled import jit
+from jamflow.engine.compiled.laws import energy_force
 
 KIND = "sphere"
 
