@@ -25,9 +25,10 @@ from pathlib import Path
 from predictor import phase_iterations  # (benchmarks/ is the script's directory)
 from speed_accuracy import append_row
 
-from jamflow.checks import check_packing
+from jamflow.mechanics.checks import check_packing
 from jamflow.protocols import compression
-from jamflow.protocols.compression import NEWTON_FINAL_FACTOR, PhiStepper, fast_protocol, jam
+from jamflow.protocols.compression import NEWTON_FINAL_FACTOR, PhiStepper, jam
+from jamflow.protocols.settings import fast_protocol
 
 
 def adaptive_stepper(margin: float, max_ratio: float):

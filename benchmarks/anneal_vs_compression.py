@@ -26,9 +26,9 @@ import numpy as np
 from tqdm import tqdm
 
 from jamflow import jam
-from jamflow.analysis.order import Nematic
-from jamflow.checks import check_packing
-from jamflow.io import load_packing, save_packing
+from jamflow.model.nematic import Nematic
+from jamflow.mechanics.checks import check_packing
+from jamflow.io.packing_file import load_packing, save_packing
 from jamflow.protocols.anneal import anneal
 
 from ellipse_ensembles import SIZES, pyplot, read_rows, run_or_report, save_figure, stats, write_rows  # (benchmarks/ is the script's directory)

@@ -55,13 +55,13 @@ def timed(argv, env) -> tuple[float, float, str]:
 
 def processes(tmp: Path, seed: int) -> dict:
     """name -> (argv, extra environment) of the whole processes timed (module docstring)."""
-    jam = [sys.executable, "-m", "jamflow.cli", "jam", "--n", "64", "--seed", str(seed), "--quiet",
+    jam = [sys.executable, "-m", "jamflow.cli.app", "jam", "--n", "64", "--seed", str(seed), "--quiet",
            "--out", str(tmp / "p.h5"), "--force"]
     py = [sys.executable, "-c"]
     return {"numpy": (py + ["import numpy"], {}), "numpy+h5py": (py + ["import numpy, h5py"], {}),
             "numpy+scipy.spatial": (py + ["import numpy, scipy.spatial"], {}),
             "jam": (jam, {}), "jam-numba": (jam, {"JAMFLOW_AOT": "0"}),
-            "jam --help": ([sys.executable, "-m", "jamflow.cli", "jam", "--help"], {})}
+            "jam --help": ([sys.executable, "-m", "jamflow.cli.app", "jam", "--help"], {})}
 
 
 def alternate(procs: dict, env: dict, repeats: int) -> tuple[dict, list, bool]:
@@ -92,8 +92,8 @@ def set_bytecode(cached: bool) -> None:
 
 def kernel_speed(n: int, repeats: int) -> dict:
     """CPU microseconds per FIRE iteration, AOT and numba, in this process (medians, alternating)."""
-    from jamflow.engine.compiled import aot, fire
-    from jamflow.engine.compiled.engine import CompiledEngine
+    from jamflow.engines.compiled import aot, fire
+    from jamflow.engines.compiled.engine import CompiledEngine
     from jamflow.protocols.compression import jam
 
     jammed = jam(n=n, seed=1).packing

@@ -1,9 +1,9 @@
 """A compiled cell-list pair search (issue 17, start-up item: "a numba cell-list pair search so
 a compiled jam does not import scipy.spatial"): measured in docs/speed-2.md 7.1 (not kept then, as
-numba's own start-up cost more than scipy.spatial), now ``jamflow.engine.compiled.cells``, compiled
+numba's own start-up cost more than scipy.spatial), now ``jamflow.engines.compiled.cells``, compiled
 ahead of time with the disk kernels (section 12).
 
-It was the orthogonal branch of ``jamflow.pairs.neighbor_pairs`` on this branch for a while
+It was the orthogonal branch of ``jamflow.model.pairs.neighbor_pairs`` on this branch for a while
 (commit 1506453): the same pair set as scipy's periodic cKDTree (the same distance test: per
 axis the difference folded into [-L/2, L/2], squared distance <= rmax^2), so jams stayed
 bit-identical. Measured: no whole-process gain for ``jamflow jam --n 64`` (numba's own start-up
@@ -20,7 +20,7 @@ import time
 
 import numpy as np
 
-from jamflow.engine.compiled.cells import cell_pairs
+from jamflow.engines.compiled.cells import cell_pairs
 
 
 def main():

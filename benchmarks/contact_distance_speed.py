@@ -24,9 +24,9 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from jamflow.shapes import contact_distance
+from jamflow.model.shapes import contact_distance
 
-cdm = importlib.import_module("jamflow.shapes.contact_distance")
+cdm = importlib.import_module("jamflow.model.shapes.contact_distance")
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 CASES = {
     # name: (dim, a_j / a_i, methods)

@@ -27,9 +27,9 @@ from pathlib import Path
 from tqdm import tqdm
 
 from jamflow import jam
-from jamflow.analysis.contacts import Contacts
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.shapes import Ellipsoid
+from jamflow.mechanics.contacts import Contacts
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.model.shapes import Ellipsoid
 
 from ellipse_ensembles import pyplot, read_rows, save_figure, write_rows  # (benchmarks/ is the script's directory)
 

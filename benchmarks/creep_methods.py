@@ -11,8 +11,9 @@ from __future__ import annotations
 import argparse
 import time
 
-from jamflow.minimize import CREEP_METHODS, MinimizerSettings
-from jamflow.protocols.compression import fast_protocol, jam
+from jamflow.minimize.settings import CREEP_METHODS, MinimizerSettings
+from jamflow.protocols.settings import fast_protocol
+from jamflow.protocols.compression import jam
 
 
 def main(argv=None) -> int:

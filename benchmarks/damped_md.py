@@ -31,9 +31,9 @@ import numpy as np
 from tqdm import tqdm
 
 from jamflow import jam
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.minimize import MinimizerSettings
-from jamflow.protocols.compression import fast_protocol
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.minimize.settings import MinimizerSettings
+from jamflow.protocols.settings import fast_protocol
 
 METHODS = {
     "fire": MinimizerSettings(method="fire"),

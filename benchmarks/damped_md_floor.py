@@ -26,10 +26,10 @@ import numpy as np
 from tqdm import tqdm
 
 from jamflow import jam
-from jamflow.engine.lammps import LammpsEngine
-from jamflow.engine.plugin_build import load_plugin
-from jamflow.minimize import MinimizerSettings
-from jamflow.pairs import overlapping_pairs
+from jamflow.engines.lammps.engine import LammpsEngine
+from jamflow.engines.lammps.plugin_build import load_plugin
+from jamflow.minimize.settings import MinimizerSettings
+from jamflow.model.pairs import overlapping_pairs
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 DPHIS = (0.0, 1e-6, 1e-4, 1e-2)

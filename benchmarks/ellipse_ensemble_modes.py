@@ -1,8 +1,8 @@
 """Checks and stability of the kept ellipse packings of benchmarks/ellipse_ensembles.py: for each
-packing file, jamflow.checks (window, force and torque balance, contact count), the spectrum of
+packing file, jamflow.mechanics.checks (window, force and torque balance, contact count), the spectrum of
 the dynamical matrix with rotations, zero modes against d, quartic modes against the missing
 contacts N' d_f - d + 1 - N_c (Mailman et al., PRL 102, 255501 (2009)) and the three branches,
-all through `jamflow modes`' own per-file analysis (jamflow.commands.modes.analyse_file).
+all through `jamflow modes`' own per-file analysis (jamflow.cli.commands.modes.analyse_file).
 
     python benchmarks/ellipse_ensemble_modes.py /tmp/ee_runs/numba/*.h5 --out docs/ellipse-ensembles-modes.csv
     python benchmarks/ellipse_ensemble_modes.py --report docs/ellipse-ensembles-modes.csv
@@ -21,9 +21,9 @@ import numpy as np
 from tqdm import tqdm
 
 from jamflow.analysis.modes import Spectrum, branches
-from jamflow.checks import check_packing
-from jamflow.commands.modes import analyse_file
-from jamflow.io import load_packing, read_checks
+from jamflow.mechanics.checks import check_packing
+from jamflow.cli.commands.modes import analyse_file
+from jamflow.io.packing_file import load_packing, read_checks
 
 from ellipse_ensembles import pyplot, read_rows, run_or_report, save_figure, write_rows  # (benchmarks/ is the script's directory)
 

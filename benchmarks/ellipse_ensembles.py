@@ -1,6 +1,6 @@
 """Jammed 2D bidisperse ellipses (2:1 mixture, major-axis ratio 1.4: --sizes bi:1.4:0.6667) at
 several aspect ratios, each packing checked by the independent brute-force energy
-(jamflow.analysis.independent), with contacts and floaters (jamflow.analysis.contacts).
+(jamflow.analysis.independent), with contacts and floaters (jamflow.mechanics.contacts).
 
     python benchmarks/ellipse_ensembles.py --alphas 1.2 1.6 2.0 --seeds 20 --n 128 --out docs/ellipse-ensembles.csv
     python benchmarks/ellipse_ensembles.py --engine lammps --seeds 5 --out docs/ellipse-ensembles-lammps.csv
@@ -29,11 +29,12 @@ import numpy as np
 from tqdm import tqdm
 
 from jamflow import jam
-from jamflow.analysis.contacts import Contacts
+from jamflow.mechanics.contacts import Contacts
 from jamflow.analysis.independent import independent_check
-from jamflow.io import atomic_path, save_packing
-from jamflow.minimize import MinimizerSettings
-from jamflow.protocols.compression import fast_protocol
+from jamflow.support.files import atomic_path
+from jamflow.io.packing_file import save_packing
+from jamflow.minimize.settings import MinimizerSettings
+from jamflow.protocols.settings import fast_protocol
 
 SIZES = "bi:1.4:0.6667"
 COLUMNS = ["engine", "alpha", "seed", "n", "phi_j", "energy_per_particle", "pressure", "max_force", "max_torque",
@@ -76,7 +77,7 @@ def one(engine: str, alpha: float, seed: int, n: int, keep_dir: Path | None) -> 
 
 
 def _force_difference(packing, check) -> float:
-    from jamflow.engine.reference import energy_forces_pressure
+    from jamflow.mechanics.reference import energy_forces_pressure
 
     return float(np.abs(energy_forces_pressure(packing).forces - check.forces).max())
 
@@ -153,7 +154,7 @@ def stats(values):
 def recount(rows, packings: Path) -> None:
     """Contacts of the kept packings again with the current floater rules (in place): mean_z and
     n_floaters with seed Figure 2.19's exception, mean_z_rule / n_floaters_rule with d_f + 1 only."""
-    from jamflow.io import load_packing
+    from jamflow.io.packing_file import load_packing
 
     for r in rows:
         p = load_packing(packings / r["engine"] / f"{r['engine']}-alpha{float(r['alpha']):g}-seed{r['seed']}.h5")

@@ -20,14 +20,15 @@ import csv
 import os
 import time
 
-from jamflow.engine.compiled.engine import CompiledEngine
-from jamflow.engine.lammps import LammpsEngine
-from jamflow.io import atomic_path
-from jamflow.minimize import MinimizerSettings
-from jamflow.packing import random_packing
-from jamflow.potentials import Spring
-from jamflow.shapes import SPHERE, Ellipsoid
-from jamflow.sizes import parse_sizes
+from jamflow.engines.compiled.engine import CompiledEngine
+from jamflow.engines.lammps.engine import LammpsEngine
+from jamflow.support.files import atomic_path
+from jamflow.minimize.settings import MinimizerSettings
+from jamflow.model.packing import random_packing
+from jamflow.model.potentials import Spring
+from jamflow.model.shapes import SPHERE, Ellipsoid
+from jamflow.model.sizes import parse_sizes
+from jamflow.minimize.rules import minimize
 
 CASES = [("disk", None), ("ellipse", "exact"), ("ellipse", "cleaver"), ("ellipse", "linear"),
          ("ellipse", "quadratic")]
@@ -38,16 +39,16 @@ def start(n, shape, state="random", seed=1):
     if state == "random":
         return p
     with CompiledEngine(p) as eng:
-        eng.minimize(MinimizerSettings(force_tol=1e-10))
+        minimize(eng, MinimizerSettings(force_tol=1e-10))
         return eng.packing().scaled_to_phi(p.phi * (1 + 1e-4))
 
 
 def time_fire(p, iterations):
     settings = MinimizerSettings(force_tol=1e-300, max_iterations=iterations, window=iterations)
     with CompiledEngine(p) as eng:
-        eng.minimize(MinimizerSettings(force_tol=1e-300, max_iterations=10, window=10))  # compile, first list
+        minimize(eng, MinimizerSettings(force_tol=1e-300, max_iterations=10, window=10))  # compile, first list
         t = time.process_time()
-        r = eng.minimize(settings)
+        r = minimize(eng, settings)
         return 1e6 * (time.process_time() - t) / r.iterations
 
 
@@ -55,7 +56,7 @@ def time_lammps_md(p, steps):
     settings = MinimizerSettings(method="md", force_tol=1e-300, max_iterations=steps, window=steps)
     with LammpsEngine(p) as eng:
         t = time.process_time()
-        r = eng.minimize(settings)
+        r = minimize(eng, settings)
         return 1e6 * (time.process_time() - t) / r.iterations
 
 

@@ -1,7 +1,7 @@
 """Shear modulus G of ellipse packings against phi - phi_J (seed Figure 2.33: G ~ dphi for ellipses
 at small dphi, G ~ dphi^(1/2) for disks): 2D 2:1 bidisperse ellipses (major-axis ratio 1.4), each
 seed at onset (``jam``, or the kept packings of ``ellipse_ensembles.py --keep`` with ``--from``),
-compressed by each DPHI (``compress_above``) and measured by ``jamflow.analysis.moduli.Moduli``
+compressed by each DPHI (``compress_above``) and measured by ``jamflow.protocols.moduli.Moduli``
 (strain sweeps and the Hessian route with rotations) or, with ``--hessian-only``, by the Hessian
 route alone (``HessianModuli``; the two agree to 6e-8 on the packings where both ran).
 
@@ -28,12 +28,12 @@ import numpy as np
 from tqdm import tqdm
 
 from jamflow import jam
-from jamflow.analysis.contacts import Contacts
-from jamflow.analysis.elastic import HessianModuli
-from jamflow.analysis.moduli import Moduli
-from jamflow.io import load_packing
+from jamflow.mechanics.contacts import Contacts
+from jamflow.mechanics.elastic import HessianModuli
+from jamflow.protocols.moduli import Moduli
+from jamflow.io.packing_file import load_packing
 from jamflow.protocols.above import compress_above
-from jamflow.protocols.compression import JammingFailed
+from jamflow.protocols.outcome import JammingFailed
 
 from ellipse_ensembles import SIZES, pyplot, read_rows, run_or_report, save_figure, stats, write_rows  # (benchmarks/)
 

@@ -8,7 +8,7 @@ T = 0 with angmom), from the same random starts (same seed), 2D 2:1 bidisperse e
     python benchmarks/ellipse_routes.py --report docs/ellipse-routes.csv
 
 Each row is ``ellipse_ensembles.one`` (the independent brute-force check, contacts, CPU seconds
-of the process: the LAMMPS library runs in it) plus ``jamflow.checks.check_packing`` of the
+of the process: the LAMMPS library runs in it) plus ``jamflow.mechanics.checks.check_packing`` of the
 packing (window, force and torque balance, contact count). Rows are written as they finish and
 skipped when present (the run resumes). ``--report`` prints the table of docs/ellipses.md (means,
 paired differences, a two-sample Kolmogorov-Smirnov test and the Wilcoxon signed-rank test of the
@@ -24,8 +24,8 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from jamflow.checks import check_packing
-from jamflow.io import load_packing
+from jamflow.mechanics.checks import check_packing
+from jamflow.io.packing_file import load_packing
 
 from ellipse_ensembles import COLUMNS, one, pyplot, read_rows, run_or_report, save_figure, stats, write_rows  # (benchmarks/)
 

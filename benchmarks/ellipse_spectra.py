@@ -1,6 +1,6 @@
 """The sorted normal-mode frequencies of ellipse packings at several aspect ratios (seed Figure
 2.17): 2D bidisperse ellipses (2:1, major-axis ratio 1.4), one packing per alpha at onset, the
-dynamical matrix with rotations (jamflow.analysis.hessian), its three branches
+dynamical matrix with rotations (jamflow.mechanics.hessian), its three branches
 (jamflow.analysis.modes.branches) and each mode's translational fraction.
 
     python benchmarks/ellipse_spectra.py --n 120 --alphas 1.02 1.06 1.1 1.2 1.4 1.8 --out docs/ellipse-spectra.csv
@@ -22,7 +22,7 @@ from tqdm import tqdm
 
 from jamflow import jam
 from jamflow.analysis.modes import Spectrum, branch_labels
-from jamflow.checks import check_packing
+from jamflow.mechanics.checks import check_packing
 
 from ellipse_ensembles import SIZES, pyplot, read_rows, run_or_report, save_figure, write_rows  # (benchmarks/ is the script's directory)
 

@@ -22,10 +22,11 @@ import statistics
 from pathlib import Path
 
 from jamflow import jam
-from jamflow.engine.lammps import LammpsEngine
-from jamflow.engine.compiled.engine import CompiledEngine
-from jamflow.minimize import MinimizerSettings
+from jamflow.engines.lammps.engine import LammpsEngine
+from jamflow.engines.compiled.engine import CompiledEngine
+from jamflow.minimize.settings import MinimizerSettings
 from jamflow.protocols.compression import initial_packing
+from jamflow.minimize.rules import minimize
 
 ENGINES = {"lammps": LammpsEngine, "numba": CompiledEngine}
 
@@ -33,13 +34,13 @@ ENGINES = {"lammps": LammpsEngine, "numba": CompiledEngine}
 def near_jamming_state(n: int, seed: int = 0):
     start = initial_packing(n, 2, "bi:1.4:0.5", "spring", seed, 0.85)
     with CompiledEngine(start) as eng:
-        eng.minimize(MinimizerSettings(force_tol=1e-9, max_iterations=200_000))
+        minimize(eng, MinimizerSettings(force_tol=1e-9, max_iterations=200_000))
         return eng.packing()
 
 
 def microseconds_per_iteration(engine_cls, packing, iterations: int) -> float:
     with engine_cls(packing) as eng:
-        r = eng.minimize(MinimizerSettings(force_tol=1e-300, max_iterations=iterations, window=iterations))
+        r = minimize(eng, MinimizerSettings(force_tol=1e-300, max_iterations=iterations, window=iterations))
     return r.seconds / r.iterations * 1e6
 
 

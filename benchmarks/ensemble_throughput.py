@@ -29,7 +29,7 @@ from pathlib import Path
 
 import psutil
 
-JAMFLOW = [sys.executable, "-m", "jamflow.cli"]
+JAMFLOW = [sys.executable, "-m", "jamflow.cli.app"]
 
 
 def uptime() -> str:
@@ -85,7 +85,7 @@ def throughput(work: Path, seeds: int, n: int) -> list[dict]:
     load = uptime()
     script = (f"{' '.join(JAMFLOW)} jam --n {n} --seed $0 --out {loop}/seed$0.h5 --quiet > /dev/null")
     wall, cpu, _ = timed(["bash", "-c", f"seq 0 {seeds - 1} | xargs -P 2 -I{{}} bash -c '{script}' {{}}"])
-    from jamflow.io import read_attrs
+    from jamflow.io.packing_file import read_attrs
 
     same = sum(read_attrs(loop / f"seed{s}.h5")["phi"] == float(ens[s]["phi_j"]) for s in range(seeds))
     rows.append(dict(method="loop of jamflow jam, xargs -P 2", packings=len(list(loop.glob("*.h5"))),

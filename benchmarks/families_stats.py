@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from jamflow.analysis.families import _text, convergence, join, mirror_by_sightings, mirror_check, symmetric_strain
-from jamflow.shear_file import load_family_points
+from jamflow.io.families_file import load_family_points
 
 
 def neighbour_gaps(pts, fam):

@@ -1,7 +1,7 @@
 """Gauss-Newton active-set polish for the creep of disk minimisations (issue 17; docs/speed-2.md
 section 8), measured against plain FIRE on the same seeds.
 
-Method (``jamflow.polish``): with the linear spring V = 1/2 sum max(0, delta)^2, delta = 1 - r/sigma,
+Method (``jamflow.minimize.polish``): with the linear spring V = 1/2 sum max(0, delta)^2, delta = 1 - r/sigma,
 a nonlinear least-squares objective; each step minimises the convex Gauss-Newton model
 m(dx) = 1/2 sum max(0, delta + J dx)^2 by semismooth Newton over an active set that includes the
 gaps the step would close (exact line search on m), then Armijo backtracking on the exact energy.
@@ -16,8 +16,8 @@ FIRE iterations and polishes after a chunk that ends near force balance (max for
 unconverged (the saddle escape's trigger); ``reach`` first runs FIRE to max force < 1e-9 (the
 minimiser's rules, with force_tol 1e-9), polishes, then lets FIRE finish with the usual rules;
 ``none`` is the default protocol; ``soft`` is the default protocol with the lead's soft-mode
-Newton steps on (``MinimizerSettings(creep="soft-modes")``, ``jamflow.soft_modes``), no polish;
-``hook`` the polish as jamflow runs it by default (``MinimizerSettings(creep="auto")``: ``jamflow.polish.Polisher``
+Newton steps on (``MinimizerSettings(creep="soft-modes")``, ``jamflow.minimize.soft_modes``), no polish;
+``hook`` the polish as jamflow runs it by default (``MinimizerSettings(creep="auto")``: ``jamflow.minimize.polish.Polisher``
 inside ``minimize``), no wrapper. Every other trigger runs with ``creep="off"``.
 After a polish the plain minimiser always runs once more, so the stopping rule (max force,
 V_min) is FIRE's own, applied to the polished state.
@@ -47,17 +47,18 @@ from speed_accuracy import append_row  # (benchmarks/ is the script's directory)
 
 import numpy as np
 
-from jamflow.engine.compiled.engine import CompiledEngine
-from jamflow.minimize import MinimizerSettings
-from jamflow.polish import CREEP_FORCE, polish_reason
-from jamflow.polish import polish as gn_polish
+from jamflow.engines.compiled.engine import CompiledEngine
+from jamflow.minimize.settings import MinimizerSettings
+from jamflow.minimize.polish import CREEP_FORCE, polish_reason
+from jamflow.minimize.polish import polish as gn_polish
+from jamflow.minimize.rules import minimize
 
 PLAIN_MINIMIZE = CompiledEngine.minimize
 
 
 @dataclass
 class PolishLog:
-    """Every polish step of a run (``jamflow.polish.PolishStep``), polishes, converged ones, CPU s."""
+    """Every polish step of a run (``jamflow.minimize.polish.PolishStep``), polishes, converged ones, CPU s."""
 
     steps: list = field(default_factory=list)
     polishes: int = 0
@@ -66,7 +67,7 @@ class PolishLog:
 
 
 def polish(engine, ftol: float, log: PolishLog, verbose: bool = False, newton: bool = False) -> bool:
-    """``jamflow.polish.polish`` with the steps logged (and printed with ``verbose``)."""
+    """``jamflow.minimize.polish.polish`` with the steps logged (and printed with ``verbose``)."""
 
     def on_step(step):
         log.steps.append(step)
@@ -123,9 +124,9 @@ def install(trigger: str, after: int, log: PolishLog, verbose: bool = False, new
 
 # --- closed cases -----------------------------------------------------------------------------------
 def _engine_at(positions, diameters, length):
-    from jamflow.box import Box
-    from jamflow.packing import Packing
-    from jamflow.potentials import Spring
+    from jamflow.model.box import Box
+    from jamflow.model.packing import Packing
+    from jamflow.model.potentials import Spring
 
     box = Box.cube(float(length), 2)
     return CompiledEngine(Packing(np.asarray(positions, float), np.asarray(diameters, float), box, Spring()))
@@ -154,10 +155,10 @@ def check() -> None:
     res = jam(n=256, seed=2, engine="numba")  # seed 1 unjams (V -> 7e-31) when compressed by 1e-3
     p = res.packing
     eng = CompiledEngine(p)
-    from jamflow.box import Box
+    from jamflow.model.box import Box
 
     eng.set_box(Box(p.box.h * (res.phi_j / (res.phi_j + 1e-3)) ** 0.5))
-    first = eng.minimize(MinimizerSettings(v_min=1e-30))
+    first = minimize(eng, MinimizerSettings(v_min=1e-30))
     assert first.reason == "force" and first.energy_per_particle > 1e-9, first
     x0 = eng.positions()
     e0 = eng.evaluate().energy
@@ -166,7 +167,7 @@ def check() -> None:
     ftol = tolerance(eng, MinimizerSettings())
     log = PolishLog()
     ok = polish(eng, ftol, log, verbose=True)
-    from jamflow.analysis.contacts import Contacts
+    from jamflow.mechanics.contacts import Contacts
 
     kept = Contacts().compute(eng.packing()).kept  # rattlers keep their displacement (no force on them)
     dx = eng.box.minimum_image(eng.positions() - x0)[kept]
@@ -177,8 +178,9 @@ def check() -> None:
 
 
 def run(args) -> None:
-    from jamflow.checks import check_packing
-    from jamflow.protocols.compression import fast_protocol, jam
+    from jamflow.mechanics.checks import check_packing
+    from jamflow.protocols.settings import fast_protocol
+    from jamflow.protocols.compression import jam
 
     jam(n=16, seed=0, engine="numba")
     out = Path(args.out) if args.out else None

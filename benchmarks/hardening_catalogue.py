@@ -114,7 +114,7 @@ def _():
 
 
 def _passed(s, name):
-    done = s.python(f"from jamflow.io import read_checks; c = read_checks('{name}'); print(c is not None and c.passed)")
+    done = s.python(f"from jamflow.io.packing_file import read_checks; c = read_checks('{name}'); print(c is not None and c.passed)")
     return done.stdout.strip() == "True"
 
 
@@ -212,7 +212,7 @@ def _squeezed(s):
     good = s.packing()
     s.python("""
         import jamflow
-        from jamflow.io import save_packing
+        from jamflow.io.packing_file import save_packing
         p = jamflow.load_packing('p.h5')
         save_packing('sq.h5', p.scaled_to_phi(p.phi / 0.95**2))""")
     return s.dir / "sq.h5", good
@@ -264,7 +264,7 @@ def _():
             original(self, target, **kwargs)
             time.sleep(60)
         Figure.savefig = slow
-        from jamflow.cli import main
+        from jamflow.cli.app import main
         sys.exit(main(["modes", "p.h5"]))"""
     proc = subprocess.Popen([sys.executable, "-c", textwrap.dedent(code)], cwd=s.dir, env=s.env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -366,13 +366,13 @@ def _():
     s = Scratch()
     done = s.python("""
         import sys
-        import jamflow.engine.lammps as L
+        import jamflow.engines.lammps.engine as L
         original = L.LammpsEngine._setup
         def broken(self, packing, skin):
             original(self, packing, skin)
             self.command("pair_style no/such/style")
         L.LammpsEngine._setup = broken
-        from jamflow.cli import main
+        from jamflow.cli.app import main
         sys.exit(main(["jam", "--n", "16", "--engine", "lammps", "--quiet", "--out", "x.h5"]))""")
     return verdict(done, 4, ["LAMMPS failed", "no/such/style"], s, [s.dir / "x.h5"])
 
@@ -663,7 +663,7 @@ def _():
     s = Scratch()
     killed = s.python("""
         import os, signal
-        from jamflow.io import atomic_path
+        from jamflow.io.packing_file import atomic_path
         with atomic_path("p.h5") as tmp:
             tmp.write_bytes(b"half a file")
             os.kill(os.getpid(), signal.SIGKILL)

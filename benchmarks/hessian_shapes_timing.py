@@ -1,4 +1,4 @@
-"""CPU seconds to build the sparse dynamical matrix (``jamflow.analysis.hessian.hessian``) of
+"""CPU seconds to build the sparse dynamical matrix (``jamflow.mechanics.hessian.hessian``) of
 random overlapping packings of every shape against N (the cost depends on the number of
 overlapping pairs, not on whether the packing is jammed): disks, dimers (2 sites), trimers
 (3 sites, 3D), ellipses (alpha 1.5) and prolate spheroids (alpha 1.5), bidisperse bi:1.4:0.5,
@@ -15,11 +15,11 @@ import time
 
 import numpy as np
 
-from jamflow.analysis.hessian import hessian
-from jamflow.packing import random_packing
-from jamflow.pairs import overlapping_pairs, overlapping_sites
-from jamflow.shapes import SPHERE, Ellipsoid, RigidBody
-from jamflow.sizes import parse_sizes
+from jamflow.mechanics.hessian import hessian
+from jamflow.model.packing import random_packing
+from jamflow.model.pairs import overlapping_pairs, overlapping_sites
+from jamflow.model.shapes import SPHERE, Ellipsoid, RigidBody
+from jamflow.model.sizes import parse_sizes
 
 SHAPES = {  # name -> (dim, shape, phi)
     "disk": (2, SPHERE, 0.86),

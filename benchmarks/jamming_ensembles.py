@@ -4,7 +4,7 @@ and 10 seeds of 3D monodisperse spheres (N=512), each checked independently of L
     python benchmarks/jamming_ensembles.py --protocol fast --out docs/jamming-ensembles.csv
 
 Per packing: phi_J, V (window 1e-16 < V < 2e-16), max |force| over non-floaters from the
-numpy all-pairs reference, isostaticity (jamflow.analysis.contacts), time, minimisations.
+numpy all-pairs reference, isostaticity (jamflow.mechanics.contacts), time, minimisations.
 Seed 0 of each system is jammed twice to check reproducibility. Rows are appended and
 skipped when present (resumable). Published large-N onsets: 2D bidisperse ~0.842, 3D
 monodisperse ~0.639-0.64 (O'Hern, Silbert, Liu & Nagel, PRE 68, 011306, 2003).
@@ -20,9 +20,9 @@ from pathlib import Path
 import numpy as np
 
 from jamflow import jam
-from jamflow.analysis.contacts import Contacts
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.protocols.compression import PROTOCOLS
+from jamflow.mechanics.contacts import Contacts
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.protocols.settings import PROTOCOLS
 
 SYSTEMS = {"2d-bi-256": dict(n=256, dim=2, sizes="bi:1.4:0.5"), "3d-mono-512": dict(n=512, dim=3, sizes="mono")}
 COLUMNS = ["system", "protocol", "seed", "repeat", "phi_j", "v", "max_force_nonfloater", "floaters",

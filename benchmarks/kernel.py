@@ -25,10 +25,11 @@ from speed_accuracy import append_row  # (benchmarks/ is the script's directory)
 import numba
 import numpy as np
 
-from jamflow.engine.compiled import spheres, start_numba
-from jamflow.engine.compiled.engine import CompiledEngine
-from jamflow.minimize import MinimizerSettings
+from jamflow.engines.compiled import spheres, start_numba
+from jamflow.engines.compiled.engine import CompiledEngine
+from jamflow.minimize.settings import MinimizerSettings
 from jamflow.protocols.compression import initial_packing
+from jamflow.minimize.rules import minimize
 
 start_numba()  # spheres.forces as a numba dispatcher (it is Deferred until numba starts), for _repeat
 
@@ -45,7 +46,7 @@ def near_jamming_state(n: int, seed: int = 0, dim: int = 2, phi: float = 0.85):
     """A relaxed (|f| < 1e-9) 50:50 bidisperse state at packing fraction ``phi``."""
     start = initial_packing(n, dim, "bi:1.4:0.5", "spring", seed, phi)
     with CompiledEngine(start) as eng:
-        eng.minimize(MinimizerSettings(force_tol=1e-9, max_iterations=200_000))
+        minimize(eng, MinimizerSettings(force_tol=1e-9, max_iterations=200_000))
         return eng.packing()
 
 
@@ -79,7 +80,7 @@ def fire_us(packing, skin: float, iterations: int, repeats: int) -> float:
     for _ in range(repeats):
         with CompiledEngine(packing, skin=skin) as eng:
             t0 = time.process_time()
-            r = eng.minimize(MinimizerSettings(force_tol=1e-300, max_iterations=iterations, window=iterations))
+            r = minimize(eng, MinimizerSettings(force_tol=1e-300, max_iterations=iterations, window=iterations))
             best = min(best, (time.process_time() - t0) / r.iterations * 1e6)
     return best
 

@@ -10,8 +10,10 @@ import resource
 import sys
 import warnings
 
-from jamflow.minimize import MinimizerSettings
-from jamflow.protocols.compression import JammingFailed, fast_protocol, jam
+from jamflow.minimize.settings import MinimizerSettings
+from jamflow.protocols.outcome import JammingFailed
+from jamflow.protocols.settings import fast_protocol
+from jamflow.protocols.compression import jam
 
 n, dim, engine = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3]
 base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss  # kB on Linux

@@ -15,8 +15,8 @@ import multiprocessing as mp
 from pathlib import Path
 
 from jamflow import jam
-from jamflow.minimize import METHODS, MinimizerSettings
-from jamflow.protocols.compression import PROTOCOLS
+from jamflow.minimize.settings import METHODS, MinimizerSettings
+from jamflow.protocols.settings import PROTOCOLS
 
 
 def one_run(queue, n, method, protocol, seed):

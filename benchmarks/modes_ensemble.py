@@ -18,9 +18,10 @@ import argparse
 import time
 from pathlib import Path
 
-from jamflow.engine.lammps import LammpsEngine
-from jamflow.io import load_packing, save_packing
+from jamflow.engines.lammps.engine import LammpsEngine
+from jamflow.io.packing_file import load_packing, save_packing
 from jamflow.protocols.compression import jam
+from jamflow.minimize.rules import minimize
 
 
 def onset(path: Path, n: int, seed: int) -> None:
@@ -40,7 +41,7 @@ def above(source: Path, path: Path, dphi: float) -> None:
     t0 = time.perf_counter()
     start = load_packing(source)
     with LammpsEngine(start.scaled_to_phi(start.phi + dphi)) as eng:
-        result = eng.minimize()
+        result = minimize(eng)
         state = eng.state()
         packing = eng.packing()
     save_packing(path, packing, energy_per_particle=result.energy_per_particle,

@@ -16,10 +16,10 @@ from pathlib import Path
 
 import numpy as np
 
-from jamflow.analysis.hessian import hessian
-from jamflow.engine.lammps import LammpsEngine
-from jamflow.io import load_packing
-from jamflow.pairs import overlapping_pairs
+from jamflow.mechanics.hessian import hessian
+from jamflow.engines.lammps.engine import LammpsEngine
+from jamflow.io.packing_file import load_packing
+from jamflow.model.pairs import overlapping_pairs
 
 
 def lammps_matrix(packing, step: float) -> np.ndarray:

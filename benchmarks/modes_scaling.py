@@ -13,12 +13,13 @@ from __future__ import annotations
 import argparse
 import time
 
-from jamflow.analysis.contacts import Contacts
-from jamflow.analysis.hessian import DynamicalMatrix
+from jamflow.mechanics.contacts import Contacts
+from jamflow.mechanics.dynamical_matrix import DynamicalMatrix
 from jamflow.analysis.modes import Spectrum, Stability
-from jamflow.engine.lammps import LammpsEngine
-from jamflow.packing import random_packing
-from jamflow.sizes import parse_sizes
+from jamflow.engines.lammps.engine import LammpsEngine
+from jamflow.model.packing import random_packing
+from jamflow.model.sizes import parse_sizes
+from jamflow.minimize.rules import minimize
 
 
 def timed(fn):
@@ -36,7 +37,7 @@ def main() -> None:
     for n in args.sizes:
         start = random_packing(n, 2, parse_sizes("bi:1.4:0.5"), 0.86, seed=n)
         with LammpsEngine(start) as eng:
-            eng.minimize()
+            minimize(eng)
             packing = eng.packing()
         _, t_contacts = timed(lambda: Contacts().compute(packing))
         dyn, t_hessian = timed(lambda: DynamicalMatrix().compute(packing))

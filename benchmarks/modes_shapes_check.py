@@ -19,7 +19,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from test_hessian_shapes import (MODELS, busiest_particle_entries, model_packing,  # noqa: E402
                                  second_difference)
 
-from jamflow.analysis.hessian import Coordinates, hessian  # noqa: E402
+from jamflow.mechanics.hessian import Coordinates, hessian  # noqa: E402
 
 
 def main() -> None:

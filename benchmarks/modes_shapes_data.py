@@ -13,8 +13,8 @@ import time
 from pathlib import Path
 
 from jamflow import jam
-from jamflow.io import save_packing
-from jamflow.shapes import RigidBody
+from jamflow.io.packing_file import save_packing
+from jamflow.model.shapes import RigidBody
 
 
 def dimer(dim: int, alpha: float) -> RigidBody:

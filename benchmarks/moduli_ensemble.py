@@ -2,7 +2,7 @@
 
 For each potential and seed it jams a 2D 50:50 bidisperse (ratio 1.4) packing of N disks at onset
 (``jamflow.jam``), compresses it above onset by each DPHI (``jamflow.compress_above``: affine, then
-minimised) and measures the moduli of that packing (``jamflow.analysis.moduli.Moduli``: both
+minimised) and measures the moduli of that packing (``jamflow.protocols.moduli.Moduli``: both
 strain sweeps and the Hessian route), caching every file in --out (onset_*.h5, above_*.h5,
 above_*.moduli.h5), so a rerun only does what is missing. Then it writes one CSV row per packing,
 the ensemble table (mean and standard error over seeds per DPHI), power-law fits of G, B, P and
@@ -27,13 +27,14 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from jamflow.analysis.moduli import Moduli
-from jamflow.analysis.plots_moduli import family_figure, scaling_figure
-from jamflow.analysis.sweeps import SweepSettings
-from jamflow.commands.moduli import read_moduli, save_moduli
-from jamflow.io import load_packing, save_packing
+from jamflow.protocols.moduli import Moduli
+from jamflow.plots.moduli import family_figure, scaling_figure
+from jamflow.protocols.sweeps import SweepSettings
+from jamflow.cli.commands.moduli import read_moduli, save_moduli
+from jamflow.io.packing_file import load_packing, save_packing
 from jamflow.protocols.above import compress_above
-from jamflow.protocols.compression import JammingFailed, jam
+from jamflow.protocols.outcome import JammingFailed
+from jamflow.protocols.compression import jam
 
 DPHIS = (1e-6, 3e-6, 1e-5, 3e-5, 1e-4, 3e-4, 1e-3, 3e-3, 1e-2)
 PUBLISHED = {"spring": {"G": 0.5, "B": 0.0, "P": 1.0, "G/B": 0.5}, "hertz": {"G": 1.0, "B": 0.5, "P": 1.5, "G/B": 0.5}}

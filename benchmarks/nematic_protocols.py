@@ -26,8 +26,8 @@ import numpy as np
 from tqdm import tqdm
 
 from jamflow import jam
-from jamflow.checks import check_packing
-from jamflow.io import load_packing, save_packing
+from jamflow.mechanics.checks import check_packing
+from jamflow.io.packing_file import load_packing, save_packing
 from jamflow.protocols.anneal import anneal
 
 from anneal_vs_compression import COLUMNS, _row  # (benchmarks/ is the script's directory)
@@ -95,7 +95,7 @@ def report(path: Path, keep: Path | None) -> None:
 
 
 def chart(groups, keep, path: Path) -> None:
-    from jamflow.drawing import draw_into
+    from jamflow.plots.drawing import draw_into
 
     plt = pyplot()
     keys = sorted(groups)

@@ -16,15 +16,15 @@ import csv
 
 import numpy as np
 
-from jamflow.box import Box
-from jamflow.engine.compiled.engine import CompiledEngine
-from jamflow.engine.lammps import LammpsEngine
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.io import atomic_path
-from jamflow.packing import random_packing
-from jamflow.potentials import Spring
-from jamflow.shapes import parse_shape
-from jamflow.sizes import parse_sizes
+from jamflow.model.box import Box
+from jamflow.engines.compiled.engine import CompiledEngine
+from jamflow.engines.lammps.engine import LammpsEngine
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.support.files import atomic_path
+from jamflow.model.packing import random_packing
+from jamflow.model.potentials import Spring
+from jamflow.model.shapes import parse_shape
+from jamflow.model.sizes import parse_sizes
 
 SPECS = ["nmer:2:1.5", "nmer:2:2", "nmer:3:1.5", "dimer:1.5:0.7", "trimer:2:0.3"]
 

@@ -8,11 +8,11 @@ that made it.
 One row per packing (appended; a row already in the CSV or in ``--rejects`` is skipped, so runs
 resume): phi_J, V,
 P, the largest force and generalized torque tau_a / d_k on non-floaters from the all-pairs site
-sum of the numpy reference (``jamflow.engine.reference``, independent of both engines), the
-contacts between bodies and between sites (``jamflow.analysis.contacts``), floaters by the convex
+sum of the numpy reference (``jamflow.mechanics.reference``, independent of both engines), the
+contacts between bodies and between sites (``jamflow.mechanics.contacts``), floaters by the convex
 rule d_f + 1, bodies touched on one site only (their free rotations), the isostatic count
 N' d_f - d + 1, the engine, CPU seconds and wall seconds (the machine load is in the log), and
-the packing file (``--packings``; HDF5, schema jamflow.packing v2) for the figures
+the packing file (``--packings``; HDF5, schema jamflow.model.packing v2) for the figures
 (``benchmarks/nmer_figures.py``). With ``--rejects R.csv`` the rows of packings that fail the
 checks (``failed_checks``: not stopped by force, unbalanced, outside the energy window, or every body
 a floater) go to R.csv instead, so --out holds checked packings only and every failure stays on record.
@@ -30,12 +30,14 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from jamflow.analysis.contacts import Contacts
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.io import atomic_path, check_writable, save_packing
-from jamflow.minimize import CREEP_METHODS, MinimizerSettings
-from jamflow.protocols.compression import PROTOCOLS, compress, initial_packing
-from jamflow.checks import generalized_torques
+from jamflow.mechanics.contacts import Contacts
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.support.files import atomic_path, check_writable
+from jamflow.io.packing_file import save_packing
+from jamflow.minimize.settings import CREEP_METHODS, MinimizerSettings
+from jamflow.protocols.settings import PROTOCOLS
+from jamflow.protocols.compression import compress, initial_packing
+from jamflow.mechanics.checks import generalized_torques
 
 COLUMNS = ["shape", "dim", "n", "sizes", "engine", "minimizer", "damping", "seed", "phi_j", "v", "pressure",
            "max_force", "max_torque", "floaters", "contacts", "body_contacts", "one_site", "free_rotations",

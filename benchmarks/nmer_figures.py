@@ -14,7 +14,7 @@
 - ``acceptance.png`` and the acceptance table (issue 14, "How we will know"): per packing the
   largest force and generalized torque on non-floaters (numpy reference, all site pairs), and
   the zero modes beyond d against the free rotations of one-site bodies; per set how many
-  packings are in the window, pass ``jamflow.checks``, have exactly d zero modes as they stand,
+  packings are in the window, pass ``jamflow.mechanics.checks``, have exactly d zero modes as they stand,
   and exactly d once the free rotations are set aside (``analysis.free_rotations``).
 - ``routes.png``: phi_J of the same starts jammed by the compiled FIRE and by LAMMPS's damped
   rigid bodies (paired).
@@ -37,8 +37,9 @@ import numpy as np  # noqa: E402
 
 from jamflow.analysis.order import BondOrder, first_minimum  # noqa: E402
 from jamflow.analysis.structure import RDF  # noqa: E402
-from jamflow.io import atomic_path, load_packing  # noqa: E402
-from jamflow.drawing import draw_into  # noqa: E402
+from jamflow.support.files import atomic_path
+from jamflow.io.packing_file import load_packing  # noqa: E402
+from jamflow.plots.drawing import draw_into  # noqa: E402
 from nmer_ensembles import F_LIMIT  # noqa: E402  (benchmarks/ is the script's directory)
 
 FIGURE_2_26 = (1.04, 1.1, 1.2, 1.3, 1.4, 1.6)
@@ -78,7 +79,7 @@ def plot_bodies(path: Path) -> None:
     """The bodies of the --shape specs with their reference lengths (chapter Figure 2.9 b-d)."""
     from matplotlib.patches import Circle
 
-    from jamflow.shapes import parse_shape
+    from jamflow.model.shapes import parse_shape
 
     specs = [("nmer:2:1.6", "nmer:2:1.6\nlinear dimer, alpha = L/D = 1.6"), ("nmer:3:2.4", "nmer:3:2.4\nlinear trimer, alpha = 2.4"),
              ("dimer:1.5:0.6", "dimer:1.5:0.6\nasymmetric, alpha = L/D1, s = D2/D1"),
@@ -310,7 +311,7 @@ def acceptance_rows(ens_rows, dim: int, alpha: float) -> list[dict]:
 
 def acceptance_table(ens_rows, stab_rows) -> list[tuple]:
     """Per issue set (dim, alpha): packings, in window, max force, max torque, below F_LIMIT,
-    passed jamflow.checks, exactly d zero modes as they stand, exactly d beside the free
+    passed jamflow.mechanics.checks, exactly d zero modes as they stand, exactly d beside the free
     rotations, free rotations (min..max), worst zero-space residual."""
     stab = {r["file"]: r for r in stab_rows}
     out = []

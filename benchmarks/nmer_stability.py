@@ -1,6 +1,6 @@
-"""Checks and stability of the jammed n-mer ensembles (issue 14): ``jamflow.checks`` on every
+"""Checks and stability of the jammed n-mer ensembles (issue 14): ``jamflow.mechanics.checks`` on every
 packing file (window, force and torque balance, contact count), the dynamical matrix with
-rotational coordinates (``jamflow.analysis.hessian``, site-pair contacts, floaters removed), its
+rotational coordinates (``jamflow.mechanics.hessian``, site-pair contacts, floaters removed), its
 zero modes against the d trivial translations and the free rotations of bodies touched on one
 site (``jamflow.analysis.free_rotations``: the known vectors must lie in the zero-mode space and
 no zero mode may be left over), and Delta V along the lowest nonzero mode (``Stability``).
@@ -8,7 +8,7 @@ no zero mode may be left over), and Delta V along the lowest nonzero mode (``Sta
     OPENBLAS_NUM_THREADS=1 python benchmarks/nmer_stability.py --csv docs/nmers/ensembles.csv \
         --out docs/nmers/stability.csv
 
-One row per packing of the CSV (the ``file`` column): whether it passed ``jamflow.checks`` (and
+One row per packing of the CSV (the ``file`` column): whether it passed ``jamflow.mechanics.checks`` (and
 the problems if not), N', N_c (site contacts), the isostatic count, the free rotations, zero
 modes (|e| <= 1e-6), extra zero modes (beyond d), the free rotations found in the matrix's
 packing, the distance of the known zero vectors from the zero-mode space, the zero modes left
@@ -26,11 +26,12 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from jamflow.analysis.contacts import Contacts
+from jamflow.mechanics.contacts import Contacts
 from jamflow.analysis.free_rotations import zero_modes
 from jamflow.analysis.modes import Spectrum, Stability
-from jamflow.checks import check_packing
-from jamflow.io import atomic_path, load_packing
+from jamflow.mechanics.checks import check_packing
+from jamflow.support.files import atomic_path
+from jamflow.io.packing_file import load_packing
 
 COLUMNS = ["shape", "dim", "n", "seed", "checks_passed", "problems", "n_kept", "contacts", "isostatic_count",
            "free_rotations", "n_zero", "extra_zero", "free_in_matrix", "zero_residual", "unexplained_zero",

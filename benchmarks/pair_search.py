@@ -1,4 +1,4 @@
-"""Cost of the float64 pair search (jamflow.pairs.neighbor_pairs) in orthogonal and sheared
+"""Cost of the float64 pair search (jamflow.model.pairs.neighbor_pairs) in orthogonal and sheared
 cells, beside the float32 freud search it replaced for tilted cells.
 
 Random bidisperse disks (diameters 1 and 1.4) or spheres at phi = 0.84 (2D) / 0.64 (3D),
@@ -21,8 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from jamflow.box import Box
-from jamflow.pairs import neighbor_pairs
+from jamflow.model.box import Box
+from jamflow.model.pairs import neighbor_pairs
 from tqdm import tqdm
 
 

@@ -21,12 +21,12 @@ import argparse
 import time
 from dataclasses import replace
 
-from jamflow.engine.lammps import LammpsEngine
-from jamflow.engine.pair_styles import harmonic_cut_commands
-from jamflow.engine.plugin_build import load_plugin, pair_style_commands
-from jamflow.packing import random_packing
-from jamflow.potentials import RepulsiveLJ, Spring
-from jamflow.sizes import parse_sizes
+from jamflow.engines.lammps.engine import LammpsEngine
+from jamflow.engines.lammps.pair_styles import harmonic_cut_commands
+from jamflow.engines.lammps.plugin_build import load_plugin, pair_style_commands
+from jamflow.model.packing import random_packing
+from jamflow.model.potentials import RepulsiveLJ, Spring
+from jamflow.model.sizes import parse_sizes
 
 PHI = 0.86
 

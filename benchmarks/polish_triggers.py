@@ -1,12 +1,12 @@
 """When the disks' polish should fire (docs/speed-2.md section 11): jam() in process with the
 default creep method (2D disks: one Gauss-Newton polish per minimisation at the first multiple of
-20 000 iterations below max force 1e-9) against other triggers of the same ``jamflow.polish.Polisher``
+20 000 iterations below max force 1e-9) against other triggers of the same ``jamflow.minimize.polish.Polisher``
 (earlier, from a higher force, repeated: the form that resolved the creep of rigid bodies), same
 seeds, one process:
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/polish_triggers.py --n 1024 --seeds 1 2 3
 
-The triggers are set on the Polisher that ``jamflow.minimize`` builds (its fields after, every,
+The triggers are set on the Polisher that ``jamflow.minimize.rules`` builds (its fields after, every,
 creep_force), so everything else is the default path. Prints phi_J, all FIRE iterations and CPU
 seconds per (seed, trigger).
 """
@@ -16,10 +16,11 @@ from __future__ import annotations
 import argparse
 import time
 
-import jamflow.minimize as minimize_module
-from jamflow.minimize import MinimizerSettings
-from jamflow.polish import Polisher
-from jamflow.protocols.compression import fast_protocol, jam
+import jamflow.minimize.rules as minimize_module
+from jamflow.minimize.settings import MinimizerSettings
+from jamflow.minimize.polish import Polisher
+from jamflow.protocols.settings import fast_protocol
+from jamflow.protocols.compression import jam
 
 TRIGGERS = {  # Polisher fields; {} = the default
     "default": {},

@@ -50,11 +50,11 @@ import numba
 import numpy as np
 from numba import prange
 
-from jamflow.engine.compiled import fire, spheres, start_numba
-from jamflow.engine.compiled.engine import CompiledEngine
-from jamflow.engine.compiled.field import deform
-from jamflow.engine.compiled.laws import energy_force
-from jamflow.minimize import MinimizerSettings
+from jamflow.engines.compiled import fire, spheres, start_numba
+from jamflow.engines.compiled.engine import CompiledEngine
+from jamflow.engines.compiled.field import deform
+from jamflow.engines.compiled.laws import energy_force
+from jamflow.minimize.settings import MinimizerSettings
 
 start_numba()  # jamflow's kernels as numba dispatchers (and its overloads registered) before they are recompiled here
 
@@ -513,7 +513,7 @@ def startup(times: int) -> None:
 
 def state(n: int, dim: int, phi: float, directory: str | None):
     """``kernel.near_jamming_state``, kept in ``directory`` (HDF5) when given."""
-    from jamflow.io import load_packing, save_packing
+    from jamflow.io.packing_file import load_packing, save_packing
 
     path = Path(directory, f"state-{dim}d-{n}-{phi}.h5") if directory else None
     if path is not None and path.exists():

@@ -28,10 +28,11 @@ from speed_accuracy import append_row  # (benchmarks/ is the script's directory)
 
 import numpy as np
 
-from jamflow.checks import check_packing
-from jamflow.engine.compiled.engine import CompiledEngine
-from jamflow.pairs import overlapping_pairs
-from jamflow.protocols.compression import fast_protocol, jam
+from jamflow.mechanics.checks import check_packing
+from jamflow.engines.compiled.engine import CompiledEngine
+from jamflow.model.pairs import overlapping_pairs
+from jamflow.protocols.settings import fast_protocol
+from jamflow.protocols.compression import jam
 
 PLAIN = {"set_box": CompiledEngine.set_box, "minimize": CompiledEngine.minimize}
 

@@ -4,7 +4,7 @@ paired difference to the exact protocol, as CSV and a PNG chart.
 
     python benchmarks/protocol_bias.py --n 256 --seeds 20 --out docs/protocol-bias-n256.csv
 
-Every packing is checked (``jamflow.checks.check_packing``: window, force balance, contact
+Every packing is checked (``jamflow.mechanics.checks.check_packing``: window, force balance, contact
 count; the ``checks`` column). To rerun one variant against stored rows of another, start the
 CSV with those rows (``--variants fast`` on a file holding the ``seed`` rows).
 
@@ -20,8 +20,8 @@ import statistics
 from pathlib import Path
 
 from jamflow import jam
-from jamflow.checks import check_packing
-from jamflow.protocols.compression import FAST_PROTOCOL, CompressionSettings
+from jamflow.mechanics.checks import check_packing
+from jamflow.protocols.settings import FAST_PROTOCOL, CompressionSettings
 
 VARIANTS = {
     "seed": {},

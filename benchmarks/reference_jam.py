@@ -2,7 +2,7 @@
 (ellipses): the seed's compression/decompression bisection on phi (section 2.1, stop when
 V_tol < V/N < 2 V_tol) with every minimisation done by scipy's trust-region Newton method
 (``trust-exact``) on V(xi), xi = (centres, d_k theta), gradient from the reference forces and
-torques, Hessian from ``jamflow.analysis.hessian``. In 2D theta is a global coordinate, so V(xi) is
+torques, Hessian from ``jamflow.mechanics.hessian``. In 2D theta is a global coordinate, so V(xi) is
 an ordinary function for scipy. Used to make the stored test packings (tests/data/) and the
 docs' small ellipse ensembles; N ~ 16-64 (all-pairs reference).
 
@@ -19,13 +19,13 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import minimize
 
-from jamflow.analysis.hessian import Coordinates, hessian
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.io import save_packing
-from jamflow.packing import random_packing
-from jamflow.potentials import parse_potential
-from jamflow.shapes import parse_shape
-from jamflow.sizes import parse_sizes
+from jamflow.mechanics.hessian import Coordinates, hessian
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.io.packing_file import save_packing
+from jamflow.model.packing import random_packing
+from jamflow.model.potentials import parse_potential
+from jamflow.model.shapes import parse_shape
+from jamflow.model.sizes import parse_sizes
 
 V_TOL = 1e-16
 

@@ -35,10 +35,10 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from jamflow.analysis.contacts import Contacts
-from jamflow.analysis.hessian import hessian
-from jamflow.engine.compiled.engine import CompiledEngine
-from jamflow.minimize import MinimizerSettings
+from jamflow.mechanics.contacts import Contacts
+from jamflow.mechanics.hessian import hessian
+from jamflow.engines.compiled.engine import CompiledEngine
+from jamflow.minimize.settings import MinimizerSettings
 from jamflow.protocols.compression import jam
 
 CREEP_FORCE, MAX_ATTEMPTS, SHIFT, MODES = 1e-9, 5, 1e-4, 6

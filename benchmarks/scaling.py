@@ -9,7 +9,7 @@ defaults (``default``: fast protocol, engine auto = the compiled FIRE for these 
     python benchmarks/scaling.py chart
     python benchmarks/scaling.py crosscheck --n 32 64 --seeds 0 1 2 3 4 5 6 7 8 9 --ranks 2
 
-``crosscheck`` runs jamflow.crosscheck (deck under mpirun -np RANKS against the serial
+``crosscheck`` runs jamflow.decks.crosscheck (deck under mpirun -np RANKS against the serial
 controller, same start) and appends to docs/crosscheck-mpi.csv: with 2 ranks the force sums
 run in another order, so this measures how often phi_J and the contacts still agree.
 
@@ -38,7 +38,7 @@ def controller(n, seed, protocol="seed", engine="lammps"):
     import warnings
 
     from jamflow import jam
-    from jamflow.protocols.compression import PROTOCOLS
+    from jamflow.protocols.settings import PROTOCOLS
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -49,9 +49,10 @@ def controller(n, seed, protocol="seed", engine="lammps"):
 
 def deck(n, seed, ranks):
     """The deck from jamflow's own random start (a data file), as the cross-check runs it."""
-    from jamflow.deck import deck_variables, run_deck
-    from jamflow.io import write_lammps_data
-    from jamflow.protocols.compression import CompressionSettings, initial_packing
+    from jamflow.decks.jam import deck_variables, run_deck
+    from jamflow.io.packing_file import write_lammps_data
+    from jamflow.protocols.settings import CompressionSettings
+    from jamflow.protocols.compression import initial_packing
 
     start = initial_packing(n, 2, "bi:1.4:0.5", "spring", seed, 0.80)
     variables = deck_variables(n, 2, "bi:1.4:0.5", seed, CompressionSettings(), data="start.data", phi0=start.phi)
@@ -133,7 +134,7 @@ MPI_COLUMNS = ["n", "seed", "ranks", "status", "phi_j_controller", "phi_j_deck",
 
 
 def mpi_check(n, seed, ranks):
-    from jamflow.crosscheck import crosscheck
+    from jamflow.decks.crosscheck import crosscheck
 
     c = crosscheck(n, 2, "bi:1.4:0.5", seed, ranks=ranks)
     return dict(phi_j_controller=repr(c.controller.phi_j), phi_j_deck=repr(c.deck.phi_j),

@@ -17,10 +17,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from jamflow.box import Box
-from jamflow.engine.lammps import LammpsEngine
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.packing import Packing
+from jamflow.model.box import Box
+from jamflow.engines.lammps.engine import LammpsEngine
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.model.packing import Packing
 
 
 def configuration(dim: int, gamma: float, seed: int) -> Packing:

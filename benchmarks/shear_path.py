@@ -18,10 +18,10 @@ import time
 
 import numpy as np
 
-from jamflow.analysis.plots_shear import shear_path_figure
+from jamflow.plots.shear import shear_path_figure
 from jamflow.protocols.compression import jam
 from jamflow.protocols.shear import shear
-from jamflow.shear_file import path_columns, save_shear_path
+from jamflow.io.shear_file import path_columns, save_shear_path
 
 
 def main() -> None:

@@ -17,9 +17,10 @@ import csv
 
 import numpy as np
 
-from jamflow.analysis.contacts import Contacts
+from jamflow.mechanics.contacts import Contacts
 from jamflow.protocols.shear import Network
-from jamflow.protocols.compression import at_shear_strain, compress, fast_protocol, initial_packing, seed_protocol
+from jamflow.protocols.compression import at_shear_strain, compress, initial_packing
+from jamflow.protocols.settings import fast_protocol, seed_protocol
 
 PROTOCOLS = {"fast": fast_protocol, "seed": seed_protocol}
 

@@ -25,7 +25,7 @@ COLUMNS = ["n", "seed", "variant", "status", "seconds", "cpu_seconds", "phi_j", 
 
 
 def _fast():
-    from jamflow.protocols.compression import FAST_PROTOCOL
+    from jamflow.protocols.settings import FAST_PROTOCOL
 
     return dict(FAST_PROTOCOL)
 
@@ -47,7 +47,7 @@ def jam_once(n, seed, variant):
     import warnings
 
     from jamflow import jam
-    from jamflow.protocols.compression import CompressionSettings
+    from jamflow.protocols.settings import CompressionSettings
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

@@ -11,8 +11,8 @@ from __future__ import annotations
 import argparse
 import time
 
-from jamflow.engine.compiled import aot, fire
-from jamflow.engine.compiled import engine as compiled
+from jamflow.engines.compiled import aot, fire
+from jamflow.engines.compiled import engine as compiled
 from jamflow.protocols.compression import jam
 
 CALLS = {"fire kernel": (fire, "fire"), "fire kernel (AOT)": (aot.AotKernels, "fire"),

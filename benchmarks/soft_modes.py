@@ -19,13 +19,14 @@ import time
 
 import numpy as np
 
-from jamflow.analysis.hessian import DynamicalMatrix
-from jamflow.engine.compiled.engine import CompiledEngine
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.io import load_packing
-from jamflow.minimize import MinimizerSettings, minimize
-from jamflow.checks import generalized_forces
-from jamflow.soft_modes import _moved
+from jamflow.mechanics.dynamical_matrix import DynamicalMatrix
+from jamflow.engines.compiled.engine import CompiledEngine
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.io.packing_file import load_packing
+from jamflow.minimize.settings import MinimizerSettings
+from jamflow.minimize.rules import minimize
+from jamflow.mechanics.checks import generalized_forces
+from jamflow.minimize.soft_modes import _moved
 
 BANDS = [(-np.inf, 1e-15), (1e-15, 1e-11), (1e-11, 1e-8), (1e-8, 1e-5), (1e-5, np.inf)]
 

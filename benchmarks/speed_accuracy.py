@@ -59,8 +59,8 @@ GROUPS = {"dphi0": ["dphi0=1e-3", "dphi0=3e-4", "seed", "dphi0=3e-5", "dphi0=1e-
 
 
 def settings_for(variant: str):
-    from jamflow.minimize import MinimizerSettings
-    from jamflow.protocols.compression import seed_protocol
+    from jamflow.minimize.settings import MinimizerSettings
+    from jamflow.protocols.settings import seed_protocol
 
     protocol, minimizer = VARIANTS[variant]
     return seed_protocol(**protocol, minimizer=replace(MinimizerSettings(), **minimizer))
@@ -149,7 +149,7 @@ def use_agg():
 
 def save_figure(fig, path: Path) -> None:
     """Write a PNG atomically."""
-    from jamflow.io import atomic_path
+    from jamflow.support.files import atomic_path
 
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=120, format="png")

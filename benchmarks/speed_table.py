@@ -8,7 +8,7 @@ same seeds and starts, with iterations per phase (compress / approach / final, a
     python benchmarks/speed_table.py --chart docs/speed-table.csv --png docs/speed-2.png
     python benchmarks/speed_table.py --summary docs/speed-table.csv    # the markdown rows of docs/speed-2.md
 
-Whole process: ``python -m jamflow.cli jam ...`` wall and CPU (user + sys) seconds, imports
+Whole process: ``python -m jamflow.cli.app jam ...`` wall and CPU (user + sys) seconds, imports
 and numba's cache load included. In process: ``jam()`` with a warm interpreter. Rows are
 appended with the load average; run under ``flock /tmp/jamflow-bench.lock``.
 """
@@ -31,14 +31,15 @@ import numpy as np
 from predictor import phase_iterations
 from speed_vs_handwritten import handwritten_jam
 
-from jamflow.checks import check_packing
-from jamflow.protocols.compression import PROTOCOLS, DEFAULT_PROTOCOL, initial_packing, jam
+from jamflow.mechanics.checks import check_packing
+from jamflow.protocols.settings import PROTOCOLS, DEFAULT_PROTOCOL
+from jamflow.protocols.compression import initial_packing, jam
 
 
 def whole_process(n, dim, sizes, seed, tmp) -> tuple[float, float]:
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    subprocess.run([sys.executable, "-m", "jamflow.cli", "jam", "--n", str(n), "--dim", str(dim), "--sizes", sizes,
+    subprocess.run([sys.executable, "-m", "jamflow.cli.app", "jam", "--n", str(n), "--dim", str(dim), "--sizes", sizes,
                     "--seed", str(seed), "--quiet", "--force", "--out", f"{tmp}/p.h5"], check=True,
                    stdout=subprocess.DEVNULL)
     wall = time.perf_counter() - t0

@@ -20,10 +20,11 @@ import time
 from pathlib import Path
 
 from jamflow import jam
-from jamflow.engine.lammps_lib import new_lammps
-from jamflow.engine.pair_styles import harmonic_cut_commands
-from jamflow.io import write_lammps_data
-from jamflow.protocols.compression import PROTOCOLS, initial_packing
+from jamflow.engines.lammps.library import new_lammps
+from jamflow.engines.lammps.pair_styles import harmonic_cut_commands
+from jamflow.io.packing_file import write_lammps_data
+from jamflow.protocols.settings import PROTOCOLS
+from jamflow.protocols.compression import initial_packing
 
 
 def handwritten_jam(packing, data_path, cap=100_000, v_tol=1e-16, dphi0=1e-4):

@@ -1,5 +1,5 @@
-"""Which spring exponents alpha end in a checked packing (jamflow.checks): jam N = 32 bidisperse
-disks (seed 0) with spring:ALPHA at the smallest V_tol that jamflow.checks.resolution accepts
+"""Which spring exponents alpha end in a checked packing (jamflow.mechanics.checks): jam N = 32 bidisperse
+disks (seed 0) with spring:ALPHA at the smallest V_tol that jamflow.mechanics.checks.resolution accepts
 (x 1.5, at least 1e-16) and check the packing. Basis of compression.SPRING_ALPHA_RANGE.
 
     python benchmarks/spring_exponents.py fast 1.5 2 2.5 3 4 6 8    (rows to docs/spring-exponents.csv)
@@ -15,8 +15,8 @@ import sys
 from pathlib import Path
 
 import jamflow.protocols.compression as compression
-from jamflow.checks import check_packing, resolution
-from jamflow.minimize import MinimizerSettings
+from jamflow.mechanics.checks import check_packing, resolution
+from jamflow.minimize.settings import MinimizerSettings
 from vtol_resolution import jam_quietly
 
 CSV = Path(__file__).resolve().parents[1] / "docs" / "spring-exponents.csv"

@@ -37,7 +37,7 @@ from pathlib import Path
 
 from speed_accuracy import append_row  # (benchmarks/ is the script's directory)
 
-CLI = ["-m", "jamflow.cli"]
+CLI = ["-m", "jamflow.cli.app"]
 COMMANDS = {"help": CLI + ["--help"], "jam-help": CLI + ["jam", "--help"],
             "jam-n64": CLI + ["jam", "--n", "64", "--seed", "{seed}", "--quiet", "--out", "{tmp}/p.h5", "--force"]}
 NUMBA_FLOOR = """import numba, numpy
@@ -54,9 +54,9 @@ PHASES = """import time, sys
 t = [time.perf_counter()]
 def mark(): t.append(time.perf_counter())
 import numpy; mark()
-import jamflow.commands.jam as jc; mark()
+import jamflow.cli.commands.jam as jc; mark()
 import numba; mark()
-import jamflow.engine.compiled.engine; mark()
+import jamflow.engines.compiled.engine; mark()
 from jamflow.protocols.compression import jam
 jam(n=16, seed=1); mark()
 res = jam(n=64, seed=1); mark()

@@ -19,8 +19,9 @@ import argparse
 import time
 from pathlib import Path
 
-from jamflow.io import save_packing
-from jamflow.protocols.compression import CompressionSettings, compress, jam
+from jamflow.io.packing_file import save_packing
+from jamflow.protocols.settings import CompressionSettings
+from jamflow.protocols.compression import compress, jam
 
 DISK_SIZES = {"1.1": "poly-uniform:0.1", "1.4": "poly-uniform:0.4"}
 

@@ -19,13 +19,12 @@ import numpy as np
 
 from jamflow.analysis.correlations import BondCorrelation, rdf_correlation_length
 from jamflow.analysis.order import BondOrder, first_minimum, particle_bond_order, translational_order
-from jamflow.analysis.plots_structure import (plot_bond_correlations, plot_bond_order_map, plot_rdf,
-                                             plot_structure_factor)
+from jamflow.plots.structure import plot_bond_correlations, plot_bond_order_map, plot_rdf, plot_structure_factor
 from jamflow.analysis.structure import (RDF, StructureFactor, fcc_packing, rms_contact_distance,
                                         structure_factor_grid, triangular_packing)
-from jamflow.io import load_packing
-from jamflow.packing import random_packing
-from jamflow.sizes import parse_sizes
+from jamflow.io.packing_file import load_packing
+from jamflow.model.packing import random_packing
+from jamflow.model.sizes import parse_sizes
 
 DATA = Path("/tmp/jamflow-structure-data")
 

@@ -15,8 +15,8 @@ import numpy as np
 from jamflow.analysis.correlations import BondCorrelation
 from jamflow.analysis.order import BondOrder
 from jamflow.analysis.structure import RDF, StructureFactor
-from jamflow.packing import random_packing
-from jamflow.sizes import parse_sizes
+from jamflow.model.packing import random_packing
+from jamflow.model.sizes import parse_sizes
 
 
 def timed(label, fn, repeat=3):

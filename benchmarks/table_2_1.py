@@ -18,9 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
-from jamflow.shapes import contact_distance, figure_2_12, lambda_polynomial
+from jamflow.model.shapes import contact_distance, figure_2_12, lambda_polynomial
 
-cdm = importlib.import_module("jamflow.shapes.contact_distance")
+cdm = importlib.import_module("jamflow.model.shapes.contact_distance")
 
 ALPHAS = (1.0, 1.2, 1.5, 2.0, 3.0, 10.0)
 RATIO = 1.4
@@ -213,7 +213,7 @@ def main():
 
 
 def cdm_panels():
-    from jamflow.shapes.ellipse_plot import FIGURE_2_12_PANELS
+    from jamflow.plots.ellipse_pair import FIGURE_2_12_PANELS
 
     return FIGURE_2_12_PANELS
 

@@ -1,6 +1,6 @@
 """Where V_tol stops being resolvable in float64: jam with ever smaller V_tol and check each
-packing (window, force balance, contact count; jamflow.checks) against the two ratios that
-jamflow.checks.resolution predicts before any work (typical window overlap / position
+packing (window, force balance, contact count; jamflow.mechanics.checks) against the two ratios that
+jamflow.mechanics.checks.resolution predicts before any work (typical window overlap / position
 round-off, window contact force / force tolerance).
 
     python benchmarks/vtol_resolution.py            (writes docs/vtol-resolution.csv)
@@ -17,8 +17,8 @@ import warnings
 from pathlib import Path
 
 import jamflow.protocols.compression as compression
-from jamflow.checks import check_packing, resolution
-from jamflow.minimize import MinimizerSettings
+from jamflow.mechanics.checks import check_packing, resolution
+from jamflow.minimize.settings import MinimizerSettings
 
 CSV = Path(__file__).resolve().parents[1] / "docs" / "vtol-resolution.csv"
 COLUMNS = ["n", "potential", "seed", "vtol", "overlap_ratio", "force_ratio", "refused", "status", "passed",

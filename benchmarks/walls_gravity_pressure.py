@@ -9,7 +9,7 @@ constant-pressure ensembles at P = 1e-4 and 1e-6 are the rows of the pressure se
 OUT-summary.txt, OUT-gravity-seed0.h5, and the figures OUT-packing-{0..3}.png (walled and
 settled packings), OUT-profile.png (pressure with height under gravity) and
 OUT-phi-pressure.png (phi against P).
-Every check uses ``jamflow.engine.reference`` (all pairs, numpy), not the engine that minimised:
+Every check uses ``jamflow.mechanics.reference`` (all pairs, numpy), not the engine that minimised:
 - force balance: max |F_i| over the non-floaters (all particles under gravity), wall and
   gravity forces included;
 - walls: the pressure on each wall, and the virial P_yy against it;
@@ -30,13 +30,13 @@ import numpy as np
 from tqdm import tqdm
 
 from jamflow import jam
-from jamflow.analysis.contacts import Contacts
+from jamflow.mechanics.contacts import Contacts
 from jamflow.analysis.profile import PressureProfile
-from jamflow.engine.reference import energy_forces_pressure
+from jamflow.mechanics.reference import energy_forces_pressure
 from jamflow.protocols.compression import initial_packing
 from jamflow.protocols.gravity import pile_fraction
 from jamflow.protocols.pressure import PressureSettings, extrapolate_phi_j, jam_at_pressure, shear_stress
-from jamflow.walls import face_pressures
+from jamflow.model.walls import face_pressures
 
 SIZES = "bi:1.4:0.5"
 
@@ -82,7 +82,7 @@ def gravity_rows(n, seeds, g, out):
         prof = PressureProfile(bins=30).compute(p)
         profiles.append(prof)
         if seed == seeds[0]:
-            from jamflow.io import save_packing
+            from jamflow.io.packing_file import save_packing
 
             save_packing(f"{out}-gravity-seed{seed}.h5", p, pressure_tensor=res.pressure_tensor,
                          wall_forces=res.wall_forces)
@@ -205,7 +205,7 @@ def summarize(walls, gravity, compare, out):
 
 
 def figures(n, out, walls_seed, profiles, compare, phi_j):
-    from jamflow.analysis.plots_walls import plot_packing, plot_phi_pressure, plot_profile
+    from jamflow.plots.walls import plot_packing, plot_phi_pressure, plot_profile
 
     shots = [("smooth walls on y", dict(walls="y")), ("rough walls on y", dict(walls="y", wall_type="rough")),
              ("closed box, smooth walls", dict(walls="x,y")), ("gravity 1e-5 on a floor", dict(walls="y", gravity=1e-5))]

@@ -7,8 +7,8 @@ scale, contacts with width proportional to force, floaters hatched, colour = con
 import argparse
 
 import jamflow
-from jamflow.checks import check_packing
-from jamflow.drawing import draw_packing
+from jamflow.mechanics.checks import check_packing
+from jamflow.plots.drawing import draw_packing
 
 parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
 parser.add_argument("--n", type=int, default=256, help="number of disks")

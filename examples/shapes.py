@@ -12,8 +12,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 import jamflow
-from jamflow.checks import check_packing
-from jamflow.drawing import draw_into
+from jamflow.mechanics.checks import check_packing
+from jamflow.plots.drawing import draw_into
 
 parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
 parser.add_argument("--n", type=int, default=64, help="particles per packing")

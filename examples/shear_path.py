@@ -9,9 +9,9 @@ the steps where the contact network changed marked (continuous geometric familie
 import argparse
 
 import jamflow
-from jamflow.analysis.plots_shear import shear_path_figure
+from jamflow.plots.shear import shear_path_figure
 from jamflow.protocols.shear import shear
-from jamflow.shear_file import path_columns
+from jamflow.io.shear_file import path_columns
 
 parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
 parser.add_argument("--n", type=int, default=10, help="number of disks")

@@ -1,36 +1,50 @@
 """jamflow: jammed packings of soft, frictionless particles.
 
-Generate them with LAMMPS (isotropic compression, seed chapter section 2.1), check their
-mechanical stability (dynamical matrix), measure their structure. Public names are
-imported lazily so that ``import jamflow`` does not start LAMMPS.
+Generate them (isotropic compression to onset, seed chapter section 2.1, with the compiled engine
+or LAMMPS), check their mechanical stability (dynamical matrix), measure their structure. The
+package is layered (docs/architecture.md): model -> mechanics -> engines -> minimize -> protocols,
+with analysis, io, plots, decks, ensemble and cli on top. Public names are imported lazily so
+that ``import jamflow`` starts neither LAMMPS nor numba.
 """
 
 from importlib import import_module
 
+from jamflow import _moved
+
 __version__ = "0.1.0"
 
 _EXPORTS = {
-    "Box": "jamflow.box",
-    "Packing": "jamflow.packing",
-    "random_packing": "jamflow.packing",
-    "Spring": "jamflow.potentials",
-    "RepulsiveLJ": "jamflow.potentials",
-    "parse_potential": "jamflow.potentials",
-    "parse_sizes": "jamflow.sizes",
+    "Box": "jamflow.model.box",
+    "Packing": "jamflow.model.packing",
+    "random_packing": "jamflow.model.packing",
+    "Spring": "jamflow.model.potentials",
+    "RepulsiveLJ": "jamflow.model.potentials",
+    "parse_potential": "jamflow.model.potentials",
+    "parse_sizes": "jamflow.model.sizes",
+    "parse_shape": "jamflow.model.shapes.parse",
+    "contact_distance": "jamflow.model.shapes.contact_distance",
     "jam": "jamflow.protocols.compression",
-    "CompressionSettings": "jamflow.protocols.compression",
+    "CompressionSettings": "jamflow.protocols.settings",
+    "JamResult": "jamflow.protocols.outcome",
+    "JammingFailed": "jamflow.protocols.outcome",
     "compress_above": "jamflow.protocols.above",
-    "MinimizerSettings": "jamflow.minimize",
-    "save_packing": "jamflow.io",
-    "load_packing": "jamflow.io",
-    "contact_distance": "jamflow.shapes.contact_distance",
+    "MinimizerSettings": "jamflow.minimize.settings",
+    "check_packing": "jamflow.mechanics.checks",
+    "save_packing": "jamflow.io.packing_file",
+    "load_packing": "jamflow.io.packing_file",
     "run_ensemble": "jamflow.ensemble",
 }
 
 __all__ = sorted(_EXPORTS)
+
+_moved.install()
 
 
 def __getattr__(name):
     if name in _EXPORTS:
         return getattr(import_module(_EXPORTS[name]), name)
     raise AttributeError(f"module 'jamflow' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_EXPORTS))

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from jamflow.box import Box
-from jamflow.packing import Packing
-from jamflow.potentials import Spring
+from jamflow.model.box import Box
+from jamflow.model.packing import Packing
+from jamflow.model.potentials import Spring
 
 
 def random_config(n, dim, phi, seed, diameters=None, tilt=0.0, potential=None):

@@ -6,12 +6,12 @@ refused before any work."""
 import numpy as np
 import pytest
 
-from jamflow.analysis.contacts import Contacts
+from jamflow.mechanics.contacts import Contacts
 from jamflow.analysis.independent import independent_check
-from jamflow.cli import main
-from jamflow.io import load_packing, read_protocol, read_table
+from jamflow.cli.app import main
+from jamflow.io.packing_file import load_packing, read_protocol, read_table
 from jamflow.protocols.anneal import STEP_COLUMNS, _grown, anneal_alphas
-from jamflow.shapes import Ellipsoid
+from jamflow.model.shapes import Ellipsoid
 
 
 @pytest.fixture(scope="module")

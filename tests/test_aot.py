@@ -1,4 +1,4 @@
-"""The disk/sphere kernels compiled ahead of time (``jamflow.engine.compiled.aot``) against numba's.
+"""The disk/sphere kernels compiled ahead of time (``jamflow.engines.compiled.aot``) against numba's.
 
 The AOT module is numba's own compilation of the same functions, so every result must be
 bit-identical to the numba path (``JAMFLOW_AOT=0``): whole jams (phi_J, iterations, positions) over
@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from jamflow.engine.compiled import aot
-from jamflow.engine.compiled.engine import CompiledEngine
+from jamflow.engines.compiled import aot
+from jamflow.engines.compiled.engine import CompiledEngine
 from jamflow.protocols.compression import initial_packing, jam
 from jamflow.protocols.pressure import PressureSettings, jam_at_pressure
 
@@ -116,7 +116,7 @@ def test_the_cell_list_finds_the_pairs_of_ckdtree(built, case):
 
 
 def test_a_disk_jam_imports_neither_numba_nor_scipy_spatial(built, tmp_path):
-    code = ("import sys\nfrom jamflow.cli import main\n"
+    code = ("import sys\nfrom jamflow.cli.app import main\n"
             f"code = main(['jam', '--n', '16', '--seed', '2', '--quiet', '--out', {str(tmp_path / 'p.h5')!r}])\n"
             "print(code, 'numba' in sys.modules, 'scipy.spatial' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
@@ -125,7 +125,7 @@ def test_a_disk_jam_imports_neither_numba_nor_scipy_spatial(built, tmp_path):
 
 def test_numba_starts_on_first_use_and_swaps_the_deferred_kernels():
     code = ("import sys, numpy as np\n"
-            "from jamflow.engine.compiled import Deferred, cells, spheres\n"
+            "from jamflow.engines.compiled import Deferred, cells, spheres\n"
             "before = isinstance(spheres.forces, Deferred), 'numba' in sys.modules\n"
             "i, j = cells.cell_pairs(np.array([[0.5, 0.5], [1.0, 0.5]]), np.array([4.0, 4.0]), np.ones(2, np.int64), 1.0)\n"
             "print(*before, 'numba' in sys.modules, type(spheres.forces).__name__, type(cells.cell_pairs).__name__, "
@@ -193,7 +193,7 @@ def test_no_c_compiler_warns_without_a_build_or_a_marker(built, fresh_cache, mon
 
 
 def test_a_bad_jamflow_aot_value_is_refused_before_work(tmp_path, monkeypatch, capsys):
-    from jamflow.cli import main
+    from jamflow.cli.app import main
 
     monkeypatch.setenv("JAMFLOW_AOT", "maybe")
     code = main(["jam", "--n", "16", "--quiet", "--out", str(tmp_path / "p.h5")])

@@ -3,7 +3,7 @@ from itertools import product
 import numpy as np
 import pytest
 
-from jamflow.box import Box
+from jamflow.model.box import Box
 
 
 def test_lammps_round_trip_3d():
@@ -154,7 +154,7 @@ def test_widths_do_not_depend_on_the_accumulated_strain():
     sheared = square.with_shear_strain(4.3)
     assert np.allclose(sheared.widths, square.with_shear_strain(0.3).widths, rtol=1e-12)
     assert np.linalg.norm(np.linalg.inv(sheared.h), axis=1).max() > 0.5  # h's own faces are 1/4.4 apart
-    from jamflow.packing import Packing
+    from jamflow.model.packing import Packing
 
     Packing([[1.0, 1.0], [4.0, 4.0]], [1.0, 1.0], sheared)  # valid: the reduced cell is wide
 
@@ -176,7 +176,7 @@ def _mirror_pressure(dim):
 @pytest.mark.parametrize("dim", [2, 3])
 def test_strain_gamma_plus_one_is_the_same_square_cell(config, dim):
     """Seed Fig. 2.4(d): shear-periodic boundaries have unit period for a square cell."""
-    from jamflow.engine.reference import energy_forces_pressure
+    from jamflow.mechanics.reference import energy_forces_pressure
 
     base = config(60, dim, 0.9 if dim == 2 else 0.7, seed=30 + dim)
     for gamma in (0.3, 0.5, -0.2):
@@ -191,7 +191,7 @@ def test_strain_gamma_plus_one_is_the_same_square_cell(config, dim):
 @pytest.mark.parametrize("dim", [2, 3])
 def test_strain_one_minus_gamma_is_the_mirror_image(config, dim):
     """Seed Fig. 2.4(c): x -> -x maps the cell at gamma onto the cell at 1 - gamma (square)."""
-    from jamflow.engine.reference import energy_forces_pressure
+    from jamflow.mechanics.reference import energy_forces_pressure
 
     base = config(60, dim, 0.9 if dim == 2 else 0.7, seed=40 + dim)
     for gamma in (0.2, 0.37):

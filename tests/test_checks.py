@@ -1,17 +1,18 @@
-"""jamflow.checks: window, force balance, contact count, and what float64 resolves."""
+"""jamflow.mechanics.checks: window, force balance, contact count, and what float64 resolves."""
 
 import math
 
 import numpy as np
 import pytest
 
-from jamflow.analysis.contacts import Contacts
-from jamflow.box import Box
-from jamflow.checks import BALANCE_RTOL, MIN_FORCE_RATIO, MIN_OVERLAP_RATIO, PackingChecks, check_packing, resolution
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.io import read_checks, save_packing
-from jamflow.packing import Packing
-from jamflow.potentials import RepulsiveLJ, Spring
+from jamflow.mechanics.contacts import Contacts
+from jamflow.model.box import Box
+from jamflow.mechanics.checks import (BALANCE_RTOL, MIN_FORCE_RATIO, MIN_OVERLAP_RATIO, PackingChecks, check_packing,
+                                      resolution)
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.io.packing_file import read_checks, save_packing
+from jamflow.model.packing import Packing
+from jamflow.model.potentials import RepulsiveLJ, Spring
 from jamflow.protocols.compression import jam
 
 
@@ -92,7 +93,7 @@ def test_resolution_closed_forms(pot):
 def test_checks_cover_particles_that_turn():
     """A jammed packing of dimers passes (forces and generalized torques balanced, at least the
     translational contact count); turning one dimer breaks its torque balance and the check sees it."""
-    from jamflow.shapes import RigidBody
+    from jamflow.model.shapes import RigidBody
 
     res = jam(n=32, seed=2, shape=RigidBody([[0.0, 0.0], [0.5, 0.0]], [1.0, 1.0], "dimer:1.5"))
     ok = check_packing(res.packing, res.energy_per_particle, None, 1e-16)

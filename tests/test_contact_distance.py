@@ -1,4 +1,4 @@
-"""Tests of jamflow.shapes.contact_distance (chapter section 2.3.2).
+"""Tests of jamflow.model.shapes.contact_distance (chapter section 2.3.2).
 
 The reference used throughout is an independent brute-force maximisation of the
 Perram-Wertheim contact function in its matrix form,
@@ -13,22 +13,11 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize, minimize_scalar
 
-from jamflow.shapes import (
-    APART,
-    OVERLAPPING,
-    TOUCHING,
-    contact_distance,
-    contact_distance_gradient,
-    contact_function,
-    contact_lambda,
-    draw_contact_pair,
-    figure_2_12,
-    lambda_polynomial,
-    overlap_state,
-    truncation_fallbacks,
-)
+from jamflow.model.shapes import (APART, OVERLAPPING, TOUCHING, contact_distance, contact_distance_gradient,
+                                  contact_function, contact_lambda, draw_contact_pair, figure_2_12, lambda_polynomial,
+                                  overlap_state, truncation_fallbacks)
 
-cd_module = importlib.import_module("jamflow.shapes.contact_distance")  # the module, not the function
+cd_module = importlib.import_module("jamflow.model.shapes.contact_distance")  # the module, not the function
 
 # --------------------------------------------------------------------------------------
 # independent reference

@@ -3,10 +3,9 @@
 import numpy as np
 import pytest
 
-from jamflow.analysis.contacts import (Contacts, angular_gap_spanning, positively_spanning,
-                                       remove_floaters)
-from jamflow.box import Box
-from jamflow.packing import Packing
+from jamflow.mechanics.contacts import Contacts, angular_gap_spanning, positively_spanning, remove_floaters
+from jamflow.model.box import Box
+from jamflow.model.packing import Packing
 
 
 def triangular_lattice(nx, ny, spacing, tilt_cells=0):

@@ -12,8 +12,8 @@ from jamflow.analysis.correlations import (BondCorrelation, envelope_fit, fit_ex
                                            rdf_correlation_length)
 from jamflow.analysis.order import TranslationalOrder, particle_bond_order
 from jamflow.analysis.structure import rms_contact_distance, triangular_packing
-from jamflow.packing import random_packing
-from jamflow.sizes import parse_sizes
+from jamflow.model.packing import random_packing
+from jamflow.model.sizes import parse_sizes
 
 
 def gas(n, dim, phi, seed, gamma=0.0, sizes="mono"):

@@ -3,7 +3,7 @@
 Checked against (1) the closed form for two particles: a head-on relative velocity gives
 -b v_rel along rhat, a tangential one nothing, a pair beyond contact nothing, and the
 relative normal velocity of an isolated contact decays by (1 - 2 b dt / m) per step;
-(2) the numpy reference ``jamflow.engine.reference.pair_damping_forces`` for random
+(2) the numpy reference ``jamflow.mechanics.reference.pair_damping_forces`` for random
 polydisperse configurations with random velocities (orthogonal and tilted, 2D and 3D,
 newton on and off, 2 MPI ranks); (3) momentum conservation and undamped free flight.
 LAMMPS systems are built by hand with ``pair_style zero``, so the forces are the damping alone.
@@ -20,12 +20,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from jamflow.box import Box
-from jamflow.engine.lammps_lib import lammps_env, lmp_executable, new_lammps
-from jamflow.engine.plugin_build import find_compiler, load_plugin, plugin_library
-from jamflow.engine.reference import pair_damping_forces
-from jamflow.minimize import PAIRWISE_BDT_LIMIT, MinimizerSettings
-from jamflow.packing import Packing
+from jamflow.model.box import Box
+from jamflow.engines.lammps.library import lammps_env, lmp_executable, new_lammps
+from jamflow.engines.lammps.plugin_build import find_compiler, load_plugin, plugin_library
+from jamflow.mechanics.reference import pair_damping_forces
+from jamflow.minimize.settings import PAIRWISE_BDT_LIMIT, MinimizerSettings
+from jamflow.model.packing import Packing
 
 from test_plugin import assert_lammps_rejects, random_config, rel
 

@@ -7,14 +7,15 @@ import numpy as np
 import pytest
 
 from jamflow import CompressionSettings, MinimizerSettings
-from jamflow.cli import SUBCOMMANDS, main
-from jamflow.commands import crosscheck as crosscheck_command
-from jamflow.crosscheck import compare, crosscheck
-from jamflow.deck import (DeckFailed, deck_text, deck_variables, default_deck_path, emit_deck, read_data_file,
-                          run_deck, run_pressure_deck)
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.io import write_lammps_data
-from jamflow.protocols.compression import compress, fast_protocol, initial_packing
+from jamflow.cli.app import SUBCOMMANDS, main
+from jamflow.cli.commands import crosscheck as crosscheck_command
+from jamflow.decks.crosscheck import compare, crosscheck
+from jamflow.decks.jam import (DeckFailed, deck_text, deck_variables, default_deck_path, emit_deck, read_data_file,
+                               run_deck, run_pressure_deck)
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.io.packing_file import write_lammps_data
+from jamflow.protocols.compression import compress, initial_packing
+from jamflow.protocols.settings import fast_protocol
 from jamflow.protocols.pressure import PressureSettings, jam_at_pressure
 
 
@@ -115,7 +116,7 @@ def test_deck_under_two_mpi_ranks_jams(tmp_path):
 def _crosscheck_cli(argv):
     if "crosscheck" in SUBCOMMANDS:
         return main(["crosscheck", *argv])
-    parser = argparse.ArgumentParser()  # until the lead registers the subcommand in jamflow.cli
+    parser = argparse.ArgumentParser()  # until the lead registers the subcommand in jamflow.cli.app
     crosscheck_command.add_arguments(parser)
     return crosscheck_command.run(parser.parse_args(argv))
 

@@ -9,11 +9,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from jamflow.deck import DeckFailed, lmp_command, read_body_data, run_deck
-from jamflow.engine.lammps_lib import lammps_env
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.shapes import parse_shape
-from jamflow.checks import generalized_torques
+from jamflow.decks.jam import DeckFailed, lmp_command, read_body_data, run_deck
+from jamflow.engines.lammps.library import lammps_env
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.model.shapes import parse_shape
+from jamflow.mechanics.checks import generalized_torques
 
 DECK = Path(__file__).resolve().parents[1] / "lammps_inputs" / "jam_dimers.lmp"
 

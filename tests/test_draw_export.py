@@ -3,12 +3,12 @@
 import numpy as np
 import pytest
 
-from jamflow.analysis.readers import packings_from_lammps
-from jamflow.cli import main
-from jamflow.drawing import MAX_LINE_WIDTH, _View, draw_packing
-from jamflow.export import export_packing
-from jamflow.io import save_packing
-from jamflow.pairs import overlapping_pairs
+from jamflow.io.readers import packings_from_lammps
+from jamflow.cli.app import main
+from jamflow.plots.drawing import MAX_LINE_WIDTH, _View, draw_packing
+from jamflow.io.export import export_packing
+from jamflow.io.packing_file import save_packing
+from jamflow.model.pairs import overlapping_pairs
 from jamflow.protocols.compression import jam
 
 PNG = b"\x89PNG\r\n\x1a\n"
@@ -90,9 +90,9 @@ def test_export_command(disks, tmp_path, capsys):
 
 
 def _random_oriented(shape, dim, seed=0):
-    from jamflow.box import Box
-    from jamflow.packing import Packing
-    from jamflow.shapes.rotations import random_orientations
+    from jamflow.model.box import Box
+    from jamflow.model.packing import Packing
+    from jamflow.model.shapes.rotations import random_orientations
 
     rng = np.random.default_rng(seed)
     return Packing(rng.uniform(0, 12.0, (6, dim)), rng.choice([1.0, 1.4], 6), Box(12.0 * np.eye(dim)),
@@ -109,8 +109,8 @@ def _dump_table(path):
 @pytest.mark.parametrize("dim", [2, 3])
 def test_export_ellipsoids_axes_and_quaternions(dim, tmp_path):
     """Dump: full axes and (w, i, j, k) turning body x onto the director; XYZ: semi-axes, (x, y, z, w)."""
-    from jamflow.shapes import parse_shape
-    from jamflow.shapes.rotations import directors, quaternion_matrices
+    from jamflow.model.shapes import parse_shape
+    from jamflow.model.shapes.rotations import directors, quaternion_matrices
 
     p = _random_oriented(parse_shape("ellipse:1.5" if dim == 2 else "spheroid:0.5", dim), dim)
     t = _dump_table(export_packing(p, tmp_path / "e.dump", "lammps-dump"))
@@ -128,7 +128,7 @@ def test_export_ellipsoids_axes_and_quaternions(dim, tmp_path):
 @pytest.mark.parametrize("dim", [2, 3])
 def test_export_rigid_bodies_one_row_per_site(dim, tmp_path):
     """Sites at the body's world positions (whole about the wrapped centre), site radii, body ids."""
-    from jamflow.shapes import RigidBody
+    from jamflow.model.shapes import RigidBody
 
     sites = [[0, 0], [0.5, 0]] if dim == 2 else [[0, 0, 0], [0.5, 0, 0], [0.5, 0.4, 0]]
     p = _random_oriented(RigidBody(sites, [1.0, 0.7] if dim == 2 else [1.0, 1.0, 0.8]), dim)
@@ -144,8 +144,8 @@ def test_export_rigid_bodies_one_row_per_site(dim, tmp_path):
 
 def test_draw_ellipses_to_scale_along_their_directors(tmp_path):
     """Each ellipse image is drawn with its full axes a, b and the director's angle; 3D spheroids are refused."""
-    from jamflow.drawing import _elliptic
-    from jamflow.shapes import parse_shape
+    from jamflow.plots.drawing import _elliptic
+    from jamflow.model.shapes import parse_shape
 
     p = _random_oriented(parse_shape("ellipse:1.6", 2), 2)
     view = _View(p, 0.5)

@@ -12,19 +12,21 @@ import pytest
 
 from jamflow import jam
 from jamflow.analysis.independent import brute_contact_distance, independent_check
-from jamflow.box import Box
-from jamflow.cli import main
-from jamflow.engine.base import engine_name
-from jamflow.engine.compiled.engine import CompiledEngine
-from jamflow.engine.lammps import LammpsEngine
-from jamflow.engine.lammps_lib import new_lammps
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.minimize import MinimizerSettings
-from jamflow.packing import Packing, random_packing
-from jamflow.potentials import RepulsiveLJ, Spring
-from jamflow.protocols.compression import compress, fast_protocol, initial_packing
-from jamflow.shapes import Ellipsoid, contact_distance
-from jamflow.sizes import parse_sizes
+from jamflow.model.box import Box
+from jamflow.cli.app import main
+from jamflow.engines.choose import engine_name
+from jamflow.engines.compiled.engine import CompiledEngine
+from jamflow.engines.lammps.engine import LammpsEngine
+from jamflow.engines.lammps.library import new_lammps
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.minimize.settings import MinimizerSettings
+from jamflow.model.packing import Packing, random_packing
+from jamflow.model.potentials import RepulsiveLJ, Spring
+from jamflow.protocols.compression import compress, initial_packing
+from jamflow.protocols.settings import fast_protocol
+from jamflow.model.shapes import Ellipsoid, contact_distance
+from jamflow.model.sizes import parse_sizes
+from jamflow.minimize.rules import minimize
 from test_engines import assert_energy_derivatives, rel, tilted
 
 ENGINES = {"lammps": LammpsEngine, "numba": CompiledEngine}
@@ -153,7 +155,7 @@ def test_lammps_reads_the_quaternions_it_was_given(tmp_path):
 
 
 def test_plugin_refuses_a_lammps_version_it_was_not_built_for(tmp_path):
-    from jamflow.engine import plugin_build
+    from jamflow.engines.lammps import plugin_build
 
     compiler = plugin_build.find_compiler()
     flags = [*plugin_build.CXXFLAGS, "-DLAMMPS_SMALLBIG", '-DJAMFLOW_LAMMPS_VERSION="1 Jan 2000"',
@@ -175,7 +177,7 @@ def test_compiled_fire_balances_forces_and_torques(dim, method):
                seed=2, phi=0.92 if dim == 2 else 0.72)
     start = energy_forces_pressure(p)
     with CompiledEngine(p) as eng:
-        r = eng.minimize(MinimizerSettings(force_tol=1e-12))
+        r = minimize(eng, MinimizerSettings(force_tol=1e-12))
         end = eng.packing()
     ref = energy_forces_pressure(end)
     assert r.reason == "force" and 0 < ref.energy < start.energy
@@ -188,10 +190,10 @@ def test_lammps_damped_dynamics_balances_forces_and_torques(dim):
     conservative forces and torques: from a minimum of the compiled FIRE compressed by 0.2 %."""
     p = sample(dim, 1.6 if dim == 2 else 0.6, "bi:1.4:0.5", "exact", n=40, seed=2, phi=0.9 if dim == 2 else 0.8)
     with CompiledEngine(p) as eng:
-        assert eng.minimize(MinimizerSettings(force_tol=1e-12)).reason == "force"  # jammed
+        assert minimize(eng, MinimizerSettings(force_tol=1e-12)).reason == "force"  # jammed
         p = eng.packing().scaled_to_phi(p.phi * 1.002)
     with LammpsEngine(p) as eng:
-        r = eng.minimize(MinimizerSettings(method="md", force_tol=1e-12))
+        r = minimize(eng, MinimizerSettings(method="md", force_tol=1e-12))
         end = eng.packing()
         g = eng.generalized_torques()
         state = eng.state()
@@ -292,14 +294,14 @@ def test_start_too_dense_for_the_contact_distance_is_refused_before_work(monkeyp
 
 
 def test_checked_in_ellipse_deck_is_the_generated_one():
-    from jamflow.deck_ellipsoids import deck_text, default_deck_path
+    from jamflow.decks.ellipsoids import deck_text, default_deck_path
 
     assert default_deck_path().read_text() == deck_text()
 
 
 def test_cli_emits_the_ellipse_deck(tmp_path, capsys):
-    from jamflow.deck_ellipsoids import read_ellipsoid_data
-    from jamflow.engine.plugin_build import plugin_library
+    from jamflow.decks.ellipsoids import read_ellipsoid_data
+    from jamflow.engines.lammps.plugin_build import plugin_library
 
     deck = tmp_path / "deck.lmp"
     assert main(["jam", "--n", "12", "--shape", "ellipse:1.3", "--contact", "cleaver", "--seed", "3",
@@ -318,9 +320,9 @@ def test_ellipse_deck_jams_in_lmp_alone(tmp_path):
     """lmp runs the deck with the plugin and damped dynamics, from a start just above onset (the
     compiled engine's packing compressed by 2e-5); the packing it writes is at onset by the
     independent brute-force check."""
-    from jamflow.deck import run_deck
-    from jamflow.deck_ellipsoids import emit_deck, read_ellipsoid_data
-    from jamflow.protocols.compression import seed_protocol
+    from jamflow.decks.jam import run_deck
+    from jamflow.decks.ellipsoids import emit_deck, read_ellipsoid_data
+    from jamflow.protocols.settings import seed_protocol
 
     near = jam(n=12, sizes="bi:1.4:0.6667", shape="ellipse:1.3", seed=3)
     start = near.packing.scaled_to_phi(near.phi_j + 2e-5)
@@ -335,7 +337,7 @@ def test_ellipse_deck_jams_in_lmp_alone(tmp_path):
 
 
 def test_ellipse_deck_refuses_what_it_cannot_run():
-    from jamflow.deck_ellipsoids import deck_variables
+    from jamflow.decks.ellipsoids import deck_variables
 
     with pytest.raises(ValueError, match="identical particles"):
         deck_variables(contact="gaussian")

@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from jamflow.box import Box
-from jamflow.engine.lammps import LammpsEngine, LammpsError
-from jamflow.engine.pair_styles import uses_harmonic_cut
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.potentials import RepulsiveLJ, Spring
+from jamflow.model.box import Box
+from jamflow.engines.lammps.engine import LammpsEngine, LammpsError
+from jamflow.engines.lammps.pair_styles import uses_harmonic_cut
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.model.potentials import RepulsiveLJ, Spring
 
 
 def assert_matches_reference(packing, rtol=1e-12):

@@ -8,16 +8,17 @@ import pytest
 from conftest import rel, tilted
 
 from jamflow import jam
-from jamflow.box import Box
-from jamflow.engine.base import engine_name, open_engine
-from jamflow.engine.compiled.engine import CompiledEngine
-from jamflow.engine.lammps import LammpsEngine
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.minimize import MinimizerSettings
-from jamflow.packing import Packing, random_packing
-from jamflow.potentials import RepulsiveLJ, Spring
-from jamflow.shapes import SPHERE, Ellipsoid, RigidBody
-from jamflow.sizes import parse_sizes
+from jamflow.model.box import Box
+from jamflow.engines.choose import engine_name, open_engine
+from jamflow.engines.compiled.engine import CompiledEngine
+from jamflow.engines.lammps.engine import LammpsEngine
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.minimize.settings import MinimizerSettings
+from jamflow.model.packing import Packing, random_packing
+from jamflow.model.potentials import RepulsiveLJ, Spring
+from jamflow.model.shapes import SPHERE, Ellipsoid, RigidBody
+from jamflow.model.sizes import parse_sizes
+from jamflow.minimize.rules import minimize
 
 ENGINES = {"lammps": LammpsEngine, "numba": CompiledEngine}
 
@@ -154,7 +155,7 @@ def test_fire_reaches_the_lammps_minimum(config, dim, tilt):
     results = {}
     for engine in (LammpsEngine, CompiledEngine):
         with engine(p) as eng:
-            r = eng.minimize(settings)
+            r = minimize(eng, settings)
             results[engine.name] = (r, eng.state(), eng.packing())
     (rl, sl, pl), (rn, sn, pn) = results["lammps"], results["numba"]
     assert rl.reason == rn.reason == "force"
@@ -169,7 +170,7 @@ def test_dilute_start_ends_unjammed_like_lammps(config):
     p = config(200, 2, 0.5, seed=2)
     for engine in (LammpsEngine, CompiledEngine):
         with engine(p) as eng:
-            r = eng.minimize(MinimizerSettings())
+            r = minimize(eng, MinimizerSettings())
         assert r.converged and r.energy_per_particle < 1e-16, engine.name
 
 
@@ -178,7 +179,7 @@ def test_pair_list_rebuilds_when_particles_travel(model):
     """From a random start particles move (and turn) far more than the skin: forces stay exact."""
     p = sample(model, 2, n=120, seed=9)
     with CompiledEngine(p, skin=0.05) as eng:
-        eng.minimize(MinimizerSettings(max_iterations=3000, window=1000))
+        minimize(eng, MinimizerSettings(max_iterations=3000, window=1000))
         moved = np.abs(p.box.minimum_image(eng.positions() - p.positions)).max()
         state = eng.state()
         end = eng.packing()
@@ -211,7 +212,7 @@ def test_fire_with_rotations_balances_forces_and_torques(model, dim):
     p = sample(model, dim, n=40, seed=2).scaled_to_phi(0.9 if dim == 2 else 0.72)
     start = energy_forces_pressure(p)
     with CompiledEngine(p) as eng:
-        r = eng.minimize(MinimizerSettings(force_tol=1e-12))
+        r = minimize(eng, MinimizerSettings(force_tol=1e-12))
         end = eng.packing()
     ref = energy_forces_pressure(end)
     assert r.reason == "force" and r.converged
@@ -255,7 +256,7 @@ def test_options_are_passed_or_refused(config):
 
 def test_compiled_engine_starts_no_lammps(monkeypatch):
     """The compiled path neither starts LAMMPS nor asks it for its version."""
-    import jamflow.engine.lammps_lib as lib
+    import jamflow.engines.lammps.library as lib
 
     def refuse(*a, **k):
         raise AssertionError("a LAMMPS instance was started")

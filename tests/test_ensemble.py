@@ -18,10 +18,11 @@ import pytest
 from jamflow.ensemble import Store, Task, jam_parameters, run_ensemble, seed_range
 from jamflow.ensemble import runner as ensemble_runner
 from jamflow.ensemble import tasks as ensemble_tasks
-from jamflow.io import atomic_path, load_packing, read_attrs
-from jamflow.protocols.compression import JammingFailed
+from jamflow.support.files import atomic_path
+from jamflow.io.packing_file import load_packing, read_attrs
+from jamflow.protocols.outcome import JammingFailed
 
-JAMFLOW = [sys.executable, "-m", "jamflow.cli"]
+JAMFLOW = [sys.executable, "-m", "jamflow.cli.app"]
 
 
 @pytest.fixture(scope="module")
@@ -331,7 +332,7 @@ def test_mpi_ranks_need_the_lammps_engine(tmp_path):
 
 
 def test_jam_command_does_not_import_dask():
-    code = ("import sys, jamflow.cli; jamflow.cli.build_parser(); import jamflow.commands.jam, jamflow.ensemble; "
+    code = ("import sys, jamflow.cli.app; jamflow.cli.app.build_parser(); import jamflow.cli.commands.jam, jamflow.ensemble; "
             "print('distributed' in sys.modules, 'dask' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert out.stdout.split() == ["False", "False"], out.stderr

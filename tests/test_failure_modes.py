@@ -5,9 +5,11 @@ import numpy as np
 import pytest
 
 from jamflow import CompressionSettings, MinimizerSettings, jam
-from jamflow.deck import DeckFailed, default_deck_path, run_deck
-from jamflow.engine.lammps import LammpsEngine
-from jamflow.protocols.compression import JammingFailed, compress, initial_packing
+from jamflow.decks.jam import DeckFailed, default_deck_path, run_deck
+from jamflow.engines.lammps.engine import LammpsEngine
+from jamflow.protocols.outcome import JammingFailed
+from jamflow.protocols.compression import compress, initial_packing
+from jamflow.minimize.rules import minimize as run_minimizer
 
 from test_decks import assert_jammed
 
@@ -26,7 +28,7 @@ def above(onset):
 
 def minimize(packing, **settings):
     with LammpsEngine(packing) as engine:
-        return engine.minimize(MinimizerSettings(**settings))
+        return run_minimizer(engine, MinimizerSettings(**settings))
 
 
 def test_cg_line_search_stall_is_reported(above):

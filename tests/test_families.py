@@ -6,11 +6,12 @@ import pytest
 
 from jamflow.analysis.families import (convergence, join, matching_pairs, mirror_by_sightings, mirror_check,
                                       mirrored, richness, symmetric_strain)
-from jamflow.cli import main
-from jamflow.protocols.compression import at_shear_strain, compress, initial_packing, seed_protocol
+from jamflow.cli.app import main
+from jamflow.protocols.compression import at_shear_strain, compress, initial_packing
+from jamflow.protocols.settings import seed_protocol
 from jamflow.protocols.families import FamilySampling, sample, signature
 from jamflow.protocols.shear import Network
-from jamflow.shear_file import load_family_points
+from jamflow.io.families_file import load_family_points
 
 
 def points(rows):
@@ -142,7 +143,7 @@ def test_families_resume_adds_rounds_only(small, capsys):
     conv = convergence(after, 0.0025, hi=0.02)
     assert [k for k, *_ in conv] == [1, 2, 3, 4]
     with pytest.raises(ValueError, match="another plan"):
-        from jamflow.commands.families import _resumed
+        from jamflow.cli.commands.families import _resumed
         _resumed(small / "points.h5", FamilySampling(n=8, gamma_max=0.02, spacing=0.01, substeps=5, starts=4))
 
 

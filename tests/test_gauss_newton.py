@@ -1,4 +1,4 @@
-"""The Gauss-Newton active-set polish (jamflow.polish): closed cases, derivatives against finite
+"""The Gauss-Newton active-set polish (jamflow.minimize.polish): closed cases, derivatives against finite
 differences and the engine's forces, and a displaced jammed packing back at FIRE's minimum."""
 
 import dataclasses
@@ -7,19 +7,21 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from jamflow.analysis.contacts import Contacts
-from jamflow.analysis.hessian import Coordinates
-from jamflow.checks import generalized_forces
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.io import load_packing
+from jamflow.mechanics.contacts import Contacts
+from jamflow.mechanics.hessian import Coordinates
+from jamflow.mechanics.checks import generalized_forces
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.io.packing_file import load_packing
 from jamflow.protocols.above import compress_above
-from jamflow.box import Box
-from jamflow.engine.compiled import spheres
-from jamflow.engine.compiled.engine import CompiledEngine
-from jamflow.minimize import MinimizerSettings, _creep_method, minimize
-from jamflow.packing import Packing
-from jamflow.polish import PolishResult, Polisher, model, model_step, model_value, moved, overlaps, polish, polish_reason
-from jamflow.potentials import Spring, parse_potential
+from jamflow.model.box import Box
+from jamflow.engines.compiled import spheres
+from jamflow.engines.compiled.engine import CompiledEngine
+from jamflow.minimize.settings import MinimizerSettings
+from jamflow.minimize.rules import _creep_method, minimize
+from jamflow.model.packing import Packing
+from jamflow.minimize.polish import (PolishResult, Polisher, model, model_step, model_value, moved, overlaps, polish,
+                                     polish_reason)
+from jamflow.model.potentials import Spring, parse_potential
 
 from conftest import tilted
 
@@ -87,7 +89,7 @@ def test_gauss_newton_returns_a_displaced_packing_near_onset_to_its_minimum():
     res = jam(n=64, seed=3, engine="numba")
     eng = CompiledEngine(res.packing)
     eng.set_box(Box(res.packing.box.h * (res.phi_j / (res.phi_j + 1e-3)) ** 0.5))
-    first = eng.minimize(MinimizerSettings(v_min=1e-30, force_tol=1e-14))
+    first = minimize(eng, MinimizerSettings(v_min=1e-30, force_tol=1e-14))
     assert first.reason == "force" and first.energy_per_particle > 1e-8  # still jammed
     x0, e0 = eng.positions(), eng.evaluate().energy
     eng.set_positions(x0 + 1e-6 * np.random.default_rng(0).standard_normal(x0.shape))
@@ -103,7 +105,7 @@ def test_newton_returns_a_displaced_compressed_packing_to_the_fire_minimum(confi
     """Far above onset (P ~ 1e-2) the Hessian is positive definite: full Newton steps, quadratic."""
     d = np.where(np.arange(64) % 2 == 0, 1.0, 1.4)
     eng = CompiledEngine(config(64, dim, phi, seed=1, diameters=d))
-    first = eng.minimize(MinimizerSettings(force_tol=1e-13))
+    first = minimize(eng, MinimizerSettings(force_tol=1e-13))
     assert first.reason == "force" and first.energy_per_particle > 1e-6  # jammed
     x0, e0 = eng.positions(), eng.evaluate().energy
     eng.set_positions(x0 + 1e-6 * np.random.default_rng(0).standard_normal(x0.shape))
@@ -197,7 +199,7 @@ def test_the_creeping_3d_dimer_state_is_polished():
 
 def test_a_polisher_runs_once_or_every_so_many_iterations(monkeypatch):
     calls = []
-    monkeypatch.setattr("jamflow.polish.polish", lambda engine, ftol: calls.append(ftol) or PolishResult(True, (), 0.0, 0.0))
+    monkeypatch.setattr("jamflow.minimize.polish.polish", lambda engine, ftol: calls.append(ftol) or PolishResult(True, (), 0.0, 0.0))
     once, every = Polisher(100, 1e-14), Polisher(100, 1e-14, every=200)
     for p in (once, every):
         assert not p.due(100, 2e-9) and p.due(100, 5e-10) and not p.due(150, 5e-10)  # creeping, at a multiple of after

@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 
 import jamflow
-from jamflow.cli import EXIT_JAMMING, EXIT_LAMMPS, EXIT_PLUGIN, EXIT_TERMINATED, main
-from jamflow.io import load_packing, read_attrs, read_checks, read_history, save_packing
+from jamflow.cli.app import EXIT_JAMMING, EXIT_LAMMPS, EXIT_PLUGIN, EXIT_TERMINATED, main
+from jamflow.io.packing_file import load_packing, read_attrs, read_checks, read_history, save_packing
 
-JAMFLOW = [sys.executable, "-m", "jamflow.cli"]
+JAMFLOW = [sys.executable, "-m", "jamflow.cli.app"]
 
 
 def no_traceback(err: str) -> bool:
@@ -49,7 +49,7 @@ def run_jam(tmp_path, capsys, *args):
     (["--potential", "spring:4"], "alpha = 4"),  # was: exit 0, net forces 7% of the contact forces
 ])
 def test_jam_refuses_before_work(tmp_path, capsys, monkeypatch, args, message):
-    monkeypatch.setattr("jamflow.commands.jam.jam", lambda *a, **k: pytest.fail("work started"))
+    monkeypatch.setattr("jamflow.cli.commands.jam.jam", lambda *a, **k: pytest.fail("work started"))
     code, err = run_jam(tmp_path, capsys, *args, "--out", str(tmp_path / "x.h5"))
     assert code == 2 and no_traceback(err) and len(err.strip().splitlines()) == 1
     import re
@@ -80,7 +80,7 @@ def test_a_packing_that_fails_its_checks_is_not_written(tmp_path, capsys, monkey
     good = jamflow.jam(n=32, seed=3)
     squeezed = good.packing.scaled_to_phi(good.phi_j / 0.95**2)
     fake = type(good)(**{**good.__dict__, "packing": squeezed})
-    monkeypatch.setattr("jamflow.commands.jam.jam", lambda *a, **k: fake)
+    monkeypatch.setattr("jamflow.cli.commands.jam.jam", lambda *a, **k: fake)
     out = tmp_path / "p.h5"
     out.write_bytes(packing_file.read_bytes())
     code, err = run_jam(tmp_path, capsys, "--n", "32", "--seed", "3", "--out", str(out))
@@ -98,12 +98,12 @@ def test_jamming_failed_exits_3_with_its_remedy(tmp_path, capsys):
 
 def test_lammps_failure_exits_4(tmp_path, capsys, monkeypatch):
     """Was: exit 1 with a traceback."""
-    from jamflow.engine.lammps import LammpsError
+    from jamflow.engines.lammps.engine import LammpsError
 
     def fail(*a, **k):
         raise LammpsError("run 0", "ERROR: Lost atoms: original 16 current 4")
 
-    monkeypatch.setattr("jamflow.commands.jam.jam", fail)
+    monkeypatch.setattr("jamflow.cli.commands.jam.jam", fail)
     code, err = run_jam(tmp_path, capsys, "--n", "16", "--out", str(tmp_path / "x.h5"))
     assert code == EXIT_LAMMPS and no_traceback(err) and "Lost atoms" in err and "diverged" in err
 
@@ -280,7 +280,7 @@ def test_ctrl_c_during_start_up(capsys, monkeypatch):
     def interrupted(name):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr("jamflow.cli.import_module", interrupted)
+    monkeypatch.setattr("jamflow.cli.app.import_module", interrupted)
     assert main(["jam"]) == 130
     assert "interrupted" in capsys.readouterr().err
 
@@ -317,7 +317,7 @@ def test_python_jam_rejects_bad_arguments_clearly(kwargs, error, message, monkey
 # --- issue 18 follow-up: the commands added since (shear, families, moduli, anneal, jam options) ---
 def test_negative_values_with_an_exponent_are_values():
     # was: `jamflow shear --dgamma -1e-3` "expected one argument" (argparse read -1e-3 as an option)
-    from jamflow.cli import build_parser
+    from jamflow.cli.app import build_parser
 
     args = build_parser("shear").parse_args(["shear", "p.h5", "--dgamma", "-1e-3", "--to", "-2e-3", "--out", "d"])
     assert (args.dgamma, args.to) == (-1e-3, -2e-3)
@@ -325,7 +325,7 @@ def test_negative_values_with_an_exponent_are_values():
 
 
 def test_anneal_refuses_before_work(tmp_path, capsys, monkeypatch, packing_file):
-    monkeypatch.setattr("jamflow.commands.anneal.anneal", lambda *a, **k: pytest.fail("work started"))
+    monkeypatch.setattr("jamflow.cli.commands.anneal.anneal", lambda *a, **k: pytest.fail("work started"))
     base = ["anneal", str(packing_file), "--dalpha", "0.05", "--out", str(tmp_path / "a.h5"), "--quiet"]
     # was: the whole anneal ran, then a TypeError traceback at the save (result lost)
     assert main([*base, "--to", "1.1", "--seed", "99999999999999999999999"]) == 2
@@ -345,7 +345,7 @@ def test_a_failed_run_leaves_no_empty_out_directory(tmp_path, capsys, monkeypatc
     if how == "interrupted":
         def interrupt(*a, **k):
             raise KeyboardInterrupt
-        monkeypatch.setattr(f"jamflow.commands.{name}.{'shear' if name == 'shear' else 'sample'}", interrupt)
+        monkeypatch.setattr(f"jamflow.cli.commands.{name}.{'shear' if name == 'shear' else 'sample'}", interrupt)
     args = {"shear": ["shear", str(packing_file), "--dgamma", "1e-3", "--to", "2e-3"],
             "families": ["families", "--n", "6", "--starts", "1", "--gamma-max", "0.02"]}[name]
     bad = {"shear": ["--vtol", "1e-30"], "families": ["--n", "1"]}[name] if how == "refused" else []
@@ -358,8 +358,8 @@ def test_a_failed_run_leaves_no_empty_out_directory(tmp_path, capsys, monkeypatc
 def test_commands_refuse_a_symlinked_output_before_work_and_force_it(tmp_path, capsys, monkeypatch, packing_file,
                                                                      command):
     # was: "... or --force" advice where the command had no --force; families refused only after all its work
-    work = {"shear": "jamflow.commands.shear.shear", "families": "jamflow.commands.families.sample",
-            "moduli": "jamflow.analysis.moduli.Moduli.compute"}[command]
+    work = {"shear": "jamflow.cli.commands.shear.shear", "families": "jamflow.cli.commands.families.sample",
+            "moduli": "jamflow.protocols.moduli.Moduli.compute"}[command]
     monkeypatch.setattr(work, lambda *a, **k: pytest.fail("work started"))
     out = tmp_path / "out"
     out.mkdir()
@@ -372,7 +372,7 @@ def test_commands_refuse_a_symlinked_output_before_work_and_force_it(tmp_path, c
     assert main([*args, "--quiet", "--no-figure"] if command != "families" else [*args, "--quiet"]) == 2
     assert "symbolic link" in capsys.readouterr().err
     assert (out / link).is_symlink()
-    from jamflow.cli import build_parser
+    from jamflow.cli.app import build_parser
 
     assert build_parser(command).parse_args([*args, "--force"]).force
 
@@ -410,7 +410,7 @@ def test_moduli_warns_when_a_sweep_has_no_linear_amplitude(tmp_path, capsys, pac
 
 def test_jam_above_one_does_not_quote_an_onset_not_yet_known(tmp_path, capsys, monkeypatch):
     # was: "phi_J + dphi = 0.000000 + 2 >= 1"
-    monkeypatch.setattr("jamflow.commands.jam.jam", lambda *a, **k: pytest.fail("work started"))
+    monkeypatch.setattr("jamflow.cli.commands.jam.jam", lambda *a, **k: pytest.fail("work started"))
     assert main(["jam", "--n", "10", "--above", "2", "--quiet", "--out", str(tmp_path / "x.h5")]) == 2
     err = capsys.readouterr().err
     assert "--above 2 >= 1" in err and "0.000000" not in err
@@ -425,7 +425,7 @@ def test_jam_above_one_does_not_quote_an_onset_not_yet_known(tmp_path, capsys, m
 def test_a_strain_that_is_not_finite_is_refused_naming_its_option(tmp_path, capsys, monkeypatch, packing_file, args,
                                                                    option):
     # was: "shear strain gamma must be a finite number, got nan" (the check of the grid's strains)
-    for work in ("jamflow.commands.families.sample", "jamflow.commands.shear.shear"):
+    for work in ("jamflow.cli.commands.families.sample", "jamflow.cli.commands.shear.shear"):
         monkeypatch.setattr(work, lambda *a, **k: pytest.fail("work started"))
     args = [str(packing_file) if a == "P" else a for a in args]
     assert main([*args, "--out", str(tmp_path / "d"), "--quiet"]) == 2
@@ -455,7 +455,7 @@ def test_a_run_without_quiet_still_shows_its_progress(tmp_path, capsys):
                                                ("ellipse:1", 2, "linear"), ("nmer:2:1.5", 2, "gaussian")])
 def test_jam_refuses_a_contact_method_for_shapes_without_one(tmp_path, capsys, monkeypatch, shape, dim, contact):
     # was: accepted and silently ignored (disks, spheres and rigid bodies of round sites have no approximation)
-    monkeypatch.setattr("jamflow.commands.jam.jam", lambda *a, **k: pytest.fail("work started"))
+    monkeypatch.setattr("jamflow.cli.commands.jam.jam", lambda *a, **k: pytest.fail("work started"))
     code, err = run_jam(tmp_path, capsys, "--shape", shape, "--dim", str(dim), "--contact", contact,
                         "--out", str(tmp_path / "x.h5"))
     assert code == 2 and len(err.strip().splitlines()) == 1
@@ -464,8 +464,8 @@ def test_jam_refuses_a_contact_method_for_shapes_without_one(tmp_path, capsys, m
 
 
 def test_jam_keeps_a_contact_method_for_ellipses():
-    from jamflow.cli import build_parser
-    from jamflow.commands.jam import prepare
+    from jamflow.cli.app import build_parser
+    from jamflow.cli.commands.jam import prepare
 
     args = build_parser("jam").parse_args(["jam", "--shape", "ellipse:1.5", "--sizes", "mono", "--contact", "gaussian",
                                            "--n", "16"])
@@ -474,10 +474,10 @@ def test_jam_keeps_a_contact_method_for_ellipses():
 
 def test_a_write_killed_by_sigkill_leaves_debris_that_the_next_run_removes(tmp_path, capsys):
     # was: the hidden .p.h5.*.tmp of a SIGKILLed write stayed beside the output for good
-    from jamflow.io import _temporary_prefix
+    from jamflow.support.files import _temporary_prefix
 
     out = tmp_path / "p.h5"
-    killed = subprocess.run([sys.executable, "-c", "import os, signal\nfrom jamflow.io import atomic_path\n"
+    killed = subprocess.run([sys.executable, "-c", "import os, signal\nfrom jamflow.io.packing_file import atomic_path\n"
                              f"with atomic_path({str(out)!r}) as tmp:\n    tmp.write_bytes(b'half a file')\n"
                              "    os.kill(os.getpid(), signal.SIGKILL)"], cwd=tmp_path)
     assert killed.returncode == -signal.SIGKILL
@@ -494,15 +494,15 @@ def test_a_write_killed_by_sigkill_leaves_debris_that_the_next_run_removes(tmp_p
 
 
 def test_ctrl_c_while_the_command_starts(tmp_path):
-    # was: a KeyboardInterrupt traceback while the console script imported jamflow.cli (about 10 ms)
+    # was: a KeyboardInterrupt traceback while the console script imported jamflow.cli.app (about 10 ms)
     import re
 
     text = (Path(__file__).resolve().parents[1] / "pyproject.toml").read_text()
     module, function = re.search(r'^jamflow = "([\w.]+):(\w+)"', text, re.M).groups()
     script = ("import importlib.abc, os, signal, sys\n"
-              "class Interrupt(importlib.abc.MetaPathFinder):  # Ctrl-C as jamflow.cli starts to load\n"
+              "class Interrupt(importlib.abc.MetaPathFinder):  # Ctrl-C as jamflow.cli.app starts to load\n"
               "    def find_spec(self, name, path, target=None):\n"
-              "        if name == 'jamflow.cli':\n            os.kill(os.getpid(), signal.SIGINT)\n"
+              "        if name == 'jamflow.cli.app':\n            os.kill(os.getpid(), signal.SIGINT)\n"
               "sys.meta_path.insert(0, Interrupt())\n"
               f"from {module} import {function}\nsys.exit({function}())\n")  # what pip's console script does
     done = subprocess.run([sys.executable, "-c", script, "jam"], cwd=tmp_path, capture_output=True, text=True)

@@ -4,11 +4,12 @@ LAMMPS's ``dynamical_matrix`` command (PHONON package) as a second implementatio
 import numpy as np
 import pytest
 
-from jamflow.analysis.hessian import DynamicalMatrix, hessian, pair_stiffness
-from jamflow.box import Box
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.packing import Packing
-from jamflow.potentials import RepulsiveLJ, Spring
+from jamflow.mechanics.dynamical_matrix import DynamicalMatrix
+from jamflow.mechanics.hessian import hessian, pair_stiffness
+from jamflow.model.box import Box
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.model.packing import Packing
+from jamflow.model.potentials import RepulsiveLJ, Spring
 from test_contacts import triangular_lattice
 
 POTENTIALS = [Spring(2.0), Spring(2.5), Spring(3.0), RepulsiveLJ()]
@@ -44,7 +45,7 @@ def finite_difference_columns(packing, columns, step):
 def lammps_dynamical_matrix(packing, step, tmp_path):
     """LAMMPS ``dynamical_matrix all regular STEP`` (binary, 3N x 3N in atom-ID = packing order,
     divided by sqrt(m_i m_j) = 1), restricted to the packing's d coordinates."""
-    from jamflow.engine.lammps import LammpsEngine
+    from jamflow.engines.lammps.engine import LammpsEngine
 
     out = tmp_path / "dynmat.bin"
     with LammpsEngine(packing) as eng:

@@ -12,17 +12,17 @@ import dataclasses
 import numpy as np
 import pytest
 
-from jamflow.analysis.deformation import displaced
-from jamflow.analysis.hessian import (Coordinates, _local_index, _PairFrame, hessian, pair_stiffness, pair_terms,
-                                      reduced_distance_derivatives)
-from jamflow.box import Box
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.packing import Packing, random_packing
-from jamflow.pairs import candidate_pairs, contact_distances, separations, site_packing
-from jamflow.potentials import Spring
-from jamflow.shapes import Ellipsoid
-from jamflow.shapes.rotations import rotation_matrices
-from jamflow.sizes import parse_sizes
+from jamflow.mechanics.deformation import displaced
+from jamflow.mechanics.hessian import (Coordinates, _local_index, _PairFrame, hessian, pair_stiffness, pair_terms,
+                                       reduced_distance_derivatives)
+from jamflow.model.box import Box
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.model.packing import Packing, random_packing
+from jamflow.model.pairs import candidate_pairs, contact_distances, separations, site_packing
+from jamflow.model.potentials import Spring
+from jamflow.model.shapes import Ellipsoid
+from jamflow.model.shapes.rotations import rotation_matrices
+from jamflow.model.sizes import parse_sizes
 from test_engines import dimer, sample
 
 MODELS = [("dimer", 2), ("dimer", 3), ("asym-dimer", 2), ("trimer", 2), ("trimer", 3), ("ellipsoid", 2),

@@ -2,10 +2,10 @@ import h5py
 import numpy as np
 import pytest
 
-from jamflow.engine.lammps import LammpsEngine
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.io import load_packing, read_attrs, save_packing, to_universe, write_lammps_data
-from jamflow.potentials import Spring
+from jamflow.engines.lammps.engine import LammpsEngine
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.io.packing_file import load_packing, read_attrs, save_packing, to_universe, write_lammps_data
+from jamflow.model.potentials import Spring
 
 
 def test_hdf5_round_trip_is_exact(config, tmp_path):
@@ -29,7 +29,7 @@ def test_interrupted_write_leaves_no_file(config, tmp_path, monkeypatch):
     def boom(*a, **k):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr("jamflow.io._attr", boom)
+    monkeypatch.setattr("jamflow.io.packing_file._attr", boom)
     with pytest.raises(KeyboardInterrupt):
         save_packing(target, p, protocol={"x": 1})
     assert list(tmp_path.iterdir()) == []

@@ -8,17 +8,18 @@ import numpy as np
 import pytest
 from conftest import rel, tilted
 
-from jamflow.box import Box
-from jamflow.engine.base import engine_name
-from jamflow.engine.compiled.engine import CompiledEngine
-from jamflow.engine.lammps import LammpsEngine
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.minimize import MinimizerSettings
-from jamflow.packing import random_packing
-from jamflow.potentials import Spring
-from jamflow.shapes import parse_shape
-from jamflow.checks import generalized_torques
-from jamflow.sizes import parse_sizes
+from jamflow.model.box import Box
+from jamflow.engines.choose import engine_name
+from jamflow.engines.compiled.engine import CompiledEngine
+from jamflow.engines.lammps.engine import LammpsEngine
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.minimize.settings import MinimizerSettings
+from jamflow.model.packing import random_packing
+from jamflow.model.potentials import Spring
+from jamflow.model.shapes import parse_shape
+from jamflow.mechanics.checks import generalized_torques
+from jamflow.model.sizes import parse_sizes
+from jamflow.minimize.rules import minimize
 
 SPECS = ["nmer:2:1.5", "nmer:2:2", "dimer:1.5:0.7", "trimer:2:0.3", "nmer:3:1.5"]
 
@@ -92,7 +93,7 @@ def test_damped_rigid_bodies_reach_force_and_torque_balance(dim):
     p = bodies("nmer:2:1.5", dim, phi=0.9 if dim == 2 else 0.72, n=40)
     start = energy_forces_pressure(p)
     with LammpsEngine(p) as eng:
-        r = eng.minimize(MinimizerSettings(method="md", force_tol=1e-13))
+        r = minimize(eng, MinimizerSettings(method="md", force_tol=1e-13))
         end = eng.packing()
         state = eng.state()
     ref = energy_forces_pressure(end)
@@ -112,7 +113,7 @@ def test_damped_rigid_bodies_are_reproducible_in_one_process():
         keep.append(np.ones(1000 * (k + 1)))  # changes what the allocator hands LAMMPS next
         p = bodies("nmer:2:1.5", 2, phi=0.9, n=16)
         with LammpsEngine(p) as eng:
-            r = eng.minimize(MinimizerSettings(method="md", force_tol=1e-13))
+            r = minimize(eng, MinimizerSettings(method="md", force_tol=1e-13))
             runs.append((r.iterations, eng.packing().positions))
     assert all(k == runs[0][0] for k, _ in runs) and runs[0][0] > 1000
     assert all(np.array_equal(x, runs[0][1]) for _, x in runs)
@@ -127,7 +128,7 @@ def test_lammps_minimisers_are_refused_for_rigid_bodies(method):
         engine_name(p, method, "lammps")
     assert engine_name(p, "md", "auto") == "lammps" and engine_name(p, "fire", "auto") == "numba"
     with LammpsEngine(p) as eng, pytest.raises(ValueError, match="minimisers ignore rigid bodies"):
-        eng.minimize(MinimizerSettings(method=method))
+        minimize(eng, MinimizerSettings(method=method))
 
 
 def test_sheared_past_a_cell_flip_bodies_stay_exact():

@@ -3,9 +3,10 @@
 import numpy as np
 import pytest
 
-from jamflow.engine.lammps import LammpsEngine
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.minimize import MinimizerSettings
+from jamflow.engines.lammps.engine import LammpsEngine
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.minimize.settings import MinimizerSettings
+from jamflow.minimize.rules import minimize
 
 
 @pytest.mark.parametrize("method", ["fire", "cg", "md"])
@@ -13,7 +14,7 @@ def test_overcompressed_packing_converges_by_force(config, method):
     d = np.where(np.arange(64) % 2 == 0, 1.0, 1.4)
     p = config(64, 2, 0.88, seed=1, diameters=d)
     with LammpsEngine(p) as eng:
-        res = eng.minimize(MinimizerSettings(method=method, force_tol=1e-12))
+        res = minimize(eng, MinimizerSettings(method=method, force_tol=1e-12))
         q = eng.packing()
     assert res.converged and res.reason == "force"
     ref = energy_forces_pressure(q)
@@ -25,7 +26,7 @@ def test_overcompressed_packing_converges_by_force(config, method):
 def test_dilute_packing_stops_below_vmin(config):
     p = config(64, 2, 0.5, seed=2, diameters=np.ones(64))
     with LammpsEngine(p) as eng:
-        res = eng.minimize(MinimizerSettings())
+        res = minimize(eng, MinimizerSettings())
     assert res.converged and res.reason in ("energy-below-vmin", "force")
     assert res.energy_per_particle < 1e-16
 
@@ -33,7 +34,7 @@ def test_dilute_packing_stops_below_vmin(config):
 def test_iteration_cap_is_reported_as_not_converged(config):
     p = config(64, 2, 0.88, seed=1, diameters=np.ones(64))
     with LammpsEngine(p) as eng:
-        res = eng.minimize(MinimizerSettings(max_iterations=10, window=5))
+        res = minimize(eng, MinimizerSettings(max_iterations=10, window=5))
     assert not res.converged and res.reason == "iteration-cap" and res.iterations == 10
 
 
@@ -43,7 +44,7 @@ def test_unknown_method_rejected():
 
 
 def test_force_bound_closed_form_for_the_linear_spring(config):
-    from jamflow.minimize import _force_bound
+    from jamflow.minimize.rules import _force_bound
 
     # all of E in one contact of the smallest pair: delta = sqrt(2 E), |f| = delta / sigma
     p = config(10, 2, 0.5, seed=1, diameters=np.full(10, 1.0))
@@ -53,7 +54,7 @@ def test_force_bound_closed_form_for_the_linear_spring(config):
 @pytest.mark.parametrize("energy,fmax", [(float("nan"), 1e-3), (1e-20, float("inf")), (0.0, 1e3)])
 def test_blown_up_states_are_not_reported_as_unjammed(energy, fmax):
     """A diverged integration can report V = 0 with huge forces; it must not pass as V < V_min."""
-    from jamflow.minimize import _stop_reason
+    from jamflow.minimize.rules import _stop_reason
 
     s = MinimizerSettings()
     reason = _stop_reason(s, 1e-14, energy, fmax, 1.0, 1.0, 10, 10, 10, fmax_at_vmin=1e-6)
@@ -61,7 +62,7 @@ def test_blown_up_states_are_not_reported_as_unjammed(energy, fmax):
 
 
 def test_a_genuinely_unjammed_state_is_not_blown_up():
-    from jamflow.minimize import _stop_reason
+    from jamflow.minimize.rules import _stop_reason
 
     s = MinimizerSettings()
     assert _stop_reason(s, 1e-14, 1e-20, 1e-9, 1.0, 1.0, 10, 10, 10, fmax_at_vmin=1e-6) == "energy-below-vmin"
@@ -70,7 +71,8 @@ def test_a_genuinely_unjammed_state_is_not_blown_up():
 def test_energy_steady_is_the_md_fluctuation_rule():
     """The seed's MD rule: relative rms energy fluctuation over the window below delta; the
     force and V_min rules come first, and it is not reported as converged by force."""
-    from jamflow.minimize import CONVERGED_REASONS, _stop_reason
+    from jamflow.minimize.settings import CONVERGED_REASONS
+    from jamflow.minimize.rules import _stop_reason
 
     s = MinimizerSettings(method="md")
     args = (1e-14, 1.5e-16, 1e-12, 1.5e-16, 1e-12, 10, 10, 10)

@@ -14,13 +14,13 @@ import h5py
 import numpy as np
 import pytest
 
-from jamflow.analysis.hessian import DynamicalMatrix
+from jamflow.mechanics.dynamical_matrix import DynamicalMatrix
 from jamflow.analysis.modes import (LOCALLY_STABLE, STABLE, UNSTABLE, DensityOfStates, Spectrum, Stability,
                                     energy_change)
-from jamflow.box import Box
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.packing import Packing
-from jamflow.potentials import RepulsiveLJ, Spring
+from jamflow.model.box import Box
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.model.packing import Packing
+from jamflow.model.potentials import RepulsiveLJ, Spring
 from test_contacts import triangular_lattice
 from test_hessian import perturbed_lattice
 
@@ -182,7 +182,7 @@ def test_bad_parameters_raise(make, match):
 
 
 def _modes_args(argv):
-    from jamflow.commands import modes
+    from jamflow.cli.commands import modes
 
     parser = argparse.ArgumentParser()
     modes.add_arguments(parser)
@@ -190,7 +190,7 @@ def _modes_args(argv):
 
 
 def test_cli_writes_results_and_figure(jammed, tmp_path, capsys):
-    from jamflow.io import save_packing
+    from jamflow.io.packing_file import save_packing
 
     files = [save_packing(tmp_path / f"p{k}.h5", q) for k, q in enumerate([jammed, triangular_lattice(6, 6, 0.97)])]
     modes, args = _modes_args([str(f) for f in files])
@@ -209,7 +209,7 @@ def test_cli_writes_results_and_figure(jammed, tmp_path, capsys):
 
 
 def test_cli_rejects_bad_input_before_work(tmp_path):
-    from jamflow.io import save_packing
+    from jamflow.io.packing_file import save_packing
 
     good = save_packing(tmp_path / "good.h5", triangular_lattice(6, 6, 0.97))
     modes, args = _modes_args([str(good), str(tmp_path / "missing.h5")])

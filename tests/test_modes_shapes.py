@@ -17,16 +17,16 @@ import h5py
 import numpy as np
 import pytest
 
-from jamflow.analysis.contacts import Contacts, remove_floaters
-from jamflow.analysis.deformation import PROBE, displaced, energy_change, pair_changes
-from jamflow.analysis.hessian import Coordinates, hessian
+from jamflow.mechanics.contacts import Contacts, remove_floaters
+from jamflow.mechanics.deformation import PROBE, displaced, energy_change, pair_changes
+from jamflow.mechanics.hessian import Coordinates, hessian
 from jamflow.analysis.modes import QUARTIC_STABLE, STABLE, DensityOfStates, Spectrum, Stability
-from jamflow.box import Box
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.io import load_packing
-from jamflow.packing import Packing
-from jamflow.pairs import overlapping_sites
-from jamflow.potentials import Spring
+from jamflow.model.box import Box
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.io.packing_file import load_packing
+from jamflow.model.packing import Packing
+from jamflow.model.pairs import overlapping_sites
+from jamflow.model.potentials import Spring
 from test_engines import dimer
 from test_hessian_shapes import model_packing
 
@@ -63,7 +63,7 @@ def test_relaxed_quartic_coefficient_obeys_the_self_stress_bound(ellipses):
     correction keeps lambda^T (C eta + b) = lambda^T b, so the one-sided residual is at least
     (V''/2) (lambda^T b)^2 / |lambda|^2 (linear springs: V'' = 1); and it is at most the straight
     coefficient. lambda^T b < 0 is the stress term that makes e > 0: e = -2 lambda^T b."""
-    from jamflow.analysis.hessian import _local_index, law_derivatives, reduced_distances
+    from jamflow.mechanics.hessian import _local_index, law_derivatives, reduced_distances
     from jamflow.analysis.quartic import quartic_coefficients
 
     checked = 0
@@ -232,7 +232,7 @@ def test_three_branches_partition_the_nontrivial_modes(ellipses):
 
 
 def test_cli_stores_mode_character_and_profiles(tmp_path, capsys):
-    from jamflow.commands import modes
+    from jamflow.cli.commands import modes
 
     src = ELLIPSES[0]
     target = tmp_path / src.name

@@ -10,17 +10,17 @@ import h5py
 import numpy as np
 import pytest
 
-from jamflow.analysis.elastic import HessianModuli, StrainTerms, affine_terms
-from jamflow.analysis.moduli import Moduli
-from jamflow.analysis.strains import BULK, SHEAR, STRAINS
-from jamflow.analysis.sweeps import SweepSettings, StrainSweep, _fit, roundoff_amplitude
-from jamflow.box import Box
-from jamflow.cli import main
-from jamflow.commands.moduli import read_moduli
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.io import load_packing, read_attrs, save_packing
-from jamflow.packing import Packing
-from jamflow.potentials import RepulsiveLJ, Spring
+from jamflow.mechanics.elastic import HessianModuli, StrainTerms, affine_terms
+from jamflow.protocols.moduli import Moduli
+from jamflow.mechanics.strains import BULK, SHEAR, STRAINS
+from jamflow.protocols.sweeps import SweepSettings, StrainSweep, _fit, roundoff_amplitude
+from jamflow.model.box import Box
+from jamflow.cli.app import main
+from jamflow.cli.commands.moduli import read_moduli
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.io.packing_file import load_packing, read_attrs, save_packing
+from jamflow.model.packing import Packing
+from jamflow.model.potentials import RepulsiveLJ, Spring
 from jamflow.protocols.above import compress_above
 from jamflow.protocols.compression import jam
 from test_contacts import triangular_lattice
@@ -314,9 +314,9 @@ def test_compress_above_reaches_phi_and_force_balance():
 def test_compress_above_refuses_a_packing_that_relaxes_unjammed():
     """A dilute start with overlaps (V > 0 but far below phi_J) relaxes to V < V_min after the step:
     JammingFailed, not a packing 'above onset' with no contacts."""
-    from jamflow.packing import random_packing
-    from jamflow.sizes import parse_sizes
-    from jamflow.protocols.compression import JammingFailed
+    from jamflow.model.packing import random_packing
+    from jamflow.model.sizes import parse_sizes
+    from jamflow.protocols.outcome import JammingFailed
 
     dilute = random_packing(32, 2, parse_sizes("bi:1.4:0.5"), phi=0.5, seed=0)
     with pytest.raises(JammingFailed, match="not jammed at phi_J"):

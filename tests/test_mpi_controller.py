@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from jamflow.engine.lammps_lib import lammps_env
+from jamflow.engines.lammps.library import lammps_env
 
 pytest.importorskip("mpi4py", reason="mpi4py not installed: pip install -e '.[mpi]'")
 

@@ -1,5 +1,5 @@
 """Rigid n-mers (issue 14): the --shape specs nmer/dimer/trimer, their geometry against the
-definitions of jamflow.shapes.nmers, closed-form union volumes, the site masses LAMMPS needs,
+definitions of jamflow.model.shapes.nmers, closed-form union volumes, the site masses LAMMPS needs,
 and the refusals of bad input."""
 
 import math
@@ -7,10 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from jamflow.cli import main
-from jamflow.shapes import SPHERE, RigidBody, parse_shape
-from jamflow.shapes.nmers import trimer_max_bend
-from jamflow.shapes.union import union_moments
+from jamflow.cli.app import main
+from jamflow.model.shapes import SPHERE, RigidBody, parse_shape
+from jamflow.model.shapes.nmers import trimer_max_bend
+from jamflow.model.shapes.union import union_moments
 
 
 def extent(body: RigidBody, axis: np.ndarray) -> float:
@@ -190,8 +190,8 @@ def test_bent_trimer_area_against_a_grid():
 def _one_lobe_packing(left_touch: bool):
     """Dimer 0 (sites at -+0.25 on x) touched by 4 radial dimers on its right site only (contact
     directions -93, -31, 31, 93 degrees; overlap 0.01), or one of them moved onto its left site."""
-    from jamflow.box import Box
-    from jamflow.packing import Packing
+    from jamflow.model.box import Box
+    from jamflow.model.packing import Packing
 
     angles = np.radians([-93.0, -31.0, 31.0, 93.0])
     u = np.column_stack([np.cos(angles), np.sin(angles)])
@@ -207,8 +207,8 @@ def _one_lobe_packing(left_touch: bool):
 def test_bodies_touched_on_one_site_have_a_free_rotation():
     """Four contacts (d_f + 1) all on one site of a dimer: not a floater by the convex rule, but
     it turns freely about that site (every contact force passes through its centre)."""
-    from jamflow.analysis.contacts import Contacts
-    from jamflow.engine.reference import energy_forces_pressure
+    from jamflow.mechanics.contacts import Contacts
+    from jamflow.mechanics.reference import energy_forces_pressure
 
     p = _one_lobe_packing(False)
     c = Contacts(min_contacts=1).compute(p)
@@ -229,9 +229,9 @@ def test_bodies_touched_on_one_site_have_a_free_rotation():
 def test_side_by_side_dimers_touch_twice():
     """Two parallel dimers 0.99 apart: two overlapping site pairs, two constraints (two contacts
     with count="sites"), one touching pair of bodies."""
-    from jamflow.analysis.contacts import Contacts
-    from jamflow.box import Box
-    from jamflow.packing import Packing
+    from jamflow.mechanics.contacts import Contacts
+    from jamflow.model.box import Box
+    from jamflow.model.packing import Packing
 
     p = Packing([[5.0, 5.0], [5.0, 5.99]], [1.0, 1.0], Box.cube(10.0, 2), shape=parse_shape("nmer:2:1.5", 2),
                 orientations=[0.0, np.pi])
@@ -243,8 +243,8 @@ def test_side_by_side_dimers_touch_twice():
 
 
 def test_cli_jams_dimers_and_the_file_keeps_the_body(tmp_path, capsys):
-    from jamflow.engine.reference import energy_forces_pressure
-    from jamflow.io import load_packing, read_attrs
+    from jamflow.mechanics.reference import energy_forces_pressure
+    from jamflow.io.packing_file import load_packing, read_attrs
 
     out = tmp_path / "d.h5"
     assert main(["jam", "--shape", "dimer:1.6:0.8", "--n", "24", "--seed", "2", "--out", str(out), "--quiet"]) == 0
@@ -286,9 +286,9 @@ def test_crossed_tangent_dimers_are_an_interlocked_minimum():
     """Why bodies start without overlaps: two alpha = 2 dimers crossed at their waists are at
     rest with V > 0, and every small move (translation, turn) raises the energy, so FIRE from a
     start with such a pair never unjams it (measured: jam at phi0 0.7 and 0.8 failed)."""
-    from jamflow.box import Box
-    from jamflow.engine.reference import energy_forces_pressure
-    from jamflow.packing import Packing
+    from jamflow.model.box import Box
+    from jamflow.mechanics.reference import energy_forces_pressure
+    from jamflow.model.packing import Packing
 
     body = parse_shape("nmer:2:2", 2)
     p = Packing([[5.0, 5.0], [5.0, 5.0]], [1.0, 1.0], Box.cube(10.0, 2), shape=body, orientations=[0.0, np.pi / 2])
@@ -304,9 +304,10 @@ def test_crossed_tangent_dimers_are_an_interlocked_minimum():
 def test_bodies_start_without_overlaps(dim, spec):
     """Random sequential addition: no two bodies of the start overlap; the same seed gives the
     same start; too dense a start is refused, naming phi0."""
-    from jamflow.packing import SeparationFailed
-    from jamflow.pairs import overlapping_sites
-    from jamflow.protocols.compression import CompressionSettings, initial_packing
+    from jamflow.model.packing import SeparationFailed
+    from jamflow.model.pairs import overlapping_sites
+    from jamflow.protocols.settings import CompressionSettings
+    from jamflow.protocols.compression import initial_packing
 
     phi0 = CompressionSettings().start_phi(dim, shape=spec)
     assert phi0 == (0.45 if dim == 2 else 0.25)
@@ -319,19 +320,19 @@ def test_bodies_start_without_overlaps(dim, spec):
 
 
 def _side_by_side(tilt_angle=0.0):
-    from jamflow.box import Box
-    from jamflow.packing import Packing
+    from jamflow.model.box import Box
+    from jamflow.model.packing import Packing
 
     return Packing([[5.0, 5.0], [5.0, 5.99]], [1.0, 1.0], Box.cube(10.0, 2), shape=parse_shape("nmer:2:1.5", 2),
                    orientations=[tilt_angle, np.pi + tilt_angle])
 
 
 def test_drawing_draws_bodies_site_by_site(tmp_path):
-    """jamflow.drawing: the disks drawn are the sites (4 for two dimers), the contact lines join
+    """jamflow.plots.drawing: the disks drawn are the sites (4 for two dimers), the contact lines join
     the centres of the 2 overlapping site pairs (0.99 long, both periodic ends drawn), every site
     coloured by its body's director angle mod pi (pi and 0 are one direction)."""
-    from jamflow.drawing import _View, _colours, draw_packing
-    from jamflow.analysis.contacts import Contacts
+    from jamflow.plots.drawing import _View, _colours, draw_packing
+    from jamflow.mechanics.contacts import Contacts
 
     p = _side_by_side()
     view = _View(p, 0.5)
@@ -349,10 +350,10 @@ def test_drawing_draws_bodies_site_by_site(tmp_path):
 def test_drawing_slices_3d_bodies_through_their_sites():
     """3D: the slice cuts sites (spheres of a body), not body centres: a dimer lying along z
     with its upper site's centre on the slice shows that site at full size and the other not."""
-    from jamflow.box import Box
-    from jamflow.drawing import _View
-    from jamflow.packing import Packing
-    from jamflow.shapes.rotations import random_orientations
+    from jamflow.model.box import Box
+    from jamflow.plots.drawing import _View
+    from jamflow.model.packing import Packing
+    from jamflow.model.shapes.rotations import random_orientations
 
     body = parse_shape("nmer:2:2", 3)  # sites at -+0.5 along the body x axis
     q = random_orientations(1, 3, np.random.default_rng(0))
@@ -366,9 +367,9 @@ def test_drawing_slices_3d_bodies_through_their_sites():
 
 
 def test_draw_refuses_orientation_colours_for_disks(tmp_path):
-    from jamflow.box import Box
-    from jamflow.drawing import draw_packing
-    from jamflow.packing import Packing
+    from jamflow.model.box import Box
+    from jamflow.plots.drawing import draw_packing
+    from jamflow.model.packing import Packing
 
     disks = Packing([[1.0, 1.0], [2.0, 2.0]], [1.0, 1.0], Box.cube(4.0, 2))
     with pytest.raises(ValueError, match="color_by 'orientation' needs particles that turn"):
@@ -381,7 +382,7 @@ def test_free_rotation_vector_of_a_one_site_dimer():
     rotation is d_k theta on the rotation row and -z x lever = (0, -0.25) theta on its centre;
     the dynamical matrix (floaters kept) maps it to the contact forces' stress term only."""
     from jamflow.analysis.free_rotations import free_rotation_vectors, pivot_sites
-    from jamflow.analysis.hessian import Coordinates, hessian
+    from jamflow.mechanics.hessian import Coordinates, hessian
 
     p = _one_lobe_packing(False)
     assert pivot_sites(p) == {0: 1, 1: 0, 2: 0, 3: 0, 4: 0}  # the neighbours touch with their inner site
@@ -407,7 +408,7 @@ def test_zero_modes_are_translations_plus_free_rotations():
 
     from jamflow.analysis.free_rotations import zero_modes
     from jamflow.analysis.modes import Spectrum
-    from jamflow.io import load_packing
+    from jamflow.io.packing_file import load_packing
 
     data = Path(__file__).parent / "data"
     dimers = Spectrum(method="dense").compute(load_packing(data / "dimer2d_a1.5_n64_s0.h5"))

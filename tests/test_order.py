@@ -9,12 +9,13 @@ import numpy as np
 import pytest
 from numpy.polynomial import legendre
 
-from jamflow.analysis.order import (BondOrder, Nematic, TranslationalOrder, first_minimum, neighbour_rdf,
-                                    particle_bond_order, translational_order)
+from jamflow.analysis.order import (BondOrder, TranslationalOrder, first_minimum, neighbour_rdf, particle_bond_order,
+                                    translational_order)
+from jamflow.model.nematic import Nematic
 from jamflow.analysis.structure import fcc_packing, rms_contact_distance, triangular_packing
-from jamflow.box import Box
-from jamflow.packing import Packing, random_packing
-from jamflow.sizes import parse_sizes
+from jamflow.model.box import Box
+from jamflow.model.packing import Packing, random_packing
+from jamflow.model.sizes import parse_sizes
 
 
 def p6(x):
@@ -181,7 +182,7 @@ def test_3d_nematic_matches_freud_and_vanishes_for_random_axes():
 def test_nematic_of_a_packing_uses_its_directors(dim):
     """Aligned ellipses/spheroids: P2 = 1; uniformly random orientations (the random start):
     P2 ~ 1/sqrt(N); disks and spheres have no axis and are refused."""
-    from jamflow.shapes import Ellipsoid
+    from jamflow.model.shapes import Ellipsoid
 
     n = 2000
     p = random_packing(n, dim, parse_sizes("bi:1.4:0.5"), 0.3, 1, shape=Ellipsoid(1.5))

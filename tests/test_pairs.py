@@ -1,4 +1,4 @@
-"""The float64 pair search (jamflow.pairs.neighbor_pairs) against brute force over every pair
+"""The float64 pair search (jamflow.model.pairs.neighbor_pairs) against brute force over every pair
 and every periodic image, in orthogonal and strongly tilted cells, small and large."""
 
 from itertools import product
@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from jamflow.box import Box
-from jamflow.pairs import candidate_pairs, neighbor_pairs
+from jamflow.model.box import Box
+from jamflow.model.pairs import candidate_pairs, neighbor_pairs
 
 
 def sheared_cell(dim, side, fold):
@@ -106,7 +106,7 @@ def test_candidate_pairs_are_unchanged_in_orthogonal_boxes(config):
 
 @pytest.mark.parametrize("strain", [0.3, 2.6, -3.45])
 def test_candidate_pairs_in_sheared_boxes_hold_every_close_pair(config, strain):
-    from jamflow.pairs import all_pairs, separations
+    from jamflow.model.pairs import all_pairs, separations
 
     p = config(200, 2, 0.85, seed=4, tilt=strain)
     i, j = candidate_pairs(p, p.diameters.max())

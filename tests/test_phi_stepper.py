@@ -7,7 +7,8 @@ which is what the Newton jumps invert.
 
 import pytest
 
-from jamflow.protocols.compression import CompressionSettings, PhiStepper, fast_protocol, seed_protocol
+from jamflow.protocols.settings import CompressionSettings, fast_protocol, seed_protocol
+from jamflow.protocols.compression import PhiStepper
 
 PHI_J, A, VBAR = 0.8412345678, 0.3, 1.16
 
@@ -59,7 +60,7 @@ def test_newton_jump_stays_above_jamming_until_close():
 
 
 def test_resolution_failure_is_reported():
-    from jamflow.protocols.compression import JammingFailed
+    from jamflow.protocols.outcome import JammingFailed
 
     stepper = PhiStepper(seed_protocol(dphi0=1e-17), 2.0, VBAR)
     with pytest.raises(JammingFailed, match="float64 resolution"):

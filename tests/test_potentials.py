@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from jamflow.box import Box
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.packing import Packing
-from jamflow.potentials import RepulsiveLJ, Spring, parse_potential
+from jamflow.model.box import Box
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.model.packing import Packing
+from jamflow.model.potentials import RepulsiveLJ, Spring, parse_potential
 
 POTENTIALS = [Spring(2.0), Spring(2.5), Spring(1.5), Spring(3.0, epsilon=2.0), RepulsiveLJ(), RepulsiveLJ(0.5)]
 

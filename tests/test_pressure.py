@@ -9,21 +9,23 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from jamflow.box import Box
-from jamflow.cli import main
-from jamflow.engine.compiled.engine import CompiledEngine
-from jamflow.engine.compiled.field import box_forces, make_field
-from jamflow.engine.lammps import LammpsEngine
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.io import read_attrs
-from jamflow.minimize import MinimizerSettings, minimize
-from jamflow.packing import Packing
-from jamflow.potentials import Spring
-from jamflow.protocols.compression import BODY_PHI0, initial_packing
+from jamflow.model.box import Box
+from jamflow.cli.app import main
+from jamflow.engines.compiled.engine import CompiledEngine
+from jamflow.engines.compiled.field import box_forces, make_field
+from jamflow.engines.lammps.engine import LammpsEngine
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.io.packing_file import read_attrs
+from jamflow.minimize.settings import MinimizerSettings
+from jamflow.minimize.rules import minimize
+from jamflow.model.packing import Packing
+from jamflow.model.potentials import Spring
+from jamflow.protocols.settings import BODY_PHI0
+from jamflow.protocols.compression import initial_packing
 from jamflow.protocols.pressure import (PressureSettings, extrapolate_phi_j, jam_at_pressure, pressure_floor,
                                         pressure_sequence)
-from jamflow.shapes import RigidBody
-from jamflow.walls import with_walls
+from jamflow.model.shapes import RigidBody
+from jamflow.model.walls import with_walls
 
 
 def triangular(n=6, m=6, spacing=1.0):

@@ -7,13 +7,14 @@ import math
 import numpy as np
 import pytest
 
-from jamflow.analysis.contacts import Contacts
-from jamflow.cli import main
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.io import load_packing, read_attrs
-from jamflow.protocols.compression import at_shear_strain, compress, initial_packing, jam, seed_protocol
+from jamflow.mechanics.contacts import Contacts
+from jamflow.cli.app import main
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.io.packing_file import load_packing, read_attrs
+from jamflow.protocols.compression import at_shear_strain, compress, initial_packing, jam
+from jamflow.protocols.settings import seed_protocol
 from jamflow.protocols.shear import Network, shear, shear_strains
-from jamflow.shear_file import ShearFile, save_shear_path
+from jamflow.io.shear_file import ShearFile, save_shear_path
 
 
 def start_at(gamma, seed=1, n=10, mirror=False):

@@ -4,15 +4,16 @@ Python controller from the same start."""
 import numpy as np
 import pytest
 
-from jamflow.cli import main
-from jamflow.crosscheck import compare_shear, crosscheck_shear
-from jamflow.deck import DeckFailed
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.io import write_lammps_data
-from jamflow.protocols.compression import jam, seed_protocol
+from jamflow.cli.app import main
+from jamflow.decks.crosscheck import compare_shear, crosscheck_shear
+from jamflow.decks.jam import DeckFailed
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.io.packing_file import write_lammps_data
+from jamflow.protocols.compression import jam
+from jamflow.protocols.settings import seed_protocol
 from jamflow.protocols.shear import shear
-from jamflow.shear_deck import (default_shear_deck_path, run_shear_deck, shear_deck_text, shear_deck_variables,
-                                start_variables)
+from jamflow.decks.shear import (default_shear_deck_path, run_shear_deck, shear_deck_text, shear_deck_variables,
+                                 start_variables)
 
 QUICK = seed_protocol(dphi0=1e-5)
 
@@ -98,7 +99,7 @@ def test_shear_deck_refuses_what_it_cannot_run():
 def test_jam_deck_at_fixed_strain_matches_the_controller(tmp_path, capsys):
     """jam.lmp's bisection scales the tilt with the cell: `jam --gamma 0.3 --emit-deck` in lmp gives
     the controller's phi_J after the same minimisations."""
-    from jamflow.deck import read_deck_result, run_lmp
+    from jamflow.decks.jam import read_deck_result, run_lmp
 
     deck = tmp_path / "j.lmp"
     assert main(["jam", "--n", "10", "--seed", "2", "--gamma", "0.3", "--emit-deck", str(deck), "--out",

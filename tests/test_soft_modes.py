@@ -1,4 +1,4 @@
-"""Soft-mode Newton steps of creeping minimisations (``jamflow.soft_modes``).
+"""Soft-mode Newton steps of creeping minimisations (``jamflow.minimize.soft_modes``).
 
 Closed form: at a force-balanced packing displaced by a along one eigenmode e of its
 dynamical matrix, the harmonic gradient is a lambda e, so the soft-subspace Newton step is
@@ -9,13 +9,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from jamflow.analysis.hessian import DynamicalMatrix
-from jamflow.engine.compiled.engine import CompiledEngine
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.io import load_packing
+from jamflow.mechanics.dynamical_matrix import DynamicalMatrix
+from jamflow.engines.compiled.engine import CompiledEngine
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.io.packing_file import load_packing
 from jamflow.protocols.above import compress_above
-from jamflow.minimize import MinimizerSettings, minimize
-from jamflow.soft_modes import _moved, newton_step
+from jamflow.minimize.settings import MinimizerSettings
+from jamflow.minimize.rules import minimize
+from jamflow.minimize.soft_modes import _moved, newton_step
 
 DATA = Path(__file__).parent / "data"
 

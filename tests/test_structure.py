@@ -13,8 +13,8 @@ import pytest
 
 from jamflow.analysis.structure import (RDF, StructureFactor, fcc_packing, rms_contact_distance,
                                         structure_factor_grid, triangular_packing)
-from jamflow.packing import Packing, random_packing
-from jamflow.sizes import parse_sizes
+from jamflow.model.packing import Packing, random_packing
+from jamflow.model.sizes import parse_sizes
 
 
 def gas(n, dim, phi, seed, sizes="mono", gamma=0.0):
@@ -225,7 +225,7 @@ def test_bad_input_is_refused_with_advice():
 @pytest.fixture(scope="module")
 def lammps_files(tmp_path_factory):
     """A sheared polydisperse 2D packing written by LAMMPS itself (write_data, write_dump)."""
-    from jamflow.engine.lammps import LammpsEngine
+    from jamflow.engines.lammps.engine import LammpsEngine
 
     d = tmp_path_factory.mktemp("lammps")
     p = gas(60, 2, 0.5, 1, sizes="poly-uniform:0.4", gamma=0.3)
@@ -238,7 +238,7 @@ def lammps_files(tmp_path_factory):
 
 @pytest.mark.parametrize("name", ["p.data", "p.dump"])
 def test_lammps_files_read_back_through_mdanalysis(lammps_files, name):
-    from jamflow.analysis.readers import packing_from_lammps
+    from jamflow.io.readers import packing_from_lammps
 
     p, d = lammps_files
     q = packing_from_lammps(d / name)
@@ -250,7 +250,7 @@ def test_lammps_files_read_back_through_mdanalysis(lammps_files, name):
 
 
 def test_lammps_file_without_diameters_needs_a_type_mapping(lammps_files):
-    from jamflow.analysis.readers import packing_from_lammps
+    from jamflow.io.readers import packing_from_lammps
 
     p, d = lammps_files
     with pytest.raises(ValueError, match="type -> diameter mapping"):
@@ -267,9 +267,9 @@ def test_analyze_command_writes_hdf5_and_plots(tmp_path, lammps_files):
 
     import h5py
 
-    from jamflow.commands import analyze
-    from jamflow.io import save_packing
-    from jamflow.shapes import Ellipsoid
+    from jamflow.cli.commands import analyze
+    from jamflow.io.packing_file import save_packing
+    from jamflow.model.shapes import Ellipsoid
 
     save_packing(tmp_path / "crystal.h5", triangular_packing(12, 12, tilted=True))
     parser = argparse.ArgumentParser()

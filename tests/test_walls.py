@@ -10,20 +10,21 @@ import numpy as np
 import pytest
 
 from jamflow import jam
-from jamflow.analysis.contacts import Contacts
+from jamflow.mechanics.contacts import Contacts
 from jamflow.analysis.profile import PressureProfile
-from jamflow.box import Box
-from jamflow.cli import main
-from jamflow.engine.compiled.engine import CompiledEngine
-from jamflow.engine.lammps import LammpsEngine
-from jamflow.engine.reference import energy_forces_pressure
-from jamflow.io import load_packing, read_attrs, save_packing
-from jamflow.minimize import MinimizerSettings, minimize
-from jamflow.packing import Packing, random_packing
-from jamflow.potentials import RepulsiveLJ, Spring
-from jamflow.shapes import Ellipsoid
-from jamflow.sizes import parse_sizes
-from jamflow.walls import face_pressures, parse_walls, wall_loads, with_walls
+from jamflow.model.box import Box
+from jamflow.cli.app import main
+from jamflow.engines.compiled.engine import CompiledEngine
+from jamflow.engines.lammps.engine import LammpsEngine
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.io.packing_file import load_packing, read_attrs, save_packing
+from jamflow.minimize.settings import MinimizerSettings
+from jamflow.minimize.rules import minimize
+from jamflow.model.packing import Packing, random_packing
+from jamflow.model.potentials import RepulsiveLJ, Spring
+from jamflow.model.shapes import Ellipsoid
+from jamflow.model.sizes import parse_sizes
+from jamflow.model.walls import face_pressures, parse_walls, wall_loads, with_walls
 
 ENGINES = {"numba": CompiledEngine, "lammps": LammpsEngine}
 TIGHT = MinimizerSettings(force_tol=1e-15)
@@ -296,7 +297,7 @@ def test_bad_boundaries_are_refused_before_work():
         LammpsEngine(with_walls(replace(p, potential=Spring(2.5)), (1,)))
     with pytest.raises(ValueError, match="rough walls"):
         with_walls(e, (1,), "rough")
-    from jamflow.analysis.hessian import hessian
+    from jamflow.mechanics.hessian import hessian
 
     with pytest.raises(ValueError, match="no wall, gravity or fixed-particle terms"):
         hessian(with_walls(p, (1,)))
@@ -325,7 +326,7 @@ def test_cli_jams_with_walls_and_under_gravity(tmp_path, capsys):
 def test_walls_in_a_tilted_cell_pair_search_and_engines():
     """Walls on z with an xy shear (x, y periodic): pairs match the brute-force minimum image
     (no image across the walls) and both engines match the reference."""
-    from jamflow.pairs import candidate_pairs
+    from jamflow.model.pairs import candidate_pairs
 
     p = random_packing(120, 3, parse_sizes("bi:1.4:0.5"), 0.55, 4)
     h = p.box.h.copy()

@@ -1,0 +1,4 @@
+"""The analysis layer: what is measured on packings that exist. Normal modes and stability,
+structure (g(r), S(k)), order parameters and correlation lengths, stress profiles, geometric
+families joined from sampled paths, an independent check of ellipse packings. Reads the model
+and the mechanics layers only."""

@@ -25,7 +25,7 @@ import numpy as np
 from scipy.ndimage import gaussian_filter1d
 from scipy.signal import find_peaks
 
-from jamflow.packing import Packing
+from jamflow.model.packing import Packing
 from jamflow.analysis.order import even_degree, first_minimum, particle_bond_order
 from jamflow.analysis.structure import (UNITS_R, RDF, RDFResult, as_packings, check_r_max, max_reduced_radius, pair_chunks,
                         positive, radial_edges, rms_contact_distance)

@@ -11,7 +11,7 @@ in them), so forces and torques follow from the energy's definition:
 
     F_i = -V'(s) (r_hat / sigma - (r / sigma^2) grad_r sigma),  tau_i = V'(s) (r / sigma^2) dsigma/domega_i
 
-with s = r / sigma and V the potential's law (``jamflow.potentials``). Accuracy: sigma to ~1e-15
+with s = r / sigma and V the potential's law (``jamflow.model.potentials``). Accuracy: sigma to ~1e-15
 relative (the golden section's last steps), its angular derivatives to ~1e-10; near jamming
 (overlaps 1 - s ~ 1e-8) that makes V'(s), forces and torques good to ~1e-15 absolute (measured:
 1.7e-15 against the engines for N = 24 at onset). Units: eps, diameter.
@@ -23,9 +23,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from jamflow.packing import Packing
-from jamflow.pairs import candidate_pairs, separations
-from jamflow.shapes.rotations import generalized_torques
+from jamflow.model.packing import Packing
+from jamflow.model.pairs import candidate_pairs, separations
+from jamflow.model.shapes.rotations import generalized_torques
 
 GRID = 401  # lambda grid points in (0, 1)
 GOLDEN_STEPS = 80  # golden-section steps in the best two grid cells: 1/200 * 0.618^80 ~ 1e-19

@@ -19,7 +19,7 @@ share of each eigenvector in the centre coordinates (the mode character; 1 - it 
   unstable (e_i < -e_min), with the evidence Delta V(delta) = V(xi_0 + delta e) - V(xi_0) along
   the lowest nontrivial modes and the power p of its symmetric part ~ delta^p (2 stable,
   4 quartic, "flat" for a floppy mode). Energy changes along a displacement:
-  ``jamflow.analysis.deformation``.
+  ``jamflow.mechanics.deformation``.
 """
 
 from __future__ import annotations
@@ -31,10 +31,10 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse.linalg as spla
 
-from jamflow.packing import Packing
+from jamflow.model.packing import Packing
 from jamflow.analysis import quartic
-from jamflow.analysis.deformation import energy_change, network_amplitudes, opening_amplitude  # noqa: F401 (public here)
-from jamflow.analysis.hessian import DynamicalMatrix, DynamicalMatrixResult
+from jamflow.mechanics.deformation import energy_change, network_amplitudes, opening_amplitude  # noqa: F401 (public here)
+from jamflow.mechanics.dynamical_matrix import DynamicalMatrix, DynamicalMatrixResult
 
 DENSE_MAX_DOF = 4096  # above this many degrees of freedom "auto" uses the sparse solver
 

@@ -31,7 +31,7 @@ import numpy as np
 from scipy.ndimage import gaussian_filter1d
 from scipy.special import sph_harm_y
 
-from jamflow.packing import Packing
+from jamflow.model.packing import Packing
 from jamflow.analysis.structure import UNITS_R, RDF, RDFResult, max_reduced_radius, pair_chunks, positive, rms_contact_distance
 
 
@@ -203,47 +203,7 @@ class BondOrder:
         return BondOrderResult(g, loc, float(r_min), int(self.l), packing.dim, q, n)
 
 
-# --- nematic order ---------------------------------------------------------------------------
-@dataclass(frozen=True)
-class NematicResult:
-    """P2 = largest eigenvalue of the order tensor; ``director`` its unit eigenvector."""
-
-    p2: float
-    director: np.ndarray
-    tensor: np.ndarray
 
 
-class Nematic:
-    """Nematic order P2 (seed section 4.3) of particle axes in 2D or 3D.
-
-    ``compute(orientations)``: unit (or any non-zero) axis vectors (N, d), in 2D angles (N,)
-    in radians, or a ``Packing`` of particles that turn (their directors, the long axes of
-    prolate particles). Head and tail are equivalent (n and -n give the same P2).
-    """
-
-    def compute(self, orientations) -> NematicResult:
-        if isinstance(orientations, Packing):
-            if not orientations.shape.oriented:
-                raise ValueError(f"nematic order needs particles with an axis; "
-                                 f"{orientations.shape.name(orientations.dim)}s have none")
-            orientations = orientations.directors
-        u = _unit_axes(orientations)
-        dim = u.shape[1]
-        tensor = (dim * np.einsum("na,nb->ab", u, u) / len(u) - np.eye(dim)) / (dim - 1)
-        values, vectors = np.linalg.eigh(tensor)
-        return NematicResult(float(values[-1]), vectors[:, -1].copy(), tensor)
 
 
-def _unit_axes(orientations) -> np.ndarray:
-    a = np.asarray(orientations, float)
-    if a.ndim == 1:
-        a = np.column_stack([np.cos(a), np.sin(a)])
-    if a.ndim != 2 or a.shape[1] not in (2, 3) or len(a) == 0:
-        raise ValueError(f"orientations must be axis vectors of shape (N, 2) or (N, 3), or 2D angles (N,); "
-                         f"got shape {np.shape(orientations)}")
-    if not np.all(np.isfinite(a)):
-        raise ValueError("orientations must be finite")
-    norm = np.linalg.norm(a, axis=1)
-    if np.any(norm == 0):
-        raise ValueError("orientation vectors must be non-zero (they give each particle's long axis)")
-    return a / norm[:, None]

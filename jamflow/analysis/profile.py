@@ -8,7 +8,7 @@
 - ``sigma_xx`` (the stress along the first periodic axis) in horizontal slabs from the
   contact virial, each contact's r_x f_x spread uniformly along its bond's height
   (Irving-Kirkwood); its ratio to sigma_zz is the lateral stress ratio K.
-Contacts: mobile-mobile and mobile-fixed pairs with r < sigma (``jamflow.pairs``) and the
+Contacts: mobile-mobile and mobile-fixed pairs with r < sigma (``jamflow.model.pairs``) and the
 smooth floor's contacts (bonds from z = 0 to the particle). Units: eps / diameter^d.
 """
 
@@ -18,8 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from jamflow.packing import Packing
-from jamflow.pairs import overlapping_pairs
+from jamflow.model.packing import Packing
+from jamflow.model.pairs import overlapping_pairs
 
 
 @dataclass(frozen=True)

@@ -24,8 +24,8 @@ import scipy.sparse as sp
 from scipy.optimize import lsq_linear
 from scipy.sparse.linalg import LinearOperator
 
-from jamflow.packing import Packing
-from jamflow.analysis.hessian import Coordinates, _local_index, law_derivatives, reduced_distances
+from jamflow.model.packing import Packing
+from jamflow.mechanics.hessian import Coordinates, _local_index, law_derivatives, reduced_distances
 
 RELAXED_TOL = 1e-6  # relaxed / straight coefficient below which a zero mode is free to fourth order
 DENSE_MAX = 1500  # unknowns (coordinates + contacts) up to which the exact dense active-set solver runs

@@ -14,7 +14,7 @@ Conventions (lengths in small diameters; results in reduced units):
   the printed eq. 2.29 omits the i = j terms, which would give S(k) - 1. Because
   S(-k) = S(k), only one vector of each +-k pair is evaluated.
 
-Everything is computed in float64 from ``jamflow.pairs`` separations. freud (float32) serves
+Everything is computed in float64 from ``jamflow.model.pairs`` separations. freud (float32) serves
 as the second implementation in the tests; near jamming, contacts sit ~1e-8 inside sigma_ij,
 below float32 resolution, which is why jamflow does not bin freud distances by default.
 Ensembles: pass a sequence of packings; pair counts and ideal-gas normalisations (g), and
@@ -30,9 +30,9 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
-from jamflow.box import Box
-from jamflow.packing import Packing
-from jamflow.pairs import candidate_pairs, separations
+from jamflow.model.box import Box
+from jamflow.model.packing import Packing
+from jamflow.model.pairs import candidate_pairs, separations
 
 PAIR_CHUNK = 200_000  # pairs per separation batch (keeps Box.minimum_image memory bounded)
 MAX_SPECIES = 8  # more distinct diameters than this is treated as continuous polydispersity
@@ -56,8 +56,8 @@ def as_packings(packings: Packing | Iterable[Packing]) -> list[Packing]:
     if not items:
         raise ValueError("no packings given: pass a Packing or a non-empty sequence of them")
     if not all(isinstance(p, Packing) for p in items):
-        raise ValueError("expected jamflow Packing objects; load files with jamflow.io.load_packing "
-                         "or jamflow.analysis.readers.packing_from_lammps")
+        raise ValueError("expected jamflow Packing objects; load files with jamflow.io.packing_file.load_packing "
+                         "or jamflow.io.readers.packing_from_lammps")
     if len({p.dim for p in items}) != 1:
         raise ValueError("an ensemble must not mix 2D and 3D packings")
     return items

@@ -1,5 +1,5 @@
 """One summary row per packing file, with the checks every ensemble packing must pass
-(``jamflow.checks``: V in the window V_tol < V < 2 V_tol, force and torque balance against the
+(``jamflow.mechanics.checks``: V in the window V_tol < V < 2 V_tol, force and torque balance against the
 numpy reference, independent of the engine that made the packing, and the contact count). The
 checks stored in the file by the writer are used; files without them are checked here."""
 
@@ -10,8 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from jamflow.checks import check_packing
-from jamflow.io import load_packing, read_attrs, read_checks, read_history, read_protocol
+from jamflow.mechanics.checks import check_packing
+from jamflow.io.packing_file import load_packing, read_attrs, read_checks, read_history, read_protocol
 
 
 def packing_row(path, task, fixed: dict) -> dict:

@@ -15,8 +15,8 @@ from mpi4py import MPI  # first: this process is an MPI rank
 
 
 def main(spec: dict) -> int:
-    from jamflow.commands.jam import jam_from_args, save_result
-    from jamflow.protocols.compression import JammingFailed
+    from jamflow.cli.commands.jam import jam_from_args, save_result
+    from jamflow.protocols.outcome import JammingFailed
     from jamflow.ensemble.store import write_failure
 
     comm = MPI.COMM_WORLD

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from jamflow.io import atomic_path
+from jamflow.support.files import atomic_path
 
 
 @dataclass(frozen=True)

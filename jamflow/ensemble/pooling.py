@@ -16,7 +16,7 @@ import numpy as np
 
 from jamflow.analysis.structure import (RDF, RDFResult, StructureFactor, StructureFactorResult, _partial_pair_numbers,
                                   check_r_max, rms_contact_distance)
-from jamflow.io import load_packing
+from jamflow.io.packing_file import load_packing
 
 
 def pooled_bins(packings, k_max: float) -> tuple[float, float]:

@@ -14,7 +14,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from jamflow.commands import jam as jam_command
+from jamflow.cli.commands import jam as jam_command
 from jamflow.ensemble.cluster import WAIT_WORKERS, dask_client, workers_line, workers_state
 from jamflow.ensemble.checks import packing_row
 from jamflow.ensemble.store import Store, Task, failure_row, write_failure

@@ -1,12 +1,12 @@
 """An ensemble store: a directory with one packing file per task.
 
     DIR/ensemble.json            the parameters every packing shares and the grid axes (n, ...)
-    DIR/n64_seed000017.h5        one packing (schema of jamflow.io), named by its grid point and seed
+    DIR/n64_seed000017.h5        one packing (schema of jamflow.io.packing_file), named by its grid point and seed
     DIR/failed/n64_seed000017.json   a packing that could not be made, with the reason
     DIR/summary.csv              one row per task, rebuilt from the files above
     DIR/corrupt/                 unreadable files found by a rerun, moved aside (then redone)
 
-Every file is written to a temporary sibling and renamed (``jamflow.io.atomic_path``), so a
+Every file is written to a temporary sibling and renamed (``jamflow.support.files.atomic_path``), so a
 killed task leaves at most a ``.NAME.*.tmp`` file, removed when the store is next opened.
 """
 
@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from jamflow import __version__
-from jamflow.io import atomic_path
+from jamflow.support.files import atomic_path
 from jamflow.ensemble.checks import packing_row
 
 MANIFEST, SUMMARY, FAILED, CORRUPT, LOCK = "ensemble.json", "summary.csv", "failed", "corrupt", ".lock"

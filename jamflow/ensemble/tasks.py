@@ -11,8 +11,8 @@ import time
 import warnings
 from pathlib import Path
 
-from jamflow.commands.jam import jam_from_args, save_result
-from jamflow.protocols.compression import JammingFailed
+from jamflow.cli.commands.jam import jam_from_args, save_result
+from jamflow.protocols.outcome import JammingFailed
 from jamflow.ensemble.checks import packing_row
 from jamflow.ensemble.store import Task, failure_row, write_failure
 
@@ -52,7 +52,7 @@ def make_packing(fixed: dict, task: Task, path: str, failure_path: str, mpi_rank
 
 
 def _make_on_ranks(options, task, fixed, path, failure_path, ranks):
-    from jamflow.engine.lammps_lib import lammps_env
+    from jamflow.engines.lammps.library import lammps_env
 
     mpirun = Path(sys.prefix) / "bin" / "mpirun"
     spec = json.dumps({"options": options, "path": path, "failure_path": failure_path})

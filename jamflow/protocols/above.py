@@ -3,7 +3,7 @@
 The state the elastic moduli are measured on (seed section 4.5; O'Hern et al., PRE 68, 011306
 (2003)): phi_J -> phi_J + dphi by one affine compression of box and centres (LAMMPS
 ``change_box ... remap``; orientations unchanged), then one energy minimisation at that fixed
-box with the seed's stopping rules (``jamflow.minimize``). The minimisation can rearrange the
+box with the seed's stopping rules (``jamflow.minimize.rules``). The minimisation can rearrange the
 packing; if it relaxes to V < V_min (measured: 3 of 20 2D N = 256 spring packings compressed by
 1e-3 from onset, none of 20 at 1e-6, 1e-5, 1e-4, 1e-2; docs/moduli.md) the result is not jammed and
 ``JammingFailed`` is raised.
@@ -21,10 +21,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from jamflow.engine.base import open_engine
-from jamflow.minimize import MinimizerSettings, MinimizeResult
-from jamflow.packing import Packing
-from jamflow.protocols.compression import JammingFailed
+from jamflow.engines.choose import open_engine
+from jamflow.minimize.settings import MinimizerSettings, MinimizeResult
+from jamflow.model.packing import Packing
+from jamflow.protocols.outcome import JammingFailed
+from jamflow.minimize.rules import minimize
 
 
 @dataclass(frozen=True)
@@ -81,7 +82,7 @@ def compress_above(packing: Packing, dphi: float, minimizer: MinimizerSettings |
     start = time.perf_counter()
     with open_engine(packing, minimizer.method, engine, **(engine_options or {})) as sim:
         sim.set_box(packing.box.scaled((phi / (phi + dphi)) ** (1.0 / packing.dim)))
-        result = sim.minimize(minimizer)
+        result = minimize(sim, minimizer)
         state, out, name = sim.state(), sim.packing(), sim.name
     if result.reason == "blown-up":
         raise RuntimeError(f"the minimisation at phi = {phi + dphi:.10f} diverged (V = {result.energy_per_particle:.3g}, "

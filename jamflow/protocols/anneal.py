@@ -6,7 +6,7 @@ Each step replaces the shape (a particle's size stays its b, a = ALPHA b), resca
 affinely back to the previous step's phi_J (the longer particles would otherwise start at
 phi_J ALPHA / ALPHA_prev, deep above onset), and jams from there (``compress``: it
 decompresses or compresses as the energy says). Every step's packing is checked
-(``jamflow.checks``); its phi_J, <z> and floaters are recorded.
+(``jamflow.mechanics.checks``); its phi_J, <z> and floaters are recorded.
 """
 
 from __future__ import annotations
@@ -17,13 +17,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from jamflow.analysis.order import Nematic
-from jamflow.checks import check_packing
-from jamflow.packing import Packing
-from jamflow.shapes.rotations import random_orientations
-from jamflow.shapes.shape import SPHERE, Ellipsoid
-from jamflow.protocols.compression import (DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, JammingFailed, JamResult, check_resolution,
-                          jam)
+from jamflow.model.nematic import Nematic
+from jamflow.mechanics.checks import check_packing
+from jamflow.model.packing import Packing
+from jamflow.model.shapes.rotations import random_orientations
+from jamflow.model.shapes.shape import SPHERE, Ellipsoid
+from jamflow.protocols.settings import DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings
+from jamflow.protocols.outcome import JammingFailed, JamResult
+from jamflow.protocols.compression import check_resolution, jam
 
 STEP_COLUMNS = ("alpha", "phi_j", "mean_z", "n_contacts", "n_floaters", "p2", "energy_per_particle", "max_force",
                 "checks_passed", "minimizations", "iterations", "seconds")

@@ -4,7 +4,7 @@ Start from random positions (and orientations) at phi0; after each minimisation 
 V < V_tol, decompress if V > 2 V_tol, halve dphi whenever the state crosses from one
 side to the other, and stop when V_tol < V < 2 V_tol (V is the energy per particle).
 Box changes are affine (LAMMPS ``change_box ... remap``); the box is always set from
-the original one so phi carries no accumulated round-off. With walls (``jamflow.walls``)
+the original one so phi carries no accumulated round-off. With walls (``jamflow.model.walls``)
 the walls are the box faces and move with it, phi is measured between them, and the same
 bisection runs unchanged; under gravity ``jam`` settles the packing instead
 (``jamflow.protocols.gravity``).
@@ -12,162 +12,48 @@ bisection runs unchanged; under gravity ``jam`` settles the packing instead
 
 from __future__ import annotations
 
+from jamflow.protocols.outcome import HISTORY_COLUMNS
+from jamflow.protocols.outcome import JamResult
+from jamflow.protocols.outcome import JammingFailed
+from jamflow.protocols.outcome import record_minimization
+from jamflow.protocols.settings import CompressionSettings
+from jamflow.protocols.settings import DEFAULT_PROTOCOL
+from jamflow.protocols.settings import PROTOCOLS
+
 import math
 import os
 import time
 import warnings
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import replace
 
 import numpy as np
 
-from jamflow.box import AXES
-from jamflow.engine.base import check_engine, open_engine
-from jamflow.minimize import MinimizerSettings, MinimizeResult
-from jamflow.packing import DENSEST_PHI, Packing, SeparationFailed, random_packing
-from jamflow.potentials import POTENTIALS, Potential, Spring, parse_potential
-from jamflow.shapes.shape import parse_shape
-from jamflow.sizes import SizeSpec, parse_sizes
-from jamflow.walls import parse_walls, wall_loads, with_walls
+from jamflow.engines.choose import check_engine, open_engine
+from jamflow.minimize.settings import MinimizerSettings
+from jamflow.model.packing import DENSEST_PHI, Packing, SeparationFailed, random_packing
+from jamflow.model.potentials import POTENTIALS, Potential, Spring, parse_potential
+from jamflow.model.shapes.parse import parse_shape
+from jamflow.model.sizes import SizeSpec, parse_sizes
+from jamflow.model.walls import parse_walls, wall_loads, with_walls
+from jamflow.minimize.rules import minimize
 
-DEFAULT_PHI0 = {2: 0.80, 3: 0.55}
-GRAVITY_PHI0 = {2: 0.5, 3: 0.35}  # random starts under gravity: the settled pile stays clear of the ceiling
-BODY_PHI0 = {2: 0.45, 3: 0.25}  # rigid bodies start without overlaps (random sequential addition): below its limit
 NEWTON_FINAL_FACTOR = 3.0  # intermediate jumps stop at >= 3x the window's predicted distance from phi_J
 LOOSE_TRUST = 10.0  # a loosely minimised state decides its side only if V > 10 V_tol
 WINDOW_RESUMES = 3  # a state in the window cut off by the iteration cap is minimised again (at most 3 times a run)
-HISTORY_COLUMNS = ("phi", "energy_per_particle", "pressure", "dphi", "iterations", "max_force", "converged")
 
 
-@dataclass(frozen=True)
-class CompressionSettings:
-    """Parameters of the compression protocol (dimensionless packing fractions;
-    energies per particle in eps)."""
-
-    phi0: float | None = None  # None: DEFAULT_PHI0[dim], well below phi_J
-    dphi0: float = 1e-4
-    v_tol: float = 1e-16
-    max_steps: int = 100_000
-    dphi_growth: float = 1.0  # >1: grow dphi below jamming until the first crossing (speed-up)
-    dphi_max: float = 1e-3  # cap on the grown increment
-    newton: bool = False  # above jamming, jump to the predicted window from V and P (speed-up)
-    newton_ratio: float = 20.0  # a Newton jump shrinks phi - phi_J at most by this factor (stays jammed)
-    coarse_v_min: float | None = None  # before the first crossing, V below this counts as unjammed (speed-up)
-    approach_force_rtol: float | None = None  # before the final approach: force tol = this x pressure (speed-up)
-    coarse_force_tol: float = 1e-10  # force tolerance before the first crossing when approach_force_rtol is set
-    minimizer: MinimizerSettings = field(default_factory=MinimizerSettings)
-
-    def __post_init__(self):
-        for name in ("phi0", "dphi0", "v_tol"):
-            value = getattr(self, name)
-            if name == "phi0" and value is None:
-                continue
-            if not (isinstance(value, (int, float)) and math.isfinite(value)):
-                raise ValueError(f"{name} must be a finite number, got {value!r}")
-        if self.phi0 is not None and not 0.0 < self.phi0 < 1.0:
-            raise ValueError(f"phi0 must lie in (0, 1), got {self.phi0}")
-        if not 0.0 < self.dphi0 < 0.1:
-            raise ValueError(f"dphi0 must lie in (0, 0.1), got {self.dphi0}; the seed uses 1e-4")
-        if not self.v_tol > 0:
-            raise ValueError(f"vtol must be positive, got {self.v_tol}; the seed uses 1e-16")
-        if not (math.isfinite(self.dphi_growth) and self.dphi_growth >= 1.0):
-            raise ValueError(f"dphi_growth must be >= 1 (1 = the seed's constant increment), got {self.dphi_growth}")
-        if not (math.isfinite(self.dphi_max) and self.dphi_max > 0):
-            raise ValueError(f"dphi_max must be a finite positive number, got {self.dphi_max}")
-        if self.minimizer.v_min > self.v_tol:
-            raise ValueError(f"minimizer v_min = {self.minimizer.v_min:g} is above v_tol = {self.v_tol:g}: every "
-                             "state in the window would be stopped as unjammed; set MinimizerSettings(v_min=v_tol)")
-        if self.coarse_v_min is not None and not (math.isfinite(self.coarse_v_min) and self.coarse_v_min > 2 * self.v_tol):
-            raise ValueError(f"coarse_v_min must be a finite number above 2 V_tol, got {self.coarse_v_min}")
-        if not (math.isfinite(self.newton_ratio) and self.newton_ratio > 1):
-            raise ValueError(f"newton_ratio must be a finite number > 1, got {self.newton_ratio}")
-        if self.max_steps < 1:
-            raise ValueError("max_steps must be a positive integer")
-
-    def start_phi(self, dim: int, gravity: float = 0.0, shape=None) -> float:
-        """phi0, or the default start for this dimension (a looser one under gravity, and for
-        rigid bodies, which start without overlaps)."""
-        if self.phi0 is not None:
-            return self.phi0
-        if gravity:
-            return GRAVITY_PHI0.get(dim, math.nan)
-        rigid = shape is not None and dim in (2, 3) and parse_shape(shape, dim).kind == "rigid"
-        return (BODY_PHI0 if rigid else DEFAULT_PHI0).get(dim, math.nan)
-
-    def as_dict(self) -> dict:
-        out = {k: v for k, v in asdict(self).items() if k != "minimizer"}
-        return {**out, **self.minimizer.as_dict()}
 
 
-FAST_PROTOCOL = dict(dphi_growth=2.0, dphi_max=1e-3, newton=True, newton_ratio=10.0,
-                     coarse_v_min=1e-10, approach_force_rtol=1e-5)
 
 
-def seed_protocol(**overrides) -> CompressionSettings:
-    """The seed chapter's protocol exactly: constant dphi0 until the first crossing, halving."""
-    return CompressionSettings(**overrides)
 
 
-def fast_protocol(**overrides) -> CompressionSettings:
-    """Same stopping rule, fewer and cheaper minimisations (docs/speed.md measures its bias)."""
-    return CompressionSettings(**{**FAST_PROTOCOL, **overrides})
 
 
-PROTOCOLS = {"seed": seed_protocol, "fast": fast_protocol}
-# "fast" is the default since 20 seeds at N = 256 gave mean phi_J 0.83820 +- 0.00063 against
-# 0.83784 +- 0.00064 for "seed" (paired difference +0.00036 +- 0.00074), 4x faster in the median,
-# and at N = 1024 0.84018 +- 0.00027 against 0.83980 +- 0.00039 (paired +0.00039 +- 0.00042),
-# 3.5x fewer iterations: docs/protocol-bias-n256.csv, -n1024.csv, made by benchmarks/protocol_bias.py.
-DEFAULT_PROTOCOL = "fast"
 
 
-@dataclass(frozen=True)
-class JamResult:
-    """A packing at jamming onset and how it was found."""
-
-    packing: Packing
-    phi_j: float
-    energy_per_particle: float
-    pressure_tensor: np.ndarray
-    max_force: float
-    history: dict  # column name -> np.ndarray, one entry per minimisation
-    settings: CompressionSettings
-    seconds: float
-    lammps_version: int
-    engine: str = "lammps"  # which engine minimised: "lammps" or "numba"
-    max_torque: float = 0.0  # largest generalized torque component tau / d_k (0 for disks, spheres)
-    wall_forces: np.ndarray | None = None  # (d, 2, d) force of the particles on each face (walled boxes)
-    counters: dict = field(default_factory=dict)  # what the engine's kernel counted (ellipsoids: fallbacks, ...)
-
-    @property
-    def pressure(self) -> float:
-        return float(np.trace(self.pressure_tensor) / self.packing.dim)
-
-    @property
-    def minimizations(self) -> int:
-        return len(self.history["phi"])
-
-    @property
-    def iterations(self) -> int:
-        return int(np.sum(self.history["iterations"]))
-
-    @property
-    def wall_pressures(self) -> np.ndarray:
-        """(k, 2) pressure on the lower and upper face of each walled axis (``jamflow.walls``)."""
-        from jamflow.walls import face_pressures
-
-        return face_pressures(self.packing.box, self.wall_forces) if self.wall_forces is not None else np.empty((0, 2))
-
-    def summary(self) -> str:
-        torque = f"  max|tau/d| = {self.max_torque:.1e}" if self.packing.shape.oriented else ""
-        walls = "".join(f"  P_wall {AXES[a]} = {lo:.3e} {hi:.3e}"
-                        for a, (lo, hi) in zip(self.packing.box.walls, self.wall_pressures))
-        return (f"phi_J = {self.phi_j:.10f}  V = {self.energy_per_particle:.3e}  "
-                f"P = {self.pressure:.3e}{walls}  max|F| = {self.max_force:.1e}{torque}  "
-                f"{self.minimizations} minimisations, {self.iterations} iterations ({self.engine}), {self.seconds:.2f} s")
 
 
-class JammingFailed(RuntimeError):
-    """The protocol could not reach the energy window; the message says why and what to do."""
 
 
 def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | Potential = "spring",
@@ -177,10 +63,10 @@ def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | 
         gamma: float | None = None) -> JamResult:
     """Jam N particles by isotropic compression; ``start`` overrides the random start.
 
-    ``shape``: a ``--shape`` spec or shape object (``jamflow.shapes``; default disks/spheres);
+    ``shape``: a ``--shape`` spec or shape object (``jamflow.model.shapes``; default disks/spheres);
     ``sizes`` scale whole particles (an ellipse's b; a = ALPHA b). ``contact``: the contact-distance
     method of ellipses/spheroids (exact, gaussian, cleaver, linear, quadratic).
-    ``walls``: walled axes (``"y"``, ``"x,y"``, ...; ``jamflow.walls``) of ``wall_type``
+    ``walls``: walled axes (``"y"``, ``"x,y"``, ...; ``jamflow.model.walls``) of ``wall_type``
     smooth or rough. ``gravity`` g > 0 settles the packing on the floor instead of
     compressing it (``jamflow.protocols.gravity``; needs walls on the last axis).
     A start of a potential that diverges at contact (repulsive LJ) with deep overlaps (the
@@ -190,7 +76,7 @@ def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | 
     carries gamma as its accumulated strain (periodic cells only).
     ``observers`` are callables ``f(step: dict)`` called after every minimisation
     (progress bars, writers). ``engine``: "auto" (the compiled engine wherever it runs the
-    scene, else LAMMPS), "lammps" or "numba" (``jamflow.engine.base``).
+    scene, else LAMMPS), "lammps" or "numba" (``jamflow.engines.base``).
     """
     if settings is None:
         settings = PROTOCOLS[DEFAULT_PROTOCOL]()
@@ -309,7 +195,7 @@ def remove_overlaps(packing: Packing, minimizer: MinimizerSettings, engine: str 
     from a raw random start RLJ forces reach ~1e13 and LAMMPS loses atoms)."""
     soft = replace(packing, potential=Spring())
     with open_engine(soft, minimizer.method, engine) as sim:
-        result = sim.minimize(minimizer)
+        result = minimize(sim, minimizer)
         relaxed = sim.packing()
     if result.energy_per_particle >= minimizer.v_min:
         raise JammingFailed(f"the random start at phi0 = {packing.phi:.4f} does not relax to zero overlap "
@@ -333,7 +219,7 @@ def bisect(sim, settings: CompressionSettings, *, observers=()) -> JamResult:
     """The bisection on an open engine from its current configuration and box, whose shape
     (and shear strain) it keeps: every box is the current one scaled (seed steps 2-4). The
     engine is left holding the jammed packing (the shear protocol continues from it)."""
-    from jamflow.engine.lammps_lib import lammps_version
+    from jamflow.engines.lammps.library import lammps_version
 
     start_time = time.perf_counter()
     current = sim.packing()  # phi and the volume it counts (walls: between them) of the current state
@@ -345,13 +231,13 @@ def bisect(sim, settings: CompressionSettings, *, observers=()) -> JamResult:
     for step in range(settings.max_steps):
         sim.set_box(base_box.scaled((base_phi / phi) ** (1.0 / current.dim)))
         minimizer = stepper.minimizer()
-        result = sim.minimize(minimizer)
+        result = minimize(sim, minimizer)
         if result.reason == "blown-up":
             raise JammingFailed(f"the minimisation at phi = {phi:.10f} diverged (V = {result.energy_per_particle:.3g}, "
                                 f"max force {result.max_force:.3g}): lower the timestep, or for damped MD use "
                                 "damping x md_timestep well below 2")
         pressure = sim.state().pressure
-        _record(rows, phi, result, pressure, stepper.last_step)
+        record_minimization(rows, phi, result, pressure, stepper.last_step)
         for observe in observers:
             observe({"step": step, "phi": phi, "dphi": stepper.last_step, "result": result})
         v = result.energy_per_particle
@@ -396,7 +282,7 @@ def _check_start(packing: Packing) -> None:
 
 def _deepest_overlap(packing: Packing) -> float:
     """Smallest r/sigma over overlapping pairs (of sites, for rigid bodies); 1.0 without overlaps."""
-    from jamflow.pairs import overlapping_pairs, overlapping_sites  # here, like resolution: scipy.spatial loads lazily
+    from jamflow.model.pairs import overlapping_pairs, overlapping_sites  # here, like resolution: scipy.spatial loads lazily
 
     r, sigma = (overlapping_sites(packing) if packing.shape.kind == "rigid" else overlapping_pairs(packing))[-2:]
     return float((r / sigma).min()) if len(r) else 1.0
@@ -408,7 +294,7 @@ SPRING_ALPHA_RANGE = (2.0, 3.0)  # FIRE reaches force balance here; outside it d
 def check_resolution(packing: Packing, settings: CompressionSettings) -> None:
     """Refuse, before any work, what cannot end in a checked packing: a V_tol that float64
     positions or the force tolerance cannot resolve at this N, box and potential
-    (``jamflow.checks.resolution``), or a spring exponent outside ``SPRING_ALPHA_RANGE``."""
+    (``jamflow.mechanics.checks.resolution``), or a spring exponent outside ``SPRING_ALPHA_RANGE``."""
     pot = packing.potential
     low, high = SPRING_ALPHA_RANGE
     if pot.name == "spring" and not low <= pot.alpha <= high:
@@ -416,7 +302,7 @@ def check_resolution(packing: Packing, settings: CompressionSettings) -> None:
                          f"for alpha outside [{low:g}, {high:g}] (measured for alpha = 1.5, 4, 6, 8, 10: net forces "
                          "3-66% of the contact forces, docs/hardening.md); use spring, hertz or spring:ALPHA "
                          f"with {low:g} <= ALPHA <= {high:g}")
-    from jamflow.checks import resolution  # imported here: the checks load scipy.spatial, not needed for --help
+    from jamflow.mechanics.checks import resolution  # imported here: the checks load scipy.spatial, not needed for --help
 
     ftol = settings.minimizer.resolved_force_tol(packing.box, pot.contact_stiffness, packing.shape.force_tol_base)
     problem = resolution(packing, settings.v_tol, ftol).problem()
@@ -427,7 +313,7 @@ def check_resolution(packing: Packing, settings: CompressionSettings) -> None:
 def _check_contact_range(packing: Packing) -> None:
     """sigma_ij depends on the direction r_hat = r_ij / |r_ij|, known to ~1e-16 L / |r_ij| in a box of
     side L; at r_ij = 0 it is undefined (the contact-distance solver would return NaN)."""
-    from jamflow.pairs import candidate_pairs  # here, like resolution: scipy.spatial loads lazily
+    from jamflow.model.pairs import candidate_pairs  # here, like resolution: scipy.spatial loads lazily
 
     reach = packing.shape.reach(packing.diameters)
     i, j = candidate_pairs(packing, 2.0 * float(reach.max()))
@@ -544,11 +430,6 @@ class PhiStepper:
                 "vtol (>= 1e-20 is resolvable for N <= 10^4) or a tighter force tolerance.")
 
 
-def _record(rows, phi, result: MinimizeResult, pressure, dphi):
-    values = (phi, result.energy_per_particle, pressure, dphi, result.iterations, result.max_force, result.converged)
-    for column, value in zip(HISTORY_COLUMNS, values):
-        rows[column].append(value)
-    rows.setdefault("reason", []).append(result.reason)
 
 
 def _finish(engine, phi, result, rows, settings, start_time, version) -> JamResult:

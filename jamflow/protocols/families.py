@@ -21,7 +21,8 @@ import warnings
 
 import numpy as np
 
-from jamflow.protocols.compression import JammingFailed, check_strain, jam
+from jamflow.protocols.outcome import JammingFailed
+from jamflow.protocols.compression import check_strain, jam
 from jamflow.protocols.shear import shear, shear_protocol
 
 SEED_STRIDE = 100_000

@@ -3,7 +3,7 @@
 From a random start in a box with walls on the last axis (the floor x_(d-1) = 0 and a
 ceiling at the top, periodic sides), minimise the total energy -- pairs, walls and g x_(d-1)
 per mobile particle -- until every particle is force balanced including its weight (the
-minimiser's force rule, ``jamflow.minimize``). No compression: the load sets the overlaps.
+minimiser's force rule, ``jamflow.minimize.rules``). No compression: the load sets the overlaps.
 The result's ``phi_j`` is the packing fraction of the pile, mobile particle volume over the
 floor area times the height of the highest particle top; the ceiling must carry no load
 (otherwise the start was too dense for the box: lower phi0). The pressure profile with
@@ -17,11 +17,13 @@ import warnings
 
 import numpy as np
 
-from jamflow.engine.base import open_engine
-from jamflow.minimize import MinimizerSettings
-from jamflow.packing import Packing
-from jamflow.walls import wall_loads
-from jamflow.protocols.compression import HISTORY_COLUMNS, CompressionSettings, JamResult, JammingFailed, _record
+from jamflow.engines.choose import open_engine
+from jamflow.minimize.settings import MinimizerSettings
+from jamflow.model.packing import Packing
+from jamflow.model.walls import wall_loads
+from jamflow.protocols.outcome import HISTORY_COLUMNS, JamResult, JammingFailed, record_minimization
+from jamflow.protocols.settings import CompressionSettings
+from jamflow.minimize.rules import minimize
 
 MAX_RESUMES = 3  # a settling cut off by the iteration cap or the no-progress rule is resumed (at most 3 times)
 
@@ -37,7 +39,7 @@ def pile_fraction(packing: Packing) -> float:
 def settle(start: Packing, minimizer: MinimizerSettings | None = None, *, observers=(), engine: str = "auto",
            engine_options=None) -> JamResult:
     """Minimise ``start`` (with gravity and a floor) to force balance including the weights."""
-    from jamflow.engine.lammps_lib import lammps_version
+    from jamflow.engines.lammps.library import lammps_version
 
     if start.gravity <= 0:
         raise ValueError("settle needs gravity > 0 (Packing.gravity); compress packings without gravity")
@@ -46,11 +48,11 @@ def settle(start: Packing, minimizer: MinimizerSettings | None = None, *, observ
     rows = {c: [] for c in HISTORY_COLUMNS}
     with open_engine(start, minimizer.method, engine, **(engine_options or {})) as sim:
         for step in range(MAX_RESUMES + 1):
-            result = sim.minimize(minimizer)
+            result = minimize(sim, minimizer)
             if result.reason == "blown-up":
                 raise JammingFailed(f"settling diverged (max force {result.max_force:.3g}): lower the timestep")
             packing, state = sim.packing(), sim.state()
-            _record(rows, pile_fraction(packing), result, state.pressure, 0.0)
+            record_minimization(rows, pile_fraction(packing), result, state.pressure, 0.0)
             for observe in observers:
                 observe({"step": step, "phi": rows["phi"][-1], "dphi": 0.0, "result": result})
             if result.converged:

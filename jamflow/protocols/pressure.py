@@ -4,7 +4,7 @@ stress [35]"; the enthalpy-minimising definition of jamming, e.g. Dagois-Bohy et
 
 From a start (a random one at phi0, or a given packing), minimise the enthalpy H = U + P V
 at each pressure of a decreasing sequence, each from the previous minimum: the compiled
-FIRE with box coordinates (``jamflow.engine.compiled.field``) or LAMMPS ``fix box/relax``
+FIRE with box coordinates (``jamflow.engines.compiled.field``) or LAMMPS ``fix box/relax``
 with CG (``etol 0``). ``stress``: ``iso`` (the box keeps its shape), ``aniso`` (each P_aa =
 P), ``tri`` (also every shear stress relaxed to 0: the box tilts). Near jamming
 phi - phi_J ~ P^(1/(alpha-1)) (alpha the potential's onset exponent: P ~ dV/dphi), so
@@ -28,9 +28,11 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from jamflow.engine.base import open_engine
-from jamflow.minimize import STRESS_MODES, MinimizerSettings
-from jamflow.packing import Packing
+from jamflow.engines.choose import open_engine
+from jamflow.model.box import STRESS_MODES
+from jamflow.minimize.settings import MinimizerSettings
+from jamflow.model.packing import Packing
+from jamflow.minimize.rules import minimize
 
 FLOOR_MARGIN = 1000.0
 DEFAULT_START_PRESSURE = 1e-4  # from a random start; starting higher raises phi_J (docs/walls-gravity-pressure.md)
@@ -168,7 +170,7 @@ def shear_stress(tensor: np.ndarray) -> float:
 def jam_at_pressure(start: Packing, settings: PressureSettings | None = None, *, observers=(), engine: str = "auto",
                     engine_options=None) -> PressureResult:
     """Minimise the enthalpy at each target pressure in turn, from ``start``."""
-    from jamflow.engine.lammps_lib import lammps_version
+    from jamflow.engines.lammps.library import lammps_version
 
     settings = settings or PressureSettings()
     check_pressure_start(start, settings)
@@ -179,7 +181,7 @@ def jam_at_pressure(start: Packing, settings: PressureSettings | None = None, *,
     with open_engine(start, method, engine, pressure=True, **(engine_options or {})) as sim:
         for step, target in enumerate(settings.pressures):
             minimizer = replace(settings.minimizer, pressure=target, stress=settings.stress)
-            result = sim.minimize(minimizer)
+            result = minimize(sim, minimizer)
             state = sim.state()
             packing = sim.packing()
             values = (target, packing.phi, state.pressure, shear_stress(state.pressure_tensor),

@@ -24,11 +24,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from jamflow.analysis.contacts import Contacts
-from jamflow.engine.base import open_engine
-from jamflow.packing import Packing
-from jamflow.pairs import separations
-from jamflow.protocols.compression import CompressionSettings, JamResult, bisect, check_resolution, check_strain, fast_protocol
+from jamflow.mechanics.contacts import Contacts
+from jamflow.engines.choose import open_engine
+from jamflow.model.packing import Packing
+from jamflow.model.pairs import separations
+from jamflow.protocols.settings import CompressionSettings, fast_protocol
+from jamflow.protocols.outcome import JamResult
+from jamflow.protocols.compression import bisect, check_resolution, check_strain
 
 MAX_STEPS = 1_000_000
 REARRANGED_FRACTION = 0.5  # a first step that removes more than this fraction of the contacts is warned about

@@ -1,0 +1,226 @@
+"""Structure of one packing or an ensemble (seed sections 4.2-4.4): g(r) (partials for
+discrete species), S(k), Q6 global/local, G, the g(r) - 1 envelope length and the q6
+correlation functions with their length. FILES are jamflow HDF5 packings or LAMMPS data /
+dump files (every dump frame counts as one packing); all of them form one ensemble.
+Results go to one HDF5 file (layout in docs/structure.md) and PNG plots. Jamflow packings
+are checked for force balance first (a warning for each that is not at an energy minimum;
+order/force_balanced is 1, 0, or -1 for LAMMPS inputs, whose potential is unknown)."""
+
+from __future__ import annotations
+
+import math
+import warnings
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from jamflow import __version__
+from jamflow.mechanics.checks import check_packing
+from jamflow.support.files import atomic_path, check_writable, replacing
+from jamflow.io.packing_file import load_packing
+from jamflow.analysis.correlations import BondCorrelation, rdf_correlation_length
+from jamflow.analysis.order import BondOrder, first_minimum, translational_order
+from jamflow.model.nematic import Nematic
+from jamflow.plots.structure import (plot_bond_correlations, plot_bond_order_map, plot_order, plot_rdf,
+                                     plot_structure_factor)
+from jamflow.io.readers import packings_from_lammps
+from jamflow.ensemble.parallel import add_engine_arguments, expand_inputs, file_mapper
+from jamflow.ensemble.pooling import merge_rdf, merge_structure_factor, pooled_bins, structure_sums
+from jamflow.analysis.structure import MAX_SPECIES, RDF, StructureFactor, positive
+
+FORMATS = ("auto", "jamflow", "data", "dump")
+HDF5_SUFFIXES = (".h5", ".hdf5")
+
+
+def add_arguments(p) -> None:
+    p.add_argument("files", nargs="+", help="packing files: jamflow .h5, LAMMPS data or dump; or ensemble store directories")
+    p.add_argument("--out", default="structure.h5", help="output HDF5 file")
+    p.add_argument("--plots", default=None, help="directory for PNG plots (default: beside --out)")
+    p.add_argument("--format", choices=FORMATS, default="auto", help="input format (auto: HDF5 or by suffix)")
+    p.add_argument("--diameters", default=None,
+                   help="LAMMPS input without a diameter column: TYPE:DIAMETER,... e.g. 1:1.0,2:1.4")
+    p.add_argument("--dim", type=int, choices=(2, 3), default=None, help="LAMMPS input: dimension (default: infer)")
+    p.add_argument("--dr", type=float, default=0.02, help="g(r) bin width, units of <sigma^2>^1/2")
+    p.add_argument("--k-max", type=float, default=20.0, help="largest k, units of 1/<sigma^2>^1/2")
+    p.add_argument("--r-min", type=float, default=None,
+                   help="Q6 neighbour cutoff, units of <sigma^2>^1/2 (default: first minimum of g(r))")
+    p.add_argument("--q6-dr", type=float, default=0.1, help="bin width of the q6 correlation functions")
+    p.add_argument("--force", action="store_true",
+                   help="replace output or plot paths that are symlinks, devices or read-only files")
+    add_engine_arguments(p)
+
+
+def parse_diameters(text: str | None) -> dict | None:
+    """'1:1.0,2:1.4' -> {'1': 1.0, '2': 1.4}."""
+    if text is None:
+        return None
+    try:
+        pairs = [item.split(":") for item in text.split(",") if item.strip()]
+        mapping = {t.strip(): float(d) for t, d in pairs}
+    except ValueError:
+        raise ValueError(f"--diameters {text!r}: write TYPE:DIAMETER pairs separated by commas, e.g. 1:1.0,2:1.4") from None
+    if not mapping or not all(math.isfinite(v) and v > 0 for v in mapping.values()):
+        raise ValueError(f"--diameters {text!r}: every diameter must be a positive number")
+    return mapping
+
+
+def load_inputs(files, fmt: str, diameters, dim) -> tuple[list, list[str]]:
+    """All packings of all files, with a label (file name, and #frame for dumps) for each."""
+    missing = [f for f in files if not Path(f).is_file()]
+    if missing:
+        raise FileNotFoundError(f"input file(s) not found: {', '.join(missing)}")
+    packings, labels = [], []
+    for name in files:
+        if fmt == "jamflow" or (fmt == "auto" and (h5py.is_hdf5(name) or Path(name).suffix.lower() in HDF5_SUFFIXES)):
+            packings.append(load_packing(name))  # a damaged .h5 gets load_packing's message, not a LAMMPS parser's
+            labels.append(Path(name).name)
+            continue
+        frames = packings_from_lammps(name, None if fmt == "auto" else fmt, diameters=diameters, dim=dim)
+        packings += frames
+        labels += [Path(name).name if len(frames) == 1 else f"{Path(name).name}#{k}" for k in range(len(frames))]
+    return packings, labels
+
+
+def _check_numbers(args) -> None:
+    for name in ("dr", "k_max", "q6_dr", "r_min"):
+        if getattr(args, name) is not None:
+            positive(f"--{name.replace('_', '-')}", getattr(args, name))
+
+
+def _discrete(packings) -> bool:
+    species = [np.unique(p.diameters) for p in packings]
+    return len(species[0]) <= MAX_SPECIES and all(np.array_equal(s, species[0]) for s in species)
+
+
+def analyze(packings, labels, args, files=None) -> dict:
+    """Every measurement of the command, as plain result objects and arrays. With ``files``
+    (one jamflow packing file each) and --workers/--scheduler, per-packing work runs as one
+    Dask task per file and g(r), S(k) are pooled from the tasks (jamflow.ensemble.pooling)."""
+    partial = _discrete(packings) and len(np.unique(packings[0].diameters)) > 1
+    workers, scheduler = getattr(args, "workers", None), getattr(args, "scheduler", None)
+    parallel = files is not None and (workers is not None or scheduler is not None)
+    with file_mapper(workers, scheduler) if parallel else file_mapper() as run:
+        if parallel:
+            r_max, dk = pooled_bins(packings, args.k_max)
+            parts = run(structure_sums, files, args.dr, r_max, partial, args.k_max, dk, desc="g(r), S(k)")
+            rdf, sk = merge_rdf([p[:2] for p in parts]), merge_structure_factor([p[2] for p in parts])
+        else:
+            rdf = RDF(dr=args.dr, partial=partial).compute(packings)
+            sk = StructureFactor(k_max=args.k_max).compute(packings)
+        r_min = args.r_min if args.r_min is not None else first_minimum(rdf)
+        orders = run(order_row, files if parallel else packings, r_min, args.dr, desc="Q6, G")
+    table = {name: np.array([o[name] for o in orders]) for name in ORDER_COLUMNS}
+    table["phi"], table["n"] = np.array([p.phi for p in packings]), np.array([p.n for p in packings])
+    table["force_balanced"] = np.array([_force_balanced(p, label) for p, label in zip(packings, labels)], np.int8)
+    return dict(rdf=rdf, r_min=float(r_min), table=table, labels=labels,
+                G=translational_order(rdf, r_min), g_fit=rdf_correlation_length(rdf, r_min), sk=sk,
+                corr=BondCorrelation(r_min=r_min, dr=args.q6_dr).compute(packings))
+
+
+def _force_balanced(packing, label) -> int:
+    """1 or 0 for a jamflow packing (warning when 0); -1 for a LAMMPS input (potential unknown)."""
+    if "coordinate_precision" in packing.metadata:  # read from a LAMMPS file (jamflow.io.readers)
+        return -1
+    checks = check_packing(packing)
+    if not checks.force_balanced:
+        warnings.warn(f"{label} is {checks.problems()[0]}; its structure is that of a state that is not force "
+                      "balanced", stacklevel=2)
+    return int(checks.force_balanced)
+
+
+ORDER_COLUMNS = ("Q6_global", "Q6_local", "G", "n_isolated", "P2")
+
+
+def order_row(packing, r_min: float, dr: float) -> dict:
+    """Per-packing order parameters (``packing`` may be a jamflow packing file); P2 (nematic
+    order of the directors) is NaN for particles without an axis (disks, spheres)."""
+    if not hasattr(packing, "positions"):
+        packing = load_packing(packing)
+    order = BondOrder(r_min=r_min).compute(packing)
+    return dict(Q6_global=order.global_order, Q6_local=order.local_order, n_isolated=order.n_isolated,
+                G=translational_order(RDF(dr=dr).compute(packing), r_min).G,
+                P2=Nematic().compute(packing).p2 if packing.shape.oriented else math.nan)
+
+
+def write_results(path, res: dict, files) -> None:
+    """HDF5 layout: see docs/structure.md."""
+    rdf, sk, corr = res["rdf"], res["sk"], res["corr"]
+    with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
+        f.attrs.update(schema="jamflow.structure", schema_version=1, jamflow_version=__version__,
+                       n_packings=rdf.n_packings, r_min=res["r_min"], G=res["G"].G,
+                       xi_g=res["g_fit"].xi, xi_q6=corr.fit.xi, inputs="\n".join(map(str, files)))
+        g = f.create_group("rdf")
+        for name in ("edges", "r", "g", "counts", "ideal", "species", "partial", "scales"):
+            g[name] = getattr(rdf, name)
+        s = f.create_group("sk")
+        s.attrs["dk"] = sk.dk
+        for name in ("k", "s", "n_vectors"):
+            s[name] = getattr(sk, name)
+        o = f.create_group("order")
+        o["label"] = np.array(res["labels"], dtype="S")
+        for name, column in res["table"].items():
+            o[name] = column
+        c = f.create_group("q6_correlation")
+        c.attrs.update(baseline=corr.baseline, l=corr.l, r_min=corr.r_min)
+        for name in ("edges", "r", "complex_corr", "magnitude_corr", "complex_stderr", "c", "counts"):
+            c[name] = getattr(corr, name)
+        for key, fit in (("fit_g_envelope", res["g_fit"]), ("fit_q6", corr.fit)):
+            grp = f.create_group(key)
+            grp.attrs.update(xi=fit.xi, xi_stderr=fit.xi_stderr, amplitude=fit.amplitude, reason=fit.reason)
+            grp["r_points"], grp["y_points"] = fit.r_points, fit.y_points
+
+
+PLOT_SUFFIXES = ("q6map", "rdf", "sk", "q6corr", "order")
+
+
+def write_plots(directory: Path, stem: str, res: dict, first) -> list[Path]:
+    """g(r), S(k), q6 correlations, order parameters; for 2D also the psi_6 map of the first packing."""
+    title = f"{res['rdf'].n_packings} packing(s)"
+    table = res["table"]
+    extra = []
+    if first.dim == 2:
+        extra.append(plot_bond_order_map(first, BondOrder(r_min=res["r_min"]).compute(first),
+                                         directory / f"{stem}-q6map.png", title=f"{res['labels'][0]}:"))
+    return extra + [
+        plot_rdf(res["rdf"], directory / f"{stem}-rdf.png", r_min=res["r_min"], fit=res["g_fit"], title=title),
+        plot_structure_factor(res["sk"], directory / f"{stem}-sk.png", title="S(k)"),
+        plot_bond_correlations(res["corr"], directory / f"{stem}-q6corr.png", title=title),
+        plot_order(res["labels"], {k: table[k] for k in _plotted(table)},
+                   directory / f"{stem}-order.png", title=f"r_min = {res['r_min']:.3f}"),
+    ]
+
+
+def _plotted(table) -> list[str]:
+    """The order parameters to draw: P2 only where some packing has it."""
+    return ["Q6_global", "Q6_local", "G"] + (["P2"] if np.isfinite(table["P2"]).any() else [])
+
+
+def run(args) -> int:
+    _check_numbers(args)
+    diameters = parse_diameters(args.diameters)
+    check_writable(args.out, args.force)
+    plots = Path(args.plots) if args.plots else Path(args.out).resolve().parent
+    if not plots.is_dir():
+        raise ValueError(f"--plots directory {plots} does not exist; create it first")
+    stem = Path(args.out).stem
+    for suffix in PLOT_SUFFIXES:
+        check_writable(plots / f"{stem}-{suffix}.png", args.force)
+    args.files = expand_inputs(args.files)  # a directory (ensemble store) stands for its packing files
+    packings, labels = load_inputs(args.files, args.format, diameters, args.dim)
+    if len({p.dim for p in packings}) != 1:
+        raise ValueError("the input files mix 2D and 3D packings; analyse them separately")
+    one_each = len(packings) == len(args.files) and all(h5py.is_hdf5(f) for f in args.files)
+    if (args.workers is not None or args.scheduler is not None) and not one_each:
+        raise ValueError("--workers/--scheduler run one task per jamflow packing file; LAMMPS inputs run without them")
+    res = analyze(packings, labels, args, files=args.files if one_each else None)
+    with replacing([args.out, *(plots / f"{stem}-{s}.png" for s in PLOT_SUFFIXES)] if args.force else []):
+        write_results(args.out, res, args.files)
+        written = write_plots(plots, stem, res, packings[0])
+    t = res["table"]
+    print(f"{len(packings)} packing(s): r_min = {res['r_min']:.3f}  Q6 global = {t['Q6_global'].mean():.3f}  "
+          f"Q6 local = {t['Q6_local'].mean():.3f}  G = {res['G'].G:.3g}  first peak g = {res['G'].g_max:.3g}  "
+          f"xi(g) = {res['g_fit'].xi:.3g}  xi(q6) = {res['corr'].fit.xi:.3g}"
+          + (f"  P2 = {np.nanmean(t['P2']):.3f}" if np.isfinite(t["P2"]).any() else ""))
+    print(f"-> {args.out}, " + ", ".join(str(p) for p in written))
+    return 0

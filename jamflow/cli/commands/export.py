@@ -1,0 +1,29 @@
+"""Write a packing in a format OVITO (and other viewers) open with particle radii, shapes and
+orientations: a LAMMPS text dump (id type x y z radius [shape, quaternion | mol], triclinic box
+bounds) or extended XYZ (Lattice, pbc, species, pos, radius, ...). Rigid bodies are written one
+row per site. Positions at full float64 precision; 2D packings get z = 0 (see jamflow.io.export)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from jamflow.io.export import FORMATS, SUFFIXES, export_packing
+from jamflow.support.files import check_writable, replacing
+from jamflow.io.packing_file import load_packing
+
+
+def add_arguments(p) -> None:
+    p.add_argument("file", metavar="IN.h5", help="packing file (jamflow jam --out)")
+    p.add_argument("--format", choices=FORMATS, required=True, help="lammps-dump (.dump) or extended XYZ (.xyz)")
+    p.add_argument("-o", "--out", default=None, help="file to write (default: IN with the format's suffix)")
+    p.add_argument("--force", action="store_true", help="replace an --out that is a symlink, device or read-only file")
+
+
+def run(args) -> int:
+    out = Path(args.out) if args.out else Path(args.file).with_suffix(SUFFIXES[args.format])
+    check_writable(out, args.force)
+    packing = load_packing(args.file)
+    with replacing([out] if args.force else []):
+        export_packing(packing, out, args.format)
+    print(f"{args.file}: {packing.n} particles -> {out} ({args.format})")
+    return 0

@@ -1,0 +1,221 @@
+"""Mechanical stability of jammed packings (seed sections 3 and 4.1): contacts, floaters,
+the dynamical matrix's spectrum and the stability class of each PACKING.h5, written to the
+sibling results file PACKING.modes.hdf5 (schema jamflow.modes v2; not *.h5, so that a
+glob over packing files does not pick results up); with several files, D(omega)
+and the z_i distribution are averaged and one figure is drawn. Every shape: for particles
+that turn, the modes mix translations and rotations d_k theta, each mode's translational
+fraction is stored, and the energy is profiled along every extra zero mode (quartic modes
+of hypostatic packings against the missing contacts N' d_f - d + 1 - N_c)."""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import replace
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from jamflow import __version__
+from jamflow.analysis.modes import DensityOfStates, Spectrum, Stability, branches
+from jamflow.mechanics.checks import check_packing
+from jamflow.ensemble.parallel import add_engine_arguments, expand_inputs, map_files
+from jamflow.support.files import atomic_path, check_writable, replacing
+from jamflow.io.packing_file import load_packing, open_hdf5, read_checks
+
+SCHEMA, SCHEMA_VERSION = "jamflow.modes", 2  # v2 adds the shape, mode character and per-mode profiles
+
+
+def add_arguments(p) -> None:
+    p.add_argument("files", nargs="+", metavar="PACKING.h5", help="packing files (jamflow jam --out) or ensemble store directories")
+    p.add_argument("--e-min", type=float, default=1e-6, help="zero-mode threshold on eigenvalues (eps/diameter^2)")
+    p.add_argument("--mass", type=float, default=None,
+                   help="M in omega = sqrt(e/M); default N m with m = 1, as the seed defines it")
+    p.add_argument("--method", choices=("auto", "dense", "sparse"), default="auto",
+                   help="eigen-solver: dense (all modes) or sparse shift-invert (lowest modes only)")
+    p.add_argument("--bins", type=int, default=40, help="number of D(omega) bins")
+    p.add_argument("--omega-max", type=float, default=None, help="upper edge of the D(omega) bins")
+    p.add_argument("--figure", default=None,
+                   help="PNG to draw (default: PACKING.modes.png for one file, modes.png beside the first)")
+    p.add_argument("--no-figure", action="store_true", help="do not draw the figure")
+    p.add_argument("--save-vectors", action="store_true", help="also store all eigenvectors")
+    p.add_argument("--force", action="store_true",
+                   help="replace result or figure paths that are symlinks, devices or read-only files")
+    add_engine_arguments(p)
+
+
+def results_path(packing_path) -> Path:
+    path = Path(packing_path)
+    return path.with_name(path.stem + ".modes.hdf5")
+
+
+def figure_path(args) -> Path:
+    if args.figure:
+        return Path(args.figure)
+    first = Path(args.files[0])
+    return first.with_name(first.stem + ".modes.png") if len(args.files) == 1 else first.with_name("modes.png")
+
+
+def run(args) -> int:
+    args.files = expand_inputs(args.files)  # a directory (ensemble store) stands for its packing files
+    spectrum = Spectrum(e_min=args.e_min, mass=args.mass, method=args.method)
+    dos = DensityOfStates(args.bins, args.omega_max)
+    for f in args.files:  # every input is read before any work
+        load_packing(f)
+    written = [results_path(f) for f in args.files] + ([] if args.no_figure else [figure_path(args)])
+    for out in written:
+        check_writable(out, args.force)
+    rows = map_files(analyse_file, args.files, spectrum, args.save_vectors, args.force, workers=args.workers,
+                     scheduler=args.scheduler, progress=len(args.files) > 1, desc="modes")
+    for line, _, _ in rows:
+        print(line)
+    rows = [(spec, stab) for _, spec, stab in rows]
+    print(ensemble_summary([s for s, _ in rows], [st for _, st in rows]))
+    if not args.no_figure:
+        with replacing([figure_path(args)] if args.force else []):
+            _draw(args, rows, dos)
+    return 0
+
+
+def analyse_file(path, spectrum, save_vectors=False, force=False):
+    """One packing: checks, spectrum, stability class, results file (``force``: it may replace a
+    symlink, device or read-only file); the spectrum comes back without eigenvectors (they stay
+    in the results file with --save-vectors)."""
+    packing = load_packing(path)
+    checks = checked(path, packing)
+    spec = spectrum.compute(packing)
+    stab = Stability(spectrum=spectrum).compute(packing, spec)
+    out = results_path(path)
+    with replacing([out] if force else []):
+        save_modes(out, path, spec, stab, vectors=save_vectors, checks=checks)
+    line = summary_line(path, spec, stab) + ("" if checks.force_balanced else "  [NOT FORCE BALANCED]")
+    return line, replace(spec, eigenvectors=None), stab
+
+
+def checked(path, packing):
+    """Force balance (and window, if the file records V_tol) of a packing; warns when the
+    packing is not at an energy minimum, since its modes then describe no stable state."""
+    stored = read_checks(path)
+    checks = check_packing(packing, v_tol=stored.v_tol if stored else None)
+    if not checks.force_balanced:
+        warnings.warn(f"{path} is {checks.problems()[0]}: its spectrum and stability class describe a state that "
+                      "is not force balanced; minimise it first (jamflow jam)", stacklevel=2)
+    return checks
+
+
+def _draw(args, rows, dos):
+    from jamflow.plots.modes import modes_figure
+
+    spectra = [s for s, _ in rows]
+    density = dos.compute(spectra) if all(s.complete for s in spectra) else None
+    out = modes_figure(figure_path(args), spectra, density, [s.dynamical.contacts for s in spectra],
+                       [st for _, st in rows])
+    print(f"figure -> {out}")
+
+
+def summary_line(path, spec, stab) -> str:
+    c = spec.dynamical.contacts
+    turning = spec.dynamical.packing.shape.oriented
+    quartic = (f"  quartic modes {stab.n_quartic}, one-particle flat {stab.n_single_flat} (missing contacts "
+               f"{max(-c.excess_contacts, 0)})" if turning else "")
+    return (f"{path}: N' = {c.n_kept} ({c.n_floaters} floaters)  N_c = {c.n_contacts} (iso {c.isostatic_count}, "
+            f"excess {c.excess_contacts:+d})  <z> = {c.mean_z:.4f}  near-contacts {c.n_near_contact}  "
+            f"zero modes {spec.n_zero}  negative {spec.n_negative}  lowest e = {spec.lowest_nonzero:.4e}{quartic}  "
+            f"-> {stab.label}, Delta V {stab.behaviour}{branch_text(spec)}")
+
+
+def branch_text(spec) -> str:
+    """The three branches of a spectrum with rotations (Figure 2.17), or '' (disks, no vectors)."""
+    found = branches(spec)
+    if found is None:
+        return ""
+    parts = [f"{b.name} {b.count}" + (f" (omega {b.omega_low:.2e}..{b.omega_high:.2e}, translational "
+                                       f"{b.translational:.2f})" if b.count else "") for b in found]
+    return "\n  branches: " + "; ".join(parts)
+
+
+def ensemble_summary(spectra, stabilities=()) -> str:
+    n = len(spectra)
+    iso = sum(s.dynamical.contacts.is_isostatic for s in spectra)
+    exact = sum(s.n_zero == s.dim and s.n_negative == 0 for s in spectra)
+    low = np.array([s.lowest_nonzero for s in spectra])
+    line = (f"{n} packing(s): isostatic {iso}/{n}, exactly d zero modes (none negative) {exact}/{n}, "
+            f"lowest nonzero e: mean {np.nanmean(low):.4e}, median {np.nanmedian(low):.4e}, "
+            f"min {np.nanmin(low):.4e}, max {np.nanmax(low):.4e}")
+    if stabilities and any(s.dynamical.packing.shape.oriented for s in spectra):
+        missing = [max(-s.dynamical.contacts.excess_contacts, 0) for s in spectra]
+        zeros = sum(s.n_extra_zero == m for s, m in zip(spectra, missing))
+        match = sum(st.n_quartic == m for st, m in zip(stabilities, missing))
+        line += f", extra zero modes = missing contacts {zeros}/{n}, quartic modes = missing contacts {match}/{n}"
+    return line
+
+
+def save_modes(out, source, spec, stab, vectors=False, checks=None) -> Path:
+    """Write one packing's results atomically (schema jamflow.modes v2: v1 plus ``shape``,
+    ``dof_per_particle``, ``n_translational``, ``n_quartic``, ``n_single_flat``, ``n_balanced``,
+    ``missing_contacts``, the dataset ``translational_fraction`` and the group
+    ``stability/profiles``); ``checks`` (a ``jamflow.mechanics.checks.PackingChecks``) go to group
+    ``checks`` and root ``force_balanced``."""
+    c = spec.dynamical.contacts
+    packing = spec.dynamical.packing
+    attrs = dict(schema=SCHEMA, schema_version=SCHEMA_VERSION, jamflow_version=__version__,
+                 source=str(source), dim=spec.dim, n=spec.dynamical.n_total, n_kept=c.n_kept,
+                 shape=packing.shape.spec(packing.dim), dof_per_particle=packing.dof_per_particle,
+                 n_translational=spec.dynamical.n_translational, n_quartic=stab.n_quartic,
+                 n_single_flat=stab.n_single_flat, n_balanced=c.n_balanced,
+                 missing_contacts=max(-c.excess_contacts, 0),
+                 n_floaters=c.n_floaters, n_contacts=c.n_contacts, n_overlapping=c.n_overlapping,
+                 n_near_contact=c.n_near_contact, isostatic_count=c.isostatic_count,
+                 excess_contacts=c.excess_contacts, mean_z=c.mean_z, e_min=spec.e_min, mass=spec.mass,
+                 complete=spec.complete, n_zero=spec.n_zero, n_negative=spec.n_negative,
+                 lowest_nonzero=spec.lowest_nonzero, classification=stab.label, behaviour=stab.behaviour,
+                 power=stab.power, mode_eigenvalue=stab.mode_eigenvalue,
+                 translation_residual=spec.translation_residual)
+    if checks is not None:
+        attrs["force_balanced"] = checks.force_balanced
+    with atomic_path(out) as tmp, h5py.File(tmp, "w") as f:
+        f.attrs.update(attrs)
+        if checks is not None:
+            f.create_group("checks").attrs.update(checks.as_attrs())
+        f["floater"], f["z"], f["particles"] = c.floater, c.z, spec.dynamical.particles
+        f["contacts"] = np.column_stack([c.i, c.j])
+        f["eigenvalues"], f["frequencies"] = spec.eigenvalues, spec.frequencies
+        if vectors and spec.eigenvectors is not None:
+            f["eigenvectors"] = spec.eigenvectors
+        g = f.create_group("stability")
+        g["deltas"], g["delta_v_plus"], g["delta_v_minus"], g["mode"] = (
+            stab.deltas, stab.delta_v_plus, stab.delta_v_minus, stab.mode)
+        if spec.eigenvectors is not None:
+            f["translational_fraction"] = spec.translational_fraction
+        _save_profiles(g.create_group("profiles"), stab.profiles, vectors)
+    return Path(out)
+
+
+def _save_profiles(g, profiles, vectors: bool) -> None:
+    """One row per profiled mode (ascending eigenvalue)."""
+    g["eigenvalues"] = np.array([p.eigenvalue for p in profiles])
+    g["powers"] = np.array([p.power for p in profiles])
+    g["behaviours"] = np.array([p.behaviour for p in profiles], dtype=h5py.string_dtype())
+    g["regimes"] = np.array([p.regime for p in profiles], dtype=h5py.string_dtype())
+    g["translational_fraction"] = np.array([p.translational_fraction for p in profiles])
+    g["participation"] = np.array([p.participation for p in profiles])
+    g["quartic_straight"] = np.array([p.quartic_straight for p in profiles])
+    g["quartic_relaxed"] = np.array([p.quartic_relaxed for p in profiles])
+    g["deltas"] = np.array([p.deltas for p in profiles])
+    g["delta_v"] = np.array([p.delta_v for p in profiles])
+    if vectors:
+        g["modes"] = np.array([p.mode for p in profiles])
+
+
+def _dataset(obj):
+    return obj.asstr()[...] if h5py.check_string_dtype(obj.dtype) else obj[...]
+
+
+def read_modes(path) -> dict:
+    """Attributes and datasets of a results file as a flat dict (datasets as arrays)."""
+    with open_hdf5(path, "jamflow modes results file") as f:
+        if f.attrs.get("schema") != SCHEMA:
+            raise ValueError(f"{path} is not a jamflow modes results file")
+        out = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
+        f.visititems(lambda name, obj: out.__setitem__(name, _dataset(obj)) if isinstance(obj, h5py.Dataset) else None)
+    return out

@@ -1,0 +1,125 @@
+"""Shear a jammed packing quasistatically at zero pressure (seed section 2.2, eq. 2.4): steps
+x_i -> x_i + dgamma y_i in the shear-periodic cell, each minimised at fixed strain and brought
+back into the energy window by compression/decompression. Writes DIR/STEM.shear.h5 (every
+step: gamma, phi_J, pressure tensor, contact network and its changes, the packing; schema in
+jamflow/io/shear_file.py) and the figure DIR/STEM.shear.png."""
+
+from __future__ import annotations
+
+import math
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from jamflow.engines.choose import ENGINES, engine_name
+from jamflow.support.files import check_writable, output_directory, replacing
+from jamflow.io.packing_file import load_packing
+from jamflow.minimize.settings import MinimizerSettings
+from jamflow.cli.progress import ShearProgress
+from jamflow.protocols.settings import PROTOCOLS
+from jamflow.protocols.shear import shear, shear_protocol, shear_strains
+from jamflow.io.shear_file import path_columns, save_shear_path
+
+
+def add_arguments(p) -> None:
+    p.add_argument("packing", metavar="IN.h5", help="a packing file (jamflow jam --out), in the energy window")
+    p.add_argument("--dgamma", type=float, required=True,
+                   help="strain step (either sign; the seed uses Delta gamma / n ~ 1e-3)")
+    p.add_argument("--to", type=float, required=True, help="final accumulated strain")
+    p.add_argument("--out", default=None, metavar="DIR", help="output directory (created if its parent exists; "
+                   "required unless --emit-deck)")
+    p.add_argument("--engine", choices=ENGINES, default="auto", help="auto: the compiled engine where it runs the scene")
+    p.add_argument("--protocol", choices=sorted(PROTOCOLS), default=None,
+                   help="bisection after each step: fast (growing increments, Newton jumps; the default) or seed "
+                        "(the chapter's; the default with --emit-deck, which runs it only)")
+    p.add_argument("--dphi0", type=float, default=1e-6, help="initial packing-fraction increment after each step")
+    p.add_argument("--vtol", type=float, default=1e-16, help="energy window V_tol < V < 2 V_tol (per particle)")
+    p.add_argument("--ftol", type=float, default=None, help="max force component tolerance (default scales with box)")
+    p.add_argument("--force", action="store_true",
+                   help="replace outputs that are symlinks, device nodes or read-only files")
+    p.add_argument("--quiet", action="store_true", help="no progress display")
+    p.add_argument("--no-figure", action="store_true", help="do not draw DIR/STEM.shear.png")
+    p.add_argument("--emit-deck", default=None, metavar="DECK.lmp",
+                   help="write the LAMMPS deck that runs this shear in lmp alone (and its start, DECK.start.data) "
+                        "instead of running it; then: cd DIR && lmp -in DECK.lmp")
+
+
+def settings_from_args(args):
+    for name in ("dphi0", "vtol"):
+        value = getattr(args, name)
+        if not (math.isfinite(value) and value > 0):
+            raise ValueError(f"--{name} must be a finite positive number, got {value}")
+    minimizer = MinimizerSettings(force_tol=args.ftol, v_min=args.vtol)
+    if (args.protocol or ("seed" if args.emit_deck else "fast")) == "seed":
+        return PROTOCOLS["seed"](dphi0=args.dphi0, v_tol=args.vtol, minimizer=minimizer)
+    return shear_protocol(dphi0=args.dphi0, v_tol=args.vtol, minimizer=minimizer)
+
+
+def output_paths(args) -> tuple[Path, Path]:
+    if args.out is None:
+        raise ValueError("--out DIR is required (the directory for the path file and its figure)")
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out {out} is a file; give a directory")
+    if not out.parent.is_dir():
+        raise ValueError(f"cannot create --out {out}: directory {out.parent} does not exist")
+    stem = Path(args.packing).stem
+    return out / f"{stem}.shear.h5", out / f"{stem}.shear.png"
+
+
+def run(args) -> int:
+    settings = settings_from_args(args)
+    packing = load_packing(args.packing)
+    shear_strains(packing.box.shear_strain, args.dgamma, args.to)  # bad strains refused before work
+    engine_name(packing, settings.minimizer.method, args.engine)
+    if args.emit_deck:
+        return emit(args, packing, settings)
+    data, figure = output_paths(args)
+    with output_directory(args.out):  # removed again if nothing gets written into it
+        for out in [data] + ([] if args.no_figure else [figure]):
+            check_writable(out, args.force)
+        with warnings.catch_warnings(record=True) as caught, ShearProgress(disable=args.quiet) as progress:
+            warnings.simplefilter("always")
+            path = shear(packing, args.dgamma, args.to, settings, engine=args.engine, observers=[progress])
+        for w in caught:
+            print(f"jamflow shear: warning: {w.message}")
+        passed = step_checks(path, settings)
+        if not passed.all():
+            print(f"jamflow shear: warning: {int((~passed).sum())} of {len(passed)} steps failed the packing checks "
+                  f"(steps {np.flatnonzero(~passed).tolist()[:10]}; column checks_passed in the path file)")
+        with replacing([data, figure] if args.force else []):
+            save_shear_path(data, path, source=args.packing, extra_columns={"checks_passed": passed})
+            print(f"{path.summary()}  -> {data}")
+            if not args.no_figure:
+                from jamflow.plots.shear import shear_path_figure
+
+                print(f"figure -> {shear_path_figure(figure, path_columns(path))}")
+    return 0
+
+
+def emit(args, packing, settings) -> int:
+    """--emit-deck: the shear deck and its start data file, no run."""
+    from jamflow.decks.shear import emit_shear_deck
+
+    outputs = [args.emit_deck, Path(args.emit_deck).with_name(Path(args.emit_deck).stem + ".start.data")]
+    for out in outputs:
+        check_writable(out, args.force)
+    with replacing(outputs if args.force else []):
+        deck, data = emit_shear_deck(args.emit_deck, packing, args.dgamma, args.to, settings,
+                                     out=Path(args.packing).stem)
+    print(f"wrote {deck} and {data}; run: cd {deck.parent} && lmp -in {deck.name}  "
+          f"(writes {Path(args.packing).stem}.data and {Path(args.packing).stem}.protocol.txt)")
+    return 0
+
+
+def step_checks(path, settings) -> np.ndarray:
+    """The packing checks of ``jamflow.mechanics.checks`` (window, force balance, contact count) at every step."""
+    from jamflow.mechanics.checks import check_packing
+
+    out = []
+    for step in path.steps:
+        p, jam = step.packing, step.jam
+        ftol = settings.minimizer.resolved_force_tol(p.box, p.potential.contact_stiffness)
+        out.append(check_packing(p, jam.energy_per_particle, jam.max_force, settings.v_tol, ftol).passed)
+    return np.array(out, dtype=bool)

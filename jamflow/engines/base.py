@@ -1,0 +1,129 @@
+"""The engine contract: what every engine computes, what it can run, and how one is chosen.
+
+An engine holds one packing and evaluates or minimises it at a fixed (or, for constant
+stress, variable) box. Every engine implements ``Engine`` and returns the neutral ``State``;
+it declares what it runs in ``CAPABILITIES`` (shapes, potentials, minimisers, boxes,
+processes) and ``supports(packing, method, comm)`` turns that table into a reason or None.
+``open_engine`` picks one: ``"auto"`` takes the compiled engine wherever it supports the
+scene (it needs no LAMMPS), LAMMPS elsewhere; ``"lammps"`` / ``"numba"`` force one, and a
+forced engine that cannot run the scene, or an option it does not take, is an error raised
+before any work.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+
+
+
+@dataclass(frozen=True)
+class State:
+    """Energy, forces, torques and pressure tensor at the current configuration.
+
+    ``torques`` are world-frame torques: (N,) about z in 2D, (N, 3) in 3D; None for disks and
+    spheres. ``pressure_tensor`` is the virial part of the stress (athermal packings),
+    P_ab = V^-1 sum_pairs r_ij,a f_ij,b (seed eq. 2.34; for rigid bodies r_ij joins the
+    centres), positive under compression."""
+
+    energy: float  # total, eps
+    forces: np.ndarray  # (N, d), eps/diameter, packing order
+    pressure_tensor: np.ndarray  # (d, d), eps/diameter^d
+    torques: np.ndarray | None = None  # eps
+
+    @property
+    def energy_per_particle(self) -> float:
+        return self.energy / len(self.forces)
+
+    @property
+    def pressure(self) -> float:
+        return float(np.trace(self.pressure_tensor) / len(self.pressure_tensor))
+
+    @property
+    def max_force(self) -> float:
+        return float(np.max(np.abs(self.forces))) if self.forces.size else 0.0
+
+    @property
+    def max_torque(self) -> float:
+        return float(np.max(np.abs(self.torques))) if self.torques is not None and self.torques.size else 0.0
+
+
+@dataclass(frozen=True)
+class Capabilities:
+    """What an engine runs; ``reason`` says why it cannot run a scene (None if it can)."""
+
+    shapes: frozenset
+    potentials: frozenset
+    methods: frozenset
+    tilted_boxes: bool = True
+    mpi: bool = False
+    options: frozenset = field(default_factory=frozenset)  # keyword options its constructor takes
+    boundaries: frozenset = field(default_factory=frozenset)  # of "walls", "fixed", "gravity" (disks, spheres)
+    box_methods: frozenset = field(default_factory=frozenset)  # minimisers that relax the box at a target pressure
+    shape_methods: tuple = ()  # (shape kind, minimisers, why) where a shape runs fewer minimisers
+
+    def reason(self, packing, method: str | None = "fire", comm=None, pressure: bool = False) -> str | None:
+        """Why the engine cannot run the scene, or None; ``method`` None: any of its minimisers."""
+        needs = scene_boundaries(packing)
+        if needs and packing.shape.kind != "sphere":
+            return f"{' and '.join(sorted(needs))} with {packing.shape.name(packing.dim)} particles (written for disks and spheres)"
+        if needs - self.boundaries:
+            return f"{' and '.join(sorted(needs - self.boundaries))} (it runs {', '.join(sorted(self.boundaries)) or 'none'})"
+        if pressure and method not in self.box_methods:
+            return (f"a target pressure with minimizer {method} (it relaxes the box with "
+                    f"{', '.join(sorted(self.box_methods)) or 'no minimizer'})")
+        if packing.shape.kind not in self.shapes:
+            return f"{packing.shape.name(packing.dim)} particles (it runs {', '.join(sorted(self.shapes))})"
+        if packing.potential.name not in self.potentials:
+            return f"potential {packing.potential.spec} (it runs {', '.join(sorted(self.potentials))})"
+        if method is not None and method not in self.methods:
+            return f"minimizer {method} (it runs {', '.join(sorted(self.methods))})"
+        for kind, methods, why in self.shape_methods:
+            if method is not None and packing.shape.kind == kind and method not in methods:
+                return (f"minimizer {method} on {packing.shape.name(packing.dim)} particles: {why} (it runs "
+                        f"{', '.join(sorted(methods))} there)")
+        if packing.box.is_triclinic and not self.tilted_boxes:
+            return "a tilted (sheared) box"
+        if comm is not None and not self.mpi:
+            return "an MPI communicator (it is serial)"
+        return None
+
+
+def scene_boundaries(packing) -> set:
+    """What a packing needs beyond pairs in a periodic box: walls, fixed particles, gravity."""
+    needs = set()
+    if packing.box.walls:
+        needs.add("walls")
+    if packing.fixed is not None:
+        needs.add("fixed")
+    if packing.gravity > 0:
+        needs.add("gravity")
+    return needs
+
+
+class Engine(Protocol):
+    """One packing held by an engine (a context manager; ``close`` frees it)."""
+
+    name: str
+    template: object  # the Packing it was built from (shape, sizes, potential)
+    box: object  # the current Box
+    commands: list  # LAMMPS commands sent (empty for engines that send none)
+
+    def set_box(self, box) -> None: ...  # affine deformation, positions follow
+    def positions(self) -> np.ndarray: ...
+    def set_positions(self, positions, orientations=None) -> None: ...
+    def evaluate(self) -> State: ...  # compute at the current configuration
+    def state(self) -> State: ...  # as last computed
+    def packing(self, **metadata): ...  # the current configuration as a Packing
+    def minimizer_session(self, settings, ftol: float): ...  # context -> window(steps)
+    def close(self) -> None: ...
+
+
+
+
+
+
+
+

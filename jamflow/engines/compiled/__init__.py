@@ -1,0 +1,127 @@
+"""jamflow's compiled engine (numba): FIRE 2.0 over translations, rotations and box strain,
+with one force/torque kernel per particle shape and the potentials' own laws.
+
+Layout: ``laws`` (the potentials of ``jamflow.model.potentials`` compiled from their own source),
+``rotation`` (2D angles, 3D quaternions), ``fire`` (the integrator, written once), one module
+per shape kernel (``spheres``, ``bodies``, ``ellipsoids``), ``kernels`` (the dispatch from a pair-list type to
+its kernel), ``cells`` (a cell-list pair search), ``engine`` (``CompiledEngine``, the Python side) and
+``aot`` / ``aot_build`` (the disk/sphere kernels compiled ahead of time). A new shape adds a kernel
+module and registers it in ``kernels.MODULES``; the integrator does not change.
+
+numba is imported on first use, not at import: ``jit`` returns a ``Deferred`` function, and the
+first call of any of them (``start_numba``) imports numba, swaps every deferred function in jamflow's
+loaded modules for its numba dispatcher (so compiled code calls compiled code, as with
+``numba.njit`` at import) and runs the registrations (``overload`` and friends) queued by
+``when_numba_starts``. A disk jam served by the ahead-of-time kernels never starts numba (~1 CPU s of
+start-up; docs/speed-2.md section 12). Code outside jamflow that calls jamflow's kernels from
+its own numba functions calls ``start_numba()`` first (numba cannot type a ``Deferred``; see
+benchmarks/kernel.py).
+
+Kernels are cached on disk (numba ``cache=True``) under ``<jamflow cache>/numba/<digest>``,
+the digest covering this package's sources, ``jamflow/model/potentials.py`` and
+``jamflow/model/shapes/contact_distance.py``: numba's own cache check looks only at the file of the
+cached function, not at the laws and formulas it inlines from other files, so a changed law would otherwise run stale machine code.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import sys
+from contextlib import contextmanager
+from functools import lru_cache
+from pathlib import Path
+
+_SOURCES = [*sorted(Path(__file__).parent.glob("*.py")), Path(__file__).parents[2] / "model" / "potentials.py",
+            Path(__file__).parents[2] / "model" / "shapes" / "contact_distance.py"]
+_DEFERRED: list = []  # every Deferred made before numba started
+_REGISTRATIONS: list = []  # callables to run once numba has started
+_started = False
+
+
+@lru_cache(maxsize=1)
+def source_digest() -> str:
+    """sha256 (16 hex digits) of numba's version and the sources the kernels are compiled from."""
+    import importlib.metadata
+
+    digest = hashlib.sha256(importlib.metadata.version("numba").encode())
+    for path in _SOURCES:
+        digest.update(path.name.encode() + b"\0" + path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+@lru_cache(maxsize=1)
+def cache_dir() -> Path:
+    from jamflow.support.cache import cache_root
+
+    return cache_root() / "numba" / source_digest()
+
+
+@contextmanager
+def _cache_location():
+    import numba
+
+    old = numba.config.CACHE_DIR
+    numba.config.CACHE_DIR = str(cache_dir())
+    try:
+        yield
+    finally:
+        numba.config.CACHE_DIR = old
+
+
+def _njit(fn):
+    import numba
+
+    with _cache_location():
+        return numba.njit(cache=True)(fn)
+
+
+class Deferred:
+    """A kernel that numba compiles once numba has started; calling it from Python starts numba.
+    ``py_func`` is the Python function (as on a numba dispatcher)."""
+
+    def __init__(self, fn):
+        functools.update_wrapper(self, fn)
+        self.py_func = fn
+        self.dispatcher = None
+
+    def __call__(self, *args, **kwargs):
+        start_numba()
+        return self.dispatcher(*args, **kwargs)
+
+
+def jit(fn):
+    """``numba.njit(cache=True)`` with the cache under jamflow's source digest, made when numba
+    starts (a ``Deferred``) or at once if it has."""
+    if _started:
+        return _njit(fn)
+    deferred = Deferred(fn)
+    _DEFERRED.append(deferred)
+    return deferred
+
+
+def when_numba_starts(register):
+    """Run ``register()`` (e.g. ``numba.extending.overload`` calls) once numba has started, or now."""
+    if _started:
+        register()
+    else:
+        _REGISTRATIONS.append(register)
+
+
+def start_numba() -> None:
+    """Import numba; replace every ``Deferred`` in jamflow's loaded modules by its dispatcher; run
+    the queued registrations. Idempotent."""
+    global _started
+    if _started:
+        return
+    for deferred in _DEFERRED:
+        deferred.dispatcher = _njit(deferred.py_func)
+    _started = True
+    for name, module in list(sys.modules.items()):
+        if name == "jamflow" or name.startswith("jamflow."):
+            for attr, value in list(vars(module).items()):
+                if isinstance(value, Deferred):
+                    setattr(module, attr, value.dispatcher)
+    for register in _REGISTRATIONS:
+        register()
+    _REGISTRATIONS.clear()

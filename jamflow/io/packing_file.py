@@ -1,0 +1,359 @@
+"""Packing files: a versioned HDF5 schema, LAMMPS data files, MDAnalysis Universes.
+
+HDF5 schema ``jamflow.model.packing`` version 2 (all lengths in small diameters, energies in
+epsilon, pressures in epsilon / diameter^d)::
+
+    /                       attrs: schema, schema_version, jamflow_version, lammps_version,
+                                   dim, n, phi, energy_per_particle, pressure, potential,
+                                   alpha, epsilon, seed, sizes, created (ISO time),
+                                   shape (JSON: kind and parameters, e.g.
+                                   {"kind": "ellipsoid", "alpha": 1.5, "contact": "exact"}),
+                                   shape_spec (text, e.g. "ellipse:1.5"), gamma (shear strain
+                                   xy / ly of the box, accumulated);
+                                   walls (walled axes, "" | "y" | "x,y" | ...), wall_type
+                                   ("" | "smooth" | "rough"), gravity (g, 0 without),
+                                   target_pressure (NaN at fixed box), stress ("" | "iso" |
+                                   "aniso" | "tri"), dphi_above (NaN, or the step by
+                                   which ``jamflow jam --above`` compressed the onset
+                                   packing: phi = phi_J + dphi_above)
+    /positions  (N, d)      float64, Cartesian, wrapped into the cell
+    /diameters  (N,)        float64, each particle's size scale (jamflow.model.packing)
+    /box        (d, d)      float64, upper-triangular, columns = cell vectors (LAMMPS tilt)
+    /pressure_tensor (d, d) float64, virial part (athermal), if known
+    /orientations (N,) | (N, 4)   2D angle (radians) | 3D unit quaternion (w, x, y, z);
+                                  every shape that is not round
+    /directors  (N, d)      unit vector of each particle's body x-axis: the long axis of
+                            ellipses, prolate spheroids and linear bodies, the symmetry
+                            axis of oblate spheroids
+    /axes       (N, 2)      ellipses/spheroids: full lengths along and across the director
+                            (major, minor for ellipses and prolate spheroids)
+    /sites (N, S, d), /site_diameters (N, S)   rigid bodies: world positions and diameters
+                                               of each body's sites
+    /fixed (N,)             uint8, 1 for fixed particles (rough walls: they sit on the faces)
+    /wall_forces (k, 2, d)  force of the particles on the lower and upper face of each of
+                            the k walled axes (in the order of the walls attribute)
+    /wall_pressure (k, 2)   outward normal component of wall_forces over the face area
+    /protocol               attrs: every protocol and minimiser parameter
+    /history/<column> (M,)  one dataset per recorded column (phi, energy, pressure, ...)
+    /checks                 attrs: jamflow.mechanics.checks.PackingChecks (if the writer checked it)
+
+Version 1 files (disks and spheres, no shape attributes) still load; files without the
+walls attributes and datasets (added within version 2) load as periodic packings. The derived datasets
+(directors, axes, sites, site_diameters) are written for other tools; loading rebuilds the
+packing from positions, diameters, orientations and the shape attribute.
+
+Every file is written to a temporary sibling and renamed onto its name, so an interrupted
+run never leaves a half-written file. Paths that are symlinks, device nodes, FIFOs or
+read-only files are refused unless forced (``check_writable``, ``replacing``); unreadable
+files give one-line ValueErrors naming the file (``open_hdf5``).
+"""
+
+from __future__ import annotations
+
+from jamflow.support.files import atomic_path
+
+import contextlib
+import datetime
+import json
+import math
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from jamflow import __version__
+from jamflow.model.box import Box
+from jamflow.model.packing import Packing
+from jamflow.model.potentials import potential_from_attrs
+from jamflow.model.shapes.shape import shape_from_attrs
+from jamflow.model.walls import face_pressures, parse_walls, wall_type
+
+SCHEMA = "jamflow.packing"
+SCHEMA_VERSION = 2
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+def save_packing(path, packing: Packing, *, energy_per_particle=None, pressure_tensor=None,
+                 protocol: dict | None = None, history: dict | None = None, lammps_version=None,
+                 wall_forces=None, target_pressure=None, stress=None, checks=None,
+                 dphi_above=None, tables=None) -> Path:
+    """Write ``packing`` (and optional results) atomically to the HDF5 file ``path``.
+
+    ``wall_forces`` (d, 2, d): the force on each face (``jamflow.model.walls.wall_loads``).
+    ``checks``: a ``jamflow.mechanics.checks.PackingChecks``, stored as the attributes of group
+    ``checks``; ``dphi_above``: the compression above onset (``jamflow.protocols.above``).
+    ``tables``: {group: {name: column}}, more groups of datasets (e.g. ``anneal``)."""
+    pot = packing.potential
+    attrs = dict(
+        schema=SCHEMA, schema_version=SCHEMA_VERSION, jamflow_version=__version__,
+        lammps_version=str(lammps_version or ""), dim=packing.dim, n=packing.n, phi=packing.phi,
+        energy_per_particle=_num(energy_per_particle), potential=pot.spec,
+        alpha=float(getattr(pot, "alpha", math.nan)), epsilon=float(pot.epsilon),
+        seed=int(packing.metadata.get("seed", -1)), sizes=str(packing.metadata.get("sizes", "")),
+        created=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        shape=json.dumps(packing.shape.attrs()), shape_spec=packing.shape.spec(packing.dim),
+        gamma=packing.box.shear_strain,
+        walls=packing.box.wall_spec, wall_type=wall_type(packing), gravity=float(packing.gravity),
+        target_pressure=_num(target_pressure), stress=str(stress or ""), dphi_above=_num(dphi_above),
+    )
+    ptensor = None if pressure_tensor is None else np.asarray(pressure_tensor, float)
+    attrs["pressure"] = math.nan if ptensor is None else float(np.trace(ptensor) / packing.dim)
+    with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
+        f.attrs.update(attrs)
+        f["positions"] = packing.box.wrap(packing.positions)
+        f["diameters"] = packing.diameters
+        f["box"] = packing.box.h
+        for name, data in shape_datasets(packing.with_positions(packing.box.wrap(packing.positions))).items():
+            f[name] = data
+        if ptensor is not None:
+            f["pressure_tensor"] = ptensor
+        if packing.fixed is not None:
+            f["fixed"] = packing.fixed.astype(np.uint8)
+        if wall_forces is not None and packing.box.walls:
+            loads = np.asarray(wall_forces, float)
+            f["wall_forces"] = loads[list(packing.box.walls)]
+            f["wall_pressure"] = face_pressures(packing.box, loads)
+        f.create_group("protocol").attrs.update({k: _attr(v) for k, v in (protocol or {}).items()})
+        hist = f.create_group("history")
+        for name, column in (history or {}).items():
+            hist[name] = np.asarray(column)
+        if checks is not None:
+            f.create_group("checks").attrs.update(checks.as_attrs())
+        for group, columns in (tables or {}).items():
+            g = f.create_group(group)
+            for name, column in columns.items():
+                g[name] = np.asarray(column)
+    return Path(path)
+
+
+@contextlib.contextmanager
+def open_hdf5(path, what: str = "jamflow packing file"):
+    """``h5py.File(path, "r")`` whose failures are one-line ValueErrors naming the file and
+    what is wrong with it: missing, empty, not HDF5, truncated or damaged, or lacking an
+    attribute or dataset that ``what`` needs (KeyError inside the block)."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no {what} {path}" if not path.exists() else f"{path} is not a file; give a {what}")
+    if path.stat().st_size == 0:
+        raise ValueError(f"{path} is empty (0 bytes), not a {what}; rerun the command that writes it")
+    if not h5py.is_hdf5(path):
+        raise ValueError(f"{path} is not an HDF5 file (no HDF5 signature), so not a {what}")
+    try:
+        f = h5py.File(path, "r")
+    except OSError as err:
+        raise ValueError(f"{path} is truncated or damaged ({_h5_reason(err)}); rerun the command that "
+                         "wrote it") from None
+    try:
+        with f:
+            yield f
+    except KeyError as err:
+        raise ValueError(f"{path} is an incomplete {what}: {_h5_reason(err)}") from None
+    except OSError as err:
+        raise ValueError(f"{path} is damaged ({_h5_reason(err)}); rerun the command that wrote it") from None
+
+
+def _h5_reason(err) -> str:
+    """h5py's message without its 'Unable to synchronously ...' wrapper."""
+    text = str(err.args[0] if err.args else err).strip("\"'")
+    return text.split("(", 1)[1].rstrip(")") if "(" in text else text
+
+
+def load_packing(path) -> Packing:
+    """Read a jamflow HDF5 packing file (any schema version up to the current one)."""
+    path = Path(path)
+    with open_hdf5(path) as f:
+        schema = f.attrs.get("schema")
+        if schema != SCHEMA:
+            raise ValueError(f"{path} is not a jamflow packing file (schema {schema!r})")
+        if int(f.attrs["schema_version"]) > SCHEMA_VERSION:
+            raise ValueError(f"{path} has schema version {f.attrs['schema_version']}, newer than this "
+                             f"jamflow reads (up to {SCHEMA_VERSION}); upgrade jamflow")
+        pot = potential_from_attrs(str(f.attrs["potential"]), float(f.attrs["alpha"]), float(f.attrs["epsilon"]))
+        shape = shape_from_attrs(json.loads(_text(f.attrs.get("shape", '{"kind": "sphere"}'))))
+        orientations = f["orientations"][...] if "orientations" in f else None
+        meta = {"seed": int(f.attrs["seed"]), "sizes": str(f.attrs["sizes"]), "source": str(path)}
+        h = f["box"][...]
+        fixed = f["fixed"][...].astype(bool) if "fixed" in f else None
+        try:
+            walls = parse_walls(_text(f.attrs.get("walls", "")), len(h))
+            box = Box(h, tuple(a not in walls for a in range(len(h))))
+            return Packing(f["positions"][...], f["diameters"][...], box, pot, meta, shape, orientations, fixed,
+                           float(f.attrs.get("gravity", 0.0)))
+        except ValueError as err:
+            raise ValueError(f"{path} holds an invalid packing: {err}") from None
+
+
+def shape_datasets(packing: Packing) -> dict:
+    """The orientation and shape datasets of schema v2 that this packing has."""
+    out = {}
+    if packing.orientations is not None:
+        out["orientations"] = packing.orientations
+        out["directors"] = packing.directors
+    kind = packing.shape.kind
+    if kind == "ellipsoid":
+        out["axes"] = packing.shape.axes(packing.diameters)
+    elif kind == "rigid":
+        out["sites"] = packing.shape.world_sites(packing.positions, packing.orientations, packing.diameters)
+        out["site_diameters"] = packing.diameters[:, None] * packing.shape.site_diameters[None, :]
+    return out
+
+
+def read_history(path) -> dict:
+    """The protocol history columns of a packing file as numpy arrays."""
+    return read_table(path, "history")
+
+
+def read_table(path, group: str) -> dict:
+    """The datasets of ``group`` in a packing file (``history``, ``anneal``) as numpy arrays."""
+    with open_hdf5(path) as f:  # a missing group: "incomplete jamflow packing file" naming it
+        return {k: v[...] for k, v in f[group].items()}
+
+
+def read_protocol(path) -> dict:
+    """The ``protocol`` group's attributes (protocol, minimiser and run parameters) of a packing file."""
+    with h5py.File(path, "r") as f:
+        return {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f["protocol"].attrs.items()}
+
+
+def read_attrs(path) -> dict:
+    """Root attributes (phi, energy_per_particle, pressure, versions, ...) of a packing file."""
+    with open_hdf5(path) as f:
+        return {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
+
+
+def read_checks(path):
+    """The ``jamflow.mechanics.checks.PackingChecks`` stored in a packing file, or None if it has none."""
+    from jamflow.mechanics.checks import PackingChecks
+
+    with open_hdf5(path) as f:
+        return PackingChecks.from_attrs(f["checks"].attrs) if "checks" in f else None
+
+
+def write_lammps_data(path, packing: Packing) -> Path:
+    """LAMMPS data file of ``packing``; types number the distinct sizes; mass 1 per particle.
+
+    - disks/spheres: ``atom_style sphere`` (id type diameter density x y z);
+    - ellipses/spheroids: ``atom_style ellipsoid`` (id type 1 density x y z) and an
+      ``Ellipsoids`` section (id a b b qw qx qy qz: full lengths, body x along the director);
+    - rigid bodies: ``atom_style hybrid sphere molecular``, one atom per site
+      (id type x y z diameter density molecule ix iy iz), atom id k S + s + 1 for site s of body
+      k, molecule = body, types number the distinct site diameters; site s carries the fraction
+      ``RigidBody.site_masses[s]`` of the body's mass 1, so the mass-weighted site centre (LAMMPS's
+      rigid-body centre) is the union's centre of mass; image flags keep each body whole.
+    Densities use LAMMPS's 3D volumes (also in 2D), so the masses come out as stated."""
+    values, types = packing.species()
+    if packing.shape.kind == "rigid":
+        site_d = packing.diameters[:, None] * packing.shape.site_diameters[None, :]
+        values, types = np.unique(site_d, return_inverse=True)
+        types = types.reshape(site_d.shape)
+    box = packing.box.to_lammps()
+    pos = _xyz(packing.box.wrap(packing.positions))
+    n, kind = packing.n, packing.shape.kind
+    atoms = n * (packing.shape.n_sites if kind == "rigid" else 1)
+    lines = [f"jamflow {__version__} packing, phi = {packing.phi:.17g}, shape {packing.shape.spec(packing.dim)}", "",
+             f"{atoms} atoms", f"{len(values)} atom types"]
+    if kind == "ellipsoid":
+        lines.append(f"{n} ellipsoids")
+    lines += ["", f"{box['xlo']:.17g} {box['xhi']:.17g} xlo xhi", f"{box['ylo']:.17g} {box['yhi']:.17g} ylo yhi",
+              f"{box['zlo']:.17g} {box['zhi']:.17g} zlo zhi"]
+    if packing.box.is_triclinic:
+        lines.append(f"{box['xy']:.17g} {box['xz']:.17g} {box['yz']:.17g} xy xz yz")
+    if kind == "sphere":
+        vol = np.pi * packing.diameters**3 / 6.0  # LAMMPS sphere mass = density * 4/3 pi r^3, also in 2D
+        lines += ["", "Atoms # sphere", ""]
+        lines += [f"{k + 1} {types[k] + 1} {packing.diameters[k]:.17g} {1.0 / vol[k]:.17g} "
+                  f"{_row(pos[k])}" for k in range(n)]
+    elif kind == "ellipsoid":
+        a, b = packing.shape.axes(packing.diameters).T
+        quat = lammps_quaternions(packing)
+        lines += ["", "Atoms # ellipsoid", ""]
+        lines += [f"{k + 1} {types[k] + 1} 1 {6.0 / (np.pi * a[k] * b[k] * b[k]):.17g} {_row(pos[k])}" for k in range(n)]
+        lines += ["", "Ellipsoids", ""]
+        lines += [f"{k + 1} {a[k]:.17g} {b[k]:.17g} {b[k]:.17g} {_row(quat[k])}" for k in range(n)]
+    else:
+        shape, cell = packing.shape, packing.box.reduced()  # image flags count cells of the box LAMMPS holds
+        sites = shape.world_sites(packing.box.wrap(packing.positions), packing.orientations, packing.diameters)
+        flat = sites.reshape(-1, packing.dim)
+        image = np.floor(cell.to_fractional(flat)).astype(int)
+        inside = _xyz(flat - cell.to_cartesian(image))
+        image = image if packing.dim == 3 else np.column_stack([image, np.zeros(len(image), int)])
+        mass = np.tile(shape.site_masses, n)
+        density = mass / (np.pi * site_d.ravel() ** 3 / 6.0)
+        lines += ["", "Atoms # hybrid", ""]
+        lines += [f"{a + 1} {types.flat[a] + 1} {_row(inside[a])} {site_d.flat[a]:.17g} {density[a]:.17g} "
+                  f"{a // shape.n_sites + 1} {image[a, 0]} {image[a, 1]} {image[a, 2]}" for a in range(atoms)]
+    with atomic_path(path) as tmp:
+        tmp.write_text("\n".join(lines) + "\n")
+    return Path(path)
+
+
+def lammps_quaternions(packing: Packing) -> np.ndarray:
+    """(N, 4) quaternions (w, x, y, z) of the particles as LAMMPS stores them (2D: about z)."""
+    o = packing.orientations
+    if packing.dim == 3:
+        return o
+    return np.column_stack([np.cos(o / 2), np.zeros(len(o)), np.zeros(len(o)), np.sin(o / 2)])
+
+
+def _xyz(pos: np.ndarray) -> np.ndarray:
+    return pos if pos.shape[1] == 3 else np.column_stack([pos, np.zeros(len(pos))])
+
+
+def _row(values) -> str:
+    return " ".join(f"{float(v):.17g}" for v in values)
+
+
+def to_universe(packing: Packing):
+    """An MDAnalysis Universe with positions, radii and the (triclinic) box."""
+    import MDAnalysis as mda
+    from MDAnalysis.lib.mdamath import triclinic_box
+
+    u = mda.Universe.empty(packing.n, trajectory=True)
+    _, types = packing.species()
+    u.add_TopologyAttr("types", [str(t + 1) for t in types])
+    u.add_TopologyAttr("radii", packing.diameters / 2.0)
+    cell = packing.box.reduced().h  # the same lattice with the tilt folded in, as MDAnalysis expects
+    h = cell if packing.dim == 3 else np.diag([*np.diag(cell), 1.0])
+    if packing.dim == 2:
+        h[0, 1] = cell[0, 1]
+    pos = packing.box.wrap(packing.positions)
+    u.atoms.positions = pos if packing.dim == 3 else np.column_stack([pos, np.zeros(packing.n)])
+    u.dimensions = triclinic_box(*h.T)
+    return u
+
+
+def _text(value) -> str:
+    return value.decode() if isinstance(value, bytes) else str(value)
+
+
+def _num(x):
+    return math.nan if x is None else float(x)
+
+
+def _attr(value):
+    if value is None:
+        return "None"
+    if isinstance(value, (bool, int, float, str, np.number)):
+        return value
+    return str(value)

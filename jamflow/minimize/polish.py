@@ -1,0 +1,326 @@
+"""Gauss-Newton active-set polish of a disk/sphere minimisation near force balance (issue 17).
+
+With the linear spring (alpha = 2, eps = 1) the energy is a nonlinear least-squares objective,
+V = 1/2 sum_pairs max(0, delta_ij)^2 with delta = 1 - r_ij / sigma_ij (seed eq. 2.1). Its
+Gauss-Newton model about x, m(dx) = 1/2 sum max(0, delta + J dx)^2 + mu/2 |dx|^2 (J = d delta / dx
+over the pairs within sigma + ``SKIN``), is convex and piecewise quadratic, and any dx with
+m(dx) < m(0) = V is a descent direction of V. A polish step minimises m by semismooth Newton
+(an active set A = {delta + J dx > 0}, the solve (J_A^T J_A + mu I) p = -grad m by sparse LU,
+and the exact minimiser of m along p, so the gaps that p would close stop it and join A next),
+then accepts x + alpha dx by Armijo backtracking on the engine's exact energy; where the predicted
+decrease is below the energy's round-off, the step must lower the max force instead. The
+Hessian's tension terms (-delta / (r sigma) (I - n n^T), of order -P) are left out: J^T J is
+positive semidefinite, so a step never heads for a saddle, which is why this converges where
+Newton on the full active-set Hessian did not (docs/speed-2.md sections 3-4 and 8). The shift mu
+(1e-12 of the largest diagonal) fixes the d translations and the rattlers, whose right-hand
+side is zero. Convergence is linear near a minimum (rate ~ tension / stiffness along the
+softest mode); its use is the creep of the final minimisations near onset, where FIRE spends
+1e4-1e5 iterations rolling off a saddle whose soft mode (J^T J ~ 1e-11, Hessian ~ -P) ends at a
+contact change that the model's active set finds in one step.
+
+Optionally (``newton=True``) a full Newton step with the exact Hessian is tried first wherever
+H + mu I is positive definite: quadratic far above onset, but near onset H is indefinite at
+almost every state and the option was never accepted in the N = 256 / 1024 jams, so it is off.
+
+Rigid bodies of fused sites (n-mers, issue 14) are polished the same way: their energy is the same
+sum over site pairs of different bodies, delta = 1 - s with s = |r_s - r_t| / sigma, and J is
+ds/dxi in the generalized coordinates of ``analysis.hessian.Coordinates`` (centres, then the
+rotations d_k theta; ``hessian.distance_jacobian``, the rows the dynamical matrix uses), so the
+model is linear in the rotations too and a step moves and turns the bodies rigidly
+(``analysis.deformation.displaced``); its neglected terms are the tensions and the rotations'
+second order, which the exact-energy line search absorbs. The creep it is for is the
+contact-change kind that the soft-mode steps (``jamflow.minimize.soft_modes``) undo: 3D dimers creeping
+1e5-1e6 iterations per minimisation at max force 1e-11 to 5e-9 (docs/nmers.md).
+
+Only the linear spring at a fixed periodic box (``polish_reason``); the engine is any
+``jamflow.engines.base.Engine`` (positions, set_positions, evaluate, packing); disk and sphere
+pairs come from the compiled disk kernel's builder. Measured in benchmarks/gauss_newton_polish.py
+(docs/speed-2.md section 8: N = 1024 median CPU time -19% to -38%, phi_J statistically equal).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+CREEP_FORCE = 1e-9  # a minimisation below this max force (eps/diameter) that has not converged creeps
+RIGID_CREEP_FORCE = 1e-6  # rigid bodies: their minimisations also creep at 1e-9 - 5e-9 (docs/nmers.md)
+SKIN = 0.05  # candidate pairs within sigma + SKIN (diameters): the gaps a step may close
+SHIFT = 1e-12  # mu, relative to the largest diagonal of J^T J
+ARMIJO = 1e-4
+ALPHAS = 0.5 ** np.arange(14)  # backtracking 1 ... 1.2e-4
+INNER = 10  # active-set iterations per step
+MAX_STEPS = 40
+log = logging.getLogger(__name__)
+AFTER = 20_000  # MinimizerSettings.creep_after default: iterations before a minimisation is polished (measured)
+
+
+@dataclass(frozen=True)
+class PolishStep:
+    """One Gauss-Newton step: pairs in the model's final active set, active-set iterations,
+    accepted step length (0: none accepted), max force component before and after (eps/diameter)."""
+
+    active: int
+    inner: int
+    alpha: float
+    force_before: float
+    force_after: float
+    kind: str = "gauss-newton"  # or "newton" (full Hessian, positive definite, full step accepted)
+
+
+@dataclass(frozen=True)
+class PolishResult:
+    converged: bool  # max force below the tolerance
+    steps: tuple
+    max_force: float
+    seconds: float  # process (CPU) time
+
+
+def polish_reason(packing) -> str:
+    """'' if ``polish`` applies to this packing, else why not (one phrase)."""
+    pot = packing.potential
+    if packing.shape.kind not in ("sphere", "rigid"):
+        return (f"the Gauss-Newton polish needs disks, spheres or rigid bodies of fused sites, not "
+                f"{packing.shape.kind} particles")
+    if getattr(pot, "name", "") != "spring" or float(pot.alpha) != 2.0:
+        return "the Gauss-Newton polish needs the linear spring (alpha = 2), the least-squares energy"
+    if packing.fixed is not None or not all(packing.box.periodic) or packing.gravity:
+        return "the Gauss-Newton polish needs a periodic box without walls, fixed particles or gravity"
+    return ""
+
+
+def overlaps(x: np.ndarray, pairs) -> tuple[np.ndarray, sp.csr_matrix]:
+    """delta = 1 - r / sigma over ``pairs`` (i, j, shift, sigma) and its Jacobian J (P x N d)."""
+    import scipy.sparse as sp  # loaded only when a polish runs
+
+    n, d = x.shape
+    dr = x[pairs.i] - x[pairs.j] + pairs.shift
+    r = np.sqrt(np.einsum("ij,ij->i", dr, dr))
+    delta = 1.0 - r / pairs.sigma
+    g = dr / (r * pairs.sigma)[:, None]  # d delta / d x_j = +g, d delta / d x_i = -g
+    rows = np.repeat(np.arange(len(r)), 2 * d)
+    cols = np.concatenate([pairs.i[:, None] * d + np.arange(d), pairs.j[:, None] * d + np.arange(d)], axis=1)
+    return delta, sp.csr_matrix((np.concatenate([-g, g], axis=1).ravel(), (rows, cols.ravel())),
+                                shape=(len(r), n * d))
+
+
+def model(packing):
+    """(delta, J) of the pairs within sigma + ``SKIN`` at ``packing``:
+    disks/spheres by ``overlaps`` on the compiled builder's pair list, rigid bodies over site pairs
+    in generalized coordinates (``hessian.distance_jacobian``)."""
+    if packing.shape.kind == "sphere":
+        from jamflow.engines.compiled.spheres import build  # the disk/sphere pair list (i, j, shift, sigma)
+
+        return overlaps(packing.positions, build(packing, packing.positions, SKIN))
+    from jamflow.mechanics.hessian import distance_jacobian
+
+    s, jac = distance_jacobian(packing, SKIN)
+    return 1.0 - s, -jac
+
+
+def moved(packing, dx: np.ndarray):
+    """The packing after the generalized displacement dx (centres, then rotations d_k theta)."""
+    if not packing.shape.oriented:
+        return packing.with_positions(packing.positions + dx.reshape(packing.positions.shape))
+    from jamflow.mechanics.deformation import displaced
+    from jamflow.mechanics.hessian import Coordinates
+
+    return displaced(packing, *Coordinates.of(packing).split(dx))
+
+
+def _place(engine, packing) -> None:
+    engine.set_positions(packing.positions, packing.orientations)
+
+
+def model_value(delta: np.ndarray, jac, dx: np.ndarray, mu: float) -> float:
+    """m(dx) = 1/2 sum max(0, delta + J dx)^2 + mu/2 |dx|^2."""
+    lin = delta + jac @ dx
+    return 0.5 * float(np.sum(np.maximum(lin, 0.0) ** 2)) + 0.5 * mu * float(dx @ dx)
+
+
+def line_minimum(a: np.ndarray, b: np.ndarray, dx: np.ndarray, p: np.ndarray, mu: float) -> float:
+    """The minimiser t >= 0 of m(dx + t p) = 1/2 sum max(0, a + t b)^2 + mu/2 |dx + t p|^2 (a convex
+    piecewise quadratic: its slope increases with t), by bisection on the slope."""
+    c0, c1 = mu * float(dx @ p), mu * float(p @ p)
+
+    def slope(t):
+        r = a + t * b
+        on = r > 0
+        return float(b[on] @ r[on]) + c0 + t * c1
+
+    if slope(0.0) >= 0:
+        return 0.0
+    hi = 1.0
+    while slope(hi) < 0 and hi < 1e6:
+        hi *= 2.0
+    lo = 0.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if slope(mid) < 0 else (lo, mid)
+    return lo
+
+
+def model_step(delta: np.ndarray, jac: sp.csr_matrix, mu: float) -> tuple[np.ndarray, int, int]:
+    """Minimise m(dx) by semismooth Newton with exact line searches on m; ends when a full step
+    keeps the active set. Returns (dx, pairs in the last active set, active-set iterations)."""
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla  # loaded only when a polish runs
+
+    dx = np.zeros(jac.shape[1])
+    eye = sp.identity(jac.shape[1], format="csc")
+    k = 0
+    for k in range(1, INNER + 1):
+        lin = delta + jac @ dx
+        active = lin > 0
+        ja = jac[active]
+        grad = ja.T @ lin[active] + mu * dx
+        lu = spla.splu((ja.T @ ja + mu * eye).tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                       options=dict(SymmetricMode=True))
+        p = lu.solve(-grad)
+        t = line_minimum(lin, jac @ p, dx, p, mu) if float(grad @ p) < 0 else 0.0
+        if t <= 0:
+            break
+        dx = dx + t * p
+        if t >= 1.0 and np.array_equal(delta + jac @ dx > 0, active):
+            break
+    return dx, int((delta + jac @ dx > 0).sum()), k
+
+
+def newton_step(packing, grad: np.ndarray, mu: float) -> np.ndarray | None:
+    """The Newton step -(H + mu I)^-1 grad with the full Hessian of the overlapping pairs
+    (``analysis.hessian``: tension terms included), or None where H + mu I is not positive definite
+    (read off the pivots of a symmetric, diagonally pivoted LU: Sylvester's law of inertia)."""
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla  # loaded only when a polish runs
+    from jamflow.mechanics.hessian import hessian
+
+    h = hessian(packing)
+    lu = spla.splu((h + mu * sp.identity(h.shape[0])).tocsc(), permc_spec="MMD_AT_PLUS_A",
+                   diag_pivot_thresh=0.0, options=dict(SymmetricMode=True))
+    if not (np.array_equal(lu.perm_r, lu.perm_c) and np.all(lu.U.diagonal() > 0)):
+        return None
+    return lu.solve(-grad)
+
+
+def _line_search(engine, packing, dx, state, grad, noise: float):
+    """Armijo backtracking on the exact energy along dx from ``packing`` (gradient ``grad``),
+    ``noise`` the energy's round-off; (alpha, trial state, trial packing), alpha 0 if no step
+    length is accepted."""
+    slope = float(grad @ dx)
+    if slope >= 0:
+        return 0.0, state, packing
+    worst = float(np.abs(grad).max(initial=0.0))
+    for alpha in ALPHAS:
+        trial_packing = moved(packing, alpha * dx)
+        _place(engine, trial_packing)
+        trial = engine.evaluate()
+        rise = trial.energy - state.energy
+        if -alpha * slope > noise:
+            ok = rise <= ARMIJO * alpha * slope
+        else:  # the predicted decrease is below the energy's round-off: the max force decides
+            ok = rise <= noise and _worst(trial_packing, trial) < worst
+        if ok:
+            return float(alpha), trial, trial_packing
+    return 0.0, state, packing
+
+
+def _worst(packing, state) -> float:
+    """Max |component| of -dV/dxi at ``packing``: forces and generalized torques tau_a / d_k
+    (eps/diameter)."""
+    from jamflow.mechanics.checks import generalized_forces
+
+    return float(np.abs(generalized_forces(packing, state)).max(initial=0.0))
+
+
+def polish(engine, ftol: float, max_steps: int = MAX_STEPS, on_step=None, newton: bool = False) -> PolishResult:
+    """Gauss-Newton steps on ``engine``'s configuration until its max force and generalized torque
+    component is below ``ftol`` (eps/diameter) or no step length is accepted; the engine keeps the
+    last accepted configuration, evaluated. With ``newton`` a full Newton step is tried first
+    wherever the Hessian is positive definite (quadratic convergence at a stable minimum; near a
+    saddle it is not, and the Gauss-Newton step is taken). ``on_step(PolishStep)`` is called after
+    every step."""
+    from jamflow.mechanics.checks import generalized_forces
+
+    reason = polish_reason(engine.template)
+    if reason:
+        raise ValueError(f"{reason}; minimise with FIRE alone")
+    if not (np.isfinite(ftol) and ftol > 0):
+        raise ValueError(f"the polish's force tolerance must be a finite positive number (eps/diameter), got {ftol!r}")
+    c0 = time.process_time()
+    packing = engine.packing()
+    _place(engine, packing)  # the states compared below are all evaluated from arrays set here
+    state = engine.evaluate()
+    grad = -generalized_forces(packing, state)
+    worst = float(np.abs(grad).max(initial=0.0))
+    steps = []
+    while worst >= ftol and len(steps) < max_steps:
+        delta, jac = model(packing)
+        mu = SHIFT * max(float(np.asarray(jac.multiply(jac).sum(axis=0)).max(initial=0.0)), 1.0)
+        noise = 8 * np.finfo(float).eps * float(np.sum(np.maximum(delta, 0.0)))  # V = sum delta^2 / 2, each delta to ~eps
+        accepted, kind, before = 0.0, "newton", worst
+        dx = newton_step(packing, grad, mu) if newton else None
+        if dx is not None:
+            accepted, trial, trial_packing = _line_search(engine, packing, dx, state, grad, noise)
+            accepted = accepted if accepted == 1.0 else 0.0  # a damped Newton step: take Gauss-Newton's
+            n_active, inner = int((delta > 0).sum()), 0
+        if not accepted:
+            kind = "gauss-newton"
+            dx, n_active, inner = model_step(delta, jac, mu)
+            accepted, trial, trial_packing = _line_search(engine, packing, dx, state, grad, noise)
+        if accepted:
+            packing, state = trial_packing, trial
+            grad = -generalized_forces(packing, state)
+            worst = float(np.abs(grad).max(initial=0.0))
+        step = PolishStep(n_active, inner, accepted, before, worst, kind)
+        steps.append(step)
+        if on_step is not None:
+            on_step(step)
+        if not accepted:
+            _place(engine, packing)
+            state = engine.evaluate()
+            break
+    return PolishResult(worst < ftol, tuple(steps), worst, time.process_time() - c0)
+
+
+@dataclass
+class Polisher:
+    """The creep method "polish" of one minimisation (``MinimizerSettings.creep``): a ``polish``
+    at the first multiple of ``after`` iterations where the max force is below ``creep_force``,
+    once per minimisation, or again every ``every`` iterations after that (None: once).
+    ``measured`` gives the forms that were measured to pay."""
+
+    after: int
+    ftol: float
+    every: int | None = None
+    creep_force: float = CREEP_FORCE  # max force (eps/diameter) below which a minimisation counts as creeping
+    accepted: int = 0
+    attempts: int = 0
+    next_at: int = 0
+
+    @classmethod
+    def measured(cls, packing, after: int, ftol: float) -> "Polisher":
+        """Rigid bodies: every ``after`` iterations from ``RIGID_CREEP_FORCE`` (docs/nmers.md, "The
+        creep of rigid bodies"); disks and spheres: once, below ``CREEP_FORCE`` (docs/speed-2.md
+        sections 8 and 11)."""
+        if packing.shape.kind == "rigid":
+            return cls(after, ftol, every=after, creep_force=RIGID_CREEP_FORCE)
+        return cls(after, ftol)
+
+    def due(self, done: int, max_force: float) -> bool:
+        if self.attempts and (self.every is None or done < self.next_at):
+            return False
+        return done % self.after == 0 and max_force < self.creep_force
+
+    def step(self, engine, done: int) -> bool:
+        self.attempts += 1
+        self.next_at = done + (self.every or 0)
+        result = polish(engine, self.ftol)
+        kept = sum(1 for s in result.steps if s.alpha > 0)
+        self.accepted += kept
+        first = result.steps[0].force_before if result.steps else result.max_force
+        log.info("polish %d at iteration %d: %d of %d steps kept, max force %.3g -> %.3g, %.2f CPU s", self.attempts,
+                 done, kept, len(result.steps), first, result.max_force, result.seconds)
+        return kept > 0

@@ -1,0 +1,250 @@
+"""The ``Packing`` value object: the whole configuration of a particle system.
+
+Positions, sizes, orientations and the particle shape, the periodic box and the pair
+potential: everything an engine, an analysis or a file needs. Immutable: every operation
+returns a new Packing. Units: lengths in small diameters (the scale 1 of the smallest
+particle), energies in epsilon, masses 1.
+
+Sizes: ``diameters[i]`` is particle i's scale: the diameter of a disk/sphere, the
+across-axis length b of an ellipse/spheroid, the scale factor of a rigid body's sites
+(``jamflow.model.shapes``). Orientations (``jamflow.model.shapes.rotations``): None for disks and
+spheres; (N,) angles in 2D, (N, 4) unit quaternions in 3D for every other shape.
+
+Boundaries (seed section 2.3, ``jamflow.model.walls``): the box's walled axes carry flat walls at
+their faces; ``fixed`` marks particles held in place (the particles of rough walls, which
+sit on the wall faces); ``gravity`` g pulls every mobile particle (mass 1) along -e_(d-1)
+onto the floor x_(d-1) = 0, which must be a wall.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from jamflow.model.box import Box
+from jamflow.model.potentials import Potential, Spring
+from jamflow.model.shapes.rotations import check_orientations, directors, random_orientations
+from jamflow.model.shapes.shape import SPHERE
+from jamflow.model.sizes import SizeSpec
+
+# Densest packings of equal disks (hexagonal) and spheres (FCC): pi/(2 sqrt 3), pi/(3 sqrt 2).
+DENSEST_PHI = {2: math.pi / (2 * math.sqrt(3)), 3: math.pi / (3 * math.sqrt(2))}
+
+
+def particle_volumes(diameters: np.ndarray, dim: int) -> np.ndarray:
+    """Area (2D) or volume (3D) of disks/spheres with the given diameters."""
+    return SPHERE.volumes(diameters, dim)
+
+
+@dataclass(frozen=True)
+class Packing:
+    """N particles of one shape in a periodic box, with their pair potential."""
+
+    positions: np.ndarray
+    diameters: np.ndarray
+    box: Box
+    potential: Potential = field(default_factory=Spring)
+    metadata: dict = field(default_factory=dict)
+    shape: object = SPHERE
+    orientations: np.ndarray | None = None
+    fixed: np.ndarray | None = None  # (N,) bool: held in place (rough-wall particles); None: none
+    gravity: float = 0.0  # g: force per (unit-mass) mobile particle along -e_(d-1), eps/diameter
+
+    def __post_init__(self):
+        pos = np.array(self.positions, dtype=float)
+        dia = np.array(self.diameters, dtype=float)
+        if pos.ndim != 2 or pos.shape[1] != self.box.dim:
+            raise ValueError(f"positions must have shape (N, {self.box.dim}), got {pos.shape}")
+        if dia.shape != (pos.shape[0],):
+            raise ValueError(f"diameters must have shape ({pos.shape[0]},), got {dia.shape}")
+        if not (np.all(np.isfinite(pos)) and np.all(np.isfinite(dia))):
+            raise ValueError("positions and diameters must be finite")
+        if np.any(dia <= 0):
+            raise ValueError("diameters must be positive")
+        self.shape.check(self.box.dim)
+        self.shape.check_sizes(dia, self.box.dim)
+        if self.shape.oriented:
+            if self.orientations is None:
+                raise ValueError(f"a packing of {self.shape.name(self.box.dim)} particles needs orientations")
+            orient = check_orientations(self.orientations, len(pos), self.box.dim)
+            orient.setflags(write=False)
+            object.__setattr__(self, "orientations", orient)
+        elif self.orientations is not None:
+            raise ValueError("disks and spheres have no orientations; pass orientations=None")
+        self._check_boundary(len(dia))
+        if len(dia) and 4 * self.shape.reach(dia).max() >= self.box.widths.min():
+            raise ValueError("box too small: the largest contact distance must stay below half "
+                             "the box width for a unique minimum image; use more particles")
+        pos.setflags(write=False)
+        dia.setflags(write=False)
+        object.__setattr__(self, "positions", pos)
+        object.__setattr__(self, "diameters", dia)
+
+    def _check_boundary(self, n: int) -> None:
+        if self.fixed is not None:
+            fixed = np.array(self.fixed, dtype=bool)
+            if fixed.shape != (n,):
+                raise ValueError(f"fixed must be a boolean mask of shape ({n},), got {np.shape(self.fixed)}")
+            if fixed.all():
+                raise ValueError("every particle is fixed: nothing can move; mark only the wall particles fixed")
+            fixed.setflags(write=False)
+            object.__setattr__(self, "fixed", fixed if fixed.any() else None)
+        g = self.gravity
+        if not (isinstance(g, (int, float, np.floating)) and math.isfinite(g) and g >= 0):
+            raise ValueError(f"gravity must be a finite number >= 0 (eps/diameter per particle), got {g!r}")
+        object.__setattr__(self, "gravity", float(g))
+        if g > 0 and self.box.periodic[-1]:
+            floor = "yz"[self.box.dim - 2]
+            raise ValueError(f"gravity without a floor: gravity pulls along -{floor}, but {floor} is periodic; "
+                             f"add walls on {floor} (--walls {floor})")
+
+    @property
+    def n(self) -> int:
+        return len(self.diameters)
+
+    @property
+    def mobile(self) -> np.ndarray:
+        """(N,) bool: particles that move (all but the fixed ones)."""
+        return np.ones(self.n, bool) if self.fixed is None else ~self.fixed
+
+    @property
+    def n_mobile(self) -> int:
+        """Particles that move: the N of energies per particle and of the contact count."""
+        return self.n if self.fixed is None else int(self.n - self.fixed.sum())
+
+    @property
+    def dim(self) -> int:
+        return self.box.dim
+
+    @property
+    def volumes(self) -> np.ndarray:
+        """Area (2D) or volume (3D) of every particle."""
+        return self.shape.volumes(self.diameters, self.dim)
+
+    @property
+    def phi(self) -> float:
+        """Packing fraction: particle volume inside the box over the box volume, which with
+        walls is the volume between them (mobile particles count whole, fixed wall particles
+        by the fraction inside: ``jamflow.model.packing.inside_fraction``)."""
+        if self.fixed is None:
+            return float(self.volumes.sum() / self.box.volume)
+        from jamflow.model.packing import inside_fraction
+
+        return float((self.volumes * inside_fraction(self)).sum() / self.box.volume)
+
+    @property
+    def dof_per_particle(self) -> int:
+        """d_f of the seed chapter (section 3)."""
+        return self.shape.dof(self.dim)
+
+    @property
+    def directors(self) -> np.ndarray | None:
+        """(N, d) unit vectors along each particle's body x-axis (None for disks/spheres)."""
+        return None if self.orientations is None else directors(self.orientations, self.dim)
+
+    @property
+    def rotational_lengths(self) -> np.ndarray:
+        """(N, r) d_k of each rotational body axis (r = 0 for disks and spheres)."""
+        return self.shape.rotational_lengths(self.diameters, self.dim)
+
+    def species(self) -> tuple[np.ndarray, np.ndarray]:
+        """(distinct diameters, type index 0.. of each particle)."""
+        values, index = np.unique(self.diameters, return_inverse=True)
+        return values, index
+
+    def with_positions(self, positions, box: Box | None = None, orientations=None, **metadata) -> "Packing":
+        """Same particles at new positions (and orientations, if given) in ``box``."""
+        return replace(self, positions=positions, box=box or self.box,
+                       orientations=self.orientations if orientations is None else orientations,
+                       metadata={**self.metadata, **metadata})
+
+    def subset(self, keep: np.ndarray, **metadata) -> "Packing":
+        """The packing of particles ``keep`` (indices or mask), same box, shape and potential."""
+        orient = None if self.orientations is None else self.orientations[keep]
+        fixed = None if self.fixed is None else self.fixed[keep]
+        return replace(self, positions=self.positions[keep], diameters=self.diameters[keep],
+                       orientations=orient, fixed=fixed, metadata={**self.metadata, **metadata})
+
+    def scaled_to_phi(self, phi: float) -> "Packing":
+        """Affine rescaling of box and positions to packing fraction ``phi``."""
+        factor = (self.phi / phi) ** (1.0 / self.dim)
+        return self.with_positions(self.positions * factor, self.box.scaled(factor))
+
+
+def random_packing(n: int, dim: int, sizes: SizeSpec, phi: float, seed: int,
+                   potential: Potential | None = None, shape=SPHERE, separated: bool = False) -> Packing:
+    """Uniformly random positions in a square/cubic box at packing fraction ``phi`` and, for
+    shapes that are not round, uniformly random orientations (seed step 1). Diameters are
+    drawn first, then positions, then orientations, from one generator. ``separated`` (rigid
+    bodies): orientations first, then positions by random sequential addition, so that no two
+    bodies overlap (``separated_positions``)."""
+    rng = np.random.default_rng(seed)
+    diameters = sizes.draw(n, rng)
+    length = (shape.volumes(diameters, dim).sum() / phi) ** (1.0 / dim)
+    box = Box.cube(length, dim)
+    if separated:
+        orientations = random_orientations(n, dim, rng)
+        positions = separated_positions(shape, diameters, orientations, box, rng)
+    else:
+        positions = rng.random((n, dim)) * length
+        orientations = random_orientations(n, dim, rng) if shape.oriented else None
+    return Packing(positions, diameters, box, potential or Spring(),
+                   metadata={"seed": seed, "sizes": sizes.spec}, shape=shape, orientations=orientations)
+
+
+SEPARATION_TRIES = 10_000  # random positions tried per body before random sequential addition gives up
+
+
+class SeparationFailed(ValueError):
+    """Random sequential addition found no place for a body: the start is too dense."""
+
+
+def separated_positions(shape, diameters, orientations, box: Box, rng: np.random.Generator) -> np.ndarray:
+    """Random sequential addition of rigid bodies, the largest first: each at a uniform random
+    position, drawn again while any of its sites overlaps a site of a body already placed
+    (minimum image). Soft
+    concave bodies started on top of each other can stay interlocked (two crossed dimers at
+    alpha = 2 are a local energy minimum, site overlaps 1 - 1/sqrt 2: docs/nmers.md)."""
+    n, dim = len(diameters), box.dim
+    local = shape.world_sites(np.zeros((n, dim)), orientations, diameters)  # (N, S, d) about each centre
+    site_d = diameters[:, None] * shape.site_diameters[None, :]
+    placed, placed_d = np.empty((0, dim)), np.empty(0)
+    positions = np.empty((n, dim))
+    for k in np.argsort(-np.asarray(diameters), kind="stable"):
+        for _ in range(SEPARATION_TRIES):
+            centre = box.to_cartesian(rng.random(dim))
+            sites = centre + local[k]
+            gap = np.linalg.norm(box.minimum_image(sites[:, None, :] - placed[None, :, :]), axis=-1)
+            if np.all(gap >= 0.5 * (site_d[k][:, None] + placed_d[None, :])):
+                break
+        else:
+            raise SeparationFailed(f"random sequential addition found no place for body {k + 1} of {n} at packing fraction "
+                             f"{shape.volumes(diameters, dim).sum() / box.volume:.3f}; use a lower phi0")
+        positions[k] = centre
+        placed, placed_d = np.vstack([placed, sites]), np.concatenate([placed_d, site_d[k]])
+    return positions
+
+
+ON_FACE = 1e-9  # a fixed particle lies on a face when |x_a - face| < ON_FACE * L_a
+
+
+def face_membership(packing) -> np.ndarray:
+    """(N, d, 2) bool: particle i is a fixed particle centred on the lower/upper face of axis a."""
+    out = np.zeros((packing.n, packing.dim, 2), bool)
+    if packing.fixed is None:
+        return out
+    x, lengths = packing.positions, packing.box.lengths
+    for a in packing.box.walls:
+        tol = ON_FACE * lengths[a]
+        out[:, a, 0] = packing.fixed & (np.abs(x[:, a]) < tol)
+        out[:, a, 1] = packing.fixed & (np.abs(x[:, a] - lengths[a]) < tol)
+    return out
+
+
+def inside_fraction(packing) -> np.ndarray:
+    """(N,) fraction of each particle's volume counted inside the walls: 1 for mobile
+    particles, 2^-k for a fixed particle on k faces (exact while wall particles do not overlap)."""
+    faces = face_membership(packing).sum(axis=(1, 2))
+    return 0.5 ** faces

@@ -1,0 +1,212 @@
+"""Purely repulsive contact potentials of the seed chapter, each written once.
+
+A potential is a law of the reduced distance s = r / sigma_ij (sigma_ij the contact
+distance: (a_i + a_j)/2 for disks and spheres, the exact ellipse contact distance for
+ellipses): V(s) > 0 for s < 1 and V = 0 for s >= 1. Energies in epsilon.
+
+- ``Spring(alpha)``: V = eps/alpha (1 - s)^alpha  (seed eq. 2.1; alpha = 2 linear,
+  alpha = 5/2 Hertzian).
+- ``RepulsiveLJ``: V = eps [s^-12 - 2 s^-6 + 1]  (seed eq. 2.2).
+
+The law of each potential is one pair of plain functions of (s, params) --
+``energy_force`` (V and dV/ds) and ``curvature`` (d2V/ds2) -- valid for s < 1, written with
+arithmetic only, so that numpy evaluates them on arrays (the reference engine, the Hessian)
+and numba compiles the very same source for the compiled engine
+(``jamflow.engines.compiled.laws``). The other engines' forms -- the C++ plugin
+(``engine/plugin/pair_jamflow.cpp``) and the lepton expression below -- are tested against
+these functions (tests/test_plugin.py). A new potential is one class here (with its law,
+``lepton`` and ``plugin_style``) and its C++ law in the plugin.
+
+``parse_potential`` reads the CLI spec: ``spring``, ``hertz``, ``spring:ALPHA``, ``rlj``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+
+# --- the laws: plain functions of s = r / sigma (s < 1) and a NamedTuple of parameters ---------
+class SpringParams(NamedTuple):
+    alpha: float
+    epsilon: float
+
+
+def spring_energy_force(s, p: SpringParams):
+    """V = eps/alpha (1 - s)^alpha and dV/ds = -eps (1 - s)^(alpha - 1) (seed eq. 2.1)."""
+    x = 1.0 - s
+    if p.alpha == 2.0:
+        return 0.5 * p.epsilon * x * x, -p.epsilon * x
+    return p.epsilon / p.alpha * x**p.alpha, -p.epsilon * x ** (p.alpha - 1.0)
+
+
+def spring_curvature(s, p: SpringParams):
+    """d2V/ds2 = eps (alpha - 1) (1 - s)^(alpha - 2); diverges at contact for alpha < 2."""
+    return p.epsilon * (p.alpha - 1.0) * (1.0 - s) ** (p.alpha - 2.0)
+
+
+class RLJParams(NamedTuple):
+    epsilon: float
+
+
+def rlj_energy_force(s, p: RLJParams):
+    """V = eps (s^-6 - 1)^2 = eps [s^-12 - 2 s^-6 + 1] (seed eq. 2.2; the square form has no
+    cancellation near contact) and dV/ds = -12 eps s^-6 (s^-6 - 1) / s."""
+    q6 = 1.0 / (s * s * s * s * s * s)
+    return p.epsilon * (q6 - 1.0) * (q6 - 1.0), -12.0 * p.epsilon * q6 * (q6 - 1.0) / s
+
+
+def rlj_curvature(s, p: RLJParams):
+    """d2V/ds2 = 12 eps (13 s^-12 - 7 s^-6) / s^2."""
+    q6 = 1.0 / (s * s * s * s * s * s)
+    return 12.0 * p.epsilon * (13.0 * q6 * q6 - 7.0 * q6) / (s * s)
+
+
+# --- potential objects: the law plus what the engines need ------------------------------------
+class _Law:
+    """Vectorised V(r, sigma), dV/dr, d2V/dr2 (numpy) from the law of s = r / sigma."""
+
+    def _reduced(self, r, sigma):
+        r, sigma = np.broadcast_arrays(np.asarray(r, float), np.asarray(sigma, float))
+        s = r / sigma
+        inside = s < 1.0
+        return np.where(inside, s, 0.5), sigma, inside  # 0.5: a harmless point outside contact
+
+    def energy(self, r, sigma):
+        """V(r) in eps; zero for r >= sigma."""
+        s, _, inside = self._reduced(r, sigma)
+        return np.where(inside, self.energy_force(s, self.params)[0], 0.0)
+
+    def dv_dr(self, r, sigma):
+        """dV/dr = V'(s) / sigma (negative: repulsive), eps / length."""
+        s, sigma, inside = self._reduced(r, sigma)
+        return np.where(inside, self.energy_force(s, self.params)[1] / sigma, 0.0)
+
+    def d2v_dr2(self, r, sigma):
+        """d2V/dr2 = V''(s) / sigma^2, eps / length^2."""
+        s, sigma, inside = self._reduced(r, sigma)
+        return np.where(inside, self.curvature(s, self.params) / sigma**2, 0.0)
+
+
+@dataclass(frozen=True)
+class Spring(_Law):
+    """Repulsive spring V = eps/alpha (1 - r/sigma)^alpha for r < sigma (seed eq. 2.1)."""
+
+    alpha: float = 2.0
+    epsilon: float = 1.0
+
+    name = "spring"
+    soft_start = False  # finite forces at any overlap: random starts need no relaxation
+    Params = SpringParams
+    energy_force = staticmethod(spring_energy_force)
+    curvature = staticmethod(spring_curvature)
+
+    def __post_init__(self):
+        if not (isinstance(self.alpha, (int, float)) and math.isfinite(self.alpha) and self.alpha > 1.0):
+            raise ValueError(f"spring exponent alpha must be a finite number > 1, got {self.alpha!r}")
+        _check_epsilon(self.epsilon)
+
+    @property
+    def params(self) -> SpringParams:
+        return SpringParams(float(self.alpha), float(self.epsilon))
+
+    @property
+    def spec(self) -> str:
+        return "hertz" if self.alpha == 2.5 else ("spring" if self.alpha == 2.0 else f"spring:{self.alpha:g}")
+
+    @property
+    def contact_stiffness(self) -> float:
+        """Scale of d2V/dr2 near contact (eps/diameter^2); sets the force round-off floor."""
+        return self.epsilon
+
+    @property
+    def onset_exponent(self) -> float:
+        """V ~ (phi - phi_J)^alpha just above jamming."""
+        return self.alpha
+
+    @property
+    def lepton(self) -> str:
+        """``lepton/sphere`` expression (``max``, not ``step``: a negative base to a
+        non-integer power is NaN, and step(...) * NaN stays NaN beyond contact)."""
+        return f"E/A*max(0,1-r/(radi+radj))^A; E={float(self.epsilon)!r}; A={float(self.alpha)!r}"
+
+    def plugin_style(self, cutoff: float) -> str:
+        """Arguments of ``pair_style`` for jamflow's C++ plugin."""
+        return f"jamflow/spring {float(self.alpha)!r} {float(cutoff)!r}"
+
+
+@dataclass(frozen=True)
+class RepulsiveLJ(_Law):
+    """Repulsive Lennard-Jones V = eps[(s/r)^12 - 2(s/r)^6 + 1] for r < s (seed eq. 2.2)."""
+
+    epsilon: float = 1.0
+
+    name = "rlj"
+    spec = "rlj"
+    alpha = math.nan  # no spring exponent (stored as NaN in packing files)
+    soft_start = True  # forces diverge as r -> 0: random starts are relaxed first (seed step 1)
+    Params = RLJParams
+    energy_force = staticmethod(rlj_energy_force)
+    curvature = staticmethod(rlj_curvature)
+    onset_exponent = 2.0  # harmonic at small overlap: V ~ 36 eps (1 - s)^2
+
+    def __post_init__(self):
+        _check_epsilon(self.epsilon)
+
+    @property
+    def params(self) -> RLJParams:
+        return RLJParams(float(self.epsilon))
+
+    @property
+    def contact_stiffness(self) -> float:
+        """d2V/dr2 at r = sigma is 72 eps/sigma^2: forces carry 72x the round-off of springs."""
+        return 72.0 * self.epsilon
+
+    @property
+    def lepton(self) -> str:
+        return f"E*(max(1,(radi+radj)/r)^6-1)^2; E={float(self.epsilon)!r}"
+
+    def plugin_style(self, cutoff: float) -> str:
+        return f"jamflow/rlj {float(cutoff)!r}"
+
+
+Potential = Spring | RepulsiveLJ
+POTENTIALS = {"spring": Spring, "rlj": RepulsiveLJ}  # name -> class, for files and the CLI
+
+
+def _check_epsilon(eps):
+    if not (isinstance(eps, (int, float)) and math.isfinite(eps) and eps > 0):
+        raise ValueError(f"energy scale epsilon must be a finite positive number, got {eps!r}")
+
+
+def potential_from_attrs(name: str, alpha: float, epsilon: float) -> Potential:
+    """The potential a packing file describes (root attributes potential, alpha, epsilon)."""
+    if name in ("spring", "hertz") or name.startswith("spring:"):
+        return Spring(float(alpha), float(epsilon))
+    if name == "rlj":
+        return RepulsiveLJ(float(epsilon))
+    raise ValueError(f"unknown potential {name!r} in packing file; this jamflow knows {', '.join(POTENTIALS)}")
+
+
+def parse_potential(spec: str) -> Potential:
+    """``spring`` | ``hertz`` | ``spring:ALPHA`` | ``rlj`` -> a potential object."""
+    if not isinstance(spec, str):
+        raise ValueError(f"potential must be a spec string such as 'spring' or a Spring/RepulsiveLJ object, "
+                         f"got {spec!r}")
+    text = spec.strip().lower()
+    if text == "spring":
+        return Spring(2.0)
+    if text == "hertz":
+        return Spring(2.5)
+    if text == "rlj":
+        return RepulsiveLJ()
+    if text.startswith("spring:"):
+        try:
+            alpha = float(text.split(":", 1)[1])
+        except ValueError:
+            raise ValueError(f"potential {spec!r}: ALPHA in spring:ALPHA must be a number, e.g. spring:2.5") from None
+        return Spring(alpha)
+    raise ValueError(f"unknown potential {spec!r}; use spring | hertz | spring:ALPHA | rlj")

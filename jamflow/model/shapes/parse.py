@@ -1,0 +1,47 @@
+"""Shape specs (--shape): the text form of every particle shape, parsed into shape objects."""
+
+from __future__ import annotations
+
+from jamflow.model.shapes.shape import Ellipsoid
+from jamflow.model.shapes.shape import SPHERE
+import math
+
+
+SHAPE_USAGE = ("disk | sphere | ellipse:ALPHA (2D) | spheroid:ALPHA (3D) | nmer:N:ALPHA | dimer:ALPHA:S | "
+               "trimer:ALPHA:C")
+
+
+def parse_shape(spec, dim: int, contact: str = "exact"):
+    """A ``--shape`` spec -> a shape object for dimension ``dim``. ALPHA = 1 gives the disk/sphere
+    (the cheapest exact model of that scene). Rigid n-mers (``nmer``, ``dimer``, ``trimer``):
+    ``jamflow.model.shapes.nmers`` defines their parameters and ranges."""
+    if not isinstance(spec, str):
+        if hasattr(spec, "kind"):
+            spec.check(dim)
+            return spec
+        raise ValueError(f"shape must be a spec string ({SHAPE_USAGE}) or a shape object, got {spec!r}")
+    text = spec.strip().lower()
+    kind, _, rest = text.partition(":")
+    if kind in ("disk", "sphere") and not rest:
+        return SPHERE
+    if kind in ("ellipse", "spheroid"):
+        wanted = 2 if kind == "ellipse" else 3
+        if dim != wanted:
+            raise ValueError(f"shape {spec!r}: '{kind}' is {wanted}D, the packing is {dim}D; use "
+                             f"{'spheroid' if dim == 3 else 'ellipse'}:ALPHA")
+        try:
+            alpha = float(rest)
+        except ValueError:
+            raise ValueError(f"shape {spec!r}: ALPHA in {kind}:ALPHA must be a number, e.g. {kind}:1.5") from None
+        if not (math.isfinite(alpha) and alpha > 0):
+            raise ValueError(f"shape {spec!r}: ALPHA must be a finite number > 0")
+        if alpha == 1.0:
+            return SPHERE
+        shape = Ellipsoid(alpha, contact)
+        shape.check(dim)
+        return shape
+    if kind in ("nmer", "dimer", "trimer"):
+        from jamflow.model.shapes.nmers import parse_body
+
+        return parse_body(spec, kind, rest.split(":") if rest else [], dim)
+    raise ValueError(f"unknown shape {spec!r}; use {SHAPE_USAGE}")

@@ -1,0 +1,350 @@
+"""Particle shapes: what every engine, analysis and file format needs to know of a particle.
+
+Every particle of a packing has the packing's shape, scaled by its own size factor (the
+``diameters`` column of a Packing: the diameter of a disk/sphere, the across-axis length
+b of an ellipse/spheroid, the scale of a rigid body's sites), and, for shapes that are not
+round, an orientation (``jamflow.model.shapes.rotations``). A shape provides:
+
+- ``dof(dim)``: degrees of freedom per particle d_f (seed section 3: 2 for disks, 3 for
+  ellipses; 5 for spheroids and linear 3D bodies, whose rotation about the axis is void);
+- ``rotation_mask(dim)``: which body-frame rotations are degrees of freedom (2D: one, about
+  z; 3D: body x, y, z; the director is the body x-axis);
+- ``volumes(scale, dim)``: particle areas/volumes, for phi;
+- ``rotational_lengths(scale, dim)``: d_k per body axis, the radius of gyration sqrt(I/m)
+  of a uniform particle (seed section 3: d_k = sqrt(a^2 + b^2)/4 for an ellipse), which
+  turns rotations into lengths (d_k theta) and torques into forces (tau / d_k);
+- ``reach(scale)``: the radius of the smallest centred sphere that holds the particle (pair
+  search and neighbour-list skin); ``smallest_contact(scale)``: the smallest contact distance;
+- ``attrs()`` / ``shape_from_attrs``: the ``shape`` attribute of packing files.
+The trivial zero modes of a periodic packing of any shape are the d uniform translations.
+
+Contact laws (how two particles of a shape overlap) live in the engines and the numpy
+reference (``jamflow.mechanics.reference``): sigma_ij = (a_i + a_j)/2 for spheres, the exact
+contact distance (``contact_distance``) for ellipsoids, site-site spheres for rigid bodies.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from jamflow.model.shapes.union import union_moments
+
+
+def _scale(scale) -> np.ndarray:
+    return np.asarray(scale, float)
+
+
+@dataclass(frozen=True)
+class Sphere:
+    """A disk (2D) or sphere (3D) of diameter = its scale."""
+
+    kind = "sphere"
+    oriented = False
+    force_tol_base = 1e-14  # default force tolerance before box scaling (jamflow.minimize.settings)
+
+    def name(self, dim: int) -> str:
+        return "disk" if dim == 2 else "sphere"
+
+    def spec(self, dim: int) -> str:
+        return self.name(dim)
+
+    def check(self, dim: int) -> None:
+        pass
+
+    def check_sizes(self, scale, dim: int) -> None:
+        pass
+
+    def dof(self, dim: int) -> int:
+        return dim
+
+    def rotation_mask(self, dim: int) -> tuple[bool, ...]:
+        return ()
+
+    def volumes(self, scale, dim: int) -> np.ndarray:
+        s = _scale(scale)
+        return math.pi * s**2 / 4.0 if dim == 2 else math.pi * s**3 / 6.0
+
+    def rotational_lengths(self, scale, dim: int) -> np.ndarray:
+        return np.zeros((len(_scale(scale)), 0))
+
+    def reach(self, scale) -> np.ndarray:
+        return 0.5 * _scale(scale)
+
+    def smallest_contact(self, scale) -> float:
+        """The smallest contact distance two particles of these sizes can have."""
+        return float(np.min(_scale(scale)))
+
+    def attrs(self) -> dict:
+        return {"kind": self.kind}
+
+
+@dataclass(frozen=True)
+class Ellipsoid:
+    """An ellipse (2D) or spheroid (3D) with aspect ratio ``alpha`` = a / b: full length a along
+    the director (body x), b across; alpha > 1 prolate, alpha < 1 oblate (3D). The scale of a
+    particle is its b. ``contact``: the contact-distance method (``shapes.contact_distance``)."""
+
+    alpha: float
+    contact: str = "exact"
+
+    kind = "ellipsoid"
+    oriented = True
+    # near onset FIRE creeps along the quartic (rotational) modes: N = 64, alpha = 1.6 reached max
+    # force 5e-13 after 2e4 iterations of the final minimisation, 2e-13 after 3.4e5 (docs/ellipses.md)
+    force_tol_base = 5e-13
+
+    def __post_init__(self):
+        from jamflow.model.shapes.contact_distance import METHODS
+
+        if not (isinstance(self.alpha, (int, float)) and math.isfinite(self.alpha) and self.alpha > 0):
+            raise ValueError(f"aspect ratio ALPHA must be a finite number > 0, got {self.alpha!r}")
+        if self.alpha == 1.0:
+            raise ValueError("aspect ratio 1 is a disk/sphere: use the sphere shape (parse_shape does)")
+        if self.contact not in METHODS:
+            raise ValueError(f"unknown contact-distance method {self.contact!r}; use one of {', '.join(METHODS)}")
+
+    def name(self, dim: int) -> str:
+        return "ellipse" if dim == 2 else "spheroid"
+
+    def spec(self, dim: int) -> str:
+        return f"{self.name(dim)}:{self.alpha:g}"
+
+    def check(self, dim: int) -> None:
+        if dim == 2 and self.alpha < 1:
+            raise ValueError(f"an ellipse with ALPHA = {self.alpha:g} < 1 is the ellipse with ALPHA = "
+                             f"{1 / self.alpha:g} turned by 90 degrees; use ellipse:{1 / self.alpha:g}")
+
+    def check_sizes(self, scale, dim: int) -> None:
+        """Refuse a contact method outside its domain for these sizes (gaussian: identical
+        particles only; linear/quadratic in 3D: identical spheroids only)."""
+        from jamflow.model.shapes.contact_distance import SAME_SIZE_RTOL, check_method_sizes
+
+        s = _scale(scale)
+        identical = len(s) == 0 or bool(np.all(np.abs(s - s[0]) <= SAME_SIZE_RTOL * np.abs(s[0])))
+        try:
+            check_method_sizes(self.contact, dim, identical)
+        except ValueError as err:
+            raise ValueError(f"--contact {self.contact} on particles of different sizes: {err}; or use --sizes mono") from None
+
+    def dof(self, dim: int) -> int:
+        return 3 if dim == 2 else 5
+
+    def rotation_mask(self, dim: int) -> tuple[bool, ...]:
+        return (True,) if dim == 2 else (False, True, True)
+
+    def axes(self, scale) -> np.ndarray:
+        """(N, 2): full lengths along and across the director."""
+        s = _scale(scale)
+        return np.column_stack([self.alpha * s, s])
+
+    def volumes(self, scale, dim: int) -> np.ndarray:
+        a, b = self.axes(scale).T
+        return math.pi * a * b / 4.0 if dim == 2 else math.pi * a * b * b / 6.0
+
+    def rotational_lengths(self, scale, dim: int) -> np.ndarray:
+        """2D: sqrt(a^2 + b^2) / 4 (seed section 3); 3D: sqrt((a^2 + b^2) / 20) about the two
+        axes across the director (I/m = (A^2 + B^2)/5 for semi-axes A, B), 1 about the director
+        (not a degree of freedom)."""
+        a, b = self.axes(scale).T
+        if dim == 2:
+            return (np.sqrt(a * a + b * b) / 4.0)[:, None]
+        d = np.sqrt((a * a + b * b) / 20.0)
+        return np.column_stack([np.ones_like(d), d, d])
+
+    def reach(self, scale) -> np.ndarray:
+        return 0.5 * np.max(self.axes(scale), axis=1)
+
+    def smallest_contact(self, scale) -> float:
+        return float(np.min(self.axes(scale)))
+
+    def attrs(self) -> dict:
+        return {"kind": self.kind, "alpha": float(self.alpha), "contact": self.contact}
+
+
+@dataclass(frozen=True, eq=False)
+class RigidBody:
+    """A rigid body of fused spherical sites (seed section 2.3.1, Figure 2.9).
+
+    ``sites`` (S, d) and ``site_diameters`` (S,) describe the body at scale 1, in any frame:
+    the constructor moves the origin to the centre of mass of the union of the sites and turns
+    the sites to the principal axes, smallest moment first (the body x-axis, the director of a
+    linear body). With ``body_frame=True`` the sites are taken as given, already in that frame
+    (as a packing file stores them), so orientations keep their meaning. Site overlap inside a
+    body carries no energy; the volume is the union's (``shapes.union``). ``label`` names the
+    body (e.g. "dimer:1.5") for files and messages.
+    """
+
+    sites: np.ndarray
+    site_diameters: np.ndarray
+    label: str = "rigid"
+    fused: bool = True
+    body_frame: bool = False
+    _mass: dict = field(default_factory=dict, repr=False, compare=False)
+
+    kind = "rigid"
+    oriented = True
+    force_tol_base = 1e-14
+
+    def __post_init__(self):
+        sites = np.array(self.sites, dtype=float)
+        diam = np.array(self.site_diameters, dtype=float)
+        if sites.ndim != 2 or sites.shape[1] not in (2, 3) or len(sites) < 2:
+            raise ValueError(f"a rigid body needs at least 2 sites of shape (S, 2|3), got {sites.shape}")
+        if diam.shape != (len(sites),) or not np.all(np.isfinite(diam)) or np.any(diam <= 0):
+            raise ValueError("site_diameters must be one finite positive diameter per site")
+        if not np.all(np.isfinite(sites)):
+            raise ValueError("site positions must be finite")
+        if self.fused:
+            _check_fused(sites, diam)
+        volume, first, second = union_moments(sites, diam)
+        centre = first / volume
+        central = second - volume * np.outer(centre, centre)  # second moments about the centre
+        inertia = np.trace(central) * np.eye(len(centre)) - central if len(centre) == 3 else None
+        if self.body_frame:
+            size = float(np.abs(sites).max() + diam.max())
+            if np.abs(centre).max() > 1e-9 * size:
+                raise ValueError(f"body-frame sites must have their centre of mass at the origin, it is at {centre}")
+            centre, frame = np.zeros_like(centre), np.eye(len(centre))
+        else:
+            values, vectors = np.linalg.eigh(inertia if inertia is not None else -central)
+            frame = vectors * np.where(np.linalg.det(vectors) < 0, [-1] + [1] * (len(centre) - 1), 1)
+        body = (sites - centre) @ frame
+        body[np.abs(body) < 1e-14 * max(1.0, np.abs(body).max())] = 0.0
+        body.setflags(write=False)
+        diam.setflags(write=False)
+        object.__setattr__(self, "sites", body)
+        object.__setattr__(self, "site_diameters", diam)
+        polar = float(np.trace(central))
+        principal = (np.diag(frame.T @ inertia @ frame) if inertia is not None else np.array([polar]))
+        self._mass.update(volume=volume, principal=principal)
+
+    def __eq__(self, other):
+        return (isinstance(other, RigidBody) and self.label == other.label
+                and np.array_equal(self.sites, other.sites) and np.array_equal(self.site_diameters, other.site_diameters))
+
+    __hash__ = object.__hash__
+
+    @property
+    def dim(self) -> int:
+        return self.sites.shape[1]
+
+    @property
+    def n_sites(self) -> int:
+        return len(self.sites)
+
+    @property
+    def linear(self) -> bool:
+        """All sites on the body x-axis (then the rotation about it is no degree of freedom)."""
+        return bool(np.all(self.sites[:, 1:] == 0.0))
+
+    def name(self, dim: int) -> str:
+        return self.label
+
+    def spec(self, dim: int) -> str:
+        return self.label
+
+    def check(self, dim: int) -> None:
+        if dim != self.dim:
+            raise ValueError(f"the body {self.label} has {self.dim}D sites; the packing is {dim}D")
+
+    def check_sizes(self, scale, dim: int) -> None:
+        pass
+
+    def dof(self, dim: int) -> int:
+        return 3 if dim == 2 else (5 if self.linear else 6)
+
+    def rotation_mask(self, dim: int) -> tuple[bool, ...]:
+        return (True,) if dim == 2 else (not self.linear, True, True)
+
+    def volumes(self, scale, dim: int) -> np.ndarray:
+        return self._mass["volume"] * _scale(scale) ** dim
+
+    def rotational_lengths(self, scale, dim: int) -> np.ndarray:
+        """sqrt(I_a / m) about each principal body axis (uniform density); 1 about the axis of a
+        linear body (not a degree of freedom)."""
+        g = np.sqrt(self._mass["principal"] / self._mass["volume"])
+        if dim == 3 and self.linear:
+            g = np.array([1.0, g[1], g[2]])
+        return _scale(scale)[:, None] * g[None, :]
+
+    @property
+    def site_masses(self) -> np.ndarray:
+        """(S,) fractions of the body's mass on each site such that the mass-weighted site centre
+        is the union's centre of mass (the body-frame origin): LAMMPS's rigid-body centre is the
+        mass-weighted centre of its atoms. The minimum-norm solution of sum m = 1, sum m b = 0
+        (equal masses for symmetric bodies); ValueError if a site would need a mass <= 0."""
+        if "sites" not in self._mass:
+            a = np.vstack([np.ones(self.n_sites), self.sites.T])
+            e = np.zeros(len(a))
+            e[0] = 1.0
+            m = np.linalg.lstsq(a, e, rcond=None)[0]
+            size = float(np.abs(self.sites).max() + self.site_diameters.max())
+            if np.abs(a @ m - e).max() > 1e-12 * max(1.0, size) or np.any(m <= 0):
+                raise ValueError(f"no positive site masses put the site centre of mass of {self.label} at the "
+                                 "union's centre of mass; LAMMPS cannot run this body (use engine numba)")
+            m.setflags(write=False)
+            self._mass["sites"] = m
+        return self._mass["sites"]
+
+    def reach(self, scale) -> np.ndarray:
+        r = float(np.max(np.linalg.norm(self.sites, axis=1) + 0.5 * self.site_diameters))
+        return r * _scale(scale)
+
+    def smallest_contact(self, scale) -> float:
+        return float(np.min(_scale(scale)) * self.site_diameters.min())
+
+    def world_sites(self, positions, orientations, scale) -> np.ndarray:
+        """(N, S, d) site positions of every particle."""
+        from jamflow.model.shapes.rotations import rotation_matrices
+
+        rot = rotation_matrices(orientations, positions.shape[1])
+        return positions[:, None, :] + _scale(scale)[:, None, None] * np.einsum("nab,sb->nsa", rot, self.sites)
+
+    def attrs(self) -> dict:
+        return {"kind": self.kind, "label": self.label, "sites": json.dumps(self.sites.tolist()),
+                "site_diameters": json.dumps(self.site_diameters.tolist())}
+
+
+def _check_fused(sites: np.ndarray, diam: np.ndarray) -> None:
+    """Sites of a fused body must overlap (or touch) into one connected piece and must not
+    coincide. Touching sites (separation = the mean diameter, to 1e-12) count as joined: the
+    dimer at alpha = 2 of Schreck, Xu, O'Hern, Soft Matter 6, 2960 (2010)."""
+    s = len(sites)
+    sep = np.linalg.norm(sites[:, None] - sites[None], axis=-1)
+    reach = 0.5 * (diam[:, None] + diam[None])
+    if np.any(sep[np.triu_indices(s, 1)] < 1e-12 * reach[np.triu_indices(s, 1)]):
+        raise ValueError("two sites of the body coincide; give distinct site positions")
+    linked, frontier = {0}, [0]
+    while frontier:
+        k = frontier.pop()
+        for m in np.flatnonzero(sep[k] <= reach[k] * (1.0 + 1e-12)):
+            if m not in linked:
+                linked.add(int(m))
+                frontier.append(int(m))
+    if len(linked) < s:
+        raise ValueError(f"the body's sites do not overlap or touch into one piece (sites {sorted(set(range(s)) - linked)} are "
+                         "apart from site 0); move them closer or pass fused=False for bodies of separate sites")
+
+
+SPHERE = Sphere()
+
+
+def shape_from_attrs(attrs: dict):
+    """The shape a packing file's ``shape`` attributes describe."""
+    kind = attrs.get("kind", "sphere")
+    if kind == "sphere":
+        return SPHERE
+    if kind == "ellipsoid":
+        return Ellipsoid(float(attrs["alpha"]), str(attrs.get("contact", "exact")))
+    if kind == "rigid":
+        return RigidBody(np.array(json.loads(attrs["sites"])), np.array(json.loads(attrs["site_diameters"])),
+                         str(attrs.get("label", "rigid")), body_frame=True)
+    raise ValueError(f"unknown particle shape kind {kind!r} in packing file")
+
+
+
+

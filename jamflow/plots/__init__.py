@@ -1,0 +1,2 @@
+"""The figures layer: matplotlib (Agg canvas) figures of packings, spectra, moduli, shear paths,
+structure and walls, written atomically."""

@@ -1,0 +1,97 @@
+"""Figures of quasistatic shear (seed section 2.2), drawn with matplotlib's Agg canvas and
+written atomically: a shear path (phi_J(gamma) with the contact changes marked, Figure 2.6;
+the shear stress Sigma = -P_xy and Sigma / P along it) and the map of geometric families
+(phi_J(gamma) of every family, Figure 2.7)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.ticker import NullFormatter, ScalarFormatter
+
+from jamflow.support.files import atomic_path
+
+MAX_LABELS = 12
+
+
+def _save(fig, path) -> Path:
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=120)
+    return Path(path)
+
+
+def shear_path_figure(path, columns: dict, title: str = "") -> Path:
+    """Three panels against gamma: phi_J, Sigma = -P_xy, Sigma / P; steps where the contact
+    network changed are marked (red), with the numbers of contacts removed/added when there
+    are at most MAX_LABELS of them."""
+    fig = Figure(figsize=(7, 8), layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(3, 1, sharex=True)
+    g, changed = columns["gamma"], columns["changed"].astype(bool)
+    panels = ((columns["phi_j"], r"$\phi_J$"), (columns["shear_stress"], r"$\Sigma = -P_{xy}$"),
+              (columns["shear_stress"] / columns["pressure"], r"$\Sigma / P$"))
+    for ax, (y, label) in zip(axes, panels):
+        ax.plot(g, y, ".-", ms=2, lw=0.8, color="k")
+        ax.plot(g[changed], y[changed], "o", ms=5, mfc="none", color="tab:red")
+        for x in g[changed]:
+            ax.axvline(x, color="tab:red", lw=0.5, alpha=0.4)
+        ax.set_ylabel(label)
+    for k in np.flatnonzero(changed) if changed.sum() <= MAX_LABELS else ():
+        axes[0].annotate(f"-{columns['n_removed'][k]}/+{columns['n_added'][k]}", (g[k], columns["phi_j"][k]),
+                         textcoords="offset points", xytext=(3, 4), fontsize=7, color="tab:red")
+    axes[-1].set_xlabel(r"shear strain $\gamma$")
+    axes[0].set_title(title or f"{len(g) - 1} steps, contact network changed at {int(changed.sum())} "
+                               "(red: contacts removed/added)")
+    return _save(fig, path)
+
+
+def families_figure(path, families, mirror_of=None, convergence=(), richness=None, title: str = "",
+                    well_sampled: int = 2) -> Path:
+    """(a) phi_J(gamma) of every family (Figure 2.7), the dashed line at gamma = 1/2; families met
+    by >= ``well_sampled`` sampled paths in colour, the others thin grey; (b) the well-sampled
+    families met in [0, 1/2] (black) with the mirror images gamma -> 1 - gamma of those met in
+    [1/2, 1] (red, dashed), when the sampling covers both halves; (c) distinct families against
+    the number of starts per grid point."""
+    fig = Figure(figsize=(12, 8), layout="constrained")
+    FigureCanvasAgg(fig)
+    grid = fig.add_gridspec(2, 2)
+    chart, half, count = fig.add_subplot(grid[0, :]), fig.add_subplot(grid[1, 0]), fig.add_subplot(grid[1, 1])
+    seen = families.sightings()
+    for f in range(families.count):
+        strong = seen[f] >= well_sampled
+        for g, phi in _runs(*families.curve(f)[:2], families.step):
+            chart.plot(g, phi, lw=1.1 if strong else 0.4, color=f"C{f % 10}" if strong else "0.75",
+                       zorder=2 if strong else 1)
+            if not strong:
+                continue
+            if g.min() <= 0.5 + 1e-9:
+                half.plot(g, phi, lw=0.9, color="k")
+            if mirror_of is not None and g.max() >= 0.5 - 1e-9:
+                half.plot(1.0 - g, phi, lw=0.9, ls="--", color="tab:red")
+    chart.axvline(0.5, ls="--", color="0.4", lw=1)
+    chart.set(xlabel=r"$\gamma$", ylabel=r"$\phi_J$", title=title or f"(a) {families.count} geometric families")
+    half.set(xlim=(-0.01, 0.51), xlabel=r"$\gamma$", ylabel=r"$\phi_J$",
+             title=f"(b) met by >= {well_sampled} paths: in [0, 1/2] (black), mirrored from [1/2, 1] (red)")
+    if convergence:
+        k, half_count, all_count = np.array(convergence).T
+        count.plot(k, all_count, "o-", color="k", label="families met at any strain")
+        count.plot(k, half_count, "s--", color="0.4", label="families met in [0, 1/2]")
+        if richness is not None:
+            count.axhline(richness["chao1"], ls=":", color="tab:blue",
+                          label=f"Chao1 estimate of all: {richness['chao1']:.0f}")
+        count.set(xscale="log", yscale="log", xlabel="random starts per grid point", ylabel="distinct families",
+                  title="(c) convergence with the number of starts")
+        for axis in (count.xaxis, count.yaxis):
+            axis.set_major_formatter(ScalarFormatter())
+            axis.set_minor_formatter(NullFormatter())
+        count.legend(fontsize=8)
+    return _save(fig, path)
+
+
+def _runs(gamma, phi, step):
+    """Split a family's curve where strains were skipped (breaks of the solid line)."""
+    cut = np.flatnonzero(np.diff(gamma) > 1.5 * step) + 1
+    return [(g, p) for g, p in zip(np.split(gamma, cut), np.split(phi, cut))]

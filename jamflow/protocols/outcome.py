@@ -1,0 +1,71 @@
+"""What a jamming protocol returns: the packing at onset, its history, and the failure."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from dataclasses import field
+from jamflow.minimize.settings import MinimizeResult
+from jamflow.model.box import AXES
+from jamflow.model.packing import Packing
+from jamflow.protocols.settings import CompressionSettings
+import numpy as np
+
+
+HISTORY_COLUMNS = ("phi", "energy_per_particle", "pressure", "dphi", "iterations", "max_force", "converged")
+
+
+@dataclass(frozen=True)
+class JamResult:
+    """A packing at jamming onset and how it was found."""
+
+    packing: Packing
+    phi_j: float
+    energy_per_particle: float
+    pressure_tensor: np.ndarray
+    max_force: float
+    history: dict  # column name -> np.ndarray, one entry per minimisation
+    settings: CompressionSettings
+    seconds: float
+    lammps_version: int
+    engine: str = "lammps"  # which engine minimised: "lammps" or "numba"
+    max_torque: float = 0.0  # largest generalized torque component tau / d_k (0 for disks, spheres)
+    wall_forces: np.ndarray | None = None  # (d, 2, d) force of the particles on each face (walled boxes)
+    counters: dict = field(default_factory=dict)  # what the engine's kernel counted (ellipsoids: fallbacks, ...)
+
+    @property
+    def pressure(self) -> float:
+        return float(np.trace(self.pressure_tensor) / self.packing.dim)
+
+    @property
+    def minimizations(self) -> int:
+        return len(self.history["phi"])
+
+    @property
+    def iterations(self) -> int:
+        return int(np.sum(self.history["iterations"]))
+
+    @property
+    def wall_pressures(self) -> np.ndarray:
+        """(k, 2) pressure on the lower and upper face of each walled axis (``jamflow.model.walls``)."""
+        from jamflow.model.walls import face_pressures
+
+        return face_pressures(self.packing.box, self.wall_forces) if self.wall_forces is not None else np.empty((0, 2))
+
+    def summary(self) -> str:
+        torque = f"  max|tau/d| = {self.max_torque:.1e}" if self.packing.shape.oriented else ""
+        walls = "".join(f"  P_wall {AXES[a]} = {lo:.3e} {hi:.3e}"
+                        for a, (lo, hi) in zip(self.packing.box.walls, self.wall_pressures))
+        return (f"phi_J = {self.phi_j:.10f}  V = {self.energy_per_particle:.3e}  "
+                f"P = {self.pressure:.3e}{walls}  max|F| = {self.max_force:.1e}{torque}  "
+                f"{self.minimizations} minimisations, {self.iterations} iterations ({self.engine}), {self.seconds:.2f} s")
+
+
+class JammingFailed(RuntimeError):
+    """The protocol could not reach the energy window; the message says why and what to do."""
+
+
+def record_minimization(rows, phi, result: MinimizeResult, pressure, dphi):
+    values = (phi, result.energy_per_particle, pressure, dphi, result.iterations, result.max_force, result.converged)
+    for column, value in zip(HISTORY_COLUMNS, values):
+        rows[column].append(value)
+    rows.setdefault("reason", []).append(result.reason)

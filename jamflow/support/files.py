@@ -1,0 +1,144 @@
+"""Files written atomically, output directories that leave no debris, and paths refused before work (stdlib only)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+import contextlib
+import contextvars
+import glob
+import os
+import re
+import socket
+import stat
+import tempfile
+
+
+_REPLACEABLE: contextvars.ContextVar[frozenset] = contextvars.ContextVar("jamflow_replaceable", default=frozenset())
+
+
+@contextlib.contextmanager
+def replacing(paths):
+    """Within the block, writes may replace these paths even if they are symlinks, device
+    nodes, FIFOs or read-only files (the commands' ``--force``)."""
+    token = _REPLACEABLE.set(_REPLACEABLE.get() | {os.path.abspath(p) for p in paths})
+    try:
+        yield
+    finally:
+        _REPLACEABLE.reset(token)
+
+
+@contextlib.contextmanager
+def atomic_path(path, force: bool = False):
+    """Yield a temporary path beside ``path``; rename it onto ``path`` only on success.
+
+    An existing regular file keeps its permission bits. ``force`` (or ``replacing``):
+    replace a symlink, device node, FIFO or read-only file (refused otherwise)."""
+    path = Path(path)
+    check_writable(path, force)
+    keep = path.is_file() and not path.is_symlink()
+    mode = path.stat().st_mode & 0o7777 if keep else 0o666 & ~_umask()
+    remove_stale_temporaries(path)
+    fd, tmp = tempfile.mkstemp(prefix=_temporary_prefix(path, os.getpid()), suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    try:
+        os.chmod(tmp, mode | 0o200)  # mkstemp makes 0600; the owner writes it, then it gets the final mode
+        yield Path(tmp)
+        with open(tmp, "rb+") as fh:
+            os.fsync(fh.fileno())
+        if keep:
+            os.chmod(tmp, mode)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+def _temporary_prefix(path: Path, pid: int) -> str:
+    """``.NAME.HOST.PID.`` : atomic_path's temporary files name the output, the host and the
+    process writing them (mkstemp adds 8 random characters and ``.tmp``)."""
+    return f".{path.name}.{_HOST}.{pid}."
+
+
+_HOST = re.sub(r"[^A-Za-z0-9_-]", "-", socket.gethostname()) or "host"
+
+
+_RANDOM = r"[a-z0-9_]{8}"  # tempfile's random part
+
+
+def remove_stale_temporaries(path) -> list[Path]:
+    """Remove the temporary files that atomic_path left beside ``path`` in processes that are
+    gone (a SIGKILL, a power cut): only names of atomic_path's pattern for this output, written
+    on this host by a process id that no longer exists (a live writer's file is kept, also
+    another user's). Returns the files removed."""
+    path = Path(path)
+    mine = re.compile(re.escape(f".{path.name}.{_HOST}.") + r"(\d+)\." + _RANDOM + r"\.tmp")
+    removed = []
+    for tmp in path.parent.glob(f".{glob.escape(path.name)}.*.tmp"):
+        match = mine.fullmatch(tmp.name)
+        if match and not _alive(int(match.group(1))) and tmp.is_file() and not tmp.is_symlink():
+            tmp.unlink(missing_ok=True)
+            removed.append(tmp)
+    return removed
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True  # another user's process
+    return True
+
+
+@contextlib.contextmanager
+def output_directory(path):
+    """Create the output directory ``path`` (its parent must exist) for the block; if the block
+    fails or is interrupted and the directory was made here and is still empty, remove it."""
+    path = Path(path)
+    made = not path.exists()
+    path.mkdir(exist_ok=True)
+    try:
+        yield path
+    except BaseException:
+        if made and path.is_dir() and not any(path.iterdir()):
+            path.rmdir()
+        raise
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+_KINDS = ((stat.S_ISCHR, "character device"), (stat.S_ISBLK, "block device"), (stat.S_ISFIFO, "FIFO (named pipe)"),
+          (stat.S_ISSOCK, "socket"))
+
+
+def check_writable(path, force: bool = False) -> None:
+    """Raise a clear ValueError before any work starts if ``path`` cannot or should not be
+    written: missing or read-only directory, a directory, and -- unless ``force`` -- a
+    symlink, a device node, FIFO or socket, or a read-only file (writing replaces the path
+    itself with a new regular file)."""
+    path = Path(path)
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        raise ValueError(f"cannot write {path}: directory {parent} does not exist; create it first")
+    if not os.access(parent, os.W_OK):
+        raise ValueError(f"cannot write {path}: directory {parent} is not writable; choose another --out")
+    if path.is_dir():
+        raise ValueError(f"cannot write {path}: it is a directory; give a file name such as packing.h5")
+    if force or os.path.abspath(path) in _REPLACEABLE.get() or not os.path.lexists(path):
+        return
+    if path.is_symlink():
+        raise ValueError(f"refusing to write {path}: it is a symbolic link (to {os.readlink(path)}) and writing "
+                         "would replace the link; give the target's path, or --force to replace the link")
+    mode = path.stat().st_mode
+    for test, kind in _KINDS:
+        if test(mode):
+            raise ValueError(f"refusing to write {path}: it is a {kind}, not a regular file, and writing would "
+                             "replace it; choose a file name, or --force to replace it")
+    if not mode & 0o222 or not os.access(path, os.W_OK):
+        raise ValueError(f"refusing to overwrite {path}: it is read-only; make it writable (chmod u+w), "
+                         "choose another name, or --force to replace it")
