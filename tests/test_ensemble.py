@@ -190,15 +190,15 @@ def test_killed_worker_loses_nothing(tmp_path, cluster, monkeypatch):
 
 def test_failed_packing_is_recorded_and_not_retried(tmp_path, threaded, monkeypatch):
     calls = []
-    real = ensemble_tasks.jam_from_args
+    real = ensemble_tasks.run_jam
 
-    def failing_for_seed_2(args, observers=()):
-        calls.append(args.seed)
-        if args.seed == 2:
+    def failing_for_seed_2(spec, **options):
+        calls.append(spec.seed)
+        if spec.seed == 2:
             raise JammingFailed("no packing in the window (injected)")
-        return real(args, observers)
+        return real(spec, **options)
 
-    monkeypatch.setattr(ensemble_tasks, "jam_from_args", failing_for_seed_2)
+    monkeypatch.setattr(ensemble_tasks, "run_jam", failing_for_seed_2)
     out = tmp_path / "store"
     report = run_ensemble(out, "0:4", 8, client=threaded, progress=False)
     assert (report.made, report.failed) == (3, 1)
@@ -220,9 +220,9 @@ def test_full_disk_stops_cleanly_and_a_rerun_finishes(tmp_path, monkeypatch):
     the run writes into the store afterwards."""
     from distributed import Client
 
-    real, saved, failures = ensemble_tasks.save_result, [], []
+    real, saved, failures = ensemble_tasks.save_jam_result, [], []
 
-    def disk_fills_after_three(path, result, checks, args, **info):
+    def disk_fills_after_three(path, result, checks, **info):
         if len(saved) >= 3:
             with atomic_path(path) as tmp:
                 tmp.write_bytes(b"half a packing")
@@ -230,9 +230,9 @@ def test_full_disk_stops_cleanly_and_a_rerun_finishes(tmp_path, monkeypatch):
                 time.sleep(0 if len(failures) == 1 else 1.0)
                 raise OSError(errno.ENOSPC, "No space left on device", str(tmp))
         saved.append(path)
-        return real(path, result, checks, args, **info)
+        return real(path, result, checks, **info)
 
-    monkeypatch.setattr(ensemble_tasks, "save_result", disk_fills_after_three)
+    monkeypatch.setattr(ensemble_tasks, "save_jam_result", disk_fills_after_three)
     out = tmp_path / "store"
     with Client(processes=False, n_workers=1, threads_per_worker=2, dashboard_address=":0") as two_threads:
         report = run_ensemble(out, "0:8", 8, client=two_threads, progress=False)
@@ -243,7 +243,7 @@ def test_full_disk_stops_cleanly_and_a_rerun_finishes(tmp_path, monkeypatch):
         assert len(failures) == writes_at_return and not debris(out) and len(packings(out)) == 3
         for path in packings(out):
             load_packing(path)
-        monkeypatch.setattr(ensemble_tasks, "save_result", real)
+        monkeypatch.setattr(ensemble_tasks, "save_jam_result", real)
         again = run_ensemble(out, "0:8", 8, client=two_threads, progress=False)
         assert (again.done_before, again.made, again.stopped) == (3, 5, "")
 

@@ -49,7 +49,7 @@ def run_jam(tmp_path, capsys, *args):
     (["--potential", "spring:4"], "alpha = 4"),  # was: exit 0, net forces 7% of the contact forces
 ])
 def test_jam_refuses_before_work(tmp_path, capsys, monkeypatch, args, message):
-    monkeypatch.setattr("jamflow.cli.commands.jam.jam", lambda *a, **k: pytest.fail("work started"))
+    monkeypatch.setattr("jamflow.protocols.spec.jam", lambda *a, **k: pytest.fail("work started"))
     code, err = run_jam(tmp_path, capsys, *args, "--out", str(tmp_path / "x.h5"))
     assert code == 2 and no_traceback(err) and len(err.strip().splitlines()) == 1
     import re
@@ -80,7 +80,7 @@ def test_a_packing_that_fails_its_checks_is_not_written(tmp_path, capsys, monkey
     good = jamflow.jam(n=32, seed=3)
     squeezed = good.packing.scaled_to_phi(good.phi_j / 0.95**2)
     fake = type(good)(**{**good.__dict__, "packing": squeezed})
-    monkeypatch.setattr("jamflow.cli.commands.jam.jam", lambda *a, **k: fake)
+    monkeypatch.setattr("jamflow.protocols.spec.jam", lambda *a, **k: fake)
     out = tmp_path / "p.h5"
     out.write_bytes(packing_file.read_bytes())
     code, err = run_jam(tmp_path, capsys, "--n", "32", "--seed", "3", "--out", str(out))
@@ -103,7 +103,7 @@ def test_lammps_failure_exits_4(tmp_path, capsys, monkeypatch):
     def fail(*a, **k):
         raise LammpsError("run 0", "ERROR: Lost atoms: original 16 current 4")
 
-    monkeypatch.setattr("jamflow.cli.commands.jam.jam", fail)
+    monkeypatch.setattr("jamflow.protocols.spec.jam", fail)
     code, err = run_jam(tmp_path, capsys, "--n", "16", "--out", str(tmp_path / "x.h5"))
     assert code == EXIT_LAMMPS and no_traceback(err) and "Lost atoms" in err and "diverged" in err
 
@@ -410,7 +410,7 @@ def test_moduli_warns_when_a_sweep_has_no_linear_amplitude(tmp_path, capsys, pac
 
 def test_jam_above_one_does_not_quote_an_onset_not_yet_known(tmp_path, capsys, monkeypatch):
     # was: "phi_J + dphi = 0.000000 + 2 >= 1"
-    monkeypatch.setattr("jamflow.cli.commands.jam.jam", lambda *a, **k: pytest.fail("work started"))
+    monkeypatch.setattr("jamflow.protocols.spec.jam", lambda *a, **k: pytest.fail("work started"))
     assert main(["jam", "--n", "10", "--above", "2", "--quiet", "--out", str(tmp_path / "x.h5")]) == 2
     err = capsys.readouterr().err
     assert "--above 2 >= 1" in err and "0.000000" not in err
@@ -455,7 +455,7 @@ def test_a_run_without_quiet_still_shows_its_progress(tmp_path, capsys):
                                                ("ellipse:1", 2, "linear"), ("nmer:2:1.5", 2, "gaussian")])
 def test_jam_refuses_a_contact_method_for_shapes_without_one(tmp_path, capsys, monkeypatch, shape, dim, contact):
     # was: accepted and silently ignored (disks, spheres and rigid bodies of round sites have no approximation)
-    monkeypatch.setattr("jamflow.cli.commands.jam.jam", lambda *a, **k: pytest.fail("work started"))
+    monkeypatch.setattr("jamflow.protocols.spec.jam", lambda *a, **k: pytest.fail("work started"))
     code, err = run_jam(tmp_path, capsys, "--shape", shape, "--dim", str(dim), "--contact", contact,
                         "--out", str(tmp_path / "x.h5"))
     assert code == 2 and len(err.strip().splitlines()) == 1
@@ -465,11 +465,12 @@ def test_jam_refuses_a_contact_method_for_shapes_without_one(tmp_path, capsys, m
 
 def test_jam_keeps_a_contact_method_for_ellipses():
     from jamflow.cli.app import build_parser
-    from jamflow.cli.commands.jam import prepare
+    from jamflow.cli.commands.jam import spec_from_args
+    from jamflow.protocols.spec import prepare
 
     args = build_parser("jam").parse_args(["jam", "--shape", "ellipse:1.5", "--sizes", "mono", "--contact", "gaussian",
                                            "--n", "16"])
-    assert prepare(args)[1].shape.contact == "gaussian"
+    assert prepare(spec_from_args(args))[1].shape.contact == "gaussian"
 
 
 def test_a_write_killed_by_sigkill_leaves_debris_that_the_next_run_removes(tmp_path, capsys):

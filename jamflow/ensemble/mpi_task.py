@@ -3,10 +3,9 @@
 Every rank runs the Python controller on LAMMPS over MPI.COMM_WORLD (domain decomposition;
 positions and forces gathered over ranks, README "How jamflow runs LAMMPS"); rank 0 writes
 the packing file, or the failure record, atomically. SPEC is the JSON that
-``jamflow.ensemble.tasks.make_packing`` passes (jam options, n, seed, paths).
+``jamflow.ensemble.tasks.make_packing`` passes (the ``JamSpec`` fields and the paths).
 """
 
-import argparse
 import json
 import sys
 import time
@@ -15,22 +14,23 @@ from mpi4py import MPI  # first: this process is an MPI rank
 
 
 def main(spec: dict) -> int:
-    from jamflow.cli.commands.jam import jam_from_args, save_result
+    from jamflow.io.packing_file import save_jam_result
+    from jamflow.protocols.spec import JamSpec, run_jam
     from jamflow.protocols.outcome import JammingFailed
     from jamflow.ensemble.store import write_failure
 
     comm = MPI.COMM_WORLD
-    args = argparse.Namespace(**spec["options"])
+    jam_spec = JamSpec(**spec["spec"])
     t0 = time.perf_counter()
     try:
-        result, checks = jam_from_args(args, engine_options={"comm": comm})
+        result, checks = run_jam(jam_spec, engine_options={"comm": comm}, destination=spec["path"])
     except JammingFailed as err:
         if comm.rank == 0:
             write_failure(spec["failure_path"], str(err), time.perf_counter() - t0)
         return 0
     if comm.rank == 0:
-        save_result(spec["path"], result, checks, args, seconds=round(time.perf_counter() - t0, 3),
-                    mpi_ranks=comm.size)
+        save_jam_result(spec["path"], result, checks, target_pressure=jam_spec.pressure, stress=jam_spec.stress,
+                        seconds=round(time.perf_counter() - t0, 3), mpi_ranks=comm.size)
     return 0
 
 

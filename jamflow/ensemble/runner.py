@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import errno
 import signal
@@ -14,12 +13,12 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from jamflow.cli.commands import jam as jam_command
+from jamflow.protocols.spec import JamSpec, prepare
 from jamflow.ensemble.cluster import WAIT_WORKERS, dask_client, workers_line, workers_state
 from jamflow.ensemble.checks import packing_row
 from jamflow.ensemble.store import Store, Task, failure_row, write_failure
 
-TASK_KEYS = ("n", "seed", "out", "quiet", "emit_deck", "force")  # set per task, not store parameters
+TASK_KEYS = ("n", "seed")  # set per task, not store parameters
 SUMMARY_EVERY = 10.0  # seconds between summary.csv rewrites during a run
 MAX_ERRORS_BEFORE_SUCCESS = 3  # the same broken set-up fails every task: stop early
 SETTLED = ("finished", "error", "cancelled")  # future states with an outcome ("lost": being recomputed)
@@ -44,18 +43,13 @@ class EnsembleReport:
 
 
 def jam_parameters(**options) -> dict:
-    """The store parameters: ``jamflow jam``'s defaults updated with ``options`` (same names
-    as its command-line dests: dim, sizes, potential, protocol, engine, ...)."""
-    parser = argparse.ArgumentParser(add_help=False)
-    jam_command.add_arguments(parser)
-    defaults = vars(parser.parse_args([]))
-    unknown = sorted(set(options) - set(defaults))
-    if unknown:
-        raise ValueError(f"unknown jam option(s) {', '.join(unknown)}; use names of `jamflow jam --help`")
+    """The store parameters: the fields of ``JamSpec`` (``jamflow jam``'s options and defaults)
+    updated with ``options``, without the per-task ``n`` and ``seed``."""
     if options.get("above") is not None:
         raise ValueError("above is not an ensemble option (the store keeps onset packings); run `jamflow jam --above` "
                          "or jamflow.compress_above on them")
-    return {k: v for k, v in {**defaults, **options}.items() if k not in TASK_KEYS}
+    spec = JamSpec.from_options(**{k: v for k, v in options.items() if k not in TASK_KEYS})
+    return {k: v for k, v in spec.as_dict().items() if k not in TASK_KEYS}
 
 
 def seed_range(seeds) -> range:
@@ -97,7 +91,7 @@ def run_ensemble(out, seeds, n=(64,), *, workers=None, scheduler=None, client=No
     if not wait_workers > 0:
         raise ValueError(f"--wait-workers must be a positive number of seconds, got {wait_workers}")
     for size in sizes:  # every grid point is validated before any work
-        jam_command.prepare(argparse.Namespace(**fixed, n=size, seed=seeds.start, emit_deck=None))
+        prepare(JamSpec(**fixed, n=size, seed=seeds.start))
     tasks = [Task((("n", size),), seed) for size in sizes for seed in seeds]
     with Store(out).open(fixed, ["n"], defaults=jam_parameters()) as store:
         done, failed, todo, corrupt = store.classify(tasks, fixed, retry_failed)

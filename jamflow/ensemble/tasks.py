@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import subprocess
@@ -11,12 +10,12 @@ import time
 import warnings
 from pathlib import Path
 
-from jamflow.cli.commands.jam import jam_from_args, save_result
+from jamflow.io.packing_file import save_jam_result
+from jamflow.protocols.spec import JamSpec, run_jam
 from jamflow.protocols.outcome import JammingFailed
 from jamflow.ensemble.checks import packing_row
 from jamflow.ensemble.store import Task, failure_row, write_failure
 
-TASK_ONLY = {"out": None, "quiet": True, "emit_deck": None, "force": False}  # jam options an ensemble task sets itself
 MPI_LAUNCHER_VARIABLES = ("PMI_", "PMIX_", "HYDRA_", "MPI_LOCALRANKID", "MPI_LOCALNRANKS", "OMPI_")
 
 
@@ -35,29 +34,29 @@ def make_packing(fixed: dict, task: Task, path: str, failure_path: str, mpi_rank
     """Jam ``task`` with the jam options ``fixed``; write ``path`` (or the failure record)
     atomically. ``mpi_ranks`` > 1: LAMMPS on that many MPI ranks, under mpirun."""
     leave_mpi_launcher()
-    options = {**task.options(fixed), **TASK_ONLY, "out": path}
+    spec = JamSpec(**task.options(fixed))
     if mpi_ranks > 1:
-        return _make_on_ranks(options, task, fixed, path, failure_path, mpi_ranks)
-    args = argparse.Namespace(**options)
+        return _make_on_ranks(spec, task, fixed, path, failure_path, mpi_ranks)
     t0 = time.perf_counter()
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # a final-cap warning is in the file's history/reason
-            result, checks = jam_from_args(args)
+            result, checks = run_jam(spec, destination=path)
     except JammingFailed as err:  # the protocol failed, or the packing failed its checks
         write_failure(failure_path, str(err), time.perf_counter() - t0)
         return failure_row(failure_path, task, fixed)
-    save_result(path, result, checks, args, seconds=round(time.perf_counter() - t0, 3))
+    save_jam_result(path, result, checks, target_pressure=spec.pressure, stress=spec.stress,
+                    seconds=round(time.perf_counter() - t0, 3))
     return packing_row(path, task, fixed)
 
 
-def _make_on_ranks(options, task, fixed, path, failure_path, ranks):
+def _make_on_ranks(spec, task, fixed, path, failure_path, ranks):
     from jamflow.engines.lammps.library import lammps_env
 
     mpirun = Path(sys.prefix) / "bin" / "mpirun"
-    spec = json.dumps({"options": options, "path": path, "failure_path": failure_path})
+    job = json.dumps({"spec": spec.as_dict(), "path": path, "failure_path": failure_path})
     proc = subprocess.run([str(mpirun) if mpirun.exists() else "mpirun", "-np", str(ranks), sys.executable, "-m",
-                           "jamflow.ensemble.mpi_task", spec], capture_output=True, text=True, env=lammps_env(),
+                           "jamflow.ensemble.mpi_task", job], capture_output=True, text=True, env=lammps_env(),
                           stdin=subprocess.DEVNULL)
     if proc.returncode != 0:
         raise RuntimeError(f"mpirun -np {ranks} exited with {proc.returncode}: {proc.stderr.strip()[-500:]}")

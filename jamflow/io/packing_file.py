@@ -50,7 +50,7 @@ files give one-line ValueErrors naming the file (``open_hdf5``).
 
 from __future__ import annotations
 
-from jamflow.support.files import atomic_path
+from jamflow.support.files import atomic_path, replacing
 
 import contextlib
 import datetime
@@ -145,6 +145,20 @@ def save_packing(path, packing: Packing, *, energy_per_particle=None, pressure_t
             for name, column in columns.items():
                 g[name] = np.asarray(column)
     return Path(path)
+
+
+def save_jam_result(path, result, checks, *, target_pressure=None, stress=None, force: bool = False, **run_info):
+    """Write a checked jam result (``protocols.spec.run_jam``) as a packing file: its settings and
+    engine in the protocol group with ``run_info`` (e.g. seconds), its history and checks;
+    ``stress`` is recorded with a ``target_pressure``; ``force`` lets it replace a symlink,
+    device node or read-only file."""
+    with replacing([path] if force else []):
+        return save_packing(path, result.packing, energy_per_particle=result.energy_per_particle,
+                            pressure_tensor=result.pressure_tensor,
+                            protocol={**result.settings.as_dict(), "engine": result.engine, **run_info},
+                            history=result.history, lammps_version=result.lammps_version,
+                            wall_forces=getattr(result, "wall_forces", None), target_pressure=target_pressure,
+                            stress=stress if target_pressure is not None else None, checks=checks)
 
 
 @contextlib.contextmanager

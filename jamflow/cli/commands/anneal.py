@@ -9,7 +9,7 @@ from __future__ import annotations
 import time
 
 
-from jamflow.engines.choose import ENGINES
+from jamflow.cli.options import add_engine_argument, add_force_argument, add_quiet_argument, add_vtol_argument
 from jamflow.support.files import check_writable, replacing
 from jamflow.io.packing_file import load_packing, save_packing
 from jamflow.minimize.settings import MinimizerSettings
@@ -31,11 +31,11 @@ def add_arguments(p) -> None:
     p.add_argument("--seed", type=int, default=0, help="random seed of the first step's major-axis directions")
     p.add_argument("--protocol", choices=sorted(PROTOCOLS), default=DEFAULT_PROTOCOL,
                    help="compression protocol of each re-jam (jamflow jam --protocol)")
-    p.add_argument("--vtol", type=float, default=1e-16, help="energy window V_tol < V < 2 V_tol (per particle)")
-    p.add_argument("--engine", choices=ENGINES, default="auto", help="engine of each re-jam (FIRE: the compiled one)")
+    add_vtol_argument(p)
+    add_engine_argument(p, help="engine of each re-jam (FIRE: the compiled one)")
     p.add_argument("--out", required=True, help="output HDF5 file (the last packing and the per-step table)")
-    p.add_argument("--force", action="store_true", help="replace an --out that is a symlink, device or read-only file")
-    p.add_argument("--quiet", action="store_true", help="no progress display")
+    add_force_argument(p, "replace an --out that is a symlink, device or read-only file")
+    add_quiet_argument(p)
 
 
 def run(args) -> int:

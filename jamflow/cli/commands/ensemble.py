@@ -5,14 +5,13 @@ done and finishes what is not; a store made with other parameters is refused."""
 
 from __future__ import annotations
 
-import argparse
 from collections import defaultdict
 
 import numpy as np
 
-from jamflow.cli.commands import jam as jam_command
+from jamflow.cli.options import add_force_argument, add_quiet_argument, add_spec_arguments
 
-REPLACED = {"n", "seed", "out", "emit_deck", "above", "help"}  # jam options the ensemble sets per task, replaces or lacks (--above)
+PER_TASK = ("n", "seed", "above")  # jam options the ensemble sets per task (n, seed) or lacks (--above)
 
 
 def add_arguments(p) -> None:
@@ -32,12 +31,10 @@ def add_arguments(p) -> None:
     p.add_argument("--retry-failed", action="store_true", help="try recorded failed packings again")
     p.add_argument("--rebuild-summary", action="store_true",
                    help="only rebuild DIR/summary.csv from the files in DIR, then exit")
+    add_quiet_argument(p)
+    add_force_argument(p, "accepted as in `jamflow jam`; the store's files are written anew atomically either way")
     jam_options = p.add_argument_group("jam options (as in `jamflow jam`, for every packing)")
-    jam_parser = argparse.ArgumentParser(add_help=False)
-    jam_command.add_arguments(jam_parser)
-    for action in jam_parser._actions:  # every jam option, present and future, flows into the ensemble
-        if action.dest not in REPLACED:
-            jam_options._add_action(action)
+    add_spec_arguments(jam_options, skip=PER_TASK)  # every jam option, present and future, flows into the ensemble
 
 
 def run(args) -> int:
@@ -51,7 +48,7 @@ def run(args) -> int:
     if args.seeds is None:
         raise ValueError("--seeds A:B is required, e.g. --seeds 0:200 for seeds 0 to 199")
     own = {"seeds", "n", "out", "workers", "scheduler", "wait_workers", "mpi_ranks", "retry_failed", "rebuild_summary",
-           "run", "command"}
+           "run", "command", "quiet", "force"}
     options = {k: v for k, v in vars(args).items() if k not in own}
     report = run_ensemble(args.out, args.seeds, args.n, workers=args.workers, scheduler=args.scheduler,
                           progress=not args.quiet, retry_failed=args.retry_failed, wait_workers=args.wait_workers,

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from jamflow.cli.options import add_force_argument
 from jamflow.io.export import FORMATS, SUFFIXES, export_packing
 from jamflow.support.files import check_writable, replacing
 from jamflow.io.packing_file import load_packing
@@ -16,7 +17,7 @@ def add_arguments(p) -> None:
     p.add_argument("file", metavar="IN.h5", help="packing file (jamflow jam --out)")
     p.add_argument("--format", choices=FORMATS, required=True, help="lammps-dump (.dump) or extended XYZ (.xyz)")
     p.add_argument("-o", "--out", default=None, help="file to write (default: IN with the format's suffix)")
-    p.add_argument("--force", action="store_true", help="replace an --out that is a symlink, device or read-only file")
+    add_force_argument(p, "replace an --out that is a symlink, device or read-only file")
 
 
 def run(args) -> int:

@@ -12,8 +12,8 @@ import csv
 from pathlib import Path
 
 
+from jamflow.cli.options import add_engine_argument, add_force_argument, add_quiet_argument
 from jamflow.analysis.families import convergence, join, mirror_by_sightings, mirror_check, richness
-from jamflow.engines.choose import ENGINES
 from jamflow.support.files import atomic_path, check_writable, output_directory, replacing
 from jamflow.cli.progress import progress_bar
 from jamflow.protocols.families import FamilySampling, sample
@@ -30,12 +30,11 @@ def add_arguments(p) -> None:
     p.add_argument("--substeps", type=int, default=10, help="shear steps between grid points (delta gamma = spacing / substeps)")
     p.add_argument("--starts", type=int, default=20, help="random starts per grid point")
     p.add_argument("--seed", type=int, default=0, help="offset of the random seeds")
-    p.add_argument("--engine", choices=ENGINES, default="auto", help="engine for jamming and shear")
+    add_engine_argument(p, help="engine for jamming and shear")
     p.add_argument("--out", required=True, metavar="DIR", help="output directory (created if its parent exists)")
     p.add_argument("--resume", action="store_true", help="continue DIR/points.h5 of the same plan")
-    p.add_argument("--force", action="store_true",
-                   help="replace outputs that are symlinks, device nodes or read-only files")
-    p.add_argument("--quiet", action="store_true", help="no progress display")
+    add_force_argument(p)
+    add_quiet_argument(p)
 
 
 def plan_from_args(args) -> FamilySampling:

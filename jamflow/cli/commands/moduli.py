@@ -14,11 +14,11 @@ from pathlib import Path
 import h5py
 import numpy as np
 
+from jamflow.cli.options import add_engine_argument, add_force_argument, add_quiet_argument
 from jamflow import __version__
 from jamflow.protocols.moduli import Moduli
 from jamflow.mechanics.strains import STRAINS
 from jamflow.protocols.sweeps import JUMP_TOL, LINEAR_TOL, PAST_YIELD, SweepSettings
-from jamflow.engines.choose import ENGINES
 from jamflow.support.files import atomic_path, check_writable, replacing
 from jamflow.io.packing_file import load_packing, read_attrs
 from jamflow.minimize.settings import MinimizerSettings
@@ -40,11 +40,10 @@ def add_arguments(p) -> None:
     p.add_argument("--ftol", type=float, default=None,
                    help="force tolerance of the relaxations (default: below the round-off floor, so each one runs "
                         "until it stops making progress)")
-    p.add_argument("--engine", choices=ENGINES, default="auto", help="engine of the relaxations")
+    add_engine_argument(p, help="engine of the relaxations")
     p.add_argument("--no-figure", action="store_true", help="do not draw IN.moduli.png")
-    p.add_argument("--force", action="store_true",
-                   help="replace outputs that are symlinks, device nodes or read-only files")
-    p.add_argument("--quiet", action="store_true", help="no progress display")
+    add_force_argument(p)
+    add_quiet_argument(p)
 
 
 def results_path(packing_path) -> Path:

@@ -12,7 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from jamflow.engines.choose import ENGINES, engine_name
+from jamflow.cli.options import add_engine_argument, add_force_argument, add_ftol_argument, add_quiet_argument, add_vtol_argument
+from jamflow.engines.choose import engine_name
 from jamflow.support.files import check_writable, output_directory, replacing
 from jamflow.io.packing_file import load_packing
 from jamflow.minimize.settings import MinimizerSettings
@@ -29,16 +30,15 @@ def add_arguments(p) -> None:
     p.add_argument("--to", type=float, required=True, help="final accumulated strain")
     p.add_argument("--out", default=None, metavar="DIR", help="output directory (created if its parent exists; "
                    "required unless --emit-deck)")
-    p.add_argument("--engine", choices=ENGINES, default="auto", help="auto: the compiled engine where it runs the scene")
+    add_engine_argument(p, help="auto: the compiled engine where it runs the scene")
     p.add_argument("--protocol", choices=sorted(PROTOCOLS), default=None,
                    help="bisection after each step: fast (growing increments, Newton jumps; the default) or seed "
                         "(the chapter's; the default with --emit-deck, which runs it only)")
     p.add_argument("--dphi0", type=float, default=1e-6, help="initial packing-fraction increment after each step")
-    p.add_argument("--vtol", type=float, default=1e-16, help="energy window V_tol < V < 2 V_tol (per particle)")
-    p.add_argument("--ftol", type=float, default=None, help="max force component tolerance (default scales with box)")
-    p.add_argument("--force", action="store_true",
-                   help="replace outputs that are symlinks, device nodes or read-only files")
-    p.add_argument("--quiet", action="store_true", help="no progress display")
+    add_vtol_argument(p)
+    add_ftol_argument(p)
+    add_force_argument(p)
+    add_quiet_argument(p)
     p.add_argument("--no-figure", action="store_true", help="do not draw DIR/STEM.shear.png")
     p.add_argument("--emit-deck", default=None, metavar="DECK.lmp",
                    help="write the LAMMPS deck that runs this shear in lmp alone (and its start, DECK.start.data) "

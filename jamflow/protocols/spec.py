@@ -1,0 +1,199 @@
+"""The jam specification: every option of ``jamflow jam`` as one validated, serialisable value,
+and the one function that runs it (``run_jam``). The command line parses its options into a
+``JamSpec``; the ensemble stores its fields (``ensemble.json``) and ships them to the workers.
+
+``prepare`` makes every refusal before any work (bad numbers, options that do not combine, an
+engine that cannot run the scene, a V_tol that float64 cannot resolve); ``run_jam`` returns the
+result and its checks, or raises ``JammingFailed`` so that nothing unchecked is written.
+Units as in the packing file: diameters of the small particle, eps, eps/diameter.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, fields
+
+from jamflow.engines.choose import ENGINES, engine_name
+from jamflow.mechanics.checks import check_packing
+from jamflow.minimize.settings import CREEP_METHODS, MD_DAMPINGS, METHODS, MinimizerSettings
+from jamflow.model.box import STRESS_MODES
+from jamflow.model.shapes.contact_distance import METHODS as CONTACT_METHODS
+from jamflow.model.shapes.parse import parse_shape
+from jamflow.model.walls import WALL_TYPES
+from jamflow.protocols.above import check_dphi
+from jamflow.protocols.compression import at_shear_strain, check_resolution, initial_packing, jam, with_accumulated_strain
+from jamflow.protocols.outcome import JammingFailed
+from jamflow.protocols.settings import DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings
+
+
+@dataclass(frozen=True)
+class JamSpec:
+    """One packing to jam: the options of ``jamflow jam`` (same names, same defaults), without
+    the command's own (``--out``, ``--force``, ``--quiet``, ``--emit-deck``)."""
+
+    dim: int = 2
+    n: int = 64
+    sizes: str = "bi:1.4:0.5"  # jamflow.model.sizes.parse_sizes
+    potential: str = "spring"  # spring | hertz | spring:ALPHA | rlj
+    shape: str = "disk"  # jamflow.model.shapes.parse.parse_shape
+    contact: str = "exact"  # contact distance of ellipses/spheroids
+    protocol: str | None = None  # seed | fast; None: fast
+    minimizer: str = "fire"  # fire | cg | md
+    damping: float = MinimizerSettings.damping  # md only, sqrt(m eps)/diameter
+    md_damping: str = "viscous"  # viscous | pairwise (md only)
+    creep: str = "auto"  # MinimizerSettings.creep
+    engine: str = "auto"  # auto | lammps | numba
+    phi0: float | None = None  # initial packing fraction; None: the dimension's default
+    dphi0: float = 1e-4  # initial packing-fraction increment
+    vtol: float = 1e-16  # energy window V_tol < V < 2 V_tol, per particle
+    ftol: float | None = None  # max force component; None: the force floor
+    seed: int = 0
+    above: float | None = None  # compress the onset packing by this dphi and minimise again
+    walls: str | None = None  # walled axes, e.g. "y" or "x,y"
+    wall_type: str = "smooth"  # smooth | rough
+    gravity: float = 0.0  # force per particle along -y (2D) / -z (3D); needs walls on that axis
+    pressure: float | None = None  # target pressure: the box relaxes (eps / diameter^d)
+    stress: str = "iso"  # with pressure: iso | aniso | tri
+    gamma: float | None = None  # fixed Lees-Edwards shear strain
+
+    @classmethod
+    def from_options(cls, **options) -> "JamSpec":
+        """A spec from keyword options named as ``jamflow jam``'s (``wall_type``, ``md_damping``,
+        ...); an unknown name is refused with the list of known ones."""
+        unknown = sorted(set(options) - set(cls.option_names()))
+        if unknown:
+            raise ValueError(f"unknown jam option(s) {', '.join(unknown)}; use names of `jamflow jam --help`: "
+                             f"{', '.join(cls.option_names())}")
+        return cls(**options)
+
+    @classmethod
+    def option_names(cls) -> tuple[str, ...]:
+        return tuple(f.name for f in fields(cls))
+
+    def as_dict(self) -> dict:
+        """The fields as plain values (JSON-serialisable)."""
+        return asdict(self)
+
+    @property
+    def protocol_name(self) -> str:
+        return self.protocol or DEFAULT_PROTOCOL
+
+
+def compression_settings(spec: JamSpec) -> CompressionSettings:
+    """The compression protocol and minimiser of a spec; refuses bad numbers and combinations."""
+    for name in ("phi0", "dphi0", "vtol"):
+        value = getattr(spec, name)
+        if value is not None and (not math.isfinite(value) or value <= 0):
+            raise ValueError(f"--{name} must be a finite positive number, got {value}")
+    _check_choice("protocol", spec.protocol_name, PROTOCOLS)
+    _check_choice("minimizer", spec.minimizer, METHODS)
+    _check_choice("md-damping", spec.md_damping, MD_DAMPINGS)
+    _check_choice("creep", spec.creep, CREEP_METHODS)
+    if spec.md_damping != "viscous" and spec.minimizer != "md":
+        raise ValueError(f"--md-damping {spec.md_damping} applies to --minimizer md only, not {spec.minimizer}")
+    minimizer = MinimizerSettings(method=spec.minimizer, force_tol=spec.ftol, v_min=spec.vtol, damping=spec.damping,
+                                  md_damping=spec.md_damping, creep=spec.creep)
+    return PROTOCOLS[spec.protocol_name](phi0=spec.phi0, dphi0=spec.dphi0, v_tol=spec.vtol, minimizer=minimizer)
+
+
+def _check_choice(option: str, value, choices) -> None:
+    if value not in choices:
+        raise ValueError(f"--{option} {value!r} is not one of {', '.join(sorted(choices))}")
+
+
+def check_boundaries(spec: JamSpec) -> None:
+    """Refuse bad --gravity / --pressure / --above / --gamma combinations before any work."""
+    _check_choice("engine", spec.engine, ENGINES)
+    _check_choice("wall-type", spec.wall_type, WALL_TYPES)
+    _check_choice("stress", spec.stress, STRESS_MODES)
+    _check_choice("contact", spec.contact, CONTACT_METHODS)
+    if not math.isfinite(spec.gravity) or spec.gravity < 0:
+        raise ValueError(f"--gravity must be a finite number >= 0, got {spec.gravity}")
+    if spec.pressure is not None:
+        if not math.isfinite(spec.pressure) or spec.pressure <= 0:
+            raise ValueError(f"--pressure must be a finite positive number, got {spec.pressure}")
+        if spec.walls or spec.gravity:
+            raise ValueError("--pressure relaxes a periodic box: it does not combine with --walls or --gravity")
+    if spec.above is not None:
+        check_dphi(spec.above, 0.0)  # not finite, not positive, >= 1: refused before any work
+        if spec.pressure is not None or spec.gravity:
+            raise ValueError("--above compresses the onset packing at a fixed box: it does not combine with "
+                             "--pressure, --gravity or --emit-deck")
+    if spec.gamma is not None and spec.pressure is not None:
+        raise ValueError("--gamma fixes the shear strain, --pressure relaxes the box: use one of them")
+
+
+def check_contact(spec: JamSpec) -> None:
+    """Refuse a --contact method other than the default for a shape that has no contact-distance
+    approximation (disks, spheres, ellipse:1, rigid bodies of spherical sites): it would be ignored."""
+    if spec.contact == "exact":
+        return
+    shape = parse_shape(spec.shape, spec.dim)
+    if shape.kind != "ellipsoid":
+        raise ValueError(f"--contact {spec.contact} applies to ellipses/spheroids (--shape ellipse:ALPHA or "
+                         f"spheroid:ALPHA, ALPHA != 1), not to {shape.name(spec.dim)} particles: leave --contact out")
+
+
+def prepare(spec: JamSpec):
+    """(settings, start) of a spec: validated settings (``CompressionSettings``, or
+    ``PressureSettings`` with a target pressure) and the random start. Every refusal comes here,
+    before any work (shared by ``jamflow jam``, ``jamflow ensemble`` and ``run_jam``)."""
+    check_boundaries(spec)
+    check_contact(spec)
+    settings = compression_settings(spec)
+    start = initial_packing(spec.n, spec.dim, spec.sizes, spec.potential, spec.seed,
+                            settings.start_phi(spec.dim, spec.gravity, spec.shape), spec.shape, spec.walls,
+                            spec.wall_type, spec.gravity, spec.contact)
+    if spec.gamma is not None:
+        start = at_shear_strain(start, spec.gamma)  # refuses a strain that is not finite, or walls with a shear
+    if spec.pressure is not None:
+        from jamflow.protocols.pressure import PressureSettings, check_pressure_start, pressure_sequence
+
+        psettings = PressureSettings(pressure_sequence(spec.pressure), spec.stress, settings.minimizer)
+        check_pressure_start(start, psettings)
+        engine_name(start, spec.minimizer, spec.engine, pressure=True)
+        return psettings, start
+    engine_name(start, spec.minimizer, spec.engine)  # refuse an engine that cannot run the scene, before work
+    if start.shape.kind == "rigid" and settings.minimizer.md_damping != "viscous":
+        raise ValueError(f"--md-damping {settings.minimizer.md_damping} is for disks and spheres: rigid bodies are "
+                         "damped by fix rigid langevin (set its rate with --damping)")
+    check_resolution(start, settings)
+    return settings, start
+
+
+def run_jam(spec: JamSpec, observers=(), engine_options=None, prepared=None, destination=None):
+    """(result, checks) of the jam ``spec`` asks for (``--above`` is not applied here:
+    ``protocols.above.compress_above`` on the result). ``JammingFailed`` if the protocol fails or
+    the packing fails its checks, so nothing unchecked is written. ``prepared``: what
+    ``prepare(spec)`` returned, if the caller already has it; ``destination``: the file the caller
+    would write, named in the failure message."""
+    settings, start = prepared or prepare(spec)
+    if spec.pressure is not None:
+        from jamflow.protocols.pressure import jam_at_pressure
+
+        result = jam_at_pressure(start, settings, observers=observers, engine=spec.engine,
+                                 engine_options=engine_options)
+        return result, checked(result, settings.minimizer, None, destination)
+    result = jam(start=start, settings=settings, observers=observers, engine=spec.engine,
+                 engine_options=engine_options)
+    if spec.gamma is not None:
+        result = with_accumulated_strain(result, spec.gamma)  # the file's gamma: the accumulated strain
+    window = None if spec.gravity else settings.v_tol  # a pile under gravity has no energy window
+    return result, checked(result, settings.minimizer, window, destination)
+
+
+def checked(result, minimizer: MinimizerSettings, v_tol: float | None, destination=None):
+    """The packing checks of a result; ``JammingFailed`` if any fails (naming ``destination``,
+    the file not written). ``v_tol`` None skips the energy-window check (piles under gravity,
+    constant pressure)."""
+    packing = result.packing
+    ftol = minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness, packing.shape.force_tol_base)
+    checks = check_packing(packing, result.energy_per_particle, None, v_tol, ftol)
+    if not checks.passed:
+        reason = result.history["reason"][-1].decode()
+        remedy = ("a larger --vtol (stronger contacts) or another --minimizer" if not checks.force_balanced else
+                  "a larger --vtol: the contacts at this one are near round-off")
+        raise JammingFailed(f"the packing at phi_J = {result.phi_j:.10f} failed its checks: "
+                            f"{'; '.join(checks.problems())} (final minimisation stopped by '{reason}'). "
+                            f"{f'Nothing was written to {destination}; ' if destination else ''}use {remedy}")
+    return checks
