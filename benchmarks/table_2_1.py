@@ -18,7 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from jamflow.model.shapes import contact_distance, figure_2_12, lambda_polynomial
+from jamflow.model.shapes import contact_distance, lambda_polynomial
+from jamflow.plots.ellipse_pair import figure_2_12
 
 cdm = importlib.import_module("jamflow.model.shapes.contact_distance")
 

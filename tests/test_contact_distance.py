@@ -14,8 +14,9 @@ import pytest
 from scipy.optimize import minimize, minimize_scalar
 
 from jamflow.model.shapes import (APART, OVERLAPPING, TOUCHING, contact_distance, contact_distance_gradient,
-                                  contact_function, contact_lambda, draw_contact_pair, figure_2_12, lambda_polynomial,
-                                  overlap_state, truncation_fallbacks)
+                                  contact_function, contact_lambda, lambda_polynomial, overlap_state,
+                                  truncation_fallbacks)
+from jamflow.plots.ellipse_pair import draw_contact_pair, figure_2_12
 
 cd_module = importlib.import_module("jamflow.model.shapes.contact_distance")  # the module, not the function
 
