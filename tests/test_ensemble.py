@@ -22,7 +22,7 @@ from jamflow.support.files import atomic_path
 from jamflow.io.packing_file import load_packing, read_attrs
 from jamflow.protocols.outcome import JammingFailed
 
-JAMFLOW = [sys.executable, "-m", "jamflow.cli.app"]
+JAMFLOW = [sys.executable, "-m", "jamflow.cli"]
 
 
 @pytest.fixture(scope="module")

@@ -11,7 +11,7 @@ import pytest
 from jamflow.ensemble import Store, run_ensemble
 from jamflow.ensemble.onsets import onset_statistics
 
-JAMFLOW = [sys.executable, "-m", "jamflow.cli.app"]
+JAMFLOW = [sys.executable, "-m", "jamflow.cli"]
 
 
 def synthetic_rows(nu=0.5, phi_inf=0.84, shift=0.3, amplitude=0.2, count=400, sizes=(32, 64, 128, 256, 512), seed=1):

@@ -19,7 +19,7 @@ import jamflow
 from jamflow.cli.app import EXIT_JAMMING, EXIT_LAMMPS, EXIT_PLUGIN, EXIT_TERMINATED, main
 from jamflow.io.packing_file import load_packing, read_attrs, read_checks, read_history, save_packing
 
-JAMFLOW = [sys.executable, "-m", "jamflow.cli.app"]
+JAMFLOW = [sys.executable, "-m", "jamflow.cli"]
 
 
 def no_traceback(err: str) -> bool:

@@ -32,6 +32,7 @@ from scipy.ndimage import gaussian_filter1d
 from scipy.special import sph_harm_y
 
 from jamflow.model.packing import Packing
+from jamflow.model.nematic import Nematic, NematicResult  # noqa: F401 -- re-exported: P2 is measured here too (section 4.3)
 from jamflow.analysis.structure import UNITS_R, RDF, RDFResult, max_reduced_radius, pair_chunks, positive, rms_contact_distance
 
 
