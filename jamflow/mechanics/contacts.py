@@ -204,10 +204,13 @@ class Contacts:
         trivial = 0 if packing.fixed is not None else sum(packing.box.periodic)
         balanced = (~floater & (z < need)) if test else None
         bodies = body_counts(packing.n, sites, floater) if sites is not None else (None, None, None)
-        return ContactsResult(i[keep], j[keep], floater, z, packing.dim, len(i),
-                              near_contact_count(packing, self.near_tol), d_f,
-                              np.column_stack([wall_i[wall_keep], wall_face[wall_keep]]) if bounded else None,
-                              packing.fixed, trivial if bounded else None, packing.gravity > 0, balanced, *bodies)
+        n_site_contacts, n_body_contacts, one_site = bodies
+        return ContactsResult(
+            i=i[keep], j=j[keep], floater=floater, z=z, dim=packing.dim, n_overlapping=len(i),
+            n_near_contact=near_contact_count(packing, self.near_tol), dof=d_f,
+            wall_contacts=np.column_stack([wall_i[wall_keep], wall_face[wall_keep]]) if bounded else None,
+            fixed=packing.fixed, trivial=trivial if bounded else None, loaded=packing.gravity > 0, balanced=balanced,
+            n_site_contacts=n_site_contacts, n_body_contacts=n_body_contacts, one_site=one_site)
 
 
 def site_contacts(packing: Packing, sites=None):

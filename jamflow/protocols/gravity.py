@@ -68,6 +68,7 @@ def settle(start: Packing, minimizer: MinimizerSettings | None = None, *, observ
                             f"for the box; use a lower phi0 (phi0 = {start.phi:.3f} here)")
     history = {k: np.array(v) for k, v in rows.items()}
     history["reason"] = history["reason"].astype("S")
-    return JamResult(packing, pile_fraction(packing), result.energy_per_particle, state.pressure_tensor,
-                     result.max_force, history, CompressionSettings(phi0=start.phi, minimizer=minimizer),
-                     time.perf_counter() - t0, lammps_version(), name, result.max_torque, loads)
+    return JamResult(packing=packing, phi_j=pile_fraction(packing), energy_per_particle=result.energy_per_particle,
+                     pressure_tensor=state.pressure_tensor, max_force=result.max_force, history=history,
+                     settings=CompressionSettings(phi0=start.phi, minimizer=minimizer), seconds=time.perf_counter() - t0,
+                     lammps_version=lammps_version(), engine=name, max_torque=result.max_torque, wall_forces=loads)
