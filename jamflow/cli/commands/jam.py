@@ -12,7 +12,6 @@ from __future__ import annotations
 import time
 
 from jamflow.support.files import check_writable, replacing
-from jamflow.io.packing_file import save_jam_result, save_packing
 from jamflow.protocols.spec import JamSpec, prepare, run_jam
 from jamflow.protocols.outcome import JammingFailed
 from jamflow.cli.options import add_quiet_argument, add_spec_arguments, spec_options
@@ -64,6 +63,8 @@ def run(args) -> int:
         result, checks = run_jam(spec, observers=[progress], prepared=prepared, destination=args.out)
     if spec.above is not None:
         return save_above(args, result, t0)
+    from jamflow.io.packing_file import save_jam_result  # h5py: not loaded for --help
+
     save_jam_result(args.out, result, checks, target_pressure=spec.pressure, stress=spec.stress, force=args.force)
     print(f"{result.summary()}  -> {args.out} ({time.perf_counter() - t0:.2f} s)")
     return 0
@@ -80,6 +81,8 @@ def save_above(args, result, t0) -> int:
     protocol = {**settings.as_dict(), "engine": above.engine, "phi_onset": result.phi_j, "above_dphi": above.dphi,
                 "above_reason": above.minimization.reason, "above_iterations": above.minimization.iterations}
     wall_forces = wall_loads(above.packing) if above.packing.box.walls else None
+    from jamflow.io.packing_file import save_packing  # h5py: not loaded for --help
+
     with replacing([args.out] if getattr(args, "force", False) else []):
         save_packing(args.out, above.packing, energy_per_particle=above.energy_per_particle,
                      pressure_tensor=above.pressure_tensor, protocol=protocol, history=result.history,
