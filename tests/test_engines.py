@@ -254,6 +254,19 @@ def test_options_are_passed_or_refused(config):
         open_engine(p, "fire", "lammps", bogus=1)
 
 
+@pytest.mark.parametrize("engine", sorted(ENGINES))
+def test_every_engine_implements_the_whole_contract(engine):
+    """Each member of the ``Engine`` protocol is on both engines (callers need no hasattr)."""
+    from jamflow.engines.base import Engine
+
+    methods = {m for m, v in vars(Engine).items() if callable(v) and (not m.startswith("_") or m in ("__enter__", "__exit__"))}
+    assert {"counters", "minimizer_session", "orientations", "close", "__enter__"} <= methods
+    with ENGINES[engine](random_packing(8, 2, parse_sizes("bi:1.4:0.5"), 0.5, seed=1)) as eng:
+        assert not [m for m in methods if not callable(getattr(eng, m, None))]
+        assert not [a for a in Engine.__annotations__ if not hasattr(eng, a)]
+        assert isinstance(eng.counters(), dict)
+
+
 def test_compiled_engine_starts_no_lammps(monkeypatch):
     """The compiled path neither starts LAMMPS nor asks it for its version."""
     import jamflow.engines.lammps.library as lib

@@ -443,7 +443,6 @@ def _finish(engine, phi, result, rows, settings, start_time, version) -> JamResu
                       "good as that max force", stacklevel=3)
     history = {k: np.array(v) for k, v in rows.items()}
     history["reason"] = history["reason"].astype("S")
-    counters = engine.counters() if hasattr(engine, "counters") else {}
     return JamResult(packing, phi, result.energy_per_particle, state.pressure_tensor, result.max_force,
                      history, settings, time.perf_counter() - start_time, version, engine.name, result.max_torque,
-                     wall_loads(packing) if packing.box.walls else None, counters)
+                     wall_loads(packing) if packing.box.walls else None, engine.counters())
