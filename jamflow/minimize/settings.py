@@ -103,6 +103,12 @@ class MinimizerSettings:
             return self.force_tol
         return force_floor(box, stiffness, base)
 
+    def force_tol_for(self, packing, box=None) -> float:
+        """``resolved_force_tol`` of ``packing``: its box (or ``box``, e.g. an engine's current
+        one), its potential's contact stiffness and its shape's ``force_tol_base``."""
+        return self.resolved_force_tol(packing.box if box is None else box, packing.potential.contact_stiffness,
+                                       packing.shape.force_tol_base)
+
     def as_dict(self) -> dict:
         return {f"minimizer_{k}": v for k, v in asdict(self).items()}
 

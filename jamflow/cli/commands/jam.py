@@ -228,7 +228,7 @@ def checked(result, minimizer, v_tol, out):
     from jamflow.mechanics.checks import check_packing  # imported here: its pair search (scipy.spatial) is not needed for --help
 
     packing = result.packing
-    ftol = minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness, packing.shape.force_tol_base)
+    ftol = minimizer.force_tol_for(packing)
     checks = check_packing(packing, result.energy_per_particle, None, v_tol, ftol)
     if not checks.passed:
         reason = result.history["reason"][-1].decode()
