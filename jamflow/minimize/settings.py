@@ -16,6 +16,7 @@ MD_DAMPINGS = ("viscous", "pairwise")
 
 
 CREEP_METHODS = ("auto", "soft-modes", "polish", "off")
+CREEP_FORCE = 1e-9  # max force (eps/diameter) below which a minimisation that has not converged creeps
 
 
 @dataclass(frozen=True)

@@ -32,9 +32,9 @@ from jamflow.mechanics.deformation import displaced
 from jamflow.mechanics.hessian import Coordinates
 from jamflow.mechanics.dynamical_matrix import DynamicalMatrix
 from jamflow.mechanics.checks import generalized_forces
+from jamflow.minimize.settings import CREEP_FORCE
 
 AFTER = 50_000  # MinimizerSettings.creep_after default: iterations before the first attempt, and between attempts
-CREEP_FORCE = 1e-9  # max force (eps/diameter) below which an unconverged minimisation counts as creeping
 MODES = 12  # lowest eigenpairs computed (beyond the d translations)
 ZERO_MODE = 1e-10  # |lambda| below this x stiffness: a zero mode (no restoring force), left alone
 SHIFT = 1e-8  # shift-invert about -SHIFT x stiffness (the matrix is positive semi-definite at a minimum)
