@@ -115,6 +115,38 @@ def test_reference_forces_and_torques_are_energy_derivatives(model, dim):
     assert_energy_derivatives(sample(model, dim, n=24 if dim == 2 else 100, seed=5), 5 if dim == 2 else 12)
 
 
+@pytest.mark.parametrize("dim", [2, 3])
+def test_compiled_rotation_formulas_match_the_numpy_reference(dim):
+    """The quaternion (angle) -> rotation matrix and world torque -> generalized torque of the
+    compiled kernels (``engines.compiled.rotation``) against ``model.shapes.rotations``, the
+    numpy reference: to round-off on random unit quaternions, torques and lengths."""
+    from jamflow.engines.compiled import start_numba
+    from jamflow.engines.compiled.rotation import generalized_torques as compiled_torques
+    from jamflow.engines.compiled.rotation import rotation_matrix
+    from jamflow.model.shapes.rotations import angle_matrices, generalized_torques, quaternion_matrices
+
+    start_numba()
+    rng = np.random.default_rng(7)
+    n, r = 200, (1 if dim == 2 else 3)
+    if dim == 2:
+        orientations = rng.uniform(-np.pi, np.pi, n)
+        o, tau, reference = orientations[:, None], rng.normal(size=n), angle_matrices(orientations)
+    else:
+        orientations = rng.normal(size=(n, 4))
+        orientations /= np.linalg.norm(orientations, axis=1)[:, None]
+        o, tau, reference = orientations, rng.normal(size=(n, 3)), quaternion_matrices(orientations)
+    matrices = np.zeros((n, dim, dim))
+    for i in range(n):
+        rotation_matrix(o, i, matrices[i])
+    assert np.abs(matrices - reference).max() <= 4e-16
+    dk, mask = rng.uniform(0.2, 1.0, (n, r)), np.array([1.0] if dim == 2 else [0.0, 1.0, 1.0])
+    g = np.zeros((n, r))
+    compiled_torques(o, np.ascontiguousarray(tau.reshape(n, -1)), dk, mask, g)
+    expected = generalized_torques(orientations, tau, dim, dk, mask)
+    assert np.abs(g - expected).max() <= 1e-15 * np.abs(expected).max()
+    assert (g[:, mask == 0] == 0).all() and np.abs(g).max() > 0
+
+
 def test_two_dimers_closed_form_torque():
     """Two dimers (sites 1 and 1 at +-0.25 along x), the second above the first's right site,
     turned by 90 degrees: only sites (0, right) and (1, lower) overlap, by r = 0.9."""
@@ -252,6 +284,19 @@ def test_options_are_passed_or_refused(config):
         open_engine(p, "fire", "numba", comm=None, skin=0.2)
     with pytest.raises(ValueError, match="takes no option bogus"):
         open_engine(p, "fire", "lammps", bogus=1)
+
+
+@pytest.mark.parametrize("engine", sorted(ENGINES))
+def test_every_engine_implements_the_whole_contract(engine):
+    """Each member of the ``Engine`` protocol is on both engines (callers need no hasattr)."""
+    from jamflow.engines.base import Engine
+
+    methods = {m for m, v in vars(Engine).items() if callable(v) and (not m.startswith("_") or m in ("__enter__", "__exit__"))}
+    assert {"counters", "minimizer_session", "orientations", "close", "__enter__"} <= methods
+    with ENGINES[engine](random_packing(8, 2, parse_sizes("bi:1.4:0.5"), 0.5, seed=1)) as eng:
+        assert not [m for m in methods if not callable(getattr(eng, m, None))]
+        assert not [a for a in Engine.__annotations__ if not hasattr(eng, a)]
+        assert isinstance(eng.counters(), dict)
 
 
 def test_compiled_engine_starts_no_lammps(monkeypatch):

@@ -155,6 +155,22 @@ def test_sparse_lowest_modes_match_dense(jammed):
     assert st.mode_eigenvalue == pytest.approx(dense.lowest_nonzero, rel=1e-9)
 
 
+def test_one_lowest_eigenpair_routine_serves_spectra_and_soft_modes(jammed):
+    """``mechanics.eigen.lowest_eigenpairs``: grown until a value exceeds the threshold (spectra),
+    or k pairs in ARPACK's order (soft-mode steps); both the dense spectrum's lowest."""
+    from jamflow.mechanics.eigen import lowest_eigenpairs
+    from jamflow.minimize.soft_modes import lowest_modes
+
+    matrix = DynamicalMatrix().compute(jammed).matrix
+    dense = np.linalg.eigvalsh(matrix.toarray())
+    grown, vectors = lowest_eigenpairs(matrix, 1, 1e-6, grow_above=1e-6)
+    assert len(grown) == 4 and np.sum(grown <= 1e-6) == 2 and grown[-1] > 1e-6  # k = 1, 2: the zero modes only
+    assert np.allclose(grown, dense[:4], atol=1e-12) and vectors.shape == (matrix.shape[0], 4)
+    values, _ = lowest_modes(matrix, 6, 1.0)
+    assert np.allclose(np.sort(values), dense[:6], atol=1e-12)
+    assert len(lowest_eigenpairs(matrix, 6, 1e-8, dense_limit=matrix.shape[0])[0]) == matrix.shape[0]
+
+
 def test_density_of_states_counts_every_nonzero_mode(jammed):
     spectra = [Spectrum().compute(jammed), Spectrum().compute(triangular_lattice(6, 6, 0.97))]
     dos = DensityOfStates(bins=25).compute(spectra)

@@ -173,6 +173,18 @@ def test_pressures_float64_cannot_resolve_are_refused_before_work():
         jam_at_pressure(start, PressureSettings((1e-4,)), engine="lammps")
 
 
+def test_ellipse_pressure_floor_is_that_of_the_ellipse_force_tolerance():
+    """The floor is FLOOR_MARGIN times the tolerance the minimiser runs with, which for ellipses
+    starts from their base 5e-13 (docs/ellipses.md), not the disks' 1e-14: a target between
+    the two floors is refused before work (it was accepted, with contact forces only 20x above
+    the tolerance instead of 1000x)."""
+    start = initial_packing(16, 2, "bi:1.4:0.6667", "spring", 0, 0.8, shape="ellipse:1.6")
+    floor = pressure_floor(start, MinimizerSettings())
+    assert floor == pytest.approx(1000 * 5e-13 / np.mean(start.diameters))  # L < 20
+    with pytest.raises(ValueError, match=r"round-off floor 5\.0e-13"):
+        jam_at_pressure(start, PressureSettings((1e-4, floor / 2)))
+
+
 def test_cli_pressure(tmp_path, capsys):
     out = tmp_path / "p.h5"
     assert main(["jam", "--n", "32", "--pressure", "1e-5", "--stress", "aniso", "--quiet", "--out", str(out)]) == 0

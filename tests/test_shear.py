@@ -259,3 +259,23 @@ def test_jam_command_gamma_bad_input_one_line_error(tmp_path, capsys, args, mess
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
     assert not out.exists()
+
+
+def test_shear_step_checks_record_the_tolerance_the_minimiser_ran_with(monkeypatch):
+    """``jamflow shear`` checks every step with the tolerance the shear's minimisations used:
+    the shape's (ellipses: base 5e-13), not the disks' 1e-14."""
+    from pathlib import Path
+    from types import SimpleNamespace
+
+    import jamflow.mechanics.checks as checks
+    from jamflow.cli.commands.shear import step_checks
+    from jamflow.protocols.settings import CompressionSettings
+
+    p = load_packing(Path(__file__).parent / "data" / "ellipse1.5_n16_s0.h5")
+    seen = []
+    monkeypatch.setattr(checks, "check_packing", lambda packing, v, f, v_tol, ftol: seen.append(ftol)
+                        or SimpleNamespace(passed=True))
+    settings = CompressionSettings()
+    step = SimpleNamespace(packing=p, jam=SimpleNamespace(energy_per_particle=1.5e-16, max_force=1e-13))
+    assert step_checks(SimpleNamespace(steps=[step]), settings).tolist() == [True]
+    assert seen == [settings.minimizer.force_tol_for(p)] and seen[0] >= 5e-13

@@ -29,12 +29,12 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
-import scipy.sparse.linalg as spla
 
 from jamflow.model.packing import Packing
 from jamflow.analysis import quartic
 from jamflow.mechanics.deformation import energy_change, network_amplitudes, opening_amplitude  # noqa: F401 (public here)
 from jamflow.mechanics.dynamical_matrix import DynamicalMatrix, DynamicalMatrixResult
+from jamflow.mechanics.eigen import lowest_eigenpairs
 
 DENSE_MAX_DOF = 4096  # above this many degrees of freedom "auto" uses the sparse solver
 
@@ -183,7 +183,8 @@ class Spectrum:
         if dense or dyn.n_dof <= self.n_modes + 1:
             values, vecs = _dense(dyn.matrix, self.vectors)
             return SpectrumResult(values, vecs, dyn, self.e_min, mass, True)
-        values, vecs = _sparse_lowest(dyn.matrix, self.n_modes, self.e_min)
+        # shift-invert about -e_min, k doubled until one mode exceeds e_min (the zero modes bracketed)
+        values, vecs = lowest_eigenpairs(dyn.matrix, self.n_modes, self.e_min, grow_above=self.e_min)
         return SpectrumResult(values, vecs if self.vectors else None, dyn, self.e_min, mass, False)
 
 
@@ -193,19 +194,6 @@ def _dense(matrix, vectors: bool):
     if vectors:
         return sla.eigh(a)
     return sla.eigh(a, eigvals_only=True), None
-
-
-def _sparse_lowest(matrix, k: int, e_min: float):
-    """Lowest modes by shift-invert about -e_min; doubles k until one mode exceeds e_min."""
-    n = matrix.shape[0]
-    while True:
-        k = min(k, n - 2)
-        values, vecs = spla.eigsh(matrix.tocsc(), k=k, sigma=-e_min, which="LM")
-        order = np.argsort(values)
-        values, vecs = values[order], vecs[:, order]
-        if values[-1] > e_min or k >= n - 2:
-            return values, vecs
-        k *= 2
 
 
 @dataclass(frozen=True)

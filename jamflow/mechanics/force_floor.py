@@ -9,7 +9,7 @@ docs/ellipses.md). Forces in eps/diameter."""
 
 from __future__ import annotations
 
-FORCE_TOL_BASE = 1e-14  # disks, spheres, rigid bodies (``Shape.force_tol_base``)
+from jamflow.model.shapes.shape import FORCE_TOL_BASE  # disks, spheres, rigid bodies (``Shape.force_tol_base``)
 
 
 def force_floor(box, stiffness: float = 1.0, base: float = FORCE_TOL_BASE) -> float:

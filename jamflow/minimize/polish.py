@@ -46,7 +46,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-CREEP_FORCE = 1e-9  # a minimisation below this max force (eps/diameter) that has not converged creeps
+from jamflow.minimize.settings import CREEP_FORCE
+
 RIGID_CREEP_FORCE = 1e-6  # rigid bodies: their minimisations also creep at 1e-9 - 5e-9 (docs/nmers.md)
 SKIN = 0.05  # candidate pairs within sigma + SKIN (diameters): the gaps a step may close
 SHIFT = 1e-12  # mu, relative to the largest diagonal of J^T J

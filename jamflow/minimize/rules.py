@@ -74,7 +74,7 @@ def minimize(engine, settings: MinimizerSettings | None = None) -> MinimizeResul
     start = time.perf_counter()
     n = engine.template.n_mobile
     stiffness = engine.template.potential.contact_stiffness
-    ftol = settings.resolved_force_tol(engine.box, stiffness, engine.template.shape.force_tol_base)
+    ftol = settings.force_tol_for(engine.template, box=engine.box)
     fmax_at_vmin = _force_bound(engine.template, n * settings.v_min)
     done, energy_prev, fmax_prev = 0, math.inf, math.inf
     creep = _creep_method(engine, settings, stiffness, ftol)

@@ -16,6 +16,7 @@ MD_DAMPINGS = ("viscous", "pairwise")
 
 
 CREEP_METHODS = ("auto", "soft-modes", "polish", "off")
+CREEP_FORCE = 1e-9  # max force (eps/diameter) below which a minimisation that has not converged creeps
 
 
 @dataclass(frozen=True)
@@ -102,6 +103,12 @@ class MinimizerSettings:
         if self.force_tol is not None:
             return self.force_tol
         return force_floor(box, stiffness, base)
+
+    def force_tol_for(self, packing, box=None) -> float:
+        """``resolved_force_tol`` of ``packing``: its box (or ``box``, e.g. an engine's current
+        one), its potential's contact stiffness and its shape's ``force_tol_base``."""
+        return self.resolved_force_tol(packing.box if box is None else box, packing.potential.contact_stiffness,
+                                       packing.shape.force_tol_base)
 
     def as_dict(self) -> dict:
         return {f"minimizer_{k}": v for k, v in asdict(self).items()}

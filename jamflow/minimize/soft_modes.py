@@ -26,15 +26,15 @@ import logging
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse.linalg as spla
 
 from jamflow.mechanics.deformation import displaced
 from jamflow.mechanics.hessian import Coordinates
 from jamflow.mechanics.dynamical_matrix import DynamicalMatrix
+from jamflow.mechanics.eigen import lowest_eigenpairs
 from jamflow.mechanics.checks import generalized_forces
+from jamflow.minimize.settings import CREEP_FORCE
 
 AFTER = 50_000  # MinimizerSettings.creep_after default: iterations before the first attempt, and between attempts
-CREEP_FORCE = 1e-9  # max force (eps/diameter) below which an unconverged minimisation counts as creeping
 MODES = 12  # lowest eigenpairs computed (beyond the d translations)
 ZERO_MODE = 1e-10  # |lambda| below this x stiffness: a zero mode (no restoring force), left alone
 SHIFT = 1e-8  # shift-invert about -SHIFT x stiffness (the matrix is positive semi-definite at a minimum)
@@ -106,11 +106,9 @@ def newton_step(dyn, state, packing, stiffness: float = 1.0) -> np.ndarray | Non
 
 
 def lowest_modes(matrix, k: int, stiffness: float) -> tuple[np.ndarray, np.ndarray]:
-    """The k lowest eigenpairs of a symmetric sparse matrix (all of them for small ones)."""
-    n = matrix.shape[0]
-    if n <= DENSE_LIMIT or k >= n - 1:
-        return np.linalg.eigh(matrix.toarray())
-    return spla.eigsh(matrix.tocsc(), k=k, sigma=-SHIFT * stiffness, which="LM")
+    """The k lowest eigenpairs of a symmetric sparse matrix (all of them for small ones), in
+    ARPACK's order (``mechanics.eigen.lowest_eigenpairs``)."""
+    return lowest_eigenpairs(matrix, k, SHIFT * stiffness, ascending=False, dense_limit=DENSE_LIMIT)
 
 
 def _moved(packing, dyn, xi: np.ndarray):

@@ -129,8 +129,7 @@ def anneal(start: Packing, target: float, dalpha: float, settings: CompressionSe
 
 
 def _force_tol(packing: Packing, settings: CompressionSettings) -> float:
-    return settings.minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness,
-                                                 packing.shape.force_tol_base)
+    return settings.minimizer.force_tol_for(packing)
 
 
 def _append(rows: dict, alpha: float, packing: Packing, checks, result: JamResult | None, seconds: float) -> None:

@@ -304,7 +304,7 @@ def check_resolution(packing: Packing, settings: CompressionSettings) -> None:
                          f"with {low:g} <= ALPHA <= {high:g}")
     from jamflow.mechanics.checks import resolution  # imported here: the checks load scipy.spatial, not needed for --help
 
-    ftol = settings.minimizer.resolved_force_tol(packing.box, pot.contact_stiffness, packing.shape.force_tol_base)
+    ftol = settings.minimizer.force_tol_for(packing)
     problem = resolution(packing, settings.v_tol, ftol).problem()
     if problem:
         raise ValueError(f"{problem} (N = {packing.n}, potential {pot.spec}, box side {packing.box.lengths.max():.3g})")
@@ -436,14 +436,12 @@ def _finish(engine, phi, result, rows, settings, start_time, version) -> JamResu
     state = engine.state()
     packing = engine.packing()
     if not result.converged:
-        tol = settings.minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness,
-                                                    packing.shape.force_tol_base)
+        tol = settings.minimizer.force_tol_for(packing)
         warnings.warn(f"final minimisation stopped by '{result.reason}' with max force {result.max_force:.2e} "
                       f"(tolerance {tol:.1e}); the packing is in the energy window but force balance is only as "
                       "good as that max force", stacklevel=3)
     history = {k: np.array(v) for k, v in rows.items()}
     history["reason"] = history["reason"].astype("S")
-    counters = engine.counters() if hasattr(engine, "counters") else {}
     return JamResult(packing, phi, result.energy_per_particle, state.pressure_tensor, result.max_force,
                      history, settings, time.perf_counter() - start_time, version, engine.name, result.max_torque,
-                     wall_loads(packing) if packing.box.walls else None, counters)
+                     wall_loads(packing) if packing.box.walls else None, engine.counters())

@@ -13,7 +13,8 @@ lowest pressure is reported beside it.
 
 The lowest target float64 resolves (``pressure_floor``): a contact force ~ P a^(d-1) must
 stay ``FLOOR_MARGIN`` = 1000 times above the force round-off floor, i.e. the minimiser's
-force tolerance (~ 1e-14 max(1, L/20) k: ``MinimizerSettings.resolved_force_tol``); below it
+force tolerance (base max(1, L/20) k, base the shape's: 1e-14 for disks, 5e-13 for ellipses;
+``MinimizerSettings.force_tol_for``); below it
 force balance is no longer resolved against the contact forces. For 2D bidisperse disks
 (mean diameter 1.2) that is P = 8.3e-12 up to L = 20 (N ~ 300), 1.6e-11 at N = 1024 and
 3.2e-11 at N = 4096: it grows with L.
@@ -83,7 +84,7 @@ class PressureSettings:
 
 def pressure_floor(packing: Packing, minimizer: MinimizerSettings) -> float:
     """Lowest target pressure float64 resolves for this packing (module docstring)."""
-    ftol = minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness)
+    ftol = minimizer.force_tol_for(packing)
     a = float(np.mean(packing.diameters))
     return FLOOR_MARGIN * ftol / a ** (packing.dim - 1)
 
@@ -93,7 +94,7 @@ def check_pressure_start(packing: Packing, settings: PressureSettings) -> None:
     if packing.box.walls or packing.gravity > 0 or packing.fixed is not None:
         raise ValueError("constant pressure relaxes a periodic box: it runs without walls, gravity or fixed particles")
     floor = pressure_floor(packing, settings.minimizer)
-    ftol = settings.minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness)
+    ftol = settings.minimizer.force_tol_for(packing)
     if min(settings.pressures) < floor:
         raise ValueError(f"target pressure {min(settings.pressures):g} is below what float64 resolves at N = "
                          f"{packing.n} (box side {packing.box.lengths.max():.3g}): contact forces ~ P a^(d-1) must "

@@ -187,8 +187,7 @@ def checked(result, minimizer: MinimizerSettings, v_tol: float | None, destinati
     the file not written). ``v_tol`` None skips the energy-window check (piles under gravity,
     constant pressure)."""
     packing = result.packing
-    ftol = minimizer.resolved_force_tol(packing.box, packing.potential.contact_stiffness, packing.shape.force_tol_base)
-    checks = check_packing(packing, result.energy_per_particle, None, v_tol, ftol)
+    checks = check_packing(packing, result.energy_per_particle, None, v_tol, minimizer.force_tol_for(packing))
     if not checks.passed:
         reason = result.history["reason"][-1].decode()
         remedy = ("a larger --vtol (stronger contacts) or another --minimizer" if not checks.force_balanced else

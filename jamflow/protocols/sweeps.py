@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from jamflow.engines.choose import open_engine
+from jamflow.mechanics.force_floor import FORCE_TOL_BASE
 from jamflow.minimize.settings import MinimizerSettings
 from jamflow.model.packing import Packing
 from jamflow.model.pairs import overlapping_pairs, overlapping_sites
@@ -54,7 +55,11 @@ NEAR_TOL = Contacts().near_tol  # |r / sigma - 1| below this: touching at round-
 def sweep_minimizer(packing: Packing) -> MinimizerSettings:
     """FIRE relaxing to the round-off floor: at the default tolerance (1e-14 eps/diameter) the
     response of N = 256 disks errs by ~4e-15 eps/diameter^2, at the floor by ~4e-16."""
-    tol = MinimizerSettings().resolved_force_tol(packing.box, packing.potential.contact_stiffness)
+    # the disks' base for every shape, on purpose: the tolerance is to lie below the round-off floor
+    # so that each relaxation runs to 'no-progress'. The ellipses' base (5e-13) is no round-off floor
+    # but a cap on the creep of jamming near onset; FLOOR_FACTOR of it (5e-15) could end ellipse
+    # relaxations above their floor and blur the responses the moduli are fitted to.
+    tol = MinimizerSettings().resolved_force_tol(packing.box, packing.potential.contact_stiffness, base=FORCE_TOL_BASE)
     return MinimizerSettings(force_tol=FLOOR_FACTOR * tol, window=SWEEP_WINDOW, max_iterations=SWEEP_MAX_ITERATIONS)
 
 

@@ -120,6 +120,6 @@ def step_checks(path, settings) -> np.ndarray:
     out = []
     for step in path.steps:
         p, jam = step.packing, step.jam
-        ftol = settings.minimizer.resolved_force_tol(p.box, p.potential.contact_stiffness)
+        ftol = settings.minimizer.force_tol_for(p)
         out.append(check_packing(p, jam.energy_per_particle, jam.max_force, settings.v_tol, ftol).passed)
     return np.array(out, dtype=bool)

@@ -14,22 +14,26 @@ from jamflow.engines.compiled import jit
 
 
 @jit
+def quaternion_matrix(w, x, y, z):
+    """R of the unit quaternion (w, x, y, z), row by row: (r00, r01, r02, r10, ..., r22). The
+    compiled twin of ``rotations.quaternion_matrices`` (numpy, the reference; tests/test_engines.py
+    holds them together)."""
+    return (1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
+            2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
+            2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y))
+
+
+@jit
 def rotation_matrix(o, i, out):
     """out (d, d) = R of particle i."""
     if o.shape[1] == 1:
         c, s = math.cos(o[i, 0]), math.sin(o[i, 0])
         out[0, 0], out[0, 1], out[1, 0], out[1, 1] = c, -s, s, c
         return
-    w, x, y, z = o[i, 0], o[i, 1], o[i, 2], o[i, 3]
-    out[0, 0] = 1 - 2 * (y * y + z * z)
-    out[0, 1] = 2 * (x * y - w * z)
-    out[0, 2] = 2 * (x * z + w * y)
-    out[1, 0] = 2 * (x * y + w * z)
-    out[1, 1] = 1 - 2 * (x * x + z * z)
-    out[1, 2] = 2 * (y * z - w * x)
-    out[2, 0] = 2 * (x * z - w * y)
-    out[2, 1] = 2 * (y * z + w * x)
-    out[2, 2] = 1 - 2 * (x * x + y * y)
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = quaternion_matrix(o[i, 0], o[i, 1], o[i, 2], o[i, 3])
+    out[0, 0], out[0, 1], out[0, 2] = r00, r01, r02
+    out[1, 0], out[1, 1], out[1, 2] = r10, r11, r12
+    out[2, 0], out[2, 1], out[2, 2] = r20, r21, r22
 
 
 @jit
@@ -57,17 +61,15 @@ def rotate(o, i, phi):
 @jit
 def generalized_torques(o, tau, dk, mask, g):
     """g[i, a] = mask[a] (R_i^T tau_i)_a / dk[i, a]: torques as forces on the coordinates
-    d_k theta (seed section 3). 2D: tau and g are (N, 1)."""
+    d_k theta (seed section 3). 2D: tau and g are (N, 1). The compiled twin of
+    ``rotations.generalized_torques`` (numpy, the reference; tests/test_engines.py compares them)."""
     n, r = g.shape
     if r == 1:
         for i in range(n):
             g[i, 0] = mask[0] * tau[i, 0] / dk[i, 0]
         return
     for i in range(n):
-        w, x, y, z = o[i, 0], o[i, 1], o[i, 2], o[i, 3]
-        r00, r01, r02 = 1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)
-        r10, r11, r12 = 2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)
-        r20, r21, r22 = 2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = quaternion_matrix(o[i, 0], o[i, 1], o[i, 2], o[i, 3])
         t0, t1, t2 = tau[i, 0], tau[i, 1], tau[i, 2]
         g[i, 0] = mask[0] * (r00 * t0 + r10 * t1 + r20 * t2) / dk[i, 0]
         g[i, 1] = mask[1] * (r01 * t0 + r11 * t1 + r21 * t2) / dk[i, 1]

@@ -34,6 +34,13 @@ import numpy as np
 from jamflow.model.shapes.union import union_moments
 
 
+# default force tolerance before box scaling (``mechanics.force_floor``): disks, spheres, rigid bodies
+FORCE_TOL_BASE = 1e-14
+# ellipses/spheroids: near onset FIRE creeps along the quartic (rotational) modes: N = 64, alpha = 1.6
+# reached max force 5e-13 after 2e4 iterations of the final minimisation, 2e-13 after 3.4e5 (docs/ellipses.md)
+ELLIPSOID_FORCE_TOL_BASE = 5e-13
+
+
 def _scale(scale) -> np.ndarray:
     return np.asarray(scale, float)
 
@@ -44,7 +51,7 @@ class Sphere:
 
     kind = "sphere"
     oriented = False
-    force_tol_base = 1e-14  # default force tolerance before box scaling (jamflow.minimize.settings)
+    force_tol_base = FORCE_TOL_BASE  # default force tolerance before box scaling (mechanics.force_floor)
 
     def name(self, dim: int) -> str:
         return "disk" if dim == 2 else "sphere"
@@ -93,9 +100,7 @@ class Ellipsoid:
 
     kind = "ellipsoid"
     oriented = True
-    # near onset FIRE creeps along the quartic (rotational) modes: N = 64, alpha = 1.6 reached max
-    # force 5e-13 after 2e4 iterations of the final minimisation, 2e-13 after 3.4e5 (docs/ellipses.md)
-    force_tol_base = 5e-13
+    force_tol_base = ELLIPSOID_FORCE_TOL_BASE
 
     def __post_init__(self):
         from jamflow.model.shapes.contact_distance import METHODS
@@ -187,7 +192,7 @@ class RigidBody:
 
     kind = "rigid"
     oriented = True
-    force_tol_base = 1e-14
+    force_tol_base = FORCE_TOL_BASE
 
     def __post_init__(self):
         sites = np.array(self.sites, dtype=float)
