@@ -83,12 +83,14 @@ def main(argv=None):
     ap.add_argument("--repeats", type=int, default=7)
     ap.add_argument("--seed", type=int, default=1, help="seed of the jamflow jam --n 64 process")
     ap.add_argument("--out", default=None, help="CSV to append the rows to")
-    ap.add_argument("--bytecode", choices=("both", "none", "cached"), default="both",
-                    help="jamflow's bytecode: removed (none), compiled (cached) or each in turn (both)")
+    ap.add_argument("--bytecode", choices=("both", "none", "cached", "asis"), default="both",
+                    help="jamflow's bytecode: removed (none), compiled (cached), each in turn (both) or left "
+                         "untouched (asis: the quick mode, which must not rewrite an installed package)")
     args = ap.parse_args(argv)
     env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "PYTHONDONTWRITEBYTECODE": "1"}
-    for cached in {"both": (False, True), "none": (False,), "cached": (True,)}[args.bytecode]:
-        set_bytecode(cached)
+    for cached in {"both": (False, True), "none": (False,), "cached": (True,), "asis": (None,)}[args.bytecode]:
+        if cached is not None:
+            set_bytecode(cached)
         with tempfile.TemporaryDirectory() as tmp:
             runs, loads, same = alternate(processes(Path(tmp), args.seed), env, args.repeats)
         report(runs, loads, same, cached, args)
@@ -97,7 +99,7 @@ def main(argv=None):
 def report(runs: dict, loads: list, same: bool, cached: bool, args) -> None:
     for k, r in runs.items():
         walls, cpus = [w for w, _ in r], [c for _, c in r]
-        row = {"what": k, "bytecode": "cached" if cached else "none", "seed": args.seed, "target_cpu": "host",
+        row = {"what": k, "bytecode": {True: "cached", False: "none", None: "as is"}[cached], "seed": args.seed, "target_cpu": "host",
                "wall_median_s": round(statistics.median(walls), 3), "wall_min_s": round(min(walls), 3),
                "cpu_median_s": round(statistics.median(cpus), 3), "cpu_min_s": round(min(cpus), 3), "repeats": len(r),
                "load_median": round(statistics.median(loads), 2), "bit_identical": same, "build_cpu_s": ""}
