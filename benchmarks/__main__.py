@@ -4,7 +4,7 @@
     python -m benchmarks run NAME [NAME ...]       # full runs (each benchmark's own defaults)
     python -m benchmarks run NAME -- ARGS ...      # one benchmark with its own arguments
     python -m benchmarks run --quick NAME ...      # the named ones in their quick mode
-    python -m benchmarks --quick                   # every quick mode; exit 1 if any fails
+    python -m benchmarks --quick                   # every quick mode (the others: import only); exit 1 if any fails
 
 Benchmarks run in this process, one after another (``main(argv)`` of benchmarks/NAME.py); a
 failure is reported and the next one runs. Quick modes write into a scratch directory, never
@@ -54,34 +54,51 @@ def run_one(name: str, argv: list[str]) -> bool:
     return ok
 
 
-def run(names: list[str], extra: list[str], quick: bool) -> int:
+def imports(name: str) -> bool:
+    """True if benchmarks/NAME.py imports (the check of a benchmark without a quick mode)."""
+    if str(HERE) not in sys.path:
+        sys.path.insert(0, str(HERE))
+    try:
+        importlib.import_module(name)
+        return True
+    except Exception:
+        print(f"=== {name}: FAILED to import", flush=True)
+        traceback.print_exc()
+        return False
+
+
+def run(names: list[str], extra: list[str] | None, quick: bool) -> int:
+    """Run ``names`` (quick modes, or each with ``extra`` -- the arguments after ``--`` -- or its
+    defaults); 0 if all ended without error."""
     unknown = [n for n in names if n not in BENCHMARKS]
     if unknown:
         print(f"unknown benchmark(s): {' '.join(unknown)} (python -m benchmarks list)", file=sys.stderr)
         return 2
-    if extra and len(names) != 1:
-        print("arguments after -- need exactly one benchmark", file=sys.stderr)
+    if extra is not None and (len(names) != 1 or quick):
+        print("arguments after -- need exactly one benchmark and no --quick", file=sys.stderr)
         return 2
     failed, skipped, t0 = [], [], time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="jamflow-bench-") as tmp:
         for name in names:
             b = BENCHMARKS[name]
             if quick and b.quick is None:
-                skipped.append(name)
+                skipped.append(name)  # no quick mode: only check that the script still imports
+                if not imports(name):
+                    failed.append(name)
                 continue
-            argv = [a.replace("{tmp}", tmp) for a in b.quick] if quick else extra
+            argv = [a.replace("{tmp}", tmp) for a in b.quick] if quick else (extra or [])
             if not run_one(name, argv):
                 failed.append(name)
     ran = len(names) - len(skipped)
-    print(f"\n{ran - len(failed)} of {ran} benchmark(s) ok in {time.perf_counter() - t0:.1f} s"
+    print(f"\n{ran - len(set(failed) - set(skipped))} of {ran} benchmark(s) ok in {time.perf_counter() - t0:.1f} s"
           + (f"; failed: {' '.join(failed)}" if failed else "")
-          + (f"; no quick mode: {len(skipped)}" if skipped else ""))
+          + (f"; no quick mode (imported only): {len(skipped)}" if skipped else ""))
     return 1 if failed else 0
 
 
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
-    extra = []
+    extra = None
     if "--" in argv:
         i = argv.index("--")
         argv, extra = argv[:i], argv[i + 1:]
@@ -100,7 +117,7 @@ def main(argv=None) -> int:
     if args.command == "run":
         return run(args.names, extra, args.quick or args.run_quick)
     if args.quick:
-        return run(list(BENCHMARKS), [], True)
+        return run(list(BENCHMARKS), None, True)
     ap.print_help()
     return 2
 

@@ -17,7 +17,8 @@ import importlib
 
 import numpy as np
 
-from jamflow.model.shapes import contact_distance, figure_2_12, lambda_polynomial
+from jamflow.model.shapes import contact_distance, lambda_polynomial
+from jamflow.plots.ellipse_pair import figure_2_12
 
 from common import DOCS  # (benchmarks/ is the script's directory)
 

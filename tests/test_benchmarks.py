@@ -55,9 +55,11 @@ def test_scripts_import_no_sibling_but_common():
             assert f"from {other} import" not in text and f"import {other}\n" not in text, (name, other)
 
 
-def test_run_refuses_an_unknown_name():
+def test_run_refuses_an_unknown_name_and_arguments_for_several():
     out = benchmarks("run", "no_such_benchmark")
     assert out.returncode == 2 and "unknown benchmark" in out.stderr
+    out = benchmarks("run", "kernel", "engines", "--", "--help")
+    assert out.returncode == 2 and "exactly one benchmark" in out.stderr
 
 
 @pytest.mark.slow
