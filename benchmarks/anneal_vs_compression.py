@@ -26,23 +26,12 @@ import numpy as np
 from tqdm import tqdm
 
 from jamflow import jam
-from jamflow.model.nematic import Nematic
 from jamflow.mechanics.checks import check_packing
 from jamflow.io.packing_file import load_packing, save_packing
 from jamflow.protocols.anneal import anneal
 
-from ellipse_ensembles import SIZES, pyplot, read_rows, run_or_report, save_figure, stats, write_rows  # (benchmarks/ is the script's directory)
+from common import ANNEAL_COLUMNS as COLUMNS, ELLIPSE_SIZES as SIZES, anneal_row as _row, pyplot, read_rows, run_or_report, save_figure, stats, write_rows  # (benchmarks/ is the script's directory)
 
-COLUMNS = ["protocol", "dalpha", "seed", "n", "alpha", "phi_j", "mean_z", "n_floaters", "p2", "energy_per_particle",
-           "max_force", "checks_passed", "cpu_seconds", "load"]
-
-
-def _row(protocol, dalpha, seed, n, alpha, packing, checks, cpu) -> dict:
-    p2 = Nematic().compute(packing).p2 if packing.shape.oriented else float("nan")
-    return dict(protocol=protocol, dalpha=dalpha, seed=seed, n=n, alpha=alpha, phi_j=packing.phi, mean_z=checks.mean_z,
-                n_floaters=checks.n_floaters, p2=p2, energy_per_particle=checks.energy_per_particle,
-                max_force=checks.max_force, checks_passed=checks.passed, cpu_seconds=round(cpu, 2),
-                load=os.getloadavg()[0])
 
 
 def run_anneal(n, seed, target, dalpha, keep: Path | None = None, chunk: float | None = None, save=None) -> list[dict]:
@@ -205,8 +194,8 @@ def add_arguments(ap) -> None:
     ap.add_argument("--compress", type=float, nargs="+", default=None, metavar="ALPHA",
                     help="jam by compression at these alphas instead of annealing")
 
-def main() -> None:
-    run_or_report(__doc__, add_arguments, run, report, "docs/anneal.csv")
+def main(argv=None) -> None:
+    run_or_report(__doc__, add_arguments, run, report, "docs/anneal.csv", argv)
 
 
 if __name__ == "__main__":

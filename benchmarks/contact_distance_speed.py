@@ -24,10 +24,11 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import minimize_scalar
 
+from common import DOCS  # (benchmarks/ is the script's directory)
+
 from jamflow.model.shapes import contact_distance
 
 cdm = importlib.import_module("jamflow.model.shapes.contact_distance")
-DOCS = Path(__file__).resolve().parents[1] / "docs"
 CASES = {
     # name: (dim, a_j / a_i, methods)
     "2D, a_j/a_i = 1.4, alpha = 2": (2, 1.4, ("exact", "cleaver", "linear", "quadratic")),
@@ -124,19 +125,20 @@ def plot(rows, path, floor=1e-17):
     fig.savefig(path, dpi=120)
 
 
-def main():
+def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=100_000)
     ap.add_argument("--repeat", type=int, default=5)
-    args = ap.parse_args()
+    ap.add_argument("--out-dir", type=Path, default=DOCS, help="where the CSV and PNG go (default docs/)")
+    args = ap.parse_args(argv)
     rows = measure(args.n, args.repeat)
-    with open(DOCS / "contact-distance-speed.csv", "w", newline="") as fh:
+    with open(args.out_dir / "contact-distance-speed.csv", "w", newline="") as fh:
         fh.write(f"# {platform.processor() or platform.machine()}, numpy {np.__version__}, python {platform.python_version()}\n")
         w = csv.DictWriter(fh, fieldnames=list(rows[0]))
         w.writeheader()
         for r in rows:
             w.writerow({k: (f"{v:.4g}" if isinstance(v, float) else v) for k, v in r.items()})
-    plot(rows, DOCS / "contact-distance-speed.png")
+    plot(rows, args.out_dir / "contact-distance-speed.png")
 
 
 if __name__ == "__main__":

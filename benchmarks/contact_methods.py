@@ -31,7 +31,7 @@ from jamflow.mechanics.contacts import Contacts
 from jamflow.mechanics.reference import energy_forces_pressure
 from jamflow.model.shapes import Ellipsoid
 
-from ellipse_ensembles import pyplot, read_rows, save_figure, write_rows  # (benchmarks/ is the script's directory)
+from common import pyplot, read_rows, save_figure, write_rows  # (benchmarks/ is the script's directory)
 
 MIXTURES = {"bi:1.4:0.6667": ("exact", "cleaver", "linear", "quadratic"),
             "mono": ("exact", "gaussian", "linear", "quadratic")}
@@ -116,14 +116,14 @@ def chart(table, path: Path) -> None:
     save_figure(fig, path)
 
 
-def main() -> None:
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--n", type=int, default=64)
     ap.add_argument("--alpha", type=float, default=2.0)
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--out", default="docs/contact-methods.csv")
     ap.add_argument("--report", default=None, metavar="CSV")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     if args.report:
         report(args.report)
     else:

@@ -25,7 +25,7 @@ from jamflow.mechanics.checks import check_packing
 from jamflow.cli.commands.modes import analyse_file
 from jamflow.io.packing_file import load_packing, read_checks
 
-from ellipse_ensembles import pyplot, read_rows, run_or_report, save_figure, write_rows  # (benchmarks/ is the script's directory)
+from common import pyplot, read_rows, run_or_report, save_figure, write_rows  # (benchmarks/ is the script's directory)
 
 COLUMNS = ["file", "alpha", "seed", "n", "checks_passed", "problems", "in_window", "max_force", "n_kept",
            "n_contacts", "missing_contacts", "n_zero", "n_extra_zero", "n_negative", "n_quartic", "classification",
@@ -105,8 +105,8 @@ def add_arguments(ap) -> None:
     ap.add_argument("--stability-seeds", type=int, default=5,
                     help="profile the quartic modes (jamflow modes' Stability) for seeds below this only")
 
-def main() -> None:
-    run_or_report(__doc__, add_arguments, run, report, "docs/ellipse-ensembles-modes.csv")
+def main(argv=None) -> None:
+    run_or_report(__doc__, add_arguments, run, report, "docs/ellipse-ensembles-modes.csv", argv)
 
 
 if __name__ == "__main__":

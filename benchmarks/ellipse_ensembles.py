@@ -18,85 +18,15 @@ the table of docs/ellipses.md and draws docs/ellipse-ensembles.png.
 from __future__ import annotations
 
 import argparse
-import csv
-import os
 import statistics
-import time
-import warnings
 from pathlib import Path
 
-import numpy as np
 from tqdm import tqdm
 
-from jamflow import jam
 from jamflow.mechanics.contacts import Contacts
-from jamflow.analysis.independent import independent_check
-from jamflow.support.files import atomic_path
-from jamflow.io.packing_file import save_packing
-from jamflow.minimize.settings import MinimizerSettings
-from jamflow.protocols.settings import fast_protocol
 
-SIZES = "bi:1.4:0.6667"
-COLUMNS = ["engine", "alpha", "seed", "n", "phi_j", "energy_per_particle", "pressure", "max_force", "max_torque",
-           "minimizations", "iterations", "cpu_seconds", "wall_seconds", "load", "final_reason", "warnings",
-           "brute_energy_per_particle", "brute_max_force", "brute_max_torque", "brute_max_force_kept",
-           "brute_max_torque_kept", "engine_brute_force_diff", "n_floaters", "mean_z", "n_contacts", "isostatic_count"]
+from common import ELLIPSE_COLUMNS, ellipse_row, pyplot, read_rows, save_figure, stats, write_rows  # (benchmarks/ is the script's directory)
 
-
-def settings(engine: str):
-    """The default protocol; the LAMMPS route minimises by damped dynamics (the only LAMMPS
-    minimiser that turns ellipses)."""
-    return fast_protocol(minimizer=MinimizerSettings(method="md")) if engine == "lammps" else fast_protocol()
-
-
-def one(engine: str, alpha: float, seed: int, n: int, keep_dir: Path | None) -> dict:
-    t_cpu, t_wall = time.process_time(), time.perf_counter()
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        res = jam(n=n, dim=2, sizes=SIZES, shape=f"ellipse:{alpha:g}", seed=seed, settings=settings(engine),
-                  engine=engine)
-    cpu, wall = time.process_time() - t_cpu, time.perf_counter() - t_wall
-    p = res.packing
-    check = independent_check(p)
-    contacts = Contacts().compute(p)
-    kept = ~contacts.floater
-    if keep_dir is not None:
-        save_packing(keep_dir / f"{engine}-alpha{alpha:g}-seed{seed}.h5", p, energy_per_particle=res.energy_per_particle,
-                     pressure_tensor=res.pressure_tensor, history=res.history, lammps_version=res.lammps_version)
-    return dict(engine=res.engine, alpha=alpha, seed=seed, n=n, phi_j=repr(res.phi_j),
-                energy_per_particle=res.energy_per_particle, pressure=res.pressure, max_force=res.max_force,
-                max_torque=res.max_torque, minimizations=res.minimizations, iterations=res.iterations,
-                cpu_seconds=f"{cpu:.2f}", wall_seconds=f"{wall:.2f}", load=f"{os.getloadavg()[0]:.1f}",
-                final_reason=res.history["reason"][-1].decode(), warnings=" | ".join(str(w.message)[:80] for w in caught),
-                brute_energy_per_particle=check.energy_per_particle, brute_max_force=check.max_force(),
-                brute_max_torque=check.max_generalized_torque(), brute_max_force_kept=check.max_force(kept),
-                brute_max_torque_kept=check.max_generalized_torque(kept),
-                engine_brute_force_diff=_force_difference(p, check),
-                n_floaters=contacts.n_floaters, mean_z=contacts.mean_z, n_contacts=contacts.n_contacts,
-                isostatic_count=contacts.isostatic_count)
-
-
-def _force_difference(packing, check) -> float:
-    from jamflow.mechanics.reference import energy_forces_pressure
-
-    return float(np.abs(energy_forces_pressure(packing).forces - check.forces).max())
-
-
-def read_rows(path: Path) -> list[dict]:
-    """The rows of a results CSV (empty if it does not exist yet)."""
-    if not path.is_file():
-        return []
-    with path.open() as f:
-        return list(csv.DictReader(f))
-
-
-def write_rows(path: Path, rows: list[dict], columns=COLUMNS) -> None:
-    """The whole results CSV again, atomically (an interrupted run keeps the last one)."""
-    with atomic_path(path) as tmp:
-        with open(tmp, "w", newline="") as f:
-            w = csv.DictWriter(f, columns)
-            w.writeheader()
-            w.writerows(rows)
 
 
 def run(args) -> None:
@@ -108,49 +38,11 @@ def run(args) -> None:
     if keep:
         keep.mkdir(parents=True, exist_ok=True)
     for alpha, seed in tqdm(todo, desc=f"{args.engine} ellipses", unit="packing"):
-        rows.append(one(args.engine, alpha, seed, args.n, keep))
-        write_rows(out, rows)
-
-
-# ----- shared by the ellipse benchmarks ----------------------------------------------------------
-def pyplot():
-    """matplotlib.pyplot on the Agg backend."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def save_figure(fig, path: Path) -> None:
-    """Lay out, write atomically as PNG (120 dpi) and close ``fig``."""
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=120, format="png")
-    pyplot().close(fig)
-
-
-def run_or_report(doc: str, add_arguments, run, report, out: str) -> None:
-    """The command line of a results benchmark: options from ``add_arguments(parser)``, ``--out``
-    (default ``out``), ``--report CSV``: ``report(Path)`` instead of ``run(args)``."""
-    ap = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
-    add_arguments(ap)
-    ap.add_argument("--out", default=out)
-    ap.add_argument("--report", default=None, metavar="CSV")
-    args = ap.parse_args()
-    if args.report:
-        report(Path(args.report))
-    else:
-        run(args)
+        rows.append(ellipse_row(args.engine, alpha, seed, args.n, keep))
+        write_rows(out, rows, ELLIPSE_COLUMNS)
 
 
 # ----- report -------------------------------------------------------------------------------------
-def stats(values):
-    v = [float(x) for x in values]
-    return statistics.mean(v), (statistics.stdev(v) / len(v) ** 0.5 if len(v) > 1 else float("nan")), len(v)
-
-
 def recount(rows, packings: Path) -> None:
     """Contacts of the kept packings again with the current floater rules (in place): mean_z and
     n_floaters with seed Figure 2.19's exception, mean_z_rule / n_floaters_rule with d_f + 1 only."""
@@ -217,7 +109,7 @@ def chart(groups, path: Path) -> None:
     save_figure(fig, path)
 
 
-def main() -> None:
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--alphas", type=float, nargs="+", default=[1.2, 1.6, 2.0])
     ap.add_argument("--seeds", type=int, default=20)
@@ -227,7 +119,7 @@ def main() -> None:
     ap.add_argument("--keep", default=None, help="directory to save every packing (HDF5), one per engine")
     ap.add_argument("--report", nargs="+", default=None, metavar="CSV")
     ap.add_argument("--packings", default=None, help="with --report: recount contacts of the packings kept here")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     if args.report:
         report(args.report, args.packings)
     else:

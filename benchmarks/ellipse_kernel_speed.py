@@ -60,14 +60,14 @@ def time_lammps_md(p, steps):
         return 1e6 * (time.process_time() - t) / r.iterations
 
 
-def main():
+def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--n", type=int, nargs="+", default=[128, 512, 2048])
     ap.add_argument("--alpha", type=float, default=1.6)
     ap.add_argument("--iterations", type=int, default=2000)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--out", default="docs/ellipse-kernel-speed.csv")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     rows = []
     for n in args.n:
         for state in ("random", "minimum"):

@@ -35,7 +35,7 @@ from jamflow.io.packing_file import load_packing
 from jamflow.protocols.above import compress_above
 from jamflow.protocols.outcome import JammingFailed
 
-from ellipse_ensembles import SIZES, pyplot, read_rows, run_or_report, save_figure, stats, write_rows  # (benchmarks/)
+from common import ELLIPSE_SIZES as SIZES, pyplot, read_rows, run_or_report, save_figure, stats, write_rows  # (benchmarks/)
 
 COLUMNS = ["alpha", "seed", "n", "dphi", "phi_j", "G", "G_hessian", "B", "B_hessian", "cpu_seconds", "load", "route",
            "G_affine", "n_negative", "lowest_eigenvalue", "n_contacts_onset", "n_contacts", "contacts_added",
@@ -177,8 +177,8 @@ def add_arguments(ap) -> None:
                     help="onset packings kept by ellipse_ensembles.py (numba-alphaA-seedS.h5) instead of jamming")
 
 
-def main() -> None:
-    run_or_report(__doc__, add_arguments, run, report, "docs/ellipse-moduli.csv")
+def main(argv=None) -> None:
+    run_or_report(__doc__, add_arguments, run, report, "docs/ellipse-moduli.csv", argv)
 
 
 if __name__ == "__main__":

@@ -27,7 +27,7 @@ from tqdm import tqdm
 from jamflow.mechanics.checks import check_packing
 from jamflow.io.packing_file import load_packing
 
-from ellipse_ensembles import COLUMNS, one, pyplot, read_rows, run_or_report, save_figure, stats, write_rows  # (benchmarks/)
+from common import ELLIPSE_COLUMNS as COLUMNS, ellipse_row as one, pyplot, read_rows, run_or_report, save_figure, stats, write_rows  # (benchmarks/)
 
 ENGINES = ("numba", "lammps")
 LABELS = {"numba": "compiled FIRE", "lammps": "LAMMPS damped dynamics"}
@@ -125,5 +125,9 @@ def add_arguments(ap) -> None:
     ap.add_argument("--seeds", type=int, default=20)
 
 
+def main(argv=None) -> None:
+    run_or_report(__doc__, add_arguments, run, report, "docs/ellipse-routes.csv", argv)
+
+
 if __name__ == "__main__":
-    run_or_report(__doc__, add_arguments, run, report, "docs/ellipse-routes.csv")
+    main()

@@ -24,7 +24,7 @@ from jamflow import jam
 from jamflow.analysis.modes import Spectrum, branch_labels
 from jamflow.mechanics.checks import check_packing
 
-from ellipse_ensembles import SIZES, pyplot, read_rows, run_or_report, save_figure, write_rows  # (benchmarks/ is the script's directory)
+from common import ELLIPSE_SIZES as SIZES, pyplot, read_rows, run_or_report, save_figure, write_rows  # (benchmarks/ is the script's directory)
 
 COLUMNS = ["alpha", "seed", "n", "n_kept", "phi_j", "mean_z", "checks_passed", "index", "x", "eigenvalue", "omega",
            "translational", "branch", "cpu_seconds", "load"]
@@ -102,8 +102,8 @@ def add_arguments(ap) -> None:
     ap.add_argument("--n", type=int, default=120)
     ap.add_argument("--seed", type=int, default=0)
 
-def main() -> None:
-    run_or_report(__doc__, add_arguments, run, report, "docs/ellipse-spectra.csv")
+def main(argv=None) -> None:
+    run_or_report(__doc__, add_arguments, run, report, "docs/ellipse-spectra.csv", argv)
 
 
 if __name__ == "__main__":

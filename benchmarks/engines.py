@@ -74,7 +74,7 @@ def jam_rows(n, seeds):
     return rows
 
 
-def main():
+def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--sizes", type=int, nargs="*", default=[256, 1024, 4096])
     ap.add_argument("--iterations", type=int, default=5000)
@@ -82,7 +82,7 @@ def main():
     ap.add_argument("--jam-n", type=int, default=1024)
     ap.add_argument("--jam-seeds", type=int, default=0)
     ap.add_argument("--out", default="docs/engines.csv")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     microseconds_per_iteration(CompiledEngine, near_jamming_state(64), 10)  # compile / load the kernels
     rows = per_iteration_rows(args.sizes, args.iterations, args.reps)
     if args.jam_seeds:

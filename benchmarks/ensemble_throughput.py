@@ -158,14 +158,14 @@ def plot(docs: Path) -> Path:
     return out
 
 
-def main():
+def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--work", default="/tmp/jamflow-ens/throughput", help="scratch directory for the stores")
     ap.add_argument("--seeds", type=int, default=200)
     ap.add_argument("--n", type=int, default=64)
     ap.add_argument("--docs", default="docs")
     ap.add_argument("--plot-only", action="store_true", help="only redraw the chart from the CSV")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     if args.plot_only:
         print(plot(Path(args.docs)))
         return

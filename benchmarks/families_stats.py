@@ -37,8 +37,8 @@ def neighbour_gaps(pts, fam):
     return np.array(same).reshape(-1, 4), np.array(other).reshape(-1, 4)
 
 
-def main() -> None:
-    out = Path(sys.argv[1])
+def main(argv=None) -> None:
+    out = Path((sys.argv[1:] if argv is None else argv)[0])
     plan, pts, failures = load_family_points(out / "points.h5")
     step = float(plan["spacing"]) / int(plan["substeps"])
     fam = join(pts, step, float(plan["gamma_min"]))

@@ -88,10 +88,10 @@ def dynamics(cases: int = 8, copies: int = 6):
     return rows
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--starts", type=int, default=300)
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     warnings.simplefilter("ignore")
     for n in (6, 8, 10):
         curve, counts = distinct_at_one_strain(n, args.starts)

@@ -39,11 +39,11 @@ def cpu(fn, repeat=3):
     return out, float(np.median(times))
 
 
-def main() -> None:
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[256, 1024, 4096])
     ap.add_argument("--shapes", nargs="+", default=list(SHAPES))
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     print(f"{'shape':>10} {'N':>6} {'d_f N':>7} {'pairs':>7} {'nnz':>9} {'CPU s':>7}")
     for name in args.shapes:
         dim, shape, phi = SHAPES[name]

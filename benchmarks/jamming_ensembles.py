@@ -55,13 +55,13 @@ def summarize(rows):
                   f"{max(repro) if repro else 'n/a'}")
 
 
-def main():
+def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--protocol", choices=sorted(PROTOCOLS), default="fast")
     ap.add_argument("--systems", nargs="+", choices=sorted(SYSTEMS), default=list(SYSTEMS))
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--out", default="docs/jamming-ensembles.csv")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     out = Path(args.out)
     done = {(r["system"], r["protocol"], r["seed"], r["repeat"]) for r in csv.DictReader(out.open())} if out.exists() else set()
     with out.open("a", newline="") as fh:

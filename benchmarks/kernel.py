@@ -20,7 +20,7 @@ import os
 import time
 from pathlib import Path
 
-from speed_accuracy import append_row  # (benchmarks/ is the script's directory)
+from common import append_row  # (benchmarks/ is the script's directory)
 
 import numba
 import numpy as np
@@ -85,13 +85,13 @@ def fire_us(packing, skin: float, iterations: int, repeats: int) -> float:
     return best
 
 
-def main():
+def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--sizes", type=int, nargs="+", default=[256, 1024, 4096])
     ap.add_argument("--skins", type=float, nargs="+", default=[0.1, 0.2, 0.3, 0.5])
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--out", default="docs/kernel.csv")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     rows = []
     for n in args.sizes:
         state = near_jamming_state(n)

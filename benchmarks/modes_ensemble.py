@@ -51,13 +51,13 @@ def above(source: Path, path: Path, dphi: float) -> None:
           f"max|F| = {result.max_force:.1e}  stop: {result.reason}  ({time.perf_counter() - t0:.1f} s)", flush=True)
 
 
-def main() -> None:
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--n", type=int, default=256)
     ap.add_argument("--count", type=int, default=20)
     ap.add_argument("--dphi", type=float, default=1e-4)
     ap.add_argument("--out", default="/tmp/jamflow-modes-data")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     for seed in range(args.count):

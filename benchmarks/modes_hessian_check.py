@@ -31,11 +31,11 @@ def lammps_matrix(packing, step: float) -> np.ndarray:
     return raw[np.ix_(idx, idx)]
 
 
-def main() -> None:
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("files", nargs="+")
     ap.add_argument("--steps", type=float, nargs="+", default=[1e-5, 1e-9, 1e-10])
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     for path in args.files:
         p = load_packing(path)
         h = hessian(p).toarray()

@@ -28,11 +28,11 @@ def timed(fn):
     return out, time.perf_counter() - t0
 
 
-def main() -> None:
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--sizes", type=int, nargs="+", default=[256, 1024, 4096])
     ap.add_argument("--dense-max", type=int, default=1024)
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     print(f"{'N':>6} {'contacts':>9} {'hessian':>8} {'dense':>8} {'sparse32':>9} {'stability':>9}  lowest e (sparse)")
     for n in args.sizes:
         start = random_packing(n, 2, parse_sizes("bi:1.4:0.5"), 0.86, seed=n)

@@ -139,7 +139,7 @@ def fits_with_bootstrap(rows, quantities=("G", "B", "P", "G/B"), resamples=1000,
     return table, fits, lines
 
 
-def main() -> None:
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--n", type=int, default=256)
     ap.add_argument("--seeds", type=int, default=20)
@@ -153,7 +153,7 @@ def main() -> None:
                     help="also fit over DPHI >= this only (below it N = 256 nears the finite-size regime dphi N^2 < 1)")
     ap.add_argument("--report", action="store_true",
                     help="only report: every cached result of this N in --out (each potential with its own DPHIs)")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     if not args.report:

@@ -30,8 +30,7 @@ from jamflow.mechanics.checks import check_packing
 from jamflow.io.packing_file import load_packing, save_packing
 from jamflow.protocols.anneal import anneal
 
-from anneal_vs_compression import COLUMNS, _row  # (benchmarks/ is the script's directory)
-from ellipse_ensembles import pyplot, read_rows, save_figure, stats, write_rows
+from common import ANNEAL_COLUMNS as COLUMNS, anneal_row as _row, pyplot, read_rows, save_figure, stats, write_rows  # (benchmarks/ is the script's directory)
 
 SIZES = "mono"
 
@@ -127,7 +126,7 @@ def chart(groups, keep, path: Path) -> None:
     save_figure(fig, path)
 
 
-def main() -> None:
+def main(argv=None) -> None:
     import argparse
 
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -139,7 +138,7 @@ def main() -> None:
     ap.add_argument("--out", default="docs/nematic-protocols.csv")
     ap.add_argument("--keep", default=None, help="directory of the final packings (HDF5)")
     ap.add_argument("--report", default=None, metavar="CSV")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     if args.report:
         report(Path(args.report), Path(args.keep) if args.keep else None)
     else:

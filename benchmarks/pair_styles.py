@@ -69,12 +69,12 @@ def report(title: str, packing, styles, iterations: int, repeats: int) -> None:
               f"E_final = {energy:.6e}")
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--n", type=int, default=1024)
     parser.add_argument("--iterations", type=int, default=2000)
     parser.add_argument("--repeats", type=int, default=3)
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     if args.n < 64 or args.iterations < 1 or args.repeats < 1:
         raise SystemExit("need --n >= 64, --iterations >= 1, --repeats >= 1")
 

@@ -77,7 +77,7 @@ def chart(stats, path, title):
     fig.savefig(path, dpi=120)
 
 
-def main():
+def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--n", type=int, default=256)
     ap.add_argument("--dim", type=int, default=2)
@@ -85,7 +85,7 @@ def main():
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--variants", nargs="+", default=["seed", "fast"], choices=list(VARIANTS))
     ap.add_argument("--out", default="docs/protocol-bias.csv")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     out = Path(args.out)
     done = {(r["variant"], r["seed"]) for r in csv.DictReader(out.open())} if out.exists() else set()
     with out.open("a", newline="") as fh:

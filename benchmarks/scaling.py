@@ -27,7 +27,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from speed_accuracy import DOCS, command_line, read_rows, save_figure, sweep, use_agg
+from common import DOCS, command_line, pyplot, read_rows, save_figure, sweep
 
 CSV = DOCS / "scaling.csv"
 COLUMNS = ["n", "seed", "mode", "status", "seconds", "cpu_seconds", "phi_j", "minimizations", "iterations", "load"]
@@ -77,7 +77,7 @@ def run(args) -> None:
 
         jam(n=16, seed=0)
     points = [dict(n=n, seed=seed, mode=mode) for n in args.n for seed in args.seeds for mode in args.modes]
-    sweep(args.out, COLUMNS, points, one, args.limit)
+    sweep(args.out, COLUMNS, points, one, args.limit, args.strict)
 
 
 def summary(rows):
@@ -97,7 +97,7 @@ def summary(rows):
 
 def chart(args) -> None:
     stats = summary(read_rows(args.out))
-    plt = use_agg()
+    plt = pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.4), sharey=True)
     for ax, column, label in zip(axes, (0, 1), ("CPU seconds", "wall seconds")):
         for mode, marker in zip(MODES, "os*D^"):

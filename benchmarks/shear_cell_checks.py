@@ -72,7 +72,7 @@ def periodic_images(dim: int) -> tuple[float, float]:
     return abs(plus_one - e) / e, abs(inverted - e) / e
 
 
-def main():
+def main(argv=None):
     for dim in (2, 3):
         print(f"{dim}D  steps 0.4->0.6 vs reference (energy, forces, pressure): "
               + ", ".join(f"{v:.1e}" for v in shear_steps(dim)))

@@ -24,7 +24,7 @@ from jamflow.protocols.shear import shear
 from jamflow.io.shear_file import path_columns, save_shear_path
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=10)
     parser.add_argument("--seed", type=int, default=0)
@@ -33,7 +33,7 @@ def main() -> None:
     parser.add_argument("--to", type=float, default=0.5)
     parser.add_argument("--engine", default="auto")
     parser.add_argument("--out", default="docs/shear-path-n10", help="prefix: PREFIX.png and PREFIX.shear.h5")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     start = jam(n=args.n, seed=args.seed, gamma=args.gamma0, engine=args.engine)
     cpu = time.process_time()
     path = shear(start.packing, args.dgamma, args.to, engine=args.engine)

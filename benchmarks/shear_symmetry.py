@@ -44,12 +44,12 @@ def compare(a, b, mirror=False) -> dict:
                 same_history=bool(np.array_equal(a.history["phi"], b.history["phi"])))
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=10)
     parser.add_argument("--seeds", type=int, default=20)
     parser.add_argument("--out", default="docs/shear-symmetry.csv")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     rows = []
     for protocol in PROTOCOLS:
         for gamma in (0.25, 0.2):

@@ -18,7 +18,7 @@ import math
 import statistics
 import sys
 
-from speed_accuracy import DOCS, command_line, read_rows, save_figure, sweep, use_agg
+from common import DOCS, command_line, pyplot, read_rows, save_figure, sweep
 
 CSV = DOCS / "shortcut-bias.csv"
 COLUMNS = ["n", "seed", "variant", "status", "seconds", "cpu_seconds", "phi_j", "v", "minimizations", "iterations", "load"]
@@ -58,7 +58,7 @@ def jam_once(n, seed, variant):
 
 def run(args) -> None:
     points = [dict(n=args.n, seed=seed, variant=v) for seed in args.seeds for v in args.variants]
-    sweep(args.out, COLUMNS, points, jam_once, args.limit)
+    sweep(args.out, COLUMNS, points, jam_once, args.limit, args.strict)
 
 
 def summary(rows):
@@ -87,7 +87,7 @@ def _se(values):
 
 def chart(args) -> None:
     stats = summary(read_rows(args.out))
-    plt = use_agg()
+    plt = pyplot()
     sizes = sorted({k[0] for k in stats})
     names = [v for v in VARIANTS if any((n, v) in stats for n in sizes)]
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.6))

@@ -18,19 +18,12 @@ average is recorded beside each), CPU time much less, so the charts use CPU time
 
 from __future__ import annotations
 
-import argparse
-import csv
 import math
-import multiprocessing as mp
-import os
-import queue
-import resource
-import signal
 import sys
 from dataclasses import replace
-from pathlib import Path
 
-DOCS = Path(__file__).resolve().parents[1] / "docs"
+from common import DOCS, command_line, pyplot, read_rows, save_figure, sweep  # (benchmarks/ is the script's directory)
+
 CSV = DOCS / "speed-accuracy.csv"
 COLUMNS = ["n", "seed", "variant", "status", "seconds", "cpu_seconds", "phi_j", "v", "max_force", "minimizations",
            "iterations", "load"]
@@ -66,95 +59,6 @@ def settings_for(variant: str):
     return seed_protocol(**protocol, minimizer=replace(MinimizerSettings(), **minimizer))
 
 
-# --- helpers shared by the benchmark scripts ------------------------------------------------------
-def cpu_seconds() -> float:
-    """User + system CPU of this process and its waited-for children (lmp, mpirun ranks)."""
-    own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
-    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
-
-
-def _child(q, fn, args):
-    os.setpgrp()  # own process group: a timeout also stops lmp/mpirun started by fn
-    try:
-        start = cpu_seconds()
-        value = fn(*args)
-        q.put(("ok", {**value, "cpu_seconds": f"{cpu_seconds() - start:.3f}"}))
-    except Exception as err:  # recorded as the run's status
-        q.put((f"failed: {type(err).__name__}: {str(err)[:150]}", None))
-
-
-def limited(fn, args, limit: float):
-    """(status, fn(*args)) with fn run in a forked process stopped after ``limit`` seconds."""
-    ctx = mp.get_context("fork")
-    q = ctx.Queue()
-    proc = ctx.Process(target=_child, args=(q, fn, args))
-    proc.start()
-    try:
-        status, value = q.get(timeout=limit)
-    except queue.Empty:
-        status, value = f"timeout>{limit:g}s", None
-    try:
-        os.killpg(proc.pid, signal.SIGTERM)
-    except ProcessLookupError:
-        pass
-    proc.join()
-    return status, value
-
-
-def done_keys(path: Path, keys) -> set:
-    if not path.exists():
-        return set()
-    with path.open() as fh:
-        return {tuple(row[k] for k in keys) for row in csv.DictReader(fh)}
-
-
-def append_row(path: Path, columns, row: dict) -> None:
-    """Append one row (header first if the file is new) and flush it to disk."""
-    new = not path.exists()
-    with path.open("a", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=columns)
-        if new:
-            w.writeheader()
-        w.writerow(row)
-        fh.flush()
-        os.fsync(fh.fileno())
-
-
-def sweep(path: Path, columns, points: list[dict], fn, limit: float) -> None:
-    """fn(*point.values()) for every point (dict of the key columns) not yet in the CSV at
-    ``path``; one row per run with its status, appended as it ends."""
-    done = done_keys(path, tuple(points[0])) if points else set()
-    for point in points:
-        if tuple(str(v) for v in point.values()) in done:
-            continue
-        status, value = limited(fn, tuple(point.values()), limit)
-        row = {**point, "status": status, "load": f"{os.getloadavg()[0]:.2f}", **(value or {})}
-        append_row(path, columns, row)
-        print(row, flush=True)
-
-
-def read_rows(path: Path) -> list[dict]:
-    with path.open() as fh:
-        return list(csv.DictReader(fh))
-
-
-def use_agg():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def save_figure(fig, path: Path) -> None:
-    """Write a PNG atomically."""
-    from jamflow.support.files import atomic_path
-
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=120, format="png")
-
-
 # --- this benchmark ---------------------------------------------------------------------------------
 def jam_once(n, seed, variant):
     import warnings
@@ -170,7 +74,7 @@ def jam_once(n, seed, variant):
 
 def run(args) -> None:
     points = [dict(n=n, seed=seed, variant=v) for n in args.n for seed in args.seeds for v in args.variants]
-    sweep(args.out, COLUMNS, points, jam_once, args.limit)
+    sweep(args.out, COLUMNS, points, jam_once, args.limit, args.strict)
 
 
 def errors(rows, against: str = "reference"):
@@ -207,7 +111,7 @@ FLOOR = 1e-13  # an error of exactly 0 (same phi_J to the bit) is drawn at this 
 
 def chart(args) -> None:
     rows = read_rows(args.out)
-    plt = use_agg()
+    plt = pyplot()
     fig, axes = plt.subplots(2, len(GROUPS), figsize=(4.2 * len(GROUPS), 7.6), sharex=True, sharey=True)
     for row_axes, against in zip(axes, ("reference", "seed")):
         stats = summary(rows, against)
@@ -240,20 +144,6 @@ def chart(args) -> None:
             sec, mean, worst, k, bad = stats[key]
             print(f"N={key[0]:5d} {key[1]:12s} {sec:8.2f} CPU s  mean|err| {mean:.2e}  max|err| {worst:.2e}  runs {k}  "
                   f"failed/timeout {bad}")
-
-
-def command_line(doc, argv, run, chart, csv_path: Path, add_run_arguments, limit: float = 300.0):
-    """``run`` (append rows) / ``chart`` (CSV -> PNG) sub-commands shared by the benchmark scripts."""
-    ap = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
-    sub = ap.add_subparsers(dest="what", required=True)
-    r = sub.add_parser("run")
-    add_run_arguments(r)
-    r.add_argument("--limit", type=float, default=limit, help="seconds per run before it is stopped")
-    c = sub.add_parser("chart")
-    for p in (r, c):
-        p.add_argument("--out", type=Path, default=csv_path)
-    args = ap.parse_args(argv)
-    return run(args) if args.what == "run" else chart(args)
 
 
 def _run_arguments(r):

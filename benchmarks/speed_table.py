@@ -1,7 +1,12 @@
 """The side-by-side table of issue 17: jamflow's default ``jamflow jam`` as a whole process
-and in process, against the hand-written LAMMPS protocol (``speed_vs_handwritten.py``), the
-same seeds and starts, with iterations per phase (compress / approach / final, as in
-``predictor.py``) and the packing checks.
+and in process, against the hand-written LAMMPS protocol (``handwritten_jam`` below: issue 7's baseline, formerly
+``speed_vs_handwritten.py``), the same seeds and starts, with iterations per phase (compress /
+approach / final) and the packing checks.
+
+Baseline: the seed's protocol written directly on the LAMMPS Python module -- harmonic/cut,
+``min_style fire`` with ``min_modify norm max``, ``minimize 0 1e-14 CAP`` after each
+``change_box ... remap``, dphi0 = 1e-4 from the seed protocol's start, halve on crossing, stop at
+1e-16 < V < 2e-16.
 
     python benchmarks/speed_table.py --dim 2 --n 64 256 1024 --seeds 1 2 3 4 5 --handwritten 64 256 1024 --out docs/speed-table.csv
     python benchmarks/speed_table.py --dim 3 --sizes mono --n 512 --seeds 1 2 3 --handwritten 512 --out docs/speed-table.csv
@@ -18,33 +23,67 @@ from __future__ import annotations
 import argparse
 import csv
 import os
-import resource
-import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
-from speed_accuracy import append_row  # (benchmarks/ is the script's directory)
-
 import numpy as np
-from predictor import phase_iterations
-from speed_vs_handwritten import handwritten_jam
 
+from jamflow.engines.lammps.library import new_lammps
+from jamflow.engines.lammps.pair_styles import harmonic_cut_commands
+from jamflow.io.packing_file import write_lammps_data
 from jamflow.mechanics.checks import check_packing
 from jamflow.protocols.settings import PROTOCOLS, DEFAULT_PROTOCOL
 from jamflow.protocols.compression import initial_packing, jam
 
+from common import append_row, run_process  # (benchmarks/ is the script's directory)
+
 
 def whole_process(n, dim, sizes, seed, tmp) -> tuple[float, float]:
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return run_process([sys.executable, "-m", "jamflow.cli.app", "jam", "--n", str(n), "--dim", str(dim), "--sizes",
+                        sizes, "--seed", str(seed), "--quiet", "--force", "--out", f"{tmp}/p.h5"])[:2]
+
+
+def phase_iterations(history: dict, v_tol: float) -> dict:
+    """Iterations in the compress / approach / final phases of one run."""
+    phi, its, v = history["phi"], history["iterations"], history["energy_per_particle"]
+    jammed = np.flatnonzero((v > v_tol) & (history["reason"] != b"energy-below-vmin"))
+    first = int(jammed[0]) if len(jammed) else len(phi)
+    final = int(np.flatnonzero(phi != phi[-1])[-1]) + 1 if np.any(phi != phi[-1]) else 0
+    first = min(first, final)
+    return {"compress": int(its[:first].sum()), "approach": int(its[first:final].sum()), "final": int(its[final:].sum())}
+
+
+
+def handwritten_jam(packing, data_path, cap=100_000, v_tol=1e-16, dphi0=1e-4):
+    """The plain protocol (2D or 3D); returns (phi_J, V, minimisations, seconds)."""
     t0 = time.perf_counter()
-    subprocess.run([sys.executable, "-m", "jamflow.cli.app", "jam", "--n", str(n), "--dim", str(dim), "--sizes", sizes,
-                    "--seed", str(seed), "--quiet", "--force", "--out", f"{tmp}/p.h5"], check=True,
-                   stdout=subprocess.DEVNULL)
-    wall = time.perf_counter() - t0
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    write_lammps_data(data_path, packing)
+    lmp = new_lammps()
+    dim = packing.dim
+    lmp.commands_list(["units lj", f"dimension {dim}", "atom_style sphere", f"read_data {data_path}",
+                       "set atom * mass 1.0", *harmonic_cut_commands(packing), "neighbor 0.3 bin",
+                       "neigh_modify every 1 delay 0 check yes", "thermo_modify norm no",
+                       "min_style fire", "min_modify norm max", "timestep 0.05",
+                       *(["fix 2d all enforce2d"] if dim == 2 else [])])
+    phi, dphi, side, n = packing.phi, dphi0, None, packing.n
+    for step in range(100_000):
+        lmp.command(f"minimize 0.0 1e-14 {cap} {10 * cap}")
+        v = lmp.get_thermo("pe") / n
+        if v_tol < v < 2 * v_tol:
+            lmp.close()
+            return phi, v, step + 1, time.perf_counter() - t0
+        new_side = "below" if v < v_tol else "above"
+        if side and new_side != side:
+            dphi /= 2
+        side = new_side
+        new_phi = phi + dphi if side == "below" else phi - dphi
+        s = (phi / new_phi) ** (1.0 / dim)
+        lmp.command("change_box all " + " ".join(f"{a} scale {s:.17g}" for a in "xyz"[:dim]) + " remap")
+        phi = new_phi
+    raise RuntimeError("hand-written protocol did not converge")
+
 
 
 def jamflow_row(n, dim, sizes, seed, tmp, process: bool) -> dict:
@@ -63,10 +102,10 @@ def jamflow_row(n, dim, sizes, seed, tmp, process: bool) -> dict:
             "checks": checks.passed, "load": round(os.getloadavg()[0], 2)}
 
 
-def handwritten_row(n, dim, sizes, seed, tmp) -> dict:
+def handwritten_row(n, dim, sizes, seed, tmp, cap=100_000) -> dict:
     start = initial_packing(n, dim, sizes, "spring", seed, PROTOCOLS["seed"]().start_phi(dim))
     c0 = time.process_time()
-    phi, v, m, seconds = handwritten_jam(start, Path(tmp) / "start.data")
+    phi, v, m, seconds = handwritten_jam(start, Path(tmp) / "start.data", cap=cap)
     return {"method": "handwritten", "n": n, "dim": dim, "sizes": sizes, "seed": seed, "phi_j": f"{phi:.10f}",
             "process_wall_s": "", "process_cpu_s": "", "inprocess_wall_s": round(seconds, 3),
             "inprocess_cpu_s": round(time.process_time() - c0, 3), "iterations": "", "compress": "", "approach": "",
@@ -150,7 +189,7 @@ def chart(csv_paths: list[str], png: str) -> None:
     fig.savefig(png, dpi=110)
 
 
-def main():
+def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--dim", type=int, default=2)
     ap.add_argument("--sizes", default="bi:1.4:0.5")
@@ -158,12 +197,13 @@ def main():
     ap.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3, 4, 5])
     ap.add_argument("--handwritten", type=int, nargs="*", default=[], help="sizes that also run the LAMMPS baseline")
     ap.add_argument("--handwritten-seeds", type=int, nargs="*", default=None, help="seeds of the baseline (default all)")
+    ap.add_argument("--cap", type=int, default=100_000, help="baseline FIRE iteration cap per minimisation")
     ap.add_argument("--process-max", type=int, default=1024, help="whole-process runs only up to this N")
     ap.add_argument("--out", default="docs/speed-table.csv")
     ap.add_argument("--chart", default=None, nargs="+", metavar="CSV", help="only draw the chart of these CSVs' rows")
     ap.add_argument("--png", default="docs/speed-2.png")
     ap.add_argument("--summary", default=None, metavar="CSV", help="only print the markdown rows of this CSV")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     if args.summary:
         return summary(args.summary)
     if args.chart:
@@ -175,7 +215,7 @@ def main():
             for seed in args.seeds:
                 rows = [jamflow_row(n, args.dim, args.sizes, seed, tmp, n <= args.process_max)]
                 if n in args.handwritten and (args.handwritten_seeds is None or seed in args.handwritten_seeds):
-                    rows.append(handwritten_row(n, args.dim, args.sizes, seed, tmp))
+                    rows.append(handwritten_row(n, args.dim, args.sizes, seed, tmp, args.cap))
                 for row in rows:
                     print(" ".join(f"{k}={v}" for k, v in row.items()), flush=True)
                 for row in rows:

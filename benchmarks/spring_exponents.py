@@ -12,14 +12,13 @@ from __future__ import annotations
 
 import csv
 import sys
-from pathlib import Path
 
 import jamflow.protocols.compression as compression
 from jamflow.mechanics.checks import check_packing, resolution
 from jamflow.minimize.settings import MinimizerSettings
-from vtol_resolution import jam_quietly
+from common import DOCS, jam_quietly  # (benchmarks/ is the script's directory)
 
-CSV = Path(__file__).resolve().parents[1] / "docs" / "spring-exponents.csv"
+CSV = DOCS / "spring-exponents.csv"
 COLUMNS = ["alpha", "protocol", "vtol", "status", "phi_j", "final_reason", "force_balance", "excess_contacts",
            "minimizations", "iterations", "passed"]
 
@@ -40,7 +39,9 @@ def one(alpha: float, protocol: str) -> dict:
             "minimizations": r.minimizations, "iterations": r.iterations, "passed": c.passed}
 
 
-def main(protocol: str, alphas: list[float]) -> None:
+def main(argv=None) -> None:
+    argv = sys.argv[1:] if argv is None else argv
+    protocol, alphas = argv[0], [float(a) for a in argv[1:]]
     compression.check_resolution = lambda packing, settings: None  # measure what the check would refuse
     new = not CSV.exists()
     with open(CSV, "a", newline="") as fh:
@@ -55,4 +56,4 @@ def main(protocol: str, alphas: list[float]) -> None:
 
 
 if __name__ == "__main__":
-    main(sys.argv[1], [float(a) for a in sys.argv[2:]])
+    main()

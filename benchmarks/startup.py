@@ -27,15 +27,13 @@ from __future__ import annotations
 
 import argparse
 import os
-import resource
 import statistics
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
-from speed_accuracy import append_row  # (benchmarks/ is the script's directory)
+from common import append_row, python_process  # (benchmarks/ is the script's directory)
 
 CLI = ["-m", "jamflow.cli.app"]
 COMMANDS = {"help": CLI + ["--help"], "jam-help": CLI + ["jam", "--help"],
@@ -66,17 +64,7 @@ PHASE_NAMES = ["numpy", "jam command (parser)", "numba", "compiled engine + scip
                "first jam (numba cache load, N = 16)", "jam N = 64 warm"]
 
 
-def run_once(argv, env) -> tuple[float, float]:
-    """(wall s, user + sys CPU s) of one ``python ARGV`` process."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    t0 = time.perf_counter()
-    subprocess.run([sys.executable, *argv], env=env, check=True, stdout=subprocess.DEVNULL)
-    wall = time.perf_counter() - t0
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-
-
-def main():
+def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--source", default=None, help="directory holding the jamflow package to time")
@@ -86,7 +74,7 @@ def main():
     ap.add_argument("--floors", action="store_true", help="also time the floors (python, numpy, numba)")
     ap.add_argument("--alternate", default=None, help="directory of another jamflow: jam-n64 of both, alternating")
     ap.add_argument("--other-label", default="main", help="label of the --alternate jamflow")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     if args.alternate:
         return alternate(args)
     env = dict(os.environ)
@@ -99,8 +87,8 @@ def main():
         for name, argv in commands.items():
             seeds = args.seeds if any("{seed}" in a for a in argv) else [None]
             variants = [[a.replace("{tmp}", tmp).replace("{seed}", str(seed)) for a in argv] for seed in seeds]
-            run_once(variants[0], env)  # warm the file cache and numba's disk cache
-            runs = [run_once(v, env) for _ in range(args.repeats) for v in variants]
+            python_process(variants[0], env)  # warm the file cache and numba's disk cache
+            runs = [python_process(v, env) for _ in range(args.repeats) for v in variants]
             name = name if seeds == [None] else f"{name} seeds {'-'.join(map(str, seeds))}"
             rows.append({"label": args.label, "what": name, "wall_median_s": statistics.median(w for w, _ in runs),
                          "wall_min_s": min(w for w, _ in runs), "cpu_median_s": statistics.median(c for _, c in runs),
@@ -129,12 +117,12 @@ def alternate(args) -> None:
                 args.label: COMMANDS["jam-n64"]}
         runs = {k: [] for k in argv}
         for k in argv:  # warm-up: file cache, numba's disk cache of each source tree
-            run_once([a.replace("{tmp}", tmp).replace("{seed}", "1") for a in argv[k]], envs[k])
+            python_process([a.replace("{tmp}", tmp).replace("{seed}", "1") for a in argv[k]], envs[k])
         loads = []
         for _ in range(args.repeats):
             for seed in args.seeds:
                 for k in argv:
-                    runs[k].append(run_once([a.replace("{tmp}", tmp).replace("{seed}", str(seed)) for a in argv[k]],
+                    runs[k].append(python_process([a.replace("{tmp}", tmp).replace("{seed}", str(seed)) for a in argv[k]],
                                             envs[k]))
                 loads.append(os.getloadavg()[0])
     seeds = "-".join(map(str, args.seeds))

@@ -69,7 +69,7 @@ def make_spheres(directory: Path, n: int, seeds, v_target: float) -> None:
               f"Delta phi = {dphi:.4e} ({time.perf_counter() - t0:.1f} s)", flush=True)
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("kind", choices=("disks", "spheres"))
     parser.add_argument("--n", type=int, default=1024)
@@ -77,7 +77,7 @@ def main() -> None:
     parser.add_argument("--v-target", type=float, default=2.8e-5,
                         help="spheres: energy per particle window (V, 2V); 2.8e-5 gave Delta phi ~ 1e-2 at N = 256")
     parser.add_argument("--dir", type=Path, default=Path("/tmp/jamflow-structure-data"))
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     args.dir.mkdir(parents=True, exist_ok=True)
     if args.kind == "disks":
         make_disks(args.dir, args.n, args.seeds)

@@ -141,12 +141,12 @@ def fbox_diff(packing, i, j):
     return np.asarray(fbox.wrap(pts[i] - pts[j]), float)[:, : packing.dim]
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("what", choices=("disks", "spheres", "checks"))
     parser.add_argument("--n", type=int, default=1024)
     parser.add_argument("--figures", type=Path, default=Path("docs"))
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     if args.what == "disks":
         disks(args.n, args.figures)
     elif args.what == "spheres":

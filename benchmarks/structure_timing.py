@@ -30,10 +30,10 @@ def _once(fn):
     return time.perf_counter() - t0
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--n", type=int, nargs="+", default=[1024, 4096])
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     import freud
 
     for dim, phi in ((2, 0.84), (3, 0.64)):

@@ -14,12 +14,13 @@ from __future__ import annotations
 
 import argparse
 import importlib
-from pathlib import Path
 
 import numpy as np
 
 from jamflow.model.shapes import contact_distance, lambda_polynomial
 from jamflow.plots.ellipse_pair import figure_2_12
+
+from common import DOCS  # (benchmarks/ is the script's directory)
 
 cdm = importlib.import_module("jamflow.model.shapes.contact_distance")
 
@@ -30,7 +31,6 @@ CHAPTER = {
     "linear": (-3.9, -3.8, -3.7, -3.6, -1.5, -0.1),
     "quadratic": (-6.3, -6.2, -6.3, -5.0, -3.8, -1.4),
 }
-DOCS = Path(__file__).resolve().parents[1] / "docs"
 
 
 def orientations(m: int):
@@ -126,10 +126,10 @@ def fmt(v):
     return "n/a" if not np.isfinite(v) else f"{v:.2f}"
 
 
-def main():
+def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--grid", type=int, default=512, help="M: orientations per angle (M^2 pairs)")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     m = args.grid
     rows = {k: [] for k in ("cleaver", "linear", "quadratic")}
     alt = {k: [] for k in ("mean_log", "median", "max")}

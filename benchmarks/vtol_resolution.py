@@ -13,14 +13,14 @@ from __future__ import annotations
 
 import csv
 import sys
-import warnings
-from pathlib import Path
 
 import jamflow.protocols.compression as compression
 from jamflow.mechanics.checks import check_packing, resolution
 from jamflow.minimize.settings import MinimizerSettings
 
-CSV = Path(__file__).resolve().parents[1] / "docs" / "vtol-resolution.csv"
+from common import DOCS, jam_quietly  # (benchmarks/ is the script's directory)
+
+CSV = DOCS / "vtol-resolution.csv"
 COLUMNS = ["n", "potential", "seed", "vtol", "overlap_ratio", "force_ratio", "refused", "status", "passed",
            "force_balance", "max_force", "excess_contacts", "n_floaters", "v", "minimizations", "iterations"]
 CASES = [(n, pot) for n in (64, 256) for pot in ("spring", "hertz")]
@@ -44,17 +44,7 @@ def one(n, potential, seed, vtol) -> dict:
             "minimizations": r.minimizations, "iterations": r.iterations}
 
 
-def jam_quietly(start, settings):
-    """(result, None) from compression.jam with warnings silenced, or (None, the JammingFailed message)."""
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            return compression.jam(start=start, settings=settings), None
-    except compression.JammingFailed as err:
-        return None, str(err)
-
-
-def main() -> None:
+def main(argv=None) -> None:
     compression.check_resolution = lambda packing, settings: None  # measure what the check would refuse (column refused)
     with open(CSV, "w", newline="") as fh:
         out = csv.DictWriter(fh, COLUMNS)

@@ -1,0 +1,69 @@
+"""The benchmark suite (issue 25, item 5): every script is registered, support or archived, and
+``python -m benchmarks --quick`` runs every quick mode without error (numbers are not checked)."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+BENCH = ROOT / "benchmarks"
+
+
+def benchmarks(*args, timeout=60):
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    return subprocess.run([sys.executable, "-m", "benchmarks", *args], cwd=ROOT, capture_output=True, text=True,
+                          timeout=timeout, env=env)
+
+
+def registry():
+    sys.path.insert(0, str(ROOT))
+    try:
+        from benchmarks import BENCHMARKS, KINDS, SUPPORT
+    finally:
+        sys.path.remove(str(ROOT))
+    return BENCHMARKS, KINDS, SUPPORT
+
+
+def test_list_names_every_registered_benchmark():
+    registered, kinds, _ = registry()
+    out = benchmarks("list")
+    assert out.returncode == 0, out.stderr
+    listed = {line.split()[0]: line.split()[1] for line in out.stdout.splitlines()}
+    assert listed == {name: b.kind for name, b in registered.items()}
+    assert {b.kind for b in registered.values()} <= set(kinds)
+
+
+def test_every_script_is_registered_support_or_archived():
+    registered, _, support = registry()
+    archive = (BENCH / "ARCHIVE.md").read_text()
+    scripts = {p.stem for p in BENCH.glob("*.py")}
+    unlisted = sorted(s for s in scripts if s not in registered and s not in support and f"`{s}.py`" not in archive)
+    assert not unlisted, f"benchmarks neither registered nor in ARCHIVE.md: {unlisted}"
+    assert not sorted(set(registered) - scripts), "registered benchmarks without a script"
+    retired_still_here = sorted(s for s in scripts - set(support) if f"| `{s}.py` |" in archive)
+    assert not retired_still_here, f"archived but still present: {retired_still_here}"
+
+
+def test_scripts_import_no_sibling_but_common():
+    registered, _, _ = registry()
+    for name in registered:
+        text = (BENCH / f"{name}.py").read_text()
+        for other in registered:
+            assert f"from {other} import" not in text and f"import {other}\n" not in text, (name, other)
+
+
+def test_run_refuses_an_unknown_name_and_arguments_for_several():
+    out = benchmarks("run", "no_such_benchmark")
+    assert out.returncode == 2 and "unknown benchmark" in out.stderr
+    out = benchmarks("run", "kernel", "engines", "--", "--help")
+    assert out.returncode == 2 and "exactly one benchmark" in out.stderr
+
+
+@pytest.mark.slow
+def test_quick_mode_of_every_benchmark_runs():
+    out = benchmarks("--quick", timeout=600)
+    assert out.returncode == 0, out.stdout[-4000:] + out.stderr[-4000:]
+    assert "FAILED" not in out.stdout
