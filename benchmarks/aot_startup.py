@@ -43,13 +43,13 @@ DPHI, SKIN, STEPS, FTOL = 0.01, 1.0, 100_000, 1e-13
 
 def processes(tmp: Path, seed: int) -> dict:
     """name -> (argv, extra environment) of the whole processes timed (module docstring)."""
-    jam = [sys.executable, "-m", "jamflow.cli.app", "jam", "--n", "64", "--seed", str(seed), "--quiet",
+    jam = [sys.executable, "-m", "jamflow.cli", "jam", "--n", "64", "--seed", str(seed), "--quiet",
            "--out", str(tmp / "p.h5"), "--force"]
     py = [sys.executable, "-c"]
     return {"numpy": (py + ["import numpy"], {}), "numpy+h5py": (py + ["import numpy, h5py"], {}),
             "numpy+scipy.spatial": (py + ["import numpy, scipy.spatial"], {}),
             "jam": (jam, {}), "jam-numba": (jam, {"JAMFLOW_AOT": "0"}),
-            "jam --help": ([sys.executable, "-m", "jamflow.cli.app", "jam", "--help"], {})}
+            "jam --help": ([sys.executable, "-m", "jamflow.cli", "jam", "--help"], {})}
 
 
 def alternate(procs: dict, env: dict, repeats: int) -> tuple[dict, list, bool]:

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import psutil
 
-JAMFLOW = [sys.executable, "-m", "jamflow.cli.app"]
+JAMFLOW = [sys.executable, "-m", "jamflow.cli"]
 
 
 def uptime() -> str:

@@ -13,7 +13,7 @@ Baseline: the seed's protocol written directly on the LAMMPS Python module -- ha
     python benchmarks/speed_table.py --chart docs/speed-table.csv --png docs/speed-2.png
     python benchmarks/speed_table.py --summary docs/speed-table.csv    # the markdown rows of docs/speed-2.md
 
-Whole process: ``python -m jamflow.cli.app jam ...`` wall and CPU (user + sys) seconds, imports
+Whole process: ``python -m jamflow.cli jam ...`` wall and CPU (user + sys) seconds, imports
 and numba's cache load included. In process: ``jam()`` with a warm interpreter. Rows are
 appended with the load average; run under ``flock /tmp/jamflow-bench.lock``.
 """
@@ -41,7 +41,7 @@ from common import append_row, run_process  # (benchmarks/ is the script's direc
 
 
 def whole_process(n, dim, sizes, seed, tmp) -> tuple[float, float]:
-    return run_process([sys.executable, "-m", "jamflow.cli.app", "jam", "--n", str(n), "--dim", str(dim), "--sizes",
+    return run_process([sys.executable, "-m", "jamflow.cli", "jam", "--n", str(n), "--dim", str(dim), "--sizes",
                         sizes, "--seed", str(seed), "--quiet", "--force", "--out", f"{tmp}/p.h5"])[:2]
 
 

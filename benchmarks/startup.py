@@ -35,7 +35,7 @@ from pathlib import Path
 
 from common import append_row, python_process  # (benchmarks/ is the script's directory)
 
-CLI = ["-m", "jamflow.cli.app"]
+CLI = ["-m", "jamflow.cli"]
 COMMANDS = {"help": CLI + ["--help"], "jam-help": CLI + ["jam", "--help"],
             "jam-n64": CLI + ["jam", "--n", "64", "--seed", "{seed}", "--quiet", "--out", "{tmp}/p.h5", "--force"]}
 NUMBA_FLOOR = """import numba, numpy
