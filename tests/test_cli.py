@@ -122,7 +122,7 @@ def test_a_valueerror_jamflow_raises_is_bad_input(tmp_path, capsys, monkeypatch)
     """jamflow's own ValueError (its check of the input): one line, exit 2, no traceback."""
     from jamflow.model.sizes import parse_sizes
 
-    monkeypatch.setattr("jamflow.cli.commands.jam.jam", lambda *a, **k: parse_sizes("bogus"))
+    monkeypatch.setattr("jamflow.protocols.spec.jam", lambda *a, **k: parse_sizes("bogus"))
     assert main(["jam", "--n", "16", "--out", str(tmp_path / "x.h5"), "--quiet"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("jamflow jam: error:") and "Traceback" not in err and len(err.strip().splitlines()) == 1
@@ -133,7 +133,7 @@ def test_a_valueerror_from_inside_a_library_is_a_bug(tmp_path, capsys, monkeypat
     as bad input: it propagates (exit 1 with its traceback from the console script)."""
     import numpy as np
 
-    monkeypatch.setattr("jamflow.cli.commands.jam.jam", lambda *a, **k: np.stack([np.zeros(2), np.zeros(3)]))
+    monkeypatch.setattr("jamflow.protocols.spec.jam", lambda *a, **k: np.stack([np.zeros(2), np.zeros(3)]))
     with pytest.raises(ValueError, match="same shape"):
         main(["jam", "--n", "16", "--out", str(tmp_path / "x.h5"), "--quiet"])
     assert "error:" not in capsys.readouterr().err
