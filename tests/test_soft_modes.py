@@ -115,3 +115,14 @@ def test_an_ellipse_jam_with_soft_mode_steps_repeats_bit_for_bit():
     a, b = (jam(n=32, dim=2, shape="ellipse:1.6", sizes="mono", seed=3) for _ in range(2))
     assert np.array_equal(a.packing.positions, b.packing.positions)
     assert np.array_equal(a.packing.orientations, b.packing.orientations) and a.iterations == b.iterations
+
+
+def test_the_soft_mode_trigger_waits_after_iterations_then_repeats():
+    """The soft-mode steps' trigger: the first attempt at >= ``after`` iterations while creeping
+    (not only at multiples of it), then every ``after`` iterations from the last attempt."""
+    from jamflow.minimize.creep import CreepTrigger
+
+    t = CreepTrigger(50_000, every=50_000)
+    assert not t.due(40_000, 1e-10) and not t.due(60_000, 2e-9) and t.due(60_000, 1e-10)
+    t.fired(60_000)
+    assert not t.due(100_000, 1e-10) and t.due(110_000, 1e-10)

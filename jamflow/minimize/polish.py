@@ -18,9 +18,9 @@ softest mode); its use is the creep of the final minimisations near onset, where
 1e4-1e5 iterations rolling off a saddle whose soft mode (J^T J ~ 1e-11, Hessian ~ -P) ends at a
 contact change that the model's active set finds in one step.
 
-Optionally (``newton=True``) a full Newton step with the exact Hessian is tried first wherever
-H + mu I is positive definite: quadratic far above onset, but near onset H is indefinite at
-almost every state and the option was never accepted in the N = 256 / 1024 jams, so it is off.
+A full Newton step with the exact Hessian, tried first wherever H + mu I is positive definite,
+was an option until issue 25: quadratic far above onset, but near onset H is indefinite at almost
+every state and it was never accepted in the N = 256 / 1024 jams, so it was removed.
 
 Rigid bodies of fused sites (n-mers, issue 14) are polished the same way: their energy is the same
 sum over site pairs of different bodies, delta = 1 - s with s = |r_s - r_t| / sigma, and J is
@@ -46,7 +46,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from jamflow.minimize.settings import CREEP_FORCE
+from jamflow.minimize.creep import CreepTrigger
 
 RIGID_CREEP_FORCE = 1e-6  # rigid bodies: their minimisations also creep at 1e-9 - 5e-9 (docs/nmers.md)
 SKIN = 0.05  # candidate pairs within sigma + SKIN (diameters): the gaps a step may close
@@ -69,7 +69,6 @@ class PolishStep:
     alpha: float
     force_before: float
     force_after: float
-    kind: str = "gauss-newton"  # or "newton" (full Hessian, positive definite, full step accepted)
 
 
 @dataclass(frozen=True)
@@ -190,22 +189,6 @@ def model_step(delta: np.ndarray, jac: sp.csr_matrix, mu: float) -> tuple[np.nda
     return dx, int((delta + jac @ dx > 0).sum()), k
 
 
-def newton_step(packing, grad: np.ndarray, mu: float) -> np.ndarray | None:
-    """The Newton step -(H + mu I)^-1 grad with the full Hessian of the overlapping pairs
-    (``analysis.hessian``: tension terms included), or None where H + mu I is not positive definite
-    (read off the pivots of a symmetric, diagonally pivoted LU: Sylvester's law of inertia)."""
-    import scipy.sparse as sp
-    import scipy.sparse.linalg as spla  # loaded only when a polish runs
-    from jamflow.mechanics.hessian import hessian
-
-    h = hessian(packing)
-    lu = spla.splu((h + mu * sp.identity(h.shape[0])).tocsc(), permc_spec="MMD_AT_PLUS_A",
-                   diag_pivot_thresh=0.0, options=dict(SymmetricMode=True))
-    if not (np.array_equal(lu.perm_r, lu.perm_c) and np.all(lu.U.diagonal() > 0)):
-        return None
-    return lu.solve(-grad)
-
-
 def _line_search(engine, packing, dx, state, grad, noise: float):
     """Armijo backtracking on the exact energy along dx from ``packing`` (gradient ``grad``),
     ``noise`` the energy's round-off; (alpha, trial state, trial packing), alpha 0 if no step
@@ -236,13 +219,10 @@ def _worst(packing, state) -> float:
     return float(np.abs(generalized_forces(packing, state)).max(initial=0.0))
 
 
-def polish(engine, ftol: float, max_steps: int = MAX_STEPS, on_step=None, newton: bool = False) -> PolishResult:
+def polish(engine, ftol: float, max_steps: int = MAX_STEPS, on_step=None) -> PolishResult:
     """Gauss-Newton steps on ``engine``'s configuration until its max force and generalized torque
     component is below ``ftol`` (eps/diameter) or no step length is accepted; the engine keeps the
-    last accepted configuration, evaluated. With ``newton`` a full Newton step is tried first
-    wherever the Hessian is positive definite (quadratic convergence at a stable minimum; near a
-    saddle it is not, and the Gauss-Newton step is taken). ``on_step(PolishStep)`` is called after
-    every step."""
+    last accepted configuration, evaluated. ``on_step(PolishStep)`` is called after every step."""
     from jamflow.mechanics.checks import generalized_forces
 
     reason = polish_reason(engine.template)
@@ -261,21 +241,14 @@ def polish(engine, ftol: float, max_steps: int = MAX_STEPS, on_step=None, newton
         delta, jac = model(packing)
         mu = SHIFT * max(float(np.asarray(jac.multiply(jac).sum(axis=0)).max(initial=0.0)), 1.0)
         noise = 8 * np.finfo(float).eps * float(np.sum(np.maximum(delta, 0.0)))  # V = sum delta^2 / 2, each delta to ~eps
-        accepted, kind, before = 0.0, "newton", worst
-        dx = newton_step(packing, grad, mu) if newton else None
-        if dx is not None:
-            accepted, trial, trial_packing = _line_search(engine, packing, dx, state, grad, noise)
-            accepted = accepted if accepted == 1.0 else 0.0  # a damped Newton step: take Gauss-Newton's
-            n_active, inner = int((delta > 0).sum()), 0
-        if not accepted:
-            kind = "gauss-newton"
-            dx, n_active, inner = model_step(delta, jac, mu)
-            accepted, trial, trial_packing = _line_search(engine, packing, dx, state, grad, noise)
+        before = worst
+        dx, n_active, inner = model_step(delta, jac, mu)
+        accepted, trial, trial_packing = _line_search(engine, packing, dx, state, grad, noise)
         if accepted:
             packing, state = trial_packing, trial
             grad = -generalized_forces(packing, state)
             worst = float(np.abs(grad).max(initial=0.0))
-        step = PolishStep(n_active, inner, accepted, before, worst, kind)
+        step = PolishStep(n_active, inner, accepted, before, worst)
         steps.append(step)
         if on_step is not None:
             on_step(step)
@@ -287,41 +260,24 @@ def polish(engine, ftol: float, max_steps: int = MAX_STEPS, on_step=None, newton
 
 
 @dataclass
-class Polisher:
-    """The creep method "polish" of one minimisation (``MinimizerSettings.creep``): a ``polish``
-    at the first multiple of ``after`` iterations where the max force is below ``creep_force``,
-    once per minimisation, or again every ``every`` iterations after that (None: once).
-    ``measured`` gives the forms that were measured to pay."""
+class PolishSteps:
+    """The "polish" strategy of ``minimize.creep``: one ``polish`` per attempt."""
 
-    after: int
     ftol: float
-    every: int | None = None
-    creep_force: float = CREEP_FORCE  # max force (eps/diameter) below which a minimisation counts as creeping
-    accepted: int = 0
-    attempts: int = 0
-    next_at: int = 0
 
-    @classmethod
-    def measured(cls, packing, after: int, ftol: float) -> "Polisher":
-        """Rigid bodies: every ``after`` iterations from ``RIGID_CREEP_FORCE`` (docs/nmers.md, "The
-        creep of rigid bodies"); disks and spheres: once, below ``CREEP_FORCE`` (docs/speed-2.md
-        sections 8 and 11)."""
-        if packing.shape.kind == "rigid":
-            return cls(after, ftol, every=after, creep_force=RIGID_CREEP_FORCE)
-        return cls(after, ftol)
-
-    def due(self, done: int, max_force: float) -> bool:
-        if self.attempts and (self.every is None or done < self.next_at):
-            return False
-        return done % self.after == 0 and max_force < self.creep_force
-
-    def step(self, engine, done: int) -> bool:
-        self.attempts += 1
-        self.next_at = done + (self.every or 0)
+    def attempt(self, engine, attempt: int, done: int) -> int:
         result = polish(engine, self.ftol)
         kept = sum(1 for s in result.steps if s.alpha > 0)
-        self.accepted += kept
         first = result.steps[0].force_before if result.steps else result.max_force
-        log.info("polish %d at iteration %d: %d of %d steps kept, max force %.3g -> %.3g, %.2f CPU s", self.attempts,
-                 done, kept, len(result.steps), first, result.max_force, result.seconds)
-        return kept > 0
+        log.info("polish %d at iteration %d: %d of %d steps kept, max force %.3g -> %.3g, %.2f CPU s", attempt, done,
+                 kept, len(result.steps), first, result.max_force, result.seconds)
+        return kept
+
+
+def polish_trigger(packing, after: int) -> CreepTrigger:
+    """The polish's measured trigger: rigid bodies every ``after`` iterations from
+    ``RIGID_CREEP_FORCE`` (docs/nmers.md, "The creep of rigid bodies"); disks and spheres once,
+    below ``CREEP_FORCE`` (docs/speed-2.md sections 8 and 11); at multiples of ``after``."""
+    if packing.shape.kind == "rigid":
+        return CreepTrigger(after, every=after, creep_force=RIGID_CREEP_FORCE, aligned=True)
+    return CreepTrigger(after, aligned=True)

@@ -45,6 +45,7 @@ packing at P > 0 has U > 0 however small). Energies per particle count mobile pa
 
 from __future__ import annotations
 
+from jamflow.minimize.creep import Creep, CreepTrigger
 from jamflow.minimize.settings import CONVERGED_REASONS
 from jamflow.minimize.settings import MinimizeResult
 from jamflow.minimize.settings import MinimizerSettings
@@ -99,8 +100,8 @@ def minimize(engine, settings: MinimizerSettings | None = None) -> MinimizeResul
                 energy_prev, fmax_prev = math.inf, math.inf  # a new state: the next window must not read "no-progress"
 
 
-def _creep_method(engine, settings: MinimizerSettings, stiffness: float, ftol: float):
-    """The creep method of this minimisation (``MinimizerSettings.creep``), or None."""
+def _creep_method(engine, settings: MinimizerSettings, stiffness: float, ftol: float) -> Creep | None:
+    """The creep method of this minimisation (``MinimizerSettings.creep``; ``minimize.creep``), or None."""
     template = engine.template
     method = settings.creep
     if settings.pressure is not None or template.box.walls or template.gravity or template.fixed is not None:
@@ -114,16 +115,16 @@ def _creep_method(engine, settings: MinimizerSettings, stiffness: float, ftol: f
         from jamflow.minimize.soft_modes import AFTER, SoftModeSteps  # scipy.sparse.linalg: loaded only where it runs
 
         after = settings.creep_after or AFTER
-        return SoftModeSteps(after, after, max(1.0, stiffness))
+        return Creep(CreepTrigger(after, every=after), SoftModeSteps(max(1.0, stiffness)))
     if method == "polish":
-        from jamflow.minimize.polish import AFTER, Polisher, polish_reason
+        from jamflow.minimize.polish import AFTER, PolishSteps, polish_reason, polish_trigger
 
         reason = polish_reason(template)
         if reason and settings.creep == "auto":  # e.g. the Hertz law: FIRE alone, as measured
             return None
         if reason:
             raise ValueError(f"creep method 'polish': {reason}; use the creep method soft-modes or off")
-        return Polisher.measured(template, settings.creep_after or AFTER, ftol)
+        return Creep(polish_trigger(template, settings.creep_after or AFTER), PolishSteps(ftol))
     return None
 
 

@@ -7,15 +7,15 @@ only; 3D dimers, alpha 1.5, N = 128: one at 2.6e-7 eps/diameter^2 below a band s
 minimisation creeps: 7.8e5 iterations at max force 5e-11 in one seed of docs/nmers.md, where
 the residual force lay along that one mode (1.1e-10 of its 1.1e-10 norm).
 
-``SoftModeSteps`` watches the windows of ``jamflow.minimize.rules.minimize``; once a minimisation has
-run ``after`` iterations and its max force is below ``CREEP_FORCE`` without converging, it
+``SoftModeSteps`` is a strategy of ``minimize.creep``: once a minimisation has run ``after``
+iterations and its max force is below ``CREEP_FORCE`` without converging (its trigger), it
 computes the ``MODES`` lowest eigenpairs (lambda_k, e_k) of the dynamical matrix of the
 non-floaters (``analysis.hessian``, shift-invert Lanczos) and the gradient's components
 c_k = e_k . dV/dxi on them, and takes the Newton step of that subspace,
 xi -> xi - a sum_k c_k / |lambda_k| e_k over the modes with |lambda_k| > ``ZERO_MODE`` x the
 contact stiffness (the trivial translations and free rotations excluded), with a in
 ``STEP_FACTORS`` the factor of lowest energy; the step is kept only if it lowers the energy,
-else the configuration is put back. FIRE then resumes. It repeats every ``every`` iterations.
+else the configuration is put back. FIRE then resumes. It repeats every ``after`` iterations.
 Unlike the disks' saddle escape of docs/speed-2.md (negative modes only, measured not to pay),
 it follows the positive soft modes too, where the creep of rigid bodies is.
 """
@@ -32,7 +32,6 @@ from jamflow.mechanics.hessian import Coordinates
 from jamflow.mechanics.dynamical_matrix import DynamicalMatrix
 from jamflow.mechanics.eigen import lowest_eigenpairs
 from jamflow.mechanics.checks import generalized_forces
-from jamflow.minimize.settings import CREEP_FORCE
 
 AFTER = 50_000  # MinimizerSettings.creep_after default: iterations before the first attempt, and between attempts
 MODES = 12  # lowest eigenpairs computed (beyond the d translations)
@@ -45,38 +44,23 @@ log = logging.getLogger(__name__)
 
 @dataclass
 class SoftModeSteps:
-    """The soft-mode stepper of one minimisation (see module docstring); counts its attempts."""
+    """The "soft-modes" strategy of ``minimize.creep``: one Newton step along the softest modes
+    per attempt (module docstring), kept only if it lowers the energy."""
 
-    after: int
-    every: int
     stiffness: float = 1.0
-    attempts: int = 0
-    accepted: int = 0
-    next_at: int = 0
 
-    def __post_init__(self):
-        self.next_at = self.after
-
-    def due(self, done: int, max_force: float) -> bool:
-        return done >= self.next_at and max_force < CREEP_FORCE
-
-    def step(self, engine, done: int) -> bool:
-        """One attempt on the engine's configuration; True if a step was kept."""
-        self.next_at = done + self.every
-        self.attempts += 1
+    def attempt(self, engine, attempt: int, done: int) -> int:
         packing = engine.packing()
         try:
             dyn = DynamicalMatrix().compute(packing)
         except ValueError:  # no contact network left: nothing to step along
-            return False
+            return 0
         xi = newton_step(dyn, engine.state(), packing, self.stiffness)
         if xi is None:
-            return False
-        kept = self._line_search(engine, packing, dyn, xi)
-        self.accepted += kept
-        return kept
+            return 0
+        return int(self._line_search(engine, packing, dyn, xi, attempt))
 
-    def _line_search(self, engine, packing, dyn, xi) -> bool:
+    def _line_search(self, engine, packing, dyn, xi, attempt: int) -> bool:
         e0 = engine.state().energy
         trials = []
         for a in STEP_FACTORS:
@@ -84,7 +68,7 @@ class SoftModeSteps:
             engine.set_positions(moved.positions, moved.orientations)
             trials.append((engine.evaluate().energy, a, moved))
         energy, factor, best = min(trials, key=lambda t: t[0])
-        log.info("soft-mode step %d: |xi| %.3g, factor %g, energy %.6g -> %.6g (%s)", self.attempts,
+        log.info("soft-mode step %d: |xi| %.3g, factor %g, energy %.6g -> %.6g (%s)", attempt,
                  float(np.linalg.norm(xi)), factor, e0, energy, "kept" if energy < e0 else "undone")
         chosen = best if energy < e0 else packing
         engine.set_positions(chosen.positions, chosen.orientations)

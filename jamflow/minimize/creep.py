@@ -1,0 +1,70 @@
+"""One creep mechanism: when a minimisation creeps (its max force below a threshold, yet not
+converged), a strategy steps the configuration between the minimiser's windows
+(``minimize.rules.minimize`` asks ``due`` after every window and calls ``step``).
+
+A ``Creep`` is a trigger and a strategy. The trigger (``CreepTrigger``) says when: after
+``after`` iterations, once or every ``every`` iterations, while the max force is below
+``creep_force`` (``CREEP_FORCE``, 1e-9 eps/diameter; the rigid bodies' polish from 1e-6). The
+strategy takes the step with its own model and line search and returns how many steps it kept:
+``polish.PolishSteps`` (Gauss-Newton active-set steps with Armijo backtracking on the exact
+energy; disks/spheres and rigid bodies, linear spring) or ``soft_modes.SoftModeSteps`` (a Newton
+step along the softest modes of the dynamical matrix, the best of a few lengths; any shape).
+Which strategy and trigger pay for which scene was measured: ``rules._creep_method``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+from jamflow.minimize.settings import CREEP_FORCE
+
+
+@dataclass
+class CreepTrigger:
+    """When a creep step is due (forces in eps/diameter, iterations of the minimisation)."""
+
+    after: int  # iterations before the first attempt
+    every: int | None = None  # iterations between attempts; None: once per minimisation
+    creep_force: float = CREEP_FORCE  # max force below which a minimisation counts as creeping
+    aligned: bool = False  # attempts only at multiples of ``after`` (the polish's measured form)
+    attempts: int = 0
+    next_at: int = 0
+
+    def due(self, done: int, max_force: float) -> bool:
+        if max_force >= self.creep_force:
+            return False
+        if self.attempts:
+            if self.every is None or done < self.next_at:
+                return False
+        elif not self.aligned and done < self.after:
+            return False
+        return done % self.after == 0 if self.aligned else True
+
+    def fired(self, done: int) -> None:
+        self.attempts += 1
+        self.next_at = done + (self.every or 0)
+
+
+class CreepStrategy(Protocol):
+    def attempt(self, engine, attempt: int, done: int) -> int:
+        """Step the engine's configuration; the number of steps kept (0: it is as before)."""
+
+
+@dataclass
+class Creep:
+    """The creep method of one minimisation: its trigger, its strategy, the steps kept."""
+
+    trigger: CreepTrigger
+    strategy: CreepStrategy
+    accepted: int = 0
+
+    def due(self, done: int, max_force: float) -> bool:
+        return self.trigger.due(done, max_force)
+
+    def step(self, engine, done: int) -> bool:
+        """One attempt; True if a step was kept (the configuration changed)."""
+        self.trigger.fired(done)
+        kept = self.strategy.attempt(engine, self.trigger.attempts, done)
+        self.accepted += kept
+        return kept > 0
