@@ -13,10 +13,21 @@ before any work.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import NamedTuple, Protocol
 
 import numpy as np
 
+
+
+class Window(NamedTuple):
+    """What one window of a minimiser returns (``Engine.minimizer_session``)."""
+
+    iterations: int
+    objective: float  # total energy, or the enthalpy U + P V at a target pressure (eps)
+    max_force: float  # largest force component (eps/diameter)
+    max_torque: float  # largest generalized torque tau_a / d_k or box force component; 0.0 if none
+    fluctuation: float | None = None  # damped MD of disks/spheres: relative rms fluctuation of V sampled in the window
+    kinetic: float = 0.0  # damped MD: total kinetic energy at the window's end (eps)
 
 
 @dataclass(frozen=True)
@@ -164,7 +175,6 @@ class Engine(Protocol):
         ...
 
     def minimizer_session(self, settings, ftol: float):
-        """Context manager yielding ``window(steps) -> (iterations, objective, max force
-        component, max generalized torque or box force component)``; each window is one
-        restart of the minimiser ``settings.method`` stopping at max force ``ftol``."""
+        """Context manager yielding ``window(steps) -> Window``; each window is one restart of the
+        minimiser ``settings.method`` stopping at max force ``ftol``."""
         ...

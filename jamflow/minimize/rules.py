@@ -82,19 +82,20 @@ def minimize(engine, settings: MinimizerSettings | None = None) -> MinimizeResul
     with engine.minimizer_session(settings, ftol) as run_window:
         while True:
             steps = min(settings.window, settings.max_iterations - done)
-            ran, energy_total, fmax, gmax, *md = run_window(steps)  # md adds (fluctuation, kinetic energy)
-            fluctuation, kinetic = md or (None, 0.0)
-            done += ran
-            energy = energy_total / n
-            mechanical = energy + kinetic / n  # V + K per particle: what damping can only lower
-            worst = max(fmax, gmax)  # forces and generalized torques share the units and the tolerance
-            reason = _stop_reason(settings, ftol, energy, worst, energy_prev, fmax_prev, ran, steps, done,
-                                  fmax_at_vmin, fluctuation, mechanical)
+            w = run_window(steps)
+            done += w.iterations
+            energy = w.objective / n
+            mechanical = energy + w.kinetic / n  # V + K per particle: what damping can only lower
+            worst = max(w.max_force, w.max_torque)  # forces and generalized torques share the units and the tolerance
+            reason = _stop_reason(settings, ftol, energy, worst, energy_prev, fmax_prev, w.iterations, steps, done,
+                                  fmax_at_vmin, w.fluctuation, mechanical)
             if reason:
                 if settings.pressure is not None:  # report the potential energy, not the enthalpy
                     energy = engine.state().energy / n
-                return MinimizeResult(reason in CONVERGED_REASONS, reason, done, energy, fmax,
-                                      time.perf_counter() - start, gmax, creep.accepted if creep else 0)
+                return MinimizeResult(converged=reason in CONVERGED_REASONS, reason=reason, iterations=done,
+                                      energy_per_particle=energy, max_force=w.max_force,
+                                      seconds=time.perf_counter() - start, max_torque=w.max_torque,
+                                      creep_steps=creep.accepted if creep else 0)
             energy_prev, fmax_prev = mechanical, worst
             if creep is not None and creep.due(done, worst) and creep.step(engine, done):
                 energy_prev, fmax_prev = math.inf, math.inf  # a new state: the next window must not read "no-progress"

@@ -442,6 +442,8 @@ def _finish(engine, phi, result, rows, settings, start_time, version) -> JamResu
                       "good as that max force", stacklevel=3)
     history = {k: np.array(v) for k, v in rows.items()}
     history["reason"] = history["reason"].astype("S")
-    return JamResult(packing, phi, result.energy_per_particle, state.pressure_tensor, result.max_force,
-                     history, settings, time.perf_counter() - start_time, version, engine.name, result.max_torque,
-                     wall_loads(packing) if packing.box.walls else None, engine.counters())
+    return JamResult(packing=packing, phi_j=phi, energy_per_particle=result.energy_per_particle,
+                     pressure_tensor=state.pressure_tensor, max_force=result.max_force, history=history,
+                     settings=settings, seconds=time.perf_counter() - start_time, lammps_version=version,
+                     engine=engine.name, max_torque=result.max_torque,
+                     wall_forces=wall_loads(packing) if packing.box.walls else None, counters=engine.counters())

@@ -18,7 +18,7 @@ import numpy as np
 
 from jamflow.model.box import Box
 from jamflow.model.packing import Packing
-from jamflow.engines.base import Capabilities, State
+from jamflow.engines.base import Capabilities, State, Window
 from jamflow.engines.compiled import fire
 from jamflow.engines.compiled.aot import kernels_for
 from jamflow.engines.compiled.field import make_field
@@ -207,7 +207,7 @@ class CompiledEngine:
             fmax = float(np.abs(self._f).max()) if n else 0.0
             gmax = max([0.0] + [float(np.abs(a).max()) for a in (self._g, self._gb) if a.size])
             objective = float(self._energy) + (pressure * self.box.volume if pressure is not None else 0.0)
-            return done, objective, fmax, gmax
+            return Window(done, objective, fmax, gmax)
 
         try:
             yield window

@@ -42,7 +42,7 @@ from jamflow.model.packing import Packing
 from jamflow.model.pairs import site_packing
 from jamflow.model.shapes.contact_distance import ENGINE_COUNTERS as COUNTERS
 from jamflow.model.shapes.rotations import generalized_torques
-from jamflow.engines.base import Capabilities, State
+from jamflow.engines.base import Capabilities, State, Window
 from jamflow.engines.lammps.bodies import RIGID_CHECK, RIGID_FIX, BodySites
 from jamflow.engines.lammps.library import new_lammps
 from jamflow.engines.lammps.pair_styles import pair_setup, uses_harmonic_cut
@@ -406,13 +406,13 @@ class LammpsEngine:
             after = lmp.extract_global("ntimestep")
             energy = float(lmp.get_thermo("pe"))
             if not md:
-                return after - before, energy, float(lmp.get_thermo("fmax")), 0.0
+                return Window(after - before, energy, float(lmp.get_thermo("fmax")), 0.0)
             kinetic = float(lmp.get_thermo("ke"))
             fluctuation = self._energy_fluctuation(before, after, s.md_sample_every)
             self.run_commands(["unfix jf_vsamples", *AT_REST])  # the potential's force alone
             fmax = float(lmp.get_thermo("fmax"))
             self.run_commands(RESTORE_VELOCITIES)
-            return after - before, energy, fmax, 0.0, fluctuation, kinetic
+            return Window(after - before, energy, fmax, 0.0, fluctuation, kinetic)
 
         fixes = ["jf_halt"] + ([RIGID_FIX] if rigid else ["jf_nve", "jf_damp"] if md else [])
         try:
@@ -437,8 +437,8 @@ class LammpsEngine:
             state = self.state()
             gmax = float(np.abs(self.generalized_torques(state)).max())
             if max(state.max_force, gmax) < ftol or ran < chunk or done >= steps:
-                return (done, state.energy, state.max_force, gmax, None,
-                        float(lmp.extract_compute("jf_ke", LMP_STYLE_GLOBAL, LMP_TYPE_SCALAR)))
+                return Window(done, state.energy, state.max_force, gmax, None,
+                              float(lmp.extract_compute("jf_ke", LMP_STYLE_GLOBAL, LMP_TYPE_SCALAR)))
 
     def _rotating_session(self, s):
         """Damped dynamics over positions and orientations (the body of ``minimizer_session``)."""
@@ -463,7 +463,7 @@ class LammpsEngine:
             state = self.state()
             self.run_commands(drag)
             gmax = float(np.abs(self.generalized_torques(state)).max()) if self.template.n else 0.0
-            return lmp.extract_global("ntimestep") - before, state.energy, state.max_force, gmax
+            return Window(lmp.extract_global("ntimestep") - before, state.energy, state.max_force, gmax)
 
         try:
             yield window
@@ -505,8 +505,8 @@ class LammpsEngine:
             field = make_field(self.packing(), s.pressure, s.stress)
             gb = np.zeros(len(field.basis))
             box_forces(field, state.pressure_tensor * self.box.volume, gb)
-            return (lmp.extract_global("ntimestep") - before, state.energy + s.pressure * self.box.volume,
-                    state.max_force, float(np.abs(gb).max()))
+            return Window(lmp.extract_global("ntimestep") - before, state.energy + s.pressure * self.box.volume,
+                          state.max_force, float(np.abs(gb).max()))
 
         try:
             yield window
