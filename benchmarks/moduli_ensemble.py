@@ -30,7 +30,7 @@ from tqdm import tqdm
 from jamflow.protocols.moduli import Moduli
 from jamflow.plots.moduli import family_figure, scaling_figure
 from jamflow.protocols.sweeps import SweepSettings
-from jamflow.cli.commands.moduli import read_moduli, save_moduli
+from jamflow.io.moduli_file import read_moduli, save_moduli
 from jamflow.io.packing_file import load_packing, save_packing
 from jamflow.protocols.above import compress_above
 from jamflow.protocols.outcome import JammingFailed

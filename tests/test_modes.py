@@ -213,7 +213,9 @@ def test_cli_writes_results_and_figure(jammed, tmp_path, capsys):
     assert modes.run(args) == 0
     out = capsys.readouterr().out
     assert "isostatic 1/2" in out and "exactly d zero modes (none negative) 2/2" in out
-    res = modes.read_modes(tmp_path / "p0.modes.hdf5")
+    from jamflow.io.modes_file import read_modes
+
+    res = read_modes(tmp_path / "p0.modes.hdf5")
     assert res["classification"] == STABLE and res["n_zero"] == 2
     assert res["n_contacts"] == res["isostatic_count"] and len(res["contacts"]) == res["n_contacts"]
     assert np.allclose(res["eigenvalues"], Spectrum().compute(jammed).eigenvalues, atol=1e-14)

@@ -242,7 +242,9 @@ def test_cli_stores_mode_character_and_profiles(tmp_path, capsys):
     args = parser.parse_args([str(target), "--save-vectors"])
     assert modes.run(args) == 0
     out = capsys.readouterr().out
-    res = modes.read_modes(tmp_path / (target.stem + ".modes.hdf5"))
+    from jamflow.io.modes_file import read_modes
+
+    res = read_modes(tmp_path / (target.stem + ".modes.hdf5"))
     missing = res["missing_contacts"]
     assert f"quartic modes {missing}, one-particle flat 0 (missing contacts {missing})" in out
     assert "extra zero modes = missing contacts 1/1, quartic modes = missing contacts 1/1" in out

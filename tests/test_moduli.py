@@ -16,7 +16,7 @@ from jamflow.mechanics.strains import BULK, SHEAR, STRAINS
 from jamflow.protocols.sweeps import SweepSettings, StrainSweep, _fit, roundoff_amplitude
 from jamflow.model.box import Box
 from jamflow.cli.app import main
-from jamflow.cli.commands.moduli import read_moduli
+from jamflow.io.moduli_file import read_moduli
 from jamflow.mechanics.reference import energy_forces_pressure
 from jamflow.io.packing_file import load_packing, read_attrs, save_packing
 from jamflow.model.packing import Packing

@@ -8,6 +8,8 @@ order/force_balanced is 1, 0, or -1 for LAMMPS inputs, whose potential is unknow
 
 from __future__ import annotations
 
+from jamflow.io.structure_file import write_results
+
 import math
 import warnings
 from pathlib import Path
@@ -15,9 +17,8 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from jamflow import __version__
 from jamflow.mechanics.checks import check_packing
-from jamflow.support.files import atomic_path, check_writable, replacing
+from jamflow.support.files import check_writable, replacing
 from jamflow.io.packing_file import load_packing
 from jamflow.analysis.correlations import BondCorrelation, rdf_correlation_length
 from jamflow.analysis.order import BondOrder, first_minimum, translational_order
@@ -143,32 +144,6 @@ def order_row(packing, r_min: float, dr: float) -> dict:
                 P2=Nematic().compute(packing).p2 if packing.shape.oriented else math.nan)
 
 
-def write_results(path, res: dict, files) -> None:
-    """HDF5 layout: see docs/structure.md."""
-    rdf, sk, corr = res["rdf"], res["sk"], res["corr"]
-    with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
-        f.attrs.update(schema="jamflow.structure", schema_version=1, jamflow_version=__version__,
-                       n_packings=rdf.n_packings, r_min=res["r_min"], G=res["G"].G,
-                       xi_g=res["g_fit"].xi, xi_q6=corr.fit.xi, inputs="\n".join(map(str, files)))
-        g = f.create_group("rdf")
-        for name in ("edges", "r", "g", "counts", "ideal", "species", "partial", "scales"):
-            g[name] = getattr(rdf, name)
-        s = f.create_group("sk")
-        s.attrs["dk"] = sk.dk
-        for name in ("k", "s", "n_vectors"):
-            s[name] = getattr(sk, name)
-        o = f.create_group("order")
-        o["label"] = np.array(res["labels"], dtype="S")
-        for name, column in res["table"].items():
-            o[name] = column
-        c = f.create_group("q6_correlation")
-        c.attrs.update(baseline=corr.baseline, l=corr.l, r_min=corr.r_min)
-        for name in ("edges", "r", "complex_corr", "magnitude_corr", "complex_stderr", "c", "counts"):
-            c[name] = getattr(corr, name)
-        for key, fit in (("fit_g_envelope", res["g_fit"]), ("fit_q6", corr.fit)):
-            grp = f.create_group(key)
-            grp.attrs.update(xi=fit.xi, xi_stderr=fit.xi_stderr, amplitude=fit.amplitude, reason=fit.reason)
-            grp["r_points"], grp["y_points"] = fit.r_points, fit.y_points
 
 
 PLOT_SUFFIXES = ("q6map", "rdf", "sk", "q6corr", "order")
