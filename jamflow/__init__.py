@@ -24,6 +24,8 @@ _EXPORTS = {
     "parse_shape": "jamflow.model.shapes.parse",
     "contact_distance": "jamflow.model.shapes.contact_distance",
     "jam": "jamflow.protocols.compression",
+    "JamSpec": "jamflow.protocols.spec",
+    "run_jam": "jamflow.protocols.spec",
     "CompressionSettings": "jamflow.protocols.settings",
     "JamResult": "jamflow.protocols.outcome",
     "JammingFailed": "jamflow.protocols.outcome",

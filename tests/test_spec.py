@@ -1,0 +1,64 @@
+"""The jam specification (jamflow.protocols.spec.JamSpec): the library API that `jamflow jam` and
+`jamflow ensemble` share. Its fields are the command's options, with the command's defaults; it
+refuses what it does not know before any work; run through the library or the command line, one
+spec gives the same packing."""
+
+import argparse
+import json
+
+import numpy as np
+import pytest
+
+from jamflow.cli.app import build_parser
+from jamflow.cli.commands.jam import spec_from_args
+from jamflow.cli.options import add_spec_arguments
+from jamflow.io.packing_file import load_packing
+from jamflow.protocols.spec import JamSpec, prepare, run_jam
+
+CLI_ONLY = {"out", "force", "quiet", "emit_deck", "command", "run"}
+
+
+def test_the_spec_has_every_jam_option_with_its_default():
+    args = build_parser("jam").parse_args(["jam"])
+    options = {k: v for k, v in vars(args).items() if k not in CLI_ONLY}
+    assert options == JamSpec().as_dict()
+
+
+def test_the_ensemble_declares_the_same_options_but_n_seed_and_above():
+    p = argparse.ArgumentParser()
+    add_spec_arguments(p, skip=("n", "seed", "above"))
+    assert set(vars(p.parse_args([]))) == set(JamSpec.option_names()) - {"n", "seed", "above"}
+
+
+def test_unknown_options_are_refused_with_the_known_ones():
+    with pytest.raises(ValueError, match="unknown jam option.*vtoll.*use names of `jamflow jam --help`.*vtol"):
+        JamSpec.from_options(vtoll=1e-16)
+
+
+@pytest.mark.parametrize("options,message", [
+    (dict(vtol=-1.0), "--vtol must be a finite positive number"),
+    (dict(engine="gpu"), "--engine 'gpu' is not one of"),
+    (dict(pressure=1e-3, walls="y"), "does not combine with --walls"),
+    (dict(gamma=0.5, pressure=1e-3), "use one of them"),
+    (dict(contact="gaussian"), "applies to ellipses/spheroids"),
+])
+def test_prepare_refuses_bad_specs_before_work(options, message, monkeypatch):
+    monkeypatch.setattr("jamflow.protocols.spec.jam", lambda *a, **k: pytest.fail("work started"))
+    with pytest.raises(ValueError, match=message):
+        prepare(JamSpec(n=16, **options))
+
+
+def test_a_spec_survives_json():
+    spec = JamSpec(n=32, shape="ellipse:1.6", sizes="mono", walls="y", gamma=None, seed=5)
+    assert JamSpec(**json.loads(json.dumps(spec.as_dict()))) == spec
+
+
+def test_library_and_command_line_make_the_same_packing(tmp_path):
+    spec = JamSpec(n=32, seed=4)
+    result, checks = run_jam(spec)
+    assert checks.passed
+    args = build_parser("jam").parse_args(["jam", "--n", "32", "--seed", "4", "--out", str(tmp_path / "p.h5"), "--quiet"])
+    assert spec_from_args(args) == spec
+    assert args.run(args) == 0
+    written = load_packing(tmp_path / "p.h5")
+    assert np.array_equal(written.positions, result.packing.box.wrap(result.packing.positions))  # files hold wrapped positions
