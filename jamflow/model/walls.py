@@ -93,23 +93,31 @@ def rough_wall_particles(box: Box, diameter: float, shrink: float = 1.0) -> np.n
 
 
 
+def smooth_wall_contacts(packing):
+    """Each smooth-wall contact group: (axis a, side 0 lower / 1 upper, mobile particles k within
+    a_k/2 of that face, their gaps h_k to it, the push -dV/dh >= 0 away from the face), the wall
+    acting at contact distance a_k/2 with the particles' own law."""
+    pot, half, mobile = packing.potential, 0.5 * packing.diameters, packing.mobile
+    for a in packing.box.walls:
+        x = packing.positions[:, a]
+        for side, h in enumerate((x, packing.box.lengths[a] - x)):
+            k = np.flatnonzero(mobile & (h < half))
+            yield a, side, k, h[k], -pot.dv_dr(h[k], half[k])
+
+
 def smooth_wall_terms(packing):
     """Smooth walls on the mobile particles: (energy, forces (N, d), virial (d, d), face forces
     (d, 2, d): the force the particles exert on each face)."""
     n, d = packing.n, packing.dim
     forces, virial, loads = np.zeros((n, d)), np.zeros((d, d)), np.zeros((d, 2, d))
     energy = 0.0
-    pot, half, mobile = packing.potential, 0.5 * packing.diameters, packing.mobile
-    for a in packing.box.walls:
-        x = packing.positions[:, a]
-        for side, (h, sign) in enumerate(((x, 1.0), (packing.box.lengths[a] - x, -1.0))):
-            inside = mobile & (h < half)
-            v = pot.energy(h[inside], half[inside])
-            push = -pot.dv_dr(h[inside], half[inside])  # -dV/dh >= 0, away from the face
-            energy += float(v.sum())
-            forces[inside, a] += sign * push
-            virial[a, a] += float((h[inside] * push).sum())
-            loads[a, side, a] = -sign * float(push.sum())
+    half = 0.5 * packing.diameters
+    for a, side, k, h, push in smooth_wall_contacts(packing):
+        sign = 1.0 if side == 0 else -1.0
+        energy += float(packing.potential.energy(h, half[k]).sum())
+        forces[k, a] += sign * push
+        virial[a, a] += float((h * push).sum())
+        loads[a, side, a] = -sign * float(push.sum())
     return energy, forces, virial, loads
 
 

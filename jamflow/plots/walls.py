@@ -21,6 +21,7 @@ from matplotlib.patches import Circle
 
 from jamflow.model.packing import Packing
 from jamflow.model.pairs import overlapping_pairs
+from jamflow.model.walls import smooth_wall_contacts
 from jamflow.plots.structure import _save  # the one Agg save (atomic)
 from jamflow.analysis.profile import ProfileResult
 
@@ -35,14 +36,11 @@ def contact_forces(packing: Packing):
     x = packing.positions
     segs = [np.stack([x[i], x[i] - dr], axis=1)]
     mags = [-packing.potential.dv_dr(r, sigma)]
-    half, mobile = 0.5 * packing.diameters, packing.mobile
-    for a in packing.box.walls:
-        for h, face in ((x[:, a], 0.0), (packing.box.lengths[a] - x[:, a], packing.box.lengths[a])):
-            k = np.flatnonzero(mobile & (h < half))
-            end = x[k].copy()
-            end[:, a] = face
-            segs.append(np.stack([x[k], end], axis=1))
-            mags.append(-packing.potential.dv_dr(h[k], half[k]))
+    for a, side, k, _, push in smooth_wall_contacts(packing):
+        end = x[k].copy()
+        end[:, a] = packing.box.lengths[a] if side else 0.0
+        segs.append(np.stack([x[k], end], axis=1))
+        mags.append(push)
     return np.concatenate(segs), np.concatenate(mags)
 
 
