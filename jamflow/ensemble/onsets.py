@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from jamflow.support.files import atomic_path
+from jamflow.plots.figure import save_png
 
 
 @dataclass(frozen=True)
@@ -197,7 +197,6 @@ def onsets_figure(result: OnsetResult, path, bins: int = 30, published: float | 
     fig.suptitle(f"{result.dim}D jamming onsets: {sum(s.count for s in result.sizes)} packings, "
                  f"{result.n_bootstrap} bootstrap replicates")
     fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110, format="png")
+    save_png(fig, path, dpi=110)
     plt.close(fig)
     return path
