@@ -23,40 +23,43 @@ def add_spec_arguments(p, skip=()) -> None:
     add("--dim", type=int, choices=(2, 3), default=2, help="spatial dimension")
     add("--n", type=int, default=64, help="number of particles")
     add("--sizes", default="bi:1.4:0.5",
-                   help="mono | bi:RATIO:FRACTION_SMALL | poly-uniform:WIDTH | poly-normal:WIDTH | poly-lognormal:WIDTH")
+        help="mono | bi:RATIO:FRACTION_SMALL | poly-uniform:WIDTH | poly-normal:WIDTH | poly-lognormal:WIDTH")
     add("--potential", default="spring", help="spring | hertz | spring:ALPHA | rlj")
-    add("--shape", default="disk", help="particle shape: disk | sphere (the same: round particles) | "
-                   "ellipse:ALPHA (2D, ALPHA = a/b >= 1) | spheroid:ALPHA (3D, ALPHA < 1 oblate); ALPHA = 1 is the "
-                   "disk/sphere | rigid n-mers of fused sites (docs/nmers.md): nmer:N:ALPHA (linear, ALPHA = L/D), "
-                   "dimer:ALPHA:S (asymmetric, S = D2/D1), trimer:ALPHA:C (bent, C = h/L). --sizes scales whole "
-                   "particles (b; a = ALPHA b)")
+    add("--shape", default="disk",
+        help="particle shape: disk | sphere (the same: round particles) | "
+             "ellipse:ALPHA (2D, ALPHA = a/b >= 1) | spheroid:ALPHA (3D, ALPHA < 1 oblate); ALPHA = 1 is the "
+             "disk/sphere | rigid n-mers of fused sites (docs/nmers.md): nmer:N:ALPHA (linear, ALPHA = L/D), "
+             "dimer:ALPHA:S (asymmetric, S = D2/D1), trimer:ALPHA:C (bent, C = h/L). --sizes scales whole "
+             "particles (b; a = ALPHA b)")
     add("--contact", choices=METHODS_CONTACT, default="exact",
-                   help="contact distance of ellipses/spheroids (seed section 2.3.2): exact (Perram-Wertheim), "
-                        "gaussian (equal sizes only), cleaver, linear, quadratic (3D: equal sizes only); "
-                        "docs/contact-distance.md")
+        help="contact distance of ellipses/spheroids (seed section 2.3.2): exact (Perram-Wertheim), "
+             "gaussian (equal sizes only), cleaver, linear, quadratic (3D: equal sizes only); "
+             "docs/contact-distance.md")
     add("--protocol", choices=sorted(PROTOCOLS), default=None,
-                   help=f"seed: the chapter's constant-increment bisection; fast: the same stopping rule with "
-                        f"growing increments and Newton jumps (docs/speed.md). Default {DEFAULT_PROTOCOL}; "
-                        "seed with --emit-deck (decks run the seed protocol)")
+        help=f"seed: the chapter's constant-increment bisection; fast: the same stopping rule with "
+             f"growing increments and Newton jumps (docs/speed.md). Default {DEFAULT_PROTOCOL}; "
+             "seed with --emit-deck (decks run the seed protocol)")
     add("--minimizer", choices=METHODS, default="fire",
-                   help="energy minimiser; ellipses/spheroids: fire (compiled engine, over positions and "
-                        "orientations) or md (LAMMPS damped dynamics with rotations; no LAMMPS minimiser turns them); "
-                        "rigid bodies in LAMMPS: md (damped rigid-body dynamics)")
+        help="energy minimiser; ellipses/spheroids: fire (compiled engine, over positions and "
+             "orientations) or md (LAMMPS damped dynamics with rotations; no LAMMPS minimiser turns them); "
+             "rigid bodies in LAMMPS: md (damped rigid-body dynamics)")
     add("--damping", type=float, default=MinimizerSettings().damping,
-                   help="md only: drag coefficient (sqrt(m eps)/diameter); rigid bodies: damping time 1/DAMPING")
+        help="md only: drag coefficient (sqrt(m eps)/diameter); rigid bodies: damping time 1/DAMPING")
     if "md_damping" not in skip:
         add_md_damping_argument(p)
     add("--creep", choices=CREEP_METHODS, default="auto",
-                   help="what a creeping minimisation (unconverged after 20 000+ iterations near balance) does between FIRE "
-                        "windows: soft-modes (Newton steps along its softest modes, docs/soft-modes.md), polish "
-                        "(Gauss-Newton active-set steps, disks/spheres and rigid bodies with the linear spring, "
-                        "docs/speed-2.md section 8, docs/nmers.md), off; auto: polish for rigid bodies and 2D disks, "
-                        "soft-modes for ellipses and spheroids, in the compiled engine")
-    add_engine_argument(p, skip, help="auto: the compiled engine (FIRE, in process) wherever it runs the scene, else LAMMPS "
-                        "(docs/speed.md). The engines sum forces in different orders, so from one start they "
-                        "can reach different minima and phi_J (seed 0, N = 64: 0.8352519 numba, 0.8355434 lammps)")
-    add("--phi0", type=float, default=None, help="initial packing fraction (default 0.80 in 2D, 0.55 in 3D; rigid bodies, which "
-                        "start without overlaps, 0.45 and 0.25)")
+        help="what a creeping minimisation (unconverged after 20 000+ iterations near balance) does between FIRE "
+             "windows: soft-modes (Newton steps along its softest modes, docs/soft-modes.md), polish "
+             "(Gauss-Newton active-set steps, disks/spheres and rigid bodies with the linear spring, "
+             "docs/speed-2.md section 8, docs/nmers.md), off; auto: polish for rigid bodies and 2D disks, "
+             "soft-modes for ellipses and spheroids, in the compiled engine")
+    add_engine_argument(p, skip,
+                        help="auto: the compiled engine (FIRE, in process) wherever it runs the scene, else LAMMPS "
+                             "(docs/speed.md). The engines sum forces in different orders, so from one start they "
+                             "can reach different minima and phi_J (seed 0, N = 64: 0.8352519 numba, 0.8355434 lammps)")
+    add("--phi0", type=float, default=None,
+        help="initial packing fraction (default 0.80 in 2D, 0.55 in 3D; rigid bodies, which "
+             "start without overlaps, 0.45 and 0.25)")
     add("--dphi0", type=float, default=1e-4, help="initial packing-fraction increment")
     if "vtol" not in skip:
         add_vtol_argument(p)
@@ -64,24 +67,24 @@ def add_spec_arguments(p, skip=()) -> None:
         add_ftol_argument(p)
     add("--seed", type=int, default=0, help="random seed of the initial positions and sizes")
     add("--above", type=float, default=None, metavar="DPHI",
-                   help="write the packing compressed from its onset by DPHI (phi_J -> phi_J + DPHI, affine) and "
-                        "minimised again (attribute dphi_above): the state jamflow moduli measures")
+        help="write the packing compressed from its onset by DPHI (phi_J -> phi_J + DPHI, affine) and "
+             "minimised again (attribute dphi_above): the state jamflow moduli measures")
     add("--walls", default=None, metavar="AXES",
-                   help="walls on these axes (y, x,y, x,y,z): flat walls at both faces, the particles' own law at "
-                        "contact distance a_i/2; periodic along the others; phi between the walls")
+        help="walls on these axes (y, x,y, x,y,z): flat walls at both faces, the particles' own law at "
+             "contact distance a_i/2; periodic along the others; phi between the walls")
     add("--wall-type", choices=WALL_TYPES, default="smooth",
-                   help="smooth: flat walls; rough: rows of fixed particles of the small diameter on the walls")
+        help="smooth: flat walls; rough: rows of fixed particles of the small diameter on the walls")
     add("--gravity", type=float, default=0.0, metavar="G",
-                   help="settle under gravity G (force per particle along -y in 2D, -z in 3D) on a floor: needs "
-                        "--walls y (2D) / z (3D); default phi0 0.5 (2D), 0.35 (3D)")
+        help="settle under gravity G (force per particle along -y in 2D, -z in 3D) on a floor: needs "
+             "--walls y (2D) / z (3D); default phi0 0.5 (2D), 0.35 (3D)")
     add("--pressure", type=float, default=None, metavar="P",
-                   help="jam at target pressure P with the box as a degree of freedom (enthalpy minimisation), "
-                        "reached through decades from 1e-4; FIRE in the compiled engine, CG with fix box/relax in LAMMPS")
+        help="jam at target pressure P with the box as a degree of freedom (enthalpy minimisation), "
+             "reached through decades from 1e-4; FIRE in the compiled engine, CG with fix box/relax in LAMMPS")
     add("--stress", choices=STRESS_MODES, default="iso",
-                   help="with --pressure: iso (box shape kept), aniso (each P_aa = P), tri (shear stresses relaxed to "
-                        "0 too: the box tilts)")
+        help="with --pressure: iso (box shape kept), aniso (each P_aa = P), tri (shear stresses relaxed to "
+             "0 too: the box tilts)")
     add("--gamma", type=float, default=None,
-                   help="jam at this fixed Lees-Edwards shear strain (any finite value; seed section 2.2)")
+        help="jam at this fixed Lees-Edwards shear strain (any finite value; seed section 2.2)")
 
 def add_md_damping_argument(p) -> None:
     p.add_argument("--md-damping", choices=MD_DAMPINGS, default="viscous",
