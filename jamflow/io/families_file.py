@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
+import h5py
+import numpy as np
+
 from jamflow import __version__
 from jamflow.io.packing_file import _attr
 from jamflow.support.files import atomic_path
-from pathlib import Path
-import h5py
-import json
-import numpy as np
 
 FAMILY_SCHEMA, FAMILY_SCHEMA_VERSION = "jamflow.families", 1
 

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
+import h5py
+import numpy as np
+
 from jamflow import __version__
 from jamflow.io.packing_file import open_hdf5
 from jamflow.support.files import atomic_path
-from pathlib import Path
-import h5py
-import numpy as np
 
 SCHEMA, SCHEMA_VERSION = "jamflow.modes", 2  # v2 adds the shape, mode character and per-mode profiles
 

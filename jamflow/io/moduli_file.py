@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
+import h5py
+import numpy as np
+
 from jamflow import __version__
 from jamflow.mechanics.strains import STRAINS
 from jamflow.support.files import atomic_path
-from pathlib import Path
-import h5py
-import numpy as np
 
 SCHEMA, SCHEMA_VERSION = "jamflow.moduli", 1
 

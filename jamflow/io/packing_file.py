@@ -50,8 +50,6 @@ files give one-line ValueErrors naming the file (``open_hdf5``).
 
 from __future__ import annotations
 
-from jamflow.support.files import atomic_path, replacing
-
 import contextlib
 import datetime
 import json
@@ -67,6 +65,7 @@ from jamflow.model.packing import Packing
 from jamflow.model.potentials import potential_from_attrs
 from jamflow.model.shapes.shape import shape_from_attrs
 from jamflow.model.walls import face_pressures, parse_walls, wall_type
+from jamflow.support.files import atomic_path, replacing
 
 SCHEMA = "jamflow.packing"
 SCHEMA_VERSION = 2

@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-from jamflow import __version__
-from jamflow.support.files import atomic_path
 import h5py
 import numpy as np
+
+from jamflow import __version__
+from jamflow.support.files import atomic_path
 
 
 def write_results(path, res: dict, files) -> None:

@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from jamflow.mechanics.contacts import Contacts
-from jamflow.mechanics.contacts import ContactsResult
-from jamflow.mechanics.contacts import remove_floaters
-from jamflow.mechanics.hessian import Coordinates
-from jamflow.mechanics.hessian import hessian
-from jamflow.model.packing import Packing
+
 import numpy as np
 import scipy.sparse as sp
+
+from jamflow.mechanics.contacts import Contacts, ContactsResult, remove_floaters
+from jamflow.mechanics.hessian import Coordinates, hessian
+from jamflow.model.packing import Packing
 
 
 @dataclass(frozen=True)

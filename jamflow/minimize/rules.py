@@ -45,23 +45,14 @@ packing at P > 0 has U > 0 however small). Energies per particle count mobile pa
 
 from __future__ import annotations
 
-from jamflow.minimize.creep import Creep, CreepTrigger
-from jamflow.minimize.settings import CONVERGED_REASONS
-from jamflow.minimize.settings import MinimizeResult
-from jamflow.minimize.settings import MinimizerSettings
-
 import math
 import time
 from functools import lru_cache
 
 import numpy as np
 
-
-
-
-
-
-
+from jamflow.minimize.creep import Creep, CreepTrigger
+from jamflow.minimize.settings import CONVERGED_REASONS, MinimizeResult, MinimizerSettings
 
 
 def minimize(engine, settings: MinimizerSettings | None = None) -> MinimizeResult:

@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict
-from dataclasses import dataclass
+import math
+from dataclasses import asdict, dataclass
+
 from jamflow.mechanics.force_floor import FORCE_TOL_BASE, force_floor
 from jamflow.model.box import STRESS_MODES
-import math
-
 
 METHODS = ("fire", "cg", "md")
 

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from jamflow.model.packing import Packing
+
 import numpy as np
+
+from jamflow.model.packing import Packing
 
 
 # --- nematic order ---------------------------------------------------------------------------

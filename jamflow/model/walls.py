@@ -26,14 +26,13 @@ Units: lengths in small diameters, energies eps, forces eps / diameter.
 
 from __future__ import annotations
 
-from jamflow.model.packing import face_membership
-
 import math
 from dataclasses import replace
 
 import numpy as np
 
 from jamflow.model.box import AXES, Box
+from jamflow.model.packing import face_membership
 
 WALL_TYPES = ("smooth", "rough")
 UPPER_INSET = 1e-12  # upper-face rows sit at L_a (1 - UPPER_INSET): LAMMPS (boundary f) owns no atom at x = L_a

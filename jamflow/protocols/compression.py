@@ -12,14 +12,6 @@ bisection runs unchanged; under gravity ``jam`` settles the packing instead
 
 from __future__ import annotations
 
-from jamflow.protocols.outcome import HISTORY_COLUMNS
-from jamflow.protocols.outcome import JamResult
-from jamflow.protocols.outcome import JammingFailed
-from jamflow.protocols.outcome import record_minimization
-from jamflow.protocols.settings import CompressionSettings
-from jamflow.protocols.settings import DEFAULT_PROTOCOL
-from jamflow.protocols.settings import PROTOCOLS
-
 import math
 import os
 import time
@@ -29,13 +21,15 @@ from dataclasses import replace
 import numpy as np
 
 from jamflow.engines.choose import check_engine, open_engine
+from jamflow.minimize.rules import minimize
 from jamflow.minimize.settings import MinimizerSettings
 from jamflow.model.packing import DENSEST_PHI, Packing, SeparationFailed, random_packing
 from jamflow.model.potentials import POTENTIALS, Potential, Spring, parse_potential
 from jamflow.model.shapes.parse import parse_shape
 from jamflow.model.sizes import SizeSpec, parse_sizes
 from jamflow.model.walls import parse_walls, wall_loads, with_walls
-from jamflow.minimize.rules import minimize
+from jamflow.protocols.outcome import HISTORY_COLUMNS, JammingFailed, JamResult, record_minimization
+from jamflow.protocols.settings import DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings
 
 NEWTON_FINAL_FACTOR = 3.0  # intermediate jumps stop at >= 3x the window's predicted distance from phi_J
 LOOSE_TRUST = 10.0  # a loosely minimised state decides its side only if V > 10 V_tol
@@ -282,7 +276,10 @@ def _check_start(packing: Packing) -> None:
 
 def _deepest_overlap(packing: Packing) -> float:
     """Smallest r/sigma over overlapping pairs (of sites, for rigid bodies); 1.0 without overlaps."""
-    from jamflow.model.pairs import overlapping_pairs, overlapping_sites  # here, like resolution: scipy.spatial loads lazily
+    from jamflow.model.pairs import (  # here, like resolution: scipy.spatial loads lazily
+        overlapping_pairs,
+        overlapping_sites,
+    )
 
     r, sigma = (overlapping_sites(packing) if packing.shape.kind == "rigid" else overlapping_pairs(packing))[-2:]
     return float((r / sigma).min()) if len(r) else 1.0
@@ -302,7 +299,9 @@ def check_resolution(packing: Packing, settings: CompressionSettings) -> None:
                          f"for alpha outside [{low:g}, {high:g}] (measured for alpha = 1.5, 4, 6, 8, 10: net forces "
                          "3-66% of the contact forces, docs/hardening.md); use spring, hertz or spring:ALPHA "
                          f"with {low:g} <= ALPHA <= {high:g}")
-    from jamflow.mechanics.checks import resolution  # imported here: the checks load scipy.spatial, not needed for --help
+    from jamflow.mechanics.checks import (
+        resolution,  # imported here: the checks load scipy.spatial, not needed for --help
+    )
 
     ftol = settings.minimizer.force_tol_for(packing)
     problem = resolution(packing, settings.v_tol, ftol).problem()

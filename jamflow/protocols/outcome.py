@@ -2,14 +2,14 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from dataclasses import field
+from dataclasses import dataclass, field
+
+import numpy as np
+
 from jamflow.minimize.settings import MinimizeResult
 from jamflow.model.box import AXES
 from jamflow.model.packing import Packing
 from jamflow.protocols.settings import CompressionSettings
-import numpy as np
-
 
 HISTORY_COLUMNS = ("phi", "energy_per_particle", "pressure", "dphi", "iterations", "max_force", "converged")
 

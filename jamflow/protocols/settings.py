@@ -2,13 +2,11 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict
-from dataclasses import dataclass
-from dataclasses import field
+import math
+from dataclasses import asdict, dataclass, field
+
 from jamflow.minimize.settings import MinimizerSettings
 from jamflow.model.shapes.parse import parse_shape
-import math
-
 
 DEFAULT_PHI0 = {2: 0.80, 3: 0.55}
 

@@ -21,7 +21,13 @@ from jamflow.model.shapes.contact_distance import METHODS as CONTACT_METHODS
 from jamflow.model.shapes.parse import parse_shape
 from jamflow.model.walls import WALL_TYPES
 from jamflow.protocols.above import check_dphi
-from jamflow.protocols.compression import at_shear_strain, check_resolution, initial_packing, jam, with_accumulated_strain
+from jamflow.protocols.compression import (
+    at_shear_strain,
+    check_resolution,
+    initial_packing,
+    jam,
+    with_accumulated_strain,
+)
 from jamflow.protocols.outcome import JammingFailed
 from jamflow.protocols.settings import DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings
 

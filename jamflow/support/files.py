@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
 import contextlib
 import contextvars
 import glob
@@ -11,7 +10,7 @@ import re
 import socket
 import stat
 import tempfile
-
+from pathlib import Path
 
 _REPLACEABLE: contextvars.ContextVar[frozenset] = contextvars.ContextVar("jamflow_replaceable", default=frozenset())
 

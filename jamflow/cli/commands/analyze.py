@@ -8,8 +8,6 @@ order/force_balanced is 1, 0, or -1 for LAMMPS inputs, whose potential is unknow
 
 from __future__ import annotations
 
-from jamflow.io.structure_file import write_results
-
 import math
 import warnings
 from pathlib import Path
@@ -17,18 +15,24 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from jamflow.mechanics.checks import check_packing
-from jamflow.support.files import check_writable, replacing
-from jamflow.io.packing_file import load_packing
 from jamflow.analysis.correlations import BondCorrelation, rdf_correlation_length
 from jamflow.analysis.order import BondOrder, first_minimum, translational_order
-from jamflow.model.nematic import Nematic
-from jamflow.plots.structure import (plot_bond_correlations, plot_bond_order_map, plot_order, plot_rdf,
-                                     plot_structure_factor)
-from jamflow.io.readers import packings_from_lammps
+from jamflow.analysis.structure import MAX_SPECIES, RDF, StructureFactor, positive
 from jamflow.ensemble.parallel import add_engine_arguments, expand_inputs, file_mapper
 from jamflow.ensemble.pooling import merge_rdf, merge_structure_factor, pooled_bins, structure_sums
-from jamflow.analysis.structure import MAX_SPECIES, RDF, StructureFactor, positive
+from jamflow.io.packing_file import load_packing
+from jamflow.io.readers import packings_from_lammps
+from jamflow.io.structure_file import write_results
+from jamflow.mechanics.checks import check_packing
+from jamflow.model.nematic import Nematic
+from jamflow.plots.structure import (
+    plot_bond_correlations,
+    plot_bond_order_map,
+    plot_order,
+    plot_rdf,
+    plot_structure_factor,
+)
+from jamflow.support.files import check_writable, replacing
 
 FORMATS = ("auto", "jamflow", "data", "dump")
 HDF5_SUFFIXES = (".h5", ".hdf5")

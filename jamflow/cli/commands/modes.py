@@ -9,8 +9,6 @@ of hypostatic packings against the missing contacts N' d_f - d + 1 - N_c)."""
 
 from __future__ import annotations
 
-from jamflow.io.modes_file import save_modes
-
 import warnings
 from dataclasses import replace
 from pathlib import Path
@@ -18,11 +16,11 @@ from pathlib import Path
 import numpy as np
 
 from jamflow.analysis.modes import DensityOfStates, Spectrum, Stability, branches
-from jamflow.mechanics.checks import check_packing
 from jamflow.ensemble.parallel import add_engine_arguments, expand_inputs, map_files
-from jamflow.support.files import check_writable, replacing
+from jamflow.io.modes_file import save_modes
 from jamflow.io.packing_file import load_packing, read_checks
-
+from jamflow.mechanics.checks import check_packing
+from jamflow.support.files import check_writable, replacing
 
 
 def add_arguments(p) -> None:

@@ -7,8 +7,6 @@ stress-strain figure IN.moduli.png."""
 
 from __future__ import annotations
 
-from jamflow.io.moduli_file import save_moduli
-
 import math
 import sys
 from pathlib import Path
@@ -16,14 +14,14 @@ from pathlib import Path
 import numpy as np
 
 from jamflow.cli.options import add_engine_argument, add_force_argument, add_quiet_argument
-from jamflow.protocols.moduli import Moduli
+from jamflow.cli.progress import progress_bar
+from jamflow.io.moduli_file import save_moduli
+from jamflow.io.packing_file import load_packing, read_attrs
 from jamflow.mechanics.strains import STRAINS
+from jamflow.minimize.settings import MinimizerSettings
+from jamflow.protocols.moduli import Moduli
 from jamflow.protocols.sweeps import JUMP_TOL, LINEAR_TOL, PAST_YIELD, SweepSettings
 from jamflow.support.files import check_writable, replacing
-from jamflow.io.packing_file import load_packing, read_attrs
-from jamflow.minimize.settings import MinimizerSettings
-from jamflow.cli.progress import progress_bar
-
 
 
 def add_arguments(p) -> None:

@@ -23,8 +23,6 @@ dir ``~/.cache/jamflow``). Without a compiler jamflow falls back to LAMMPS's
 
 from __future__ import annotations
 
-from jamflow.support.cache import cache_root, intact_shared_object
-
 import hashlib
 import importlib.metadata
 import os
@@ -35,6 +33,7 @@ import sys
 import warnings
 from pathlib import Path
 
+from jamflow.support.cache import cache_root, intact_shared_object
 
 PLUGIN_DIR = Path(__file__).with_name("plugin")
 SOURCES = ("pair_jamflow.cpp", "fix_jamflow_damping.cpp", "lammpsplugin.h", "pair_jamflow_ellipsoid.h",

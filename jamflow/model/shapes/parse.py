@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-from jamflow.model.shapes.shape import Ellipsoid
-from jamflow.model.shapes.shape import SPHERE
 import math
 
+from jamflow.model.shapes.shape import SPHERE, Ellipsoid
 
 SHAPE_USAGE = ("disk | sphere | ellipse:ALPHA (2D) | spheroid:ALPHA (3D) | nmer:N:ALPHA | dimer:ALPHA:S | "
                "trimer:ALPHA:C")
