@@ -336,3 +336,16 @@ def test_jam_command_does_not_import_dask():
             "print('distributed' in sys.modules, 'dask' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert out.stdout.split() == ["False", "False"], out.stderr
+
+
+def test_a_damaged_manifest_is_bad_input_not_a_bug(tmp_path):
+    """A store whose ensemble.json is not valid JSON: one line naming it, exit 2 (was: a
+    JSONDecodeError traceback once ValueErrors from outside jamflow count as bugs)."""
+    out = tmp_path / "store"
+    out.mkdir()
+    (out / "ensemble.json").write_text('{"schema": "jamflow.ens')
+    done = subprocess.run([*JAMFLOW, "ensemble", "--seeds", "0:2", "--n", "8", "--out", str(out), "--workers", "1"],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2, done.stderr
+    assert "ensemble.json is not a valid jamflow ensemble manifest: damaged JSON" in done.stderr
+    assert "Traceback" not in done.stderr

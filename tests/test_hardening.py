@@ -175,11 +175,16 @@ def bad_files(tmp_path, good):
     with h5py.File(out["incomplete"], "w") as f:
         f.attrs.update(schema="jamflow.packing", schema_version=1)
         f["positions"] = np.zeros((2, 2))
+    out["badjson"] = tmp_path / "badjson.h5"
+    out["badjson"].write_bytes(good.read_bytes())
+    with h5py.File(out["badjson"], "r+") as f:
+        f.attrs["shape"] = '{"kind": "sph'  # a damaged JSON attribute (was: a JSONDecodeError traceback, exit 1)
     return out
 
 
 EXPECTED = {"empty": "is empty", "truncated": "truncated or damaged", "text": "not an HDF5 file",
-            "incomplete": "incomplete jamflow packing file: can't locate attribute: 'potential'"}
+            "incomplete": "incomplete jamflow packing file: can't locate attribute: 'potential'",
+            "badjson": "damaged jamflow packing file: an attribute is not valid JSON"}
 
 
 @pytest.mark.parametrize("kind", sorted(EXPECTED))
@@ -193,7 +198,7 @@ def test_bad_input_files_give_one_line(tmp_path, capsys, packing_file, kind, com
 
 
 @pytest.mark.parametrize("kind,reader", [(k, r) for k in sorted(EXPECTED) for r in (load_packing, read_attrs, read_history)
-                                         if k != "incomplete" or r is load_packing])
+                                         if k not in ("incomplete", "badjson") or r is load_packing])
 def test_bad_files_raise_clear_errors_in_python(tmp_path, packing_file, kind, reader):
     path = bad_files(tmp_path, packing_file)[kind]
     with pytest.raises(ValueError, match=EXPECTED[kind]) as info:

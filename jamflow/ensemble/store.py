@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from jamflow import __version__
-from jamflow.support.files import atomic_path
+from jamflow.support.files import atomic_path, read_json
 from jamflow.ensemble.checks import packing_row
 
 MANIFEST, SUMMARY, FAILED, CORRUPT, LOCK = "ensemble.json", "summary.csv", "failed", "corrupt", ".lock"
@@ -120,7 +120,7 @@ class Store:
             with atomic_path(path) as tmp:
                 tmp.write_text(json.dumps({**wanted, "jamflow_version": __version__}, indent=1) + "\n")
             return
-        have = json.loads(path.read_text())
+        have = read_json(path, "jamflow ensemble manifest")
         if have.get("schema") != SCHEMA:
             raise ValueError(f"{path} is not a jamflow ensemble manifest; use another --out")
         if have["axes"] != list(axes):
@@ -219,7 +219,7 @@ class Store:
 
     def rebuild_summary(self) -> Path:
         """summary.csv from the packing and failure files alone (no cached rows)."""
-        manifest = json.loads((self.dir / MANIFEST).read_text())
+        manifest = read_json(self.dir / MANIFEST, "jamflow ensemble manifest")
         rows = []
         for path in sorted(self.dir.glob("*.h5")) + sorted((self.dir / FAILED).glob("*.json")):
             task = task_from_name(path.stem, manifest["axes"])
@@ -247,7 +247,7 @@ def task_from_name(stem: str, axes: list[str]) -> Task:
 
 
 def failure_row(path: Path, task: Task, fixed: dict) -> dict:
-    record = json.loads(Path(path).read_text())
+    record = read_json(path, "failure record of a jamflow ensemble")
     return {**task.options(fixed), "status": "failed", "reason": record["reason"], "file": task.name,
             "seconds": record.get("seconds", ""), "jamflow_version": record.get("jamflow_version", "")}
 

@@ -182,6 +182,9 @@ def open_hdf5(path, what: str = "jamflow packing file"):
             yield f
     except KeyError as err:
         raise ValueError(f"{path} is an incomplete {what}: {_h5_reason(err)}") from None
+    except json.JSONDecodeError as err:
+        raise ValueError(f"{path} is a damaged {what}: an attribute is not valid JSON ({err}); rerun the command "
+                         "that wrote it") from None
     except OSError as err:
         raise ValueError(f"{path} is damaged ({_h5_reason(err)}); rerun the command that wrote it") from None
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import glob
+import json
 import os
 import re
 import socket
@@ -141,3 +142,13 @@ def check_writable(path, force: bool = False) -> None:
     if not mode & 0o222 or not os.access(path, os.W_OK):
         raise ValueError(f"refusing to overwrite {path}: it is read-only; make it writable (chmod u+w), "
                          "choose another name, or --force to replace it")
+
+
+def read_json(path, what: str):
+    """The JSON document in the file ``path`` (a ``what``); a one-line ValueError naming the file
+    if it is not valid JSON (damaged, truncated), so that it reads as bad input, not a bug."""
+    try:
+        return json.loads(Path(path).read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as err:
+        raise ValueError(f"{path} is not a valid {what}: damaged JSON ({err}); remove it or rerun the command "
+                         "that wrote it") from None
