@@ -607,3 +607,63 @@ def test_jam_at_gamma_two_and_a_half_passes_its_checks(tmp_path, capsys):
     checks = read_checks(out)
     assert checks.passed and checks.jammed
     assert read_attrs(out)["gamma"] == 2.5
+
+
+def test_ensemble_of_piles_records_each_piles_fraction_and_onsets_refuse_a_zero_width(tmp_path, capsys):
+    # was: summary.csv phi_j = phi0 = 0.5 for every pile (sd 0), while jam printed each pile's own
+    # fraction; `jamflow onsets` then printed LAPACK noise and "SVD did not converge"
+    from jamflow.ensemble import Store
+
+    store = tmp_path / "piles"
+    args = ["--n", "16", "--gravity", "1e-3", "--walls", "y", "--quiet"]
+    assert main(["ensemble", "--seeds", "0:3", "--workers", "1", "--out", str(store), *args]) == 0
+    rows = sorted(Store(store).read_summary(), key=lambda r: int(r["seed"]))
+    capsys.readouterr()
+    for row in rows:
+        out = tmp_path / f"jam{row['seed']}.h5"
+        assert main(["jam", "--seed", row["seed"], "--out", str(out), *args]) == 0
+        printed = float(capsys.readouterr().out.split("phi_J = ")[1].split()[0])
+        assert float(row["phi_j"]) == pytest.approx(printed, abs=1e-9)  # what jam reports: the pile's fraction
+        assert float(row["phi"]) == 0.5 and float(row["phi_j"]) > 0.6  # the box's phi is the start's
+    assert np.std([float(r["phi_j"]) for r in rows]) > 1e-3
+    # a store summarised the old way (every phi_j the same): one clear line, no numerical noise
+    from jamflow.ensemble.onsets import onset_statistics
+
+    with pytest.raises(ValueError, match="N = 16: all 3 packings have phi_J = 0.5, a distribution of zero width"):
+        onset_statistics([{**r, "phi_j": "0.5"} for r in rows], n_bootstrap=50)
+    with pytest.raises(ValueError, match="N = 16: 1 of 3 packings have no phi_J"):
+        onset_statistics([{**r, "phi_j": "nan" if r["seed"] == "0" else r["phi_j"]} for r in rows], n_bootstrap=50)
+
+
+def test_onsets_command_refuses_a_zero_width_store_in_one_line(tmp_path, capsys):
+    import csv
+
+    from jamflow.ensemble import Store
+
+    store = tmp_path / "flat"
+    assert main(["ensemble", "--seeds", "0:3", "--workers", "1", "--n", "16", "--out", str(store), "--quiet"]) == 0
+    rows = Store(store).read_summary()
+    with (store / "summary.csv").open("w", newline="") as fh:  # the summary an older jamflow wrote for piles
+        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows({**r, "phi_j": "0.5"} for r in rows)
+    capsys.readouterr()
+    code = main(["onsets", str(store)])
+    err = capsys.readouterr().err
+    assert code == 2 and no_traceback(err) and len(err.strip().splitlines()) == 1 and "zero width" in err
+    assert "SVD" not in err and not (store / "onsets.csv").exists()
+
+
+def test_jam_at_one_pressure_reports_no_extrapolated_onset(tmp_path, capsys):
+    # was: "phi_J(P->0) = 0.8763408138", the phi at P = 1e-2 itself (one pressure extrapolates nothing)
+    out = tmp_path / "p.h5"
+    assert main(["jam", "--n", "32", "--pressure", "1e-2", "--out", str(out), "--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert "phi_J(P->0) n/a: one pressure" in text and "phi_J(P->0) =" not in text
+    attrs = read_attrs(out)
+    assert np.isnan(attrs["phi_j"]) and attrs["phi"] > 0.85  # the file: phi at P, no phi_J
+    several = tmp_path / "p6.h5"
+    assert main(["jam", "--n", "32", "--pressure", "1e-6", "--out", str(several), "--quiet"]) == 0
+    printed = float(capsys.readouterr().out.split("phi_J(P->0) = ")[1].split()[0])
+    attrs = read_attrs(several)
+    assert attrs["phi_j"] == pytest.approx(printed, abs=1e-10) and attrs["phi_j"] < attrs["phi"]

@@ -198,7 +198,8 @@ def checked(result, minimizer: MinimizerSettings, v_tol: float | None, destinati
         reason = result.history["reason"][-1].decode()
         remedy = ("a larger --vtol (stronger contacts) or another --minimizer" if not checks.force_balanced else
                   "a larger --vtol: the contacts at this one are near round-off")
-        raise JammingFailed(f"the packing at phi_J = {result.phi_j:.10f} failed its checks: "
+        at = f"phi_J = {result.phi_j:.10f}" if math.isfinite(result.phi_j) else f"phi = {packing.phi:.10f}"
+        raise JammingFailed(f"the packing at {at} failed its checks: "
                             f"{'; '.join(checks.problems())} (final minimisation stopped by '{reason}'). "
                             f"{f'Nothing was written to {destination}; ' if destination else ''}use {remedy}")
     return checks
