@@ -667,3 +667,21 @@ def test_jam_at_one_pressure_reports_no_extrapolated_onset(tmp_path, capsys):
     printed = float(capsys.readouterr().out.split("phi_J(P->0) = ")[1].split()[0])
     attrs = read_attrs(several)
     assert attrs["phi_j"] == pytest.approx(printed, abs=1e-10) and attrs["phi_j"] < attrs["phi"]
+
+
+@pytest.mark.parametrize("command", ["modes", "analyze", "moduli"])
+def test_the_same_file_twice_is_refused(tmp_path, capsys, monkeypatch, packing_file, command):
+    # was: `modes p.h5 ./p.h5` / `analyze p.h5 p.h5` averaged the one packing as two (exit 0)
+    link = tmp_path / "same.h5"
+    link.symlink_to(packing_file)
+    monkeypatch.chdir(packing_file.parent)
+    extra = ["--out", str(tmp_path / "a.h5")] if command == "analyze" else []
+    pairs = [[str(packing_file), f"./{packing_file.name}"], [str(packing_file), str(link)]]
+    if command != "moduli":  # modes and analyze take a store directory for its files
+        pairs.append([str(packing_file.parent), str(packing_file)])
+    for pair in pairs:
+        code = main([command, *pair, *extra])
+        err = capsys.readouterr().err
+        assert code == 2 and no_traceback(err) and len(err.strip().splitlines()) == 1, err
+        assert "it would count as two packings; give each packing file once" in err
+    assert not any(p.suffix == ".png" or ".modes" in p.name or ".moduli" in p.name for p in packing_file.parent.iterdir())

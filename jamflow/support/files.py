@@ -141,3 +141,18 @@ def check_writable(path, force: bool = False) -> None:
     if not mode & 0o222 or not os.access(path, os.W_OK):
         raise ValueError(f"refusing to overwrite {path}: it is read-only; make it writable (chmod u+w), "
                          "choose another name, or --force to replace it")
+
+
+def check_distinct(files) -> list[str]:
+    """``files`` if no two resolve to the same file (symlinks, ``./``, a store directory and one of
+    its files); else a one-line ValueError: a file given twice would count as two packings in the
+    averages (D(omega), g(r), ...)."""
+    seen = {}
+    for name in files:
+        key = os.path.realpath(name)
+        if key in seen:
+            same = f"as {seen[key]} and {name}" if seen[key] != name else "twice"
+            raise ValueError(f"{name} is given {same} (the same file {key}): it would count as two packings; "
+                             "give each packing file once")
+        seen[key] = name
+    return list(files)
