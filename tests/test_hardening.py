@@ -685,3 +685,38 @@ def test_the_same_file_twice_is_refused(tmp_path, capsys, monkeypatch, packing_f
         assert code == 2 and no_traceback(err) and len(err.strip().splitlines()) == 1, err
         assert "it would count as two packings; give each packing file once" in err
     assert not any(p.suffix == ".png" or ".modes" in p.name or ".moduli" in p.name for p in packing_file.parent.iterdir())
+
+
+PARTNERLESS = [  # (options, the option, its partner): was exit 0, the option silently ignored
+    (["--stress", "aniso"], "--stress aniso", "--pressure"),
+    (["--wall-type", "rough"], "--wall-type rough", "--walls"),
+    (["--damping", "2"], "--damping 2.0", "--minimizer md"),
+    (["--md-damping", "pairwise"], "--md-damping pairwise", "--minimizer md"),
+    (["--dphi0", "1e-3", "--pressure", "1e-3"], "--dphi0 0.001", "a compression run"),
+    (["--dphi0", "1e-3", "--gravity", "1e-3", "--walls", "y"], "--dphi0 0.001", "a compression run"),
+]
+
+
+@pytest.mark.parametrize("args,option,partner", PARTNERLESS)
+def test_an_option_without_its_partner_is_refused_before_work(tmp_path, capsys, monkeypatch, args, option, partner):
+    for work in ("jamflow.protocols.spec.jam", "jamflow.protocols.pressure.jam_at_pressure"):
+        monkeypatch.setattr(work, lambda *a, **k: pytest.fail("work started"))
+    code, err = run_jam(tmp_path, capsys, "--n", "16", *args, "--out", str(tmp_path / "x.h5"))
+    assert code == 2 and no_traceback(err) and len(err.strip().splitlines()) == 1, err
+    assert f"{option} applies to {partner} only" in err and "leave" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_library_refuses_a_non_default_value_without_its_partner():
+    from jamflow.protocols.spec import PARTNERS, JamSpec, check_boundaries
+
+    values = dict(stress="tri", wall_type="rough", damping=3.0, md_damping="pairwise", dphi0=2e-4)
+    assert set(values) == set(PARTNERS)
+    for name, value in values.items():
+        check_boundaries(JamSpec(**{name: getattr(JamSpec(), name)}))  # the default alone: accepted
+        with pytest.raises(ValueError, match=f"--{name.replace('_', '-')} .* applies to"):
+            check_boundaries(JamSpec(**{name: value}, pressure=1e-3 if name == "dphi0" else None))
+    check_boundaries(JamSpec(stress="tri", pressure=1e-3))  # with the partner: accepted
+    check_boundaries(JamSpec(wall_type="rough", walls="y"))
+    check_boundaries(JamSpec(damping=3.0, md_damping="pairwise", minimizer="md"))
+    check_boundaries(JamSpec(dphi0=2e-4))

@@ -95,8 +95,6 @@ def compression_settings(spec: JamSpec) -> CompressionSettings:
     _check_choice("minimizer", spec.minimizer, METHODS)
     _check_choice("md-damping", spec.md_damping, MD_DAMPINGS)
     _check_choice("creep", spec.creep, CREEP_METHODS)
-    if spec.md_damping != "viscous" and spec.minimizer != "md":
-        raise ValueError(f"--md-damping {spec.md_damping} applies to --minimizer md only, not {spec.minimizer}")
     minimizer = MinimizerSettings(method=spec.minimizer, force_tol=spec.ftol, v_min=spec.vtol, damping=spec.damping,
                                   md_damping=spec.md_damping, creep=spec.creep)
     return PROTOCOLS[spec.protocol_name](phi0=spec.phi0, dphi0=spec.dphi0, v_tol=spec.vtol, minimizer=minimizer)
@@ -127,6 +125,31 @@ def check_boundaries(spec: JamSpec) -> None:
                              "--pressure, --gravity or --emit-deck")
     if spec.gamma is not None and spec.pressure is not None:
         raise ValueError("--gamma fixes the shear strain, --pressure relaxes the box: use one of them")
+    check_partners(spec)
+
+
+# option -> (has its partner, the partner, why): a value other than the JamSpec default means
+# nothing without the partner, so it is refused rather than silently ignored
+PARTNERS = {
+    "stress": (lambda s: s.pressure is not None, "--pressure", "how the box relaxes at a target pressure"),
+    "wall_type": (lambda s: bool(s.walls), "--walls", "the kind of the walls on the walled axes"),
+    "damping": (lambda s: s.minimizer == "md", "--minimizer md", "the drag of damped dynamics"),
+    "md_damping": (lambda s: s.minimizer == "md", "--minimizer md", "the drag of damped dynamics"),
+    "dphi0": (lambda s: s.pressure is None and not s.gravity, "a compression run",
+              "the first step of phi; --pressure and --gravity runs do not compress"),
+}
+
+
+def check_partners(spec: JamSpec) -> None:
+    """Refuse an option set to a value other than its default without the option it works with
+    (``PARTNERS``): e.g. --stress without --pressure, --wall-type without --walls."""
+    defaults = JamSpec()
+    for name, (present, partner, why) in PARTNERS.items():
+        value = getattr(spec, name)
+        if value != getattr(defaults, name) and not present(spec):
+            option = name.replace("_", "-")
+            raise ValueError(f"--{option} {value} applies to {partner} only ({why}), and would be ignored here: "
+                             f"leave --{option} out, or use it with {partner}")
 
 
 def check_contact(spec: JamSpec) -> None:
