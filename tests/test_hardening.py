@@ -720,3 +720,21 @@ def test_library_refuses_a_non_default_value_without_its_partner():
     check_boundaries(JamSpec(wall_type="rough", walls="y"))
     check_boundaries(JamSpec(damping=3.0, md_damping="pairwise", minimizer="md"))
     check_boundaries(JamSpec(dphi0=2e-4))
+
+
+@pytest.mark.parametrize("contact", ["linear", "quadratic"])
+@pytest.mark.parametrize("shape,dim", [("ellipse:1.5", 2), ("spheroid:1.5", 3)])
+def test_a_contact_method_without_second_derivatives_is_refused_before_work(tmp_path, capsys, monkeypatch, contact,
+                                                                            shape, dim):
+    # was: the whole jam ran, then every packing failed: "the dynamical matrix needs the contact-distance
+    # method's derivatives; the 'linear' method's lambda ... has none here"
+    from jamflow.protocols.spec import JamSpec, prepare
+
+    monkeypatch.setattr("jamflow.protocols.compression.open_engine", lambda *a, **k: pytest.fail("work started"))
+    code, err = run_jam(tmp_path, capsys, "--n", "16", "--sizes", "mono", "--shape", shape, "--dim", str(dim),
+                        "--contact", contact, "--out", str(tmp_path / "x.h5"))
+    assert code == 2 and no_traceback(err) and len(err.strip().splitlines()) == 1, err
+    assert f"--contact {contact} cannot make a checked packing" in err and "exact | cleaver | gaussian" in err
+    assert list(tmp_path.iterdir()) == []
+    with pytest.raises(ValueError, match="cannot make a checked packing"):
+        prepare(JamSpec(n=16, sizes="mono", shape=shape, dim=dim, contact=contact))

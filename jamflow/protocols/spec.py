@@ -17,6 +17,7 @@ from jamflow.engines.choose import ENGINES, engine_name
 from jamflow.mechanics.checks import check_packing
 from jamflow.minimize.settings import CREEP_METHODS, MD_DAMPINGS, METHODS, MinimizerSettings
 from jamflow.model.box import STRESS_MODES
+from jamflow.model.shapes.contact_distance import HESSIAN_CONTACTS
 from jamflow.model.shapes.contact_distance import METHODS as CONTACT_METHODS
 from jamflow.model.shapes.parse import parse_shape
 from jamflow.model.walls import WALL_TYPES
@@ -154,13 +155,19 @@ def check_partners(spec: JamSpec) -> None:
 
 def check_contact(spec: JamSpec) -> None:
     """Refuse a --contact method other than the default for a shape that has no contact-distance
-    approximation (disks, spheres, ellipse:1, rigid bodies of spherical sites): it would be ignored."""
+    approximation (disks, spheres, ellipse:1, rigid bodies of spherical sites): it would be ignored;
+    and the truncations 'linear' / 'quadratic', whose lack of second derivatives fails every
+    packing's checks after the whole jam (``HESSIAN_CONTACTS``)."""
     if spec.contact == "exact":
         return
     shape = parse_shape(spec.shape, spec.dim)
     if shape.kind != "ellipsoid":
         raise ValueError(f"--contact {spec.contact} applies to ellipses/spheroids (--shape ellipse:ALPHA or "
                          f"spheroid:ALPHA, ALPHA != 1), not to {shape.name(spec.dim)} particles: leave --contact out")
+    if spec.contact not in HESSIAN_CONTACTS:  # the checks of every jammed packing would fail after the whole jam
+        raise ValueError(f"--contact {spec.contact} cannot make a checked packing: the packing checks (and the soft-mode "
+                         f"steps) need second derivatives of the contact distance, which the truncated root of "
+                         f"'{spec.contact}' lacks; use --contact {' | '.join(HESSIAN_CONTACTS)}")
 
 
 def prepare(spec: JamSpec):
