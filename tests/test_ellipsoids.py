@@ -267,7 +267,7 @@ def test_truncation_fallbacks_are_counted_and_warned():
     (["--shape", "ellipse:1.5", "--dim", "3"], "'ellipse' is 2D"),
     (["--shape", "spheroid:1.5"], "'spheroid' is 3D"),
     (["--shape", "ellipse:1.5", "--contact", "gaussian", "--sizes", "bi:1.4:0.5"], "identical particles"),
-    (["--shape", "spheroid:1.5", "--dim", "3", "--contact", "linear"], "identical spheroids only"),
+    (["--shape", "spheroid:1.5", "--dim", "3", "--contact", "linear"], "--contact linear cannot make a checked packing"),
     (["--shape", "ellipse:1.5", "--minimizer", "cg"], "no LAMMPS minimiser moves orientations"),
     (["--shape", "ellipse:1.5", "--engine", "lammps"], "no LAMMPS minimiser moves orientations"),
 ])

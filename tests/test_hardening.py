@@ -515,3 +515,235 @@ def test_ctrl_c_while_the_command_starts(tmp_path):
     assert done.returncode == 130 and no_traceback(done.stderr), done.stderr
     assert len(done.stderr.strip().splitlines()) == 1 and "interrupted" in done.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+# --- issue 29: wrong physics or silently wrong data ------------------------------------------
+def half_period_strains():
+    """gamma = +-(k + 1/2), k = 0..3, and its two float64 neighbours on each side."""
+    strains = []
+    for centre in (0.5, 1.5, 2.5, 3.5, -0.5, -1.5, -2.5, -3.5):
+        below = np.nextafter(centre, -np.inf)
+        above = np.nextafter(centre, np.inf)
+        strains += [np.nextafter(below, -np.inf), below, centre, above, np.nextafter(above, np.inf)]
+    return strains
+
+
+HALF_PERIODS = half_period_strains()
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("side", [5.123456789, 7.3, 3.3333333333])
+def test_a_half_period_strain_folds_into_range_and_stays_reduced(dim, side):
+    # was: gamma = 2.5 (L = 5.123456789) folded to xy = -0.5000000000000002 L, outside [-L/2, L/2):
+    # the reduced cell folded once more under its own reduction, and the pair search lost pairs
+    from jamflow.model.box import Box
+
+    for gamma in HALF_PERIODS:
+        h = np.eye(dim) * side
+        h[0, 1] = gamma * side
+        if dim == 3:
+            h[0, 2], h[1, 2] = -gamma * side, gamma * side
+        box = Box(h)
+        red, fold = box.reduction()
+        assert all(-side / 2 <= t < side / 2 for t in red.tilts), (gamma, red.tilts)
+        assert red.reduction()[0] is red, gamma  # reduced: its own reduction
+        assert np.allclose(red.h, box.h @ fold, rtol=0, atol=1e-12 * np.abs(box.h).max())
+
+
+def all_pairs_minimum_image(x, box, rmax):
+    """(i, j) of every pair i < j whose shortest image over shifts of up to 5 cells of the
+    *accumulated* cell (no reduction) is below rmax."""
+    from itertools import product
+
+    i, j = np.triu_indices(len(x), 1)
+    dr = x[i] - x[j]
+    shifts = np.array(list(product(range(-5, 6), repeat=box.dim)), float) @ box.h.T
+    best = np.min(np.linalg.norm(dr[:, None, :] + shifts[None, :, :], axis=2), axis=1)
+    keep = best < rmax
+    return i[keep], j[keep]
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_pair_search_at_half_period_strains_matches_all_pairs(dim):
+    # was: at gamma = k + 1/2 (and ulps off it) whole sets of pairs were missing -> "every particle is a floater"
+    from jamflow.model.box import Box
+    from jamflow.model.pairs import neighbor_pairs
+
+    side = 5.123456789
+    rng = np.random.default_rng(29)
+    x = rng.uniform(0, side, (60 if dim == 2 else 80, dim))
+    for gamma in HALF_PERIODS:
+        box = Box.cube(side, dim).with_shear_strain(gamma)
+        rmax = 0.45 * box.widths.min()
+        i, j, image = neighbor_pairs(x, box, rmax)
+        bi, bj = all_pairs_minimum_image(x, box, rmax)
+        assert len(bi) > 20 and np.array_equal(i, bi) and np.array_equal(j, bj), gamma
+        sep = x[i] - x[j] + image @ box.h.T
+        assert np.all(np.linalg.norm(sep, axis=1) < rmax), gamma
+
+
+@pytest.fixture(scope="module")
+def half_period_packing():
+    """A packing jammed through the API at gamma = 1/2 (N = 32)."""
+    return jamflow.jam(n=32, seed=4, gamma=0.5).packing
+
+
+def test_contacts_and_floaters_at_half_period_strains_are_those_at_one_half(half_period_packing):
+    # was: a packing at gamma = 2.5 made through the API was "all floaters" to `jamflow modes`
+    from jamflow.mechanics.checks import check_packing
+    from jamflow.mechanics.contacts import Contacts
+
+    base = Contacts().compute(half_period_packing)
+    assert base.floater.sum() < half_period_packing.n / 2
+    pairs = set(zip(base.i.tolist(), base.j.tolist()))
+    for gamma in HALF_PERIODS:
+        box = half_period_packing.box.with_shear_strain(gamma)
+        packing = half_period_packing.with_positions(half_period_packing.positions, box=box)
+        got = Contacts().compute(packing)
+        assert np.array_equal(got.floater, base.floater) and set(zip(got.i.tolist(), got.j.tolist())) == pairs, gamma
+        assert check_packing(packing).jammed, gamma
+
+
+def test_jam_at_gamma_two_and_a_half_passes_its_checks(tmp_path, capsys):
+    # was: exit 3, "not jammed: every particle is a floater (no contact network)", nothing written
+    out = tmp_path / "g.h5"
+    code, err = run_jam(tmp_path, capsys, "--n", "32", "--gamma", "2.5", "--out", str(out))
+    assert code == 0, err
+    checks = read_checks(out)
+    assert checks.passed and checks.jammed
+    assert read_attrs(out)["gamma"] == 2.5
+
+
+def test_ensemble_of_piles_records_each_piles_fraction_and_onsets_refuse_a_zero_width(tmp_path, capsys):
+    # was: summary.csv phi_j = phi0 = 0.5 for every pile (sd 0), while jam printed each pile's own
+    # fraction; `jamflow onsets` then printed LAPACK noise and "SVD did not converge"
+    from jamflow.ensemble import Store
+
+    store = tmp_path / "piles"
+    args = ["--n", "16", "--gravity", "1e-3", "--walls", "y", "--quiet"]
+    assert main(["ensemble", "--seeds", "0:3", "--workers", "1", "--out", str(store), *args]) == 0
+    rows = sorted(Store(store).read_summary(), key=lambda r: int(r["seed"]))
+    capsys.readouterr()
+    for row in rows:
+        out = tmp_path / f"jam{row['seed']}.h5"
+        assert main(["jam", "--seed", row["seed"], "--out", str(out), *args]) == 0
+        printed = float(capsys.readouterr().out.split("phi_J = ")[1].split()[0])
+        assert float(row["phi_j"]) == pytest.approx(printed, abs=1e-9)  # what jam reports: the pile's fraction
+        assert float(row["phi"]) == 0.5 and float(row["phi_j"]) > 0.6  # the box's phi is the start's
+    assert np.std([float(r["phi_j"]) for r in rows]) > 1e-3
+    # a store summarised the old way (every phi_j the same): one clear line, no numerical noise
+    from jamflow.ensemble.onsets import onset_statistics
+
+    with pytest.raises(ValueError, match="N = 16: all 3 packings have phi_J = 0.5, a distribution of zero width"):
+        onset_statistics([{**r, "phi_j": "0.5"} for r in rows], n_bootstrap=50)
+    with pytest.raises(ValueError, match="N = 16: 1 of 3 packings have no phi_J"):
+        onset_statistics([{**r, "phi_j": "nan" if r["seed"] == "0" else r["phi_j"]} for r in rows], n_bootstrap=50)
+
+
+def test_onsets_command_refuses_a_zero_width_store_in_one_line(tmp_path, capsys):
+    import csv
+
+    from jamflow.ensemble import Store
+
+    store = tmp_path / "flat"
+    assert main(["ensemble", "--seeds", "0:3", "--workers", "1", "--n", "16", "--out", str(store), "--quiet"]) == 0
+    rows = Store(store).read_summary()
+    with (store / "summary.csv").open("w", newline="") as fh:  # the summary an older jamflow wrote for piles
+        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows({**r, "phi_j": "0.5"} for r in rows)
+    capsys.readouterr()
+    code = main(["onsets", str(store)])
+    err = capsys.readouterr().err
+    assert code == 2 and no_traceback(err) and len(err.strip().splitlines()) == 1 and "zero width" in err
+    assert "SVD" not in err and not (store / "onsets.csv").exists()
+
+
+def test_jam_at_one_pressure_reports_no_extrapolated_onset(tmp_path, capsys):
+    # was: "phi_J(P->0) = 0.8763408138", the phi at P = 1e-2 itself (one pressure extrapolates nothing)
+    out = tmp_path / "p.h5"
+    assert main(["jam", "--n", "32", "--pressure", "1e-2", "--out", str(out), "--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert "phi_J(P->0) n/a: one pressure" in text and "phi_J(P->0) =" not in text
+    attrs = read_attrs(out)
+    assert np.isnan(attrs["phi_j"]) and attrs["phi"] > 0.85  # the file: phi at P, no phi_J
+    several = tmp_path / "p6.h5"
+    assert main(["jam", "--n", "32", "--pressure", "1e-6", "--out", str(several), "--quiet"]) == 0
+    printed = float(capsys.readouterr().out.split("phi_J(P->0) = ")[1].split()[0])
+    attrs = read_attrs(several)
+    assert attrs["phi_j"] == pytest.approx(printed, abs=1e-10) and attrs["phi_j"] < attrs["phi"]
+
+
+@pytest.mark.parametrize("command", ["modes", "analyze", "moduli"])
+def test_the_same_file_twice_is_refused(tmp_path, capsys, monkeypatch, packing_file, command):
+    # was: `modes p.h5 ./p.h5` / `analyze p.h5 p.h5` averaged the one packing as two (exit 0)
+    import shutil
+
+    (tmp_path / "store").mkdir()
+    packing_file = Path(shutil.copy(packing_file, tmp_path / "store" / "p.h5"))  # a directory of its own
+    link = tmp_path / "same.h5"
+    link.symlink_to(packing_file)
+    monkeypatch.chdir(packing_file.parent)
+    extra = ["--out", str(tmp_path / "a.h5")] if command == "analyze" else []
+    pairs = [[str(packing_file), f"./{packing_file.name}"], [str(packing_file), str(link)]]
+    if command != "moduli":  # modes and analyze take a store directory for its files
+        pairs.append([str(packing_file.parent), str(packing_file)])
+    for pair in pairs:
+        code = main([command, *pair, *extra])
+        err = capsys.readouterr().err
+        assert code == 2 and no_traceback(err) and len(err.strip().splitlines()) == 1, err
+        assert "it would count as two packings; give each packing file once" in err
+    assert [p.name for p in packing_file.parent.iterdir()] == ["p.h5"]  # nothing written beside it
+
+
+PARTNERLESS = [  # (options, the option, its partner): was exit 0, the option silently ignored
+    (["--stress", "aniso"], "--stress aniso", "--pressure"),
+    (["--wall-type", "rough"], "--wall-type rough", "--walls"),
+    (["--damping", "2"], "--damping 2.0", "--minimizer md"),
+    (["--md-damping", "pairwise"], "--md-damping pairwise", "--minimizer md"),
+    (["--dphi0", "1e-3", "--pressure", "1e-3"], "--dphi0 0.001", "a compression run"),
+    (["--dphi0", "1e-3", "--gravity", "1e-3", "--walls", "y"], "--dphi0 0.001", "a compression run"),
+]
+
+
+@pytest.mark.parametrize("args,option,partner", PARTNERLESS)
+def test_an_option_without_its_partner_is_refused_before_work(tmp_path, capsys, monkeypatch, args, option, partner):
+    for work in ("jamflow.protocols.spec.jam", "jamflow.protocols.pressure.jam_at_pressure"):
+        monkeypatch.setattr(work, lambda *a, **k: pytest.fail("work started"))
+    code, err = run_jam(tmp_path, capsys, "--n", "16", *args, "--out", str(tmp_path / "x.h5"))
+    assert code == 2 and no_traceback(err) and len(err.strip().splitlines()) == 1, err
+    assert f"{option} applies to {partner} only" in err and "leave" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_library_refuses_a_non_default_value_without_its_partner():
+    from jamflow.protocols.spec import PARTNERS, JamSpec, check_boundaries
+
+    values = dict(stress="tri", wall_type="rough", damping=3.0, md_damping="pairwise", dphi0=2e-4)
+    assert set(values) == set(PARTNERS)
+    for name, value in values.items():
+        check_boundaries(JamSpec(**{name: getattr(JamSpec(), name)}))  # the default alone: accepted
+        with pytest.raises(ValueError, match=f"--{name.replace('_', '-')} .* applies to"):
+            check_boundaries(JamSpec(**{name: value}, pressure=1e-3 if name == "dphi0" else None))
+    check_boundaries(JamSpec(stress="tri", pressure=1e-3))  # with the partner: accepted
+    check_boundaries(JamSpec(wall_type="rough", walls="y"))
+    check_boundaries(JamSpec(damping=3.0, md_damping="pairwise", minimizer="md"))
+    check_boundaries(JamSpec(dphi0=2e-4))
+
+
+@pytest.mark.parametrize("contact", ["linear", "quadratic"])
+@pytest.mark.parametrize("shape,dim", [("ellipse:1.5", 2), ("spheroid:1.5", 3)])
+def test_a_contact_method_without_second_derivatives_is_refused_before_work(tmp_path, capsys, monkeypatch, contact,
+                                                                            shape, dim):
+    # was: the whole jam ran, then every packing failed: "the dynamical matrix needs the contact-distance
+    # method's derivatives; the 'linear' method's lambda ... has none here"
+    from jamflow.protocols.spec import JamSpec, prepare
+
+    monkeypatch.setattr("jamflow.protocols.compression.open_engine", lambda *a, **k: pytest.fail("work started"))
+    code, err = run_jam(tmp_path, capsys, "--n", "16", "--sizes", "mono", "--shape", shape, "--dim", str(dim),
+                        "--contact", contact, "--out", str(tmp_path / "x.h5"))
+    assert code == 2 and no_traceback(err) and len(err.strip().splitlines()) == 1, err
+    assert f"--contact {contact} cannot make a checked packing" in err and "exact | cleaver | gaussian" in err
+    assert list(tmp_path.iterdir()) == []
+    with pytest.raises(ValueError, match="cannot make a checked packing"):
+        prepare(JamSpec(n=16, sizes="mono", shape=shape, dim=dim, contact=contact))

@@ -33,7 +33,8 @@ def add_spec_arguments(p, skip=()) -> None:
              "particles (b; a = ALPHA b)")
     add("--contact", choices=METHODS_CONTACT, default="exact",
         help="contact distance of ellipses/spheroids (seed section 2.3.2): exact (Perram-Wertheim), "
-             "gaussian (equal sizes only), cleaver, linear, quadratic (3D: equal sizes only); "
+             "gaussian (equal sizes only), cleaver; linear and quadratic are refused (no second derivatives "
+             "for the packing checks; jamflow.model.shapes.contact_distance computes them); "
              "docs/contact-distance.md")
     add("--protocol", choices=sorted(PROTOCOLS), default=None,
         help=f"seed: the chapter's constant-increment bisection; fast: the same stopping rule with "

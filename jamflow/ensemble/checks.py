@@ -11,11 +11,13 @@ from pathlib import Path
 import numpy as np
 
 from jamflow.mechanics.checks import check_packing
-from jamflow.io.packing_file import load_packing, read_attrs, read_checks, read_history, read_protocol
+from jamflow.io.packing_file import load_packing, read_attrs, read_checks, read_history, read_phi_j, read_protocol
 
 
 def packing_row(path, task, fixed: dict) -> dict:
-    """Summary row of one packing file; ValueError if the file does not belong to ``task``."""
+    """Summary row of one packing file; ValueError if the file does not belong to ``task``.
+    ``phi_j`` is the onset ``jamflow jam`` reports (``read_phi_j``: a pile's own fraction, phi_J(P->0)
+    at constant pressure, NaN with one pressure); ``phi`` the packing fraction of the box."""
     path = Path(path)
     attrs, protocol = read_attrs(path), read_protocol(path)
     expected = task.options(fixed)
@@ -25,7 +27,8 @@ def packing_row(path, task, fixed: dict) -> dict:
     v = float(attrs["energy_per_particle"])
     checks = read_checks(path) or check_packing(load_packing(path), v, None, float(protocol["v_tol"]))
     st = os.stat(path)
-    return {**expected, "status": "ok", "phi_j": repr(float(attrs["phi"])), "V": v, "P": float(attrs["pressure"]),
+    return {**expected, "status": "ok", "phi_j": repr(read_phi_j(path)), "phi": repr(float(attrs["phi"])), "V": v,
+            "P": float(attrs["pressure"]),
             "mean_z": checks.mean_z, "floaters": checks.n_floaters, "n_contacts": checks.n_contacts,
             "iterations": int(np.sum(history["iterations"])), "minimizations": len(history["iterations"]),
             "seconds": protocol.get("seconds", ""), "engine": protocol.get("engine", ""),

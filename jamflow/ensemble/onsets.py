@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from jamflow.plots.figure import save_png
+from jamflow.protocols.pressure import DEFAULT_START_PRESSURE
 
 
 @dataclass(frozen=True)
@@ -99,6 +100,7 @@ def onset_statistics(rows, n_bootstrap: int = 1000, seed: int = 0) -> OnsetResul
     small = [n for n, p in phis.items() if len(p) < 3]
     if small:
         raise ValueError(f"N = {', '.join(map(str, small))}: fewer than 3 packings; a width needs more")
+    check_distributions(phis)
     boot = {n: _resample(p, n_bootstrap, rng) for n, p in phis.items()}  # (B, count) replicates
     sizes = [SizeStats(n, phis[n], np.array([float(r["mean_z"]) for r in g]), _isostatic(g, dim), failed,
                        float(np.std(np.std(boot[n], axis=1, ddof=1), ddof=1)))
@@ -112,6 +114,22 @@ def onset_statistics(rows, n_bootstrap: int = 1000, seed: int = 0) -> OnsetResul
     mean_err = np.array([s.mean_phi_err for s in sizes])
     reps = np.array([_fits(ns, boot_w[:, b], w_err, boot_mean[:, b], mean_err) for b in range(n_bootstrap)])
     return OnsetResult(dim, sizes, Fit(nu, _sd(reps[:, 0])), amp, Fit(phi_inf, _sd(reps[:, 2])), shift, n_bootstrap)
+
+
+def check_distributions(phis: dict) -> None:
+    """Refuse phi_J values that give no distribution to fit: unknown ones (NaN: a constant-pressure
+    ensemble at one pressure has no phi_J(P->0)) or a zero width (every packing the same value:
+    the bootstrap errors vanish and the weighted fits are numerical noise)."""
+    for n, p in phis.items():
+        missing = int(np.sum(~np.isfinite(p)))
+        if missing:
+            raise ValueError(f"N = {n}: {missing} of {len(p)} packings have no phi_J (a constant-pressure ensemble at "
+                             "one pressure cannot extrapolate to P -> 0); run the ensemble with a --pressure below "
+                             f"{DEFAULT_START_PRESSURE:g} (a sequence of pressures), or use --n to leave this N out")
+        if np.ptp(p) == 0:
+            raise ValueError(f"N = {n}: all {len(p)} packings have phi_J = {float(p[0])!r}, a distribution of zero width: "
+                             "no onset statistics to fit (is phi_J the same fixed fraction in every file? rebuild "
+                             "the summary with jamflow ensemble --rebuild-summary)")
 
 
 def _resample(values, n_boot, rng):

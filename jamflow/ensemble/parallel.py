@@ -9,9 +9,12 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from jamflow.support.files import check_distinct
+
 
 def expand_inputs(paths) -> list[str]:
-    """Files as given; a directory (an ensemble store) stands for its ``*.h5`` packing files."""
+    """Files as given; a directory (an ensemble store) stands for its ``*.h5`` packing files.
+    A file named twice is refused (``check_distinct``)."""
     out = []
     for path in map(Path, paths):
         if path.is_dir():
@@ -21,7 +24,8 @@ def expand_inputs(paths) -> list[str]:
             out += [str(f) for f in files]
         else:
             out.append(str(path))
-    return out
+    return check_distinct(out)
+
 
 
 def add_engine_arguments(p) -> None:

@@ -229,7 +229,7 @@ class Store:
 
 
 def _columns(rows) -> list[str]:
-    first = ["n", "seed", "status", "phi_j", "V", "P", "mean_z", "floaters", "n_contacts", "iterations",
+    first = ["n", "seed", "status", "phi_j", "phi", "V", "P", "mean_z", "floaters", "n_contacts", "iterations",
              "minimizations", "seconds", "engine", "jamflow_version", "max_force", "in_window", "balanced"]
     seen = list(dict.fromkeys(k for r in rows for k in r))
     rest = [k for k in seen if k not in first and k not in BOOKKEEPING]

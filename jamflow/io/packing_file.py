@@ -15,7 +15,11 @@ epsilon, pressures in epsilon / diameter^d)::
                                    target_pressure (NaN at fixed box), stress ("" | "iso" |
                                    "aniso" | "tri"), dphi_above (NaN, or the step by
                                    which ``jamflow jam --above`` compressed the onset
-                                   packing: phi = phi_J + dphi_above)
+                                   packing: phi = phi_J + dphi_above), phi_j (the onset
+                                   ``jamflow jam`` reports: phi_J of a compression, the
+                                   pile's fraction under gravity, phi_J(P->0) at constant
+                                   pressure, NaN where none is known: one pressure, or a
+                                   packing saved without one)
     /positions  (N, d)      float64, Cartesian, wrapped into the cell
     /diameters  (N,)        float64, each particle's size scale (jamflow.model.packing)
     /box        (d, d)      float64, upper-triangular, columns = cell vectors (LAMMPS tilt)
@@ -96,13 +100,14 @@ SCHEMA_VERSION = 2
 def save_packing(path, packing: Packing, *, energy_per_particle=None, pressure_tensor=None,
                  protocol: dict | None = None, history: dict | None = None, lammps_version=None,
                  wall_forces=None, target_pressure=None, stress=None, checks=None,
-                 dphi_above=None, tables=None) -> Path:
+                 dphi_above=None, tables=None, phi_j=None) -> Path:
     """Write ``packing`` (and optional results) atomically to the HDF5 file ``path``.
 
     ``wall_forces`` (d, 2, d): the force on each face (``jamflow.model.walls.wall_loads``).
     ``checks``: a ``jamflow.mechanics.checks.PackingChecks``, stored as the attributes of group
     ``checks``; ``dphi_above``: the compression above onset (``jamflow.protocols.above``).
-    ``tables``: {group: {name: column}}, more groups of datasets (e.g. ``anneal``)."""
+    ``tables``: {group: {name: column}}, more groups of datasets (e.g. ``anneal``).
+    ``phi_j``: the onset the run reports (attribute ``phi_j``; NaN when None)."""
     pot = packing.potential
     attrs = dict(
         schema=SCHEMA, schema_version=SCHEMA_VERSION, jamflow_version=__version__,
@@ -115,6 +120,7 @@ def save_packing(path, packing: Packing, *, energy_per_particle=None, pressure_t
         gamma=packing.box.shear_strain,
         walls=packing.box.wall_spec, wall_type=wall_type(packing), gravity=float(packing.gravity),
         target_pressure=_num(target_pressure), stress=str(stress or ""), dphi_above=_num(dphi_above),
+        phi_j=_num(phi_j),
     )
     ptensor = None if pressure_tensor is None else np.asarray(pressure_tensor, float)
     attrs["pressure"] = math.nan if ptensor is None else float(np.trace(ptensor) / packing.dim)
@@ -157,7 +163,8 @@ def save_jam_result(path, result, checks, *, target_pressure=None, stress=None, 
                             protocol={**result.settings.as_dict(), "engine": result.engine, **run_info},
                             history=result.history, lammps_version=result.lammps_version,
                             wall_forces=getattr(result, "wall_forces", None), target_pressure=target_pressure,
-                            stress=stress if target_pressure is not None else None, checks=checks)
+                            stress=stress if target_pressure is not None else None, checks=checks,
+                            phi_j=result.phi_j)
 
 
 @contextlib.contextmanager
@@ -256,6 +263,28 @@ def read_attrs(path) -> dict:
     """Root attributes (phi, energy_per_particle, pressure, versions, ...) of a packing file."""
     with open_hdf5(path) as f:
         return {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
+
+
+def read_phi_j(path) -> float:
+    """The onset ``jamflow jam`` reported for the packing in ``path`` (the ``phi_j`` attribute):
+    the pile's fraction under gravity (not the box's phi), phi_J(P->0) at constant pressure (NaN
+    with one pressure), the onset of an ``--above`` packing. Files written before that attribute:
+    the same, from the history (the pile's fraction is its last phi; the pressures' phis
+    extrapolate) and the protocol (``phi_onset``)."""
+    attrs = read_attrs(path)
+    if "phi_j" in attrs:
+        return float(attrs["phi_j"])
+    if float(attrs.get("gravity", 0.0)) > 0:
+        return float(read_history(path)["phi"][-1])
+    if math.isfinite(float(attrs.get("target_pressure", math.nan))):
+        from jamflow.protocols.pressure import extrapolate_phi_j
+
+        history = read_history(path)
+        potential = potential_from_attrs(str(attrs["potential"]), float(attrs["alpha"]), float(attrs["epsilon"]))
+        return extrapolate_phi_j(history["target_pressure"], history["phi"], potential.onset_exponent)
+    if math.isfinite(float(attrs.get("dphi_above", math.nan))):
+        return float(read_protocol(path)["phi_onset"])
+    return float(attrs["phi"])
 
 
 def read_checks(path):

@@ -301,10 +301,10 @@ def _rigid_reduced(packing: Packing, coords: Coordinates, skin: float = 0.0):
 
 
 def _ellipsoid_reduced(packing: Packing, coords: Coordinates, skin: float = 0.0):
-    from jamflow.model.shapes.contact_distance import contact_lambda
+    from jamflow.model.shapes.contact_distance import HESSIAN_CONTACTS, contact_lambda
 
     shape = packing.shape
-    if shape.contact not in ("exact", "cleaver", "gaussian"):
+    if shape.contact not in HESSIAN_CONTACTS:
         raise ValueError(f"the dynamical matrix needs the contact-distance method's derivatives; the "
                          f"{shape.contact!r} method's lambda follows a truncated polynomial root and has none here: "
                          f"use contact 'exact' (or 'cleaver'/'gaussian')")

@@ -138,18 +138,19 @@ class Box:
 
         Folds in LAMMPS's order (``fix deform`` flip): yz by the second cell vector (which
         also shifts xz by the current xy), then xz and xy by the first. U is upper-unitriangular,
-        so the reduced cell of a lattice is unique (a tilt of +l/2 folds to -l/2).
-        Returns ``self`` and the identity when the tilts are already in range.
+        so the reduced cell of a lattice is unique up to round-off in the tilts (a tilt of +l/2
+        folds to -l/2). The range is tested on the folded float64 tilts themselves, so the result
+        is in range and is its own reduction at every strain, k + 1/2 and its ulp neighbours too
+        (see ``_fold_column``). Returns ``self`` and the identity when the tilts are already in range.
         """
         d = self.dim
         fold = np.eye(d, dtype=np.int64)
-        if d == 3:
-            fold[:, 2] -= _folds(self.h[1, 2], self.h[1, 1]) * fold[:, 1]
-            fold[:, 2] -= _folds((self.h @ fold)[0, 2], self.h[0, 0]) * fold[:, 0]
-        fold[:, 1] -= _folds(self.h[0, 1], self.h[0, 0]) * fold[:, 0]
+        h = self.h.copy()
+        for a, b in ((1, 2), (0, 2), (0, 1)) if d == 3 else ((0, 1),):
+            _fold_column(h, fold, a, b)
         if np.array_equal(fold, np.eye(d, dtype=np.int64)):
             return self, fold
-        return replace(self, h=self.h @ fold), fold
+        return replace(self, h=h), fold
 
     def reduced(self) -> "Box":
         """The same lattice with tilts folded into LAMMPS's range (see ``reduction``)."""
@@ -247,11 +248,25 @@ class Box:
         return box
 
 
-def _folds(tilt: float, length: float) -> int:
-    """Whole cell lengths n with tilt / length - n in [-1/2, 1/2)."""
-    x = tilt / length
-    n = np.floor(x)
-    return int(n) + int(x - n >= 0.5)
+def _fold_column(h: np.ndarray, fold: np.ndarray, a: int, b: int) -> None:
+    """Fold cell vector b by whole cell vectors a (in place, in ``h`` and in ``fold``) until the
+    tilt h[a, b] lies in [-h[a, a]/2, h[a, a]/2), tested on the float64 tilt the cell holds. The
+    count from tilt / length alone fails near a half period (strain k + 1/2 and its ulp
+    neighbours): the quotient rounds to the other side of 1/2 and the folded tilt lands one ulp
+    outside the range, so the 'reduced' cell would fold once more under its own reduction. One
+    more fold corrects it, exactly (Sterbenz: the tilt is within a length of the range). A tilt
+    already in range is left alone, so a reduced cell is its own reduction."""
+    length, half = h[a, a], 0.5 * h[a, a]  # half: exact
+    if -half <= h[a, b] < half:
+        return
+    x = h[a, b] / length
+    n = int(np.floor(x)) + int(x - np.floor(x) >= 0.5)
+    h[:, b] = h[:, b] - n * h[:, a]
+    if h[a, b] >= half:
+        n, h[:, b] = n + 1, h[:, b] - h[:, a]
+    elif h[a, b] < -half:
+        n, h[:, b] = n - 1, h[:, b] + h[:, a]
+    fold[:, b] -= n * fold[:, a]
 
 
 STRESS_MODES = ("iso", "aniso", "tri")  # box relaxation at a target pressure

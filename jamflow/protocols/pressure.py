@@ -9,7 +9,9 @@ with CG (``etol 0``). ``stress``: ``iso`` (the box keeps its shape), ``aniso`` (
 P), ``tri`` (also every shear stress relaxed to 0: the box tilts). Near jamming
 phi - phi_J ~ P^(1/(alpha-1)) (alpha the potential's onset exponent: P ~ dV/dphi), so
 phi_J is extrapolated from the two lowest pressures (``extrapolate_phi_j``); the phi at the
-lowest pressure is reported beside it.
+lowest pressure is reported beside it. With one pressure (a target at or above the start
+pressure 1e-4) no extrapolation is possible: phi_J is NaN and reported as "n/a", never the phi
+at that pressure.
 
 The lowest target float64 resolves (``pressure_floor``): a contact force ~ P a^(d-1) must
 stay ``FLOOR_MARGIN`` = 1000 times above the force round-off floor, i.e. the minimiser's
@@ -103,10 +105,11 @@ def check_pressure_start(packing: Packing, settings: PressureSettings) -> None:
 
 
 def extrapolate_phi_j(pressures, phis, onset_exponent: float) -> float:
-    """phi_J from phi = phi_J + c P^beta, beta = 1 / (alpha - 1), through the two lowest pressures."""
+    """phi_J from phi = phi_J + c P^beta, beta = 1 / (alpha - 1), through the two lowest pressures;
+    NaN with fewer than two (one point fixes no extrapolation)."""
     order = np.argsort(pressures)
     if len(order) < 2:
-        return float(np.asarray(phis)[order[0]])
+        return math.nan
     (p1, f1), (p2, f2) = [(pressures[k], phis[k]) for k in order[:2]]
     beta = 1.0 / (onset_exponent - 1.0)
     x1, x2 = p1**beta, p2**beta
@@ -132,7 +135,7 @@ class PressureResult:
 
     @property
     def phi_j(self) -> float:
-        """phi_J extrapolated to P -> 0 from the two lowest pressures."""
+        """phi_J extrapolated to P -> 0 from the two lowest pressures; NaN with one pressure."""
         return extrapolate_phi_j(self.history["target_pressure"], self.history["phi"],
                                  self.packing.potential.onset_exponent)
 
@@ -156,9 +159,17 @@ class PressureResult:
         target = self.history["target_pressure"][-1]
         shear = shear_stress(self.pressure_tensor)
         return (f"P_target = {target:.3e}  P = {self.pressure:.6e} (rel. {self.pressure / target - 1:+.1e})  "
-                f"phi = {self.phi:.10f}  phi_J(P->0) = {self.phi_j:.10f}  shear stress {shear:.1e}  "
+                f"phi = {self.phi:.10f}  {phi_j_text(self.phi_j)}  shear stress {shear:.1e}  "
                 f"max|F| = {self.max_force:.1e}  {len(self.history['phi'])} pressures, {self.iterations} iterations "
                 f"({self.engine}), {self.seconds:.2f} s")
+
+
+def phi_j_text(phi_j: float) -> str:
+    """phi_J(P->0) as the summary prints it: "n/a" when one pressure gives no extrapolation."""
+    if math.isfinite(phi_j):
+        return f"phi_J(P->0) = {phi_j:.10f}"
+    return (f"phi_J(P->0) n/a: one pressure (a target below {DEFAULT_START_PRESSURE:g} runs a sequence of decades "
+            "that extrapolates)")
 
 
 def shear_stress(tensor: np.ndarray) -> float:

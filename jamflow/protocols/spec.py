@@ -17,6 +17,7 @@ from jamflow.engines.choose import ENGINES, engine_name
 from jamflow.mechanics.checks import check_packing
 from jamflow.minimize.settings import CREEP_METHODS, MD_DAMPINGS, METHODS, MinimizerSettings
 from jamflow.model.box import STRESS_MODES
+from jamflow.model.shapes.contact_distance import HESSIAN_CONTACTS
 from jamflow.model.shapes.contact_distance import METHODS as CONTACT_METHODS
 from jamflow.model.shapes.parse import parse_shape
 from jamflow.model.walls import WALL_TYPES
@@ -95,8 +96,6 @@ def compression_settings(spec: JamSpec) -> CompressionSettings:
     _check_choice("minimizer", spec.minimizer, METHODS)
     _check_choice("md-damping", spec.md_damping, MD_DAMPINGS)
     _check_choice("creep", spec.creep, CREEP_METHODS)
-    if spec.md_damping != "viscous" and spec.minimizer != "md":
-        raise ValueError(f"--md-damping {spec.md_damping} applies to --minimizer md only, not {spec.minimizer}")
     minimizer = MinimizerSettings(method=spec.minimizer, force_tol=spec.ftol, v_min=spec.vtol, damping=spec.damping,
                                   md_damping=spec.md_damping, creep=spec.creep)
     return PROTOCOLS[spec.protocol_name](phi0=spec.phi0, dphi0=spec.dphi0, v_tol=spec.vtol, minimizer=minimizer)
@@ -127,17 +126,48 @@ def check_boundaries(spec: JamSpec) -> None:
                              "--pressure, --gravity or --emit-deck")
     if spec.gamma is not None and spec.pressure is not None:
         raise ValueError("--gamma fixes the shear strain, --pressure relaxes the box: use one of them")
+    check_partners(spec)
+
+
+# option -> (has its partner, the partner, why): a value other than the JamSpec default means
+# nothing without the partner, so it is refused rather than silently ignored
+PARTNERS = {
+    "stress": (lambda s: s.pressure is not None, "--pressure", "how the box relaxes at a target pressure"),
+    "wall_type": (lambda s: bool(s.walls), "--walls", "the kind of the walls on the walled axes"),
+    "damping": (lambda s: s.minimizer == "md", "--minimizer md", "the drag of damped dynamics"),
+    "md_damping": (lambda s: s.minimizer == "md", "--minimizer md", "the drag of damped dynamics"),
+    "dphi0": (lambda s: s.pressure is None and not s.gravity, "a compression run",
+              "the first step of phi; --pressure and --gravity runs do not compress"),
+}
+
+
+def check_partners(spec: JamSpec) -> None:
+    """Refuse an option set to a value other than its default without the option it works with
+    (``PARTNERS``): e.g. --stress without --pressure, --wall-type without --walls."""
+    defaults = JamSpec()
+    for name, (present, partner, why) in PARTNERS.items():
+        value = getattr(spec, name)
+        if value != getattr(defaults, name) and not present(spec):
+            option = name.replace("_", "-")
+            raise ValueError(f"--{option} {value} applies to {partner} only ({why}), and would be ignored here: "
+                             f"leave --{option} out, or use it with {partner}")
 
 
 def check_contact(spec: JamSpec) -> None:
     """Refuse a --contact method other than the default for a shape that has no contact-distance
-    approximation (disks, spheres, ellipse:1, rigid bodies of spherical sites): it would be ignored."""
+    approximation (disks, spheres, ellipse:1, rigid bodies of spherical sites): it would be ignored;
+    and the truncations 'linear' / 'quadratic', whose lack of second derivatives fails every
+    packing's checks after the whole jam (``HESSIAN_CONTACTS``)."""
     if spec.contact == "exact":
         return
     shape = parse_shape(spec.shape, spec.dim)
     if shape.kind != "ellipsoid":
         raise ValueError(f"--contact {spec.contact} applies to ellipses/spheroids (--shape ellipse:ALPHA or "
                          f"spheroid:ALPHA, ALPHA != 1), not to {shape.name(spec.dim)} particles: leave --contact out")
+    if spec.contact not in HESSIAN_CONTACTS:  # the checks of every jammed packing would fail after the whole jam
+        raise ValueError(f"--contact {spec.contact} cannot make a checked packing: the packing checks (and the soft-mode "
+                         f"steps) need second derivatives of the contact distance, which the truncated root of "
+                         f"'{spec.contact}' lacks; use --contact {' | '.join(HESSIAN_CONTACTS)}")
 
 
 def prepare(spec: JamSpec):
@@ -198,7 +228,8 @@ def checked(result, minimizer: MinimizerSettings, v_tol: float | None, destinati
         reason = result.history["reason"][-1].decode()
         remedy = ("a larger --vtol (stronger contacts) or another --minimizer" if not checks.force_balanced else
                   "a larger --vtol: the contacts at this one are near round-off")
-        raise JammingFailed(f"the packing at phi_J = {result.phi_j:.10f} failed its checks: "
+        at = f"phi_J = {result.phi_j:.10f}" if math.isfinite(result.phi_j) else f"phi = {packing.phi:.10f}"
+        raise JammingFailed(f"the packing at {at} failed its checks: "
                             f"{'; '.join(checks.problems())} (final minimisation stopped by '{reason}'). "
                             f"{f'Nothing was written to {destination}; ' if destination else ''}use {remedy}")
     return checks

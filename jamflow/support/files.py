@@ -152,3 +152,18 @@ def read_json(path, what: str):
     except (json.JSONDecodeError, UnicodeDecodeError) as err:
         raise ValueError(f"{path} is not a valid {what}: damaged JSON ({err}); remove it or rerun the command "
                          "that wrote it") from None
+
+
+def check_distinct(files) -> list[str]:
+    """``files`` if no two resolve to the same file (symlinks, ``./``, a store directory and one of
+    its files); else a one-line ValueError: a file given twice would count as two packings in the
+    averages (D(omega), g(r), ...)."""
+    seen = {}
+    for name in files:
+        key = os.path.realpath(name)
+        if key in seen:
+            same = f"as {seen[key]} and {name}" if seen[key] != name else "twice"
+            raise ValueError(f"{name} is given {same} (the same file {key}): it would count as two packings; "
+                             "give each packing file once")
+        seen[key] = name
+    return list(files)

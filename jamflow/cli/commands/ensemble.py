@@ -73,8 +73,12 @@ def summary_text(report) -> str:
         if row["status"] == "ok":
             by_n[int(row["n"])].append(float(row["phi_j"]))
     for n, phi in sorted(by_n.items()):
-        sd = np.std(phi, ddof=1) if len(phi) > 1 else float("nan")
-        lines.append(f"  N = {n}: {len(phi)} packings, phi_J = {np.mean(phi):.5f} (sd {sd:.5f})")
+        known = [p for p in phi if np.isfinite(p)]
+        sd = np.std(known, ddof=1) if len(known) > 1 else float("nan")
+        text = f"phi_J = {np.mean(known):.5f} (sd {sd:.5f})" if known else "phi_J n/a"
+        if len(known) < len(phi):  # one target pressure: no extrapolation to P -> 0
+            text += f"; {len(phi) - len(known)} without a phi_J (one pressure; their phi is in column phi)"
+        lines.append(f"  N = {n}: {len(phi)} packings, {text}")
     lines += [f"  error: {e}" for e in report.errors[:5]]
     lines.append(f"  summary -> {report.directory / 'summary.csv'}")
     return "\n".join(lines)

@@ -86,7 +86,8 @@ def save_above(args, result, t0) -> int:
     with replacing([args.out] if getattr(args, "force", False) else []):
         save_packing(args.out, above.packing, energy_per_particle=above.energy_per_particle,
                      pressure_tensor=above.pressure_tensor, protocol=protocol, history=result.history,
-                     lammps_version=result.lammps_version, wall_forces=wall_forces, dphi_above=above.dphi)
+                     lammps_version=result.lammps_version, wall_forces=wall_forces, dphi_above=above.dphi,
+                     phi_j=result.phi_j)
     print(result.summary())
     print(f"{above.summary()}  -> {args.out} ({time.perf_counter() - t0:.2f} s)")
     return 0

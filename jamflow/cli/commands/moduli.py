@@ -21,7 +21,7 @@ from jamflow.mechanics.strains import STRAINS
 from jamflow.minimize.settings import MinimizerSettings
 from jamflow.protocols.moduli import Moduli
 from jamflow.protocols.sweeps import JUMP_TOL, LINEAR_TOL, PAST_YIELD, SweepSettings
-from jamflow.support.files import check_writable, replacing
+from jamflow.support.files import check_distinct, check_writable, replacing
 
 
 def add_arguments(p) -> None:
@@ -67,6 +67,7 @@ def settings_from_args(args) -> SweepSettings:
 
 def run(args) -> int:
     moduli = Moduli(settings_from_args(args), engine=args.engine)
+    args.files = check_distinct(args.files)  # the same file twice would be swept twice onto one output
     packings = [load_packing(f) for f in args.files]  # every input is read before any work
     outputs = [results_path(f) for f in args.files]
     written = outputs + ([] if args.no_figure else [figure_path(f) for f in args.files])

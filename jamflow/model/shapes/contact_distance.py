@@ -55,6 +55,7 @@ from functools import cached_property
 import numpy as np
 
 METHODS = ("exact", "gaussian", "cleaver", "linear", "quadratic")
+HESSIAN_CONTACTS = ("exact", "cleaver", "gaussian")  # with second derivatives: the dynamical matrix, packing checks
 UNIT_TOL = 1e-8  # allowed | |v| - 1 | for the unit vectors r_hat, u_i, u_j
 SAME_SIZE_RTOL = 1e-12  # a_i == a_j and b_i == b_j to this relative tolerance counts as equal
 OVERLAPPING, TOUCHING, APART = -1, 0, 1
