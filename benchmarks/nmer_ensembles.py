@@ -12,7 +12,7 @@ sum of the numpy reference (``jamflow.mechanics.reference``, independent of both
 contacts between bodies and between sites (``jamflow.mechanics.contacts``), floaters by the convex
 rule d_f + 1, bodies touched on one site only (their free rotations), the isostatic count
 N' d_f - d + 1, the engine, CPU seconds and wall seconds (the machine load is in the log), and
-the packing file (``--packings``; HDF5, schema jamflow.model.packing v2) for the figures
+the packing file (``--packings``; HDF5, schema jamflow.packing v2) for the figures
 (``benchmarks/nmer_figures.py``). With ``--rejects R.csv`` the rows of packings that fail the
 checks (``failed_checks``: not stopped by force, unbalanced, outside the energy window, or every body
 a floater) go to R.csv instead, so --out holds checked packings only and every failure stays on record.

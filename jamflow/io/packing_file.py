@@ -1,6 +1,6 @@
 """Packing files: a versioned HDF5 schema, LAMMPS data files, MDAnalysis Universes.
 
-HDF5 schema ``jamflow.model.packing`` version 2 (all lengths in small diameters, energies in
+HDF5 schema ``jamflow.packing`` version 2 (all lengths in small diameters, energies in
 epsilon, pressures in epsilon / diameter^d)::
 
     /                       attrs: schema, schema_version, jamflow_version, lammps_version,
