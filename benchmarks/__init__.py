@@ -2,7 +2,7 @@
 
 Each entry is a script ``benchmarks/NAME.py`` with ``main(argv=None)``; ``quick`` is the argv
 of its small, fast mode (``{tmp}`` is replaced by a scratch directory, so a quick run never
-writes into docs/) or None for no quick mode. Kinds: speed (time of one thing), scaling (time
+writes into docs/notes/) or None for no quick mode. Kinds: speed (time of one thing), scaling (time
 against N), accuracy (a result against a reference), study (regenerates a documented study or
 figure). Retired scripts are in ARCHIVE.md. This module imports nothing heavy: ``list`` is instant.
 """
@@ -81,7 +81,7 @@ BENCHMARKS: dict[str, Benchmark] = {
         "accuracy", "does a protocol shortcut bias phi_J? variants against the exact protocol, same seeds",
         ["--n", "32", "--seeds", "1", "--variants", "seed", "fast", "--out", "{tmp}/protocol-bias.csv"]),
     "vtol_resolution": Benchmark(
-        "accuracy", "where V_tol stops being resolvable in float64 (docs/vtol-resolution.csv; minutes)"),
+        "accuracy", "where V_tol stops being resolvable in float64 (docs/notes/vtol-resolution.csv; minutes)"),
     "spring_exponents": Benchmark(
         "accuracy", "which spring exponents end in a checked packing (basis of SPRING_ALPHA_RANGE)"),
     "table_2_1": Benchmark(
@@ -89,8 +89,8 @@ BENCHMARKS: dict[str, Benchmark] = {
     # --- studies (documented results and figures) ---------------------------------------------------
     "jamming_ensembles": Benchmark("study", "issue 2's acceptance ensembles: 2D disks N=256, 3D spheres N=512"),
     "walls_gravity_pressure": Benchmark("study", "issue 16: walls, gravity and constant-pressure ensembles"),
-    "structure_data": Benchmark("study", "generate (and cache) the jammed packings behind docs/structure.md"),
-    "structure_measure": Benchmark("study", "the measured values and figures of docs/structure.md"),
+    "structure_data": Benchmark("study", "generate (and cache) the jammed packings behind docs/notes/structure.md"),
+    "structure_measure": Benchmark("study", "the measured values and figures of docs/notes/structure.md"),
     "ellipse_ensembles": Benchmark("study", "jammed 2D bidisperse ellipses at several aspect ratios, checked"),
     "ellipse_ensemble_modes": Benchmark("study", "checks and spectra of the kept ellipse packings"),
     "ellipse_routes": Benchmark("study", "compiled FIRE against LAMMPS damped dynamics for ellipses, same starts"),
@@ -100,20 +100,20 @@ BENCHMARKS: dict[str, Benchmark] = {
     "nematic_protocols": Benchmark("study", "nematic order of ellipse packings: annealing against compression"),
     "contact_methods": Benchmark("study", "CPU per packing against phi_J / <z> bias of the contact methods"),
     "nmer_ensembles": Benchmark("study", "n-mer (dimer, trimer) ensembles, checked (issue 14)"),
-    "nmer_figures": Benchmark("study", "the figures and tables of docs/nmers.md from the n-mer CSVs"),
+    "nmer_figures": Benchmark("study", "the figures and tables of docs/notes/nmers.md from the n-mer CSVs"),
     "nmer_stability": Benchmark("study", "checks and stability (dynamical matrix with rotations) of the n-mer ensembles"),
     "nmer_crosscheck": Benchmark("study", "LAMMPS vs compiled engine vs numpy reference for rigid n-mers: energy, forces, torques, pressure"),
-    "modes_ensemble": Benchmark("study", "ensemble for the stability measurements of docs/modes.md"),
+    "modes_ensemble": Benchmark("study", "ensemble for the stability measurements of docs/notes/modes.md"),
     "modes_hessian_check": Benchmark("study", "analytic dynamical matrix against LAMMPS finite differences"),
-    "modes_shapes_data": Benchmark("study", "jammed dimer packings behind docs/modes-rotations.md"),
+    "modes_shapes_data": Benchmark("study", "jammed dimer packings behind docs/notes/modes-rotations.md"),
     "reference_jam": Benchmark("study", "small 2D packings jammed on the numpy reference energy (tests/data/)"),
-    "soft_modes": Benchmark("study", "where a creeping minimisation's residual force lies (docs/soft-modes.md)"),
-    "moduli_ensemble": Benchmark("study", "ensemble moduli G, B, P against phi - phi_J (docs/moduli.md)"),
+    "soft_modes": Benchmark("study", "where a creeping minimisation's residual force lies (docs/notes/soft-modes.md)"),
+    "moduli_ensemble": Benchmark("study", "ensemble moduli G, B, P against phi - phi_J (docs/notes/moduli.md)"),
     "shear_path": Benchmark("study", "one quasistatic shear path, drawn, and what a step costs"),
     "shear_symmetry": Benchmark("study", "unit period and mirror symmetry of jamming at fixed strain"),
-    "shear_cell_checks": Benchmark("study", "the Lees-Edwards checks of docs/shear-cell.md, as numbers"),
+    "shear_cell_checks": Benchmark("study", "the Lees-Edwards checks of docs/notes/shear-cell.md, as numbers"),
     "family_checks": Benchmark("study", "how many jammed packings random starts find at one strain"),
-    "families_stats": Benchmark("study", "the numbers docs/shear.md quotes about a family sampling (needs DIR)"),
+    "families_stats": Benchmark("study", "the numbers docs/notes/shear.md quotes about a family sampling (needs DIR)"),
 }
 
 SUPPORT = ("__init__", "__main__", "common")

@@ -8,7 +8,7 @@
 
 Benchmarks run in this process, one after another (``main(argv)`` of benchmarks/NAME.py); a
 failure is reported and the next one runs. Quick modes write into a scratch directory, never
-into docs/, and check no timing.
+into docs/notes/, and check no timing.
 """
 
 from __future__ import annotations

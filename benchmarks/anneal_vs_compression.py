@@ -1,19 +1,19 @@
 """Particle-shape annealing against isotropic compression (seed section 2.3.3, Figure 2.18):
 2D bidisperse ellipses (2:1 mixture, major-axis ratio 1.4), <phi_J> and <z> against alpha.
 
-    python benchmarks/anneal_vs_compression.py --n 64 --seeds 10 --to 2.0 --dalpha 0.05 --out docs/anneal.csv
-    python benchmarks/anneal_vs_compression.py --n 64 --seeds 4 --to 1.4 --dalpha 0.005 --out docs/anneal.csv
-    python benchmarks/anneal_vs_compression.py --n 64 --seeds 10 --compress 1.0 1.2 1.4 1.6 1.8 2.0 --out docs/anneal.csv
+    python benchmarks/anneal_vs_compression.py --n 64 --seeds 10 --to 2.0 --dalpha 0.05 --out docs/notes/anneal.csv
+    python benchmarks/anneal_vs_compression.py --n 64 --seeds 4 --to 1.4 --dalpha 0.005 --out docs/notes/anneal.csv
+    python benchmarks/anneal_vs_compression.py --n 64 --seeds 10 --compress 1.0 1.2 1.4 1.6 1.8 2.0 --out docs/notes/anneal.csv
     python benchmarks/anneal_vs_compression.py --n 32 --seeds 2 --to 2.0 --dalpha 0.005 --chunk 0.1 --keep /tmp/anneal \
-        --out docs/anneal.csv          # legs of 0.1 in alpha, resumable: the same steps as one run
-    python benchmarks/anneal_vs_compression.py --report docs/anneal.csv
+        --out docs/notes/anneal.csv          # legs of 0.1 in alpha, resumable: the same steps as one run
+    python benchmarks/anneal_vs_compression.py --report docs/notes/anneal.csv
 
 Annealing: seed s jams disks (``jam(seed=s)``, the default protocol), then
 ``jamflow.protocols.anneal.anneal`` grows alpha in steps of dalpha (first directions from seed
 s), one row per step. Compression: ``jam(shape="ellipse:ALPHA", seed=s)`` from a random start.
 Rows are written as they finish (atomically) and a finished (protocol, seed) is skipped, so a
 run resumes. CPU seconds are the process's (load-independent); every row records the 1-minute
-load. ``--report`` prints the table of docs/ellipses.md and draws docs/anneal.png.
+load. ``--report`` prints the table of docs/notes/ellipses.md and draws docs/notes/anneal.png.
 """
 
 from __future__ import annotations
@@ -195,7 +195,7 @@ def add_arguments(ap) -> None:
                     help="jam by compression at these alphas instead of annealing")
 
 def main(argv=None) -> None:
-    run_or_report(__doc__, add_arguments, run, report, "docs/anneal.csv", argv)
+    run_or_report(__doc__, add_arguments, run, report, "docs/notes/anneal.csv", argv)
 
 
 if __name__ == "__main__":

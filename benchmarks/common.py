@@ -26,7 +26,7 @@ from pathlib import Path
 
 # --- paths ----------------------------------------------------------------------------------------
 ROOT = Path(__file__).resolve().parents[1]
-DOCS = ROOT / "docs"
+DOCS = ROOT / "docs" / "notes"
 
 
 # --- CPU, processes and time limits -----------------------------------------------------------------

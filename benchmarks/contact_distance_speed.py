@@ -1,6 +1,6 @@
 """Speed against accuracy of the contact-distance methods (vectorised numpy).
 
-Writes docs/contact-distance-speed.csv and docs/contact-distance-speed.png.
+Writes docs/notes/contact-distance-speed.csv and docs/notes/contact-distance-speed.png.
 Run from the repo root:  python benchmarks/contact_distance_speed.py [--n 100000] [--repeat 5]
 
 Speed: evaluations per second of one vectorised call on a batch of n random pairs (uniform
@@ -129,7 +129,7 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=100_000)
     ap.add_argument("--repeat", type=int, default=5)
-    ap.add_argument("--out-dir", type=Path, default=DOCS, help="where the CSV and PNG go (default docs/)")
+    ap.add_argument("--out-dir", type=Path, default=DOCS, help="where the CSV and PNG go (default docs/notes/)")
     args = ap.parse_args(argv)
     rows = measure(args.n, args.repeat)
     with open(args.out_dir / "contact-distance-speed.csv", "w", newline="") as fh:

@@ -2,8 +2,8 @@
 same random starts jammed with each method, CPU time per packing against the bias of phi_J and
 <z> relative to the exact contact distance on the same start (paired differences).
 
-    python benchmarks/contact_methods.py --n 64 --alpha 2.0 --seeds 10 --out docs/contact-methods.csv
-    python benchmarks/contact_methods.py --report docs/contact-methods.csv
+    python benchmarks/contact_methods.py --n 64 --alpha 2.0 --seeds 10 --out docs/notes/contact-methods.csv
+    python benchmarks/contact_methods.py --report docs/notes/contact-methods.csv
 
 Two mixtures: 2:1 bidisperse ellipses (size ratio 1.4; exact, cleaver, linear, quadratic) and
 monodisperse ones (exact, gaussian, linear, quadratic): the Gaussian form (Berne-Pechukas eq. 2.5)
@@ -121,7 +121,7 @@ def main(argv=None) -> None:
     ap.add_argument("--n", type=int, default=64)
     ap.add_argument("--alpha", type=float, default=2.0)
     ap.add_argument("--seeds", type=int, default=10)
-    ap.add_argument("--out", default="docs/contact-methods.csv")
+    ap.add_argument("--out", default="docs/notes/contact-methods.csv")
     ap.add_argument("--report", default=None, metavar="CSV")
     args = ap.parse_args(argv)
     if args.report:

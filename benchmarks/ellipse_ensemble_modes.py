@@ -4,8 +4,8 @@ the dynamical matrix with rotations, zero modes against d, quartic modes against
 contacts N' d_f - d + 1 - N_c (Mailman et al., PRL 102, 255501 (2009)) and the three branches,
 all through `jamflow modes`' own per-file analysis (jamflow.cli.commands.modes.analyse_file).
 
-    python benchmarks/ellipse_ensemble_modes.py /tmp/ee_runs/numba/*.h5 --out docs/ellipse-ensembles-modes.csv
-    python benchmarks/ellipse_ensemble_modes.py --report docs/ellipse-ensembles-modes.csv
+    python benchmarks/ellipse_ensemble_modes.py /tmp/ee_runs/numba/*.h5 --out docs/notes/ellipse-ensembles-modes.csv
+    python benchmarks/ellipse_ensemble_modes.py --report docs/notes/ellipse-ensembles-modes.csv
 
 A file already in the CSV is skipped (the run resumes). CPU seconds are the process's.
 """
@@ -106,7 +106,7 @@ def add_arguments(ap) -> None:
                     help="profile the quartic modes (jamflow modes' Stability) for seeds below this only")
 
 def main(argv=None) -> None:
-    run_or_report(__doc__, add_arguments, run, report, "docs/ellipse-ensembles-modes.csv", argv)
+    run_or_report(__doc__, add_arguments, run, report, "docs/notes/ellipse-ensembles-modes.csv", argv)
 
 
 if __name__ == "__main__":

@@ -2,9 +2,9 @@
 several aspect ratios, each packing checked by the independent brute-force energy
 (jamflow.analysis.independent), with contacts and floaters (jamflow.mechanics.contacts).
 
-    python benchmarks/ellipse_ensembles.py --alphas 1.2 1.6 2.0 --seeds 20 --n 128 --out docs/ellipse-ensembles.csv
-    python benchmarks/ellipse_ensembles.py --engine lammps --seeds 5 --out docs/ellipse-ensembles-lammps.csv
-    python benchmarks/ellipse_ensembles.py --report docs/ellipse-ensembles.csv docs/ellipse-ensembles-lammps.csv \
+    python benchmarks/ellipse_ensembles.py --alphas 1.2 1.6 2.0 --seeds 20 --n 128 --out docs/notes/ellipse-ensembles.csv
+    python benchmarks/ellipse_ensembles.py --engine lammps --seeds 5 --out docs/notes/ellipse-ensembles-lammps.csv
+    python benchmarks/ellipse_ensembles.py --report docs/notes/ellipse-ensembles.csv docs/notes/ellipse-ensembles-lammps.csv \
         --packings /tmp/ellipses     # (the --keep directory of the runs, one subdirectory per engine)
 
 ``--engine numba`` jams with the compiled FIRE over translations and rotations (the default
@@ -12,7 +12,7 @@ route), ``--engine lammps`` with LAMMPS damped dynamics (fix nve/asphere + fix l
 with angmom; minimizer md); the same seed is the same random start. Rows are written as they
 finish (atomically) and skipped when present, so a run resumes. CPU seconds are the process's
 (load-independent); the 1-minute load average is recorded with each row. ``--report`` prints
-the table of docs/ellipses.md and draws docs/ellipse-ensembles.png.
+the table of docs/notes/ellipses.md and draws docs/notes/ellipse-ensembles.png.
 """
 
 from __future__ import annotations
@@ -81,7 +81,7 @@ def report(paths, packings=None) -> None:
             extra = f"{z_rule:.3f}, {statistics.mean(int(r['n_floaters_rule']) / int(r['n']) for r in g):.3f} | "
         print(f"| {engine} | {alpha:g} | {k} | {phi:.4f} +- {phi_se:.4f} | {z:.3f} +- {z_se:.3f} | {floaters:.3f} | "
               f"{extra}{min(v):.3e} .. {max(v):.3e} | {f:.1e}, {t:.1e} | {cpu:.0f} |")
-    chart(groups, Path("docs/ellipse-ensembles.png"))
+    chart(groups, Path("docs/notes/ellipse-ensembles.png"))
 
 
 def chart(groups, path: Path) -> None:
@@ -115,7 +115,7 @@ def main(argv=None) -> None:
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--n", type=int, default=128)
     ap.add_argument("--engine", choices=("numba", "lammps"), default="numba")
-    ap.add_argument("--out", default="docs/ellipse-ensembles.csv")
+    ap.add_argument("--out", default="docs/notes/ellipse-ensembles.csv")
     ap.add_argument("--keep", default=None, help="directory to save every packing (HDF5), one per engine")
     ap.add_argument("--report", nargs="+", default=None, metavar="CSV")
     ap.add_argument("--packings", default=None, help="with --report: recount contacts of the packings kept here")

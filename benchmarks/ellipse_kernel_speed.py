@@ -2,7 +2,7 @@
 method) against the disk kernel at the same N, and LAMMPS's damped dynamics with the plugin
 (microseconds per step) for scale.
 
-    flock /tmp/jamflow-bench.lock python benchmarks/ellipse_kernel_speed.py --out docs/ellipse-kernel-speed.csv
+    flock /tmp/jamflow-bench.lock python benchmarks/ellipse_kernel_speed.py --out docs/notes/ellipse-kernel-speed.csv
 
 Two states per case: ``random``, a random overcompressed start (2D, 2:1 bidisperse, size ratio
 1.4, phi = 0.9; every listed pair overlaps, particles travel, the pair list is rebuilt often)
@@ -66,7 +66,7 @@ def main(argv=None):
     ap.add_argument("--alpha", type=float, default=1.6)
     ap.add_argument("--iterations", type=int, default=2000)
     ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--out", default="docs/ellipse-kernel-speed.csv")
+    ap.add_argument("--out", default="docs/notes/ellipse-kernel-speed.csv")
     args = ap.parse_args(argv)
     rows = []
     for n in args.n:

@@ -5,10 +5,10 @@ compressed by each DPHI (``compress_above``) and measured by ``jamflow.protocols
 (strain sweeps and the Hessian route with rotations) or, with ``--hessian-only``, by the Hessian
 route alone (``HessianModuli``; the two agree to 6e-8 on the packings where both ran).
 
-    python benchmarks/ellipse_moduli.py --n 32 --alphas 1.6 --seeds 3 --dphi 1e-4 1e-3 1e-2 --out docs/ellipse-moduli.csv
+    python benchmarks/ellipse_moduli.py --n 32 --alphas 1.6 --seeds 3 --dphi 1e-4 1e-3 1e-2 --out docs/notes/ellipse-moduli.csv
     python benchmarks/ellipse_moduli.py --n 128 --alphas 1.0 1.2 1.6 2.0 --seeds 20 --dphi 1e-5 1e-4 1e-3 1e-2 1e-1 \
-        --hessian-only --from /tmp/ee_runs/numba --out docs/ellipse-moduli-128.csv
-    python benchmarks/ellipse_moduli.py --report docs/ellipse-moduli-128.csv
+        --hessian-only --from /tmp/ee_runs/numba --out docs/notes/ellipse-moduli-128.csv
+    python benchmarks/ellipse_moduli.py --report docs/notes/ellipse-moduli-128.csv
 
 One row per packing; a (alpha, seed, dphi) already in the CSV is skipped (the run resumes). Each
 row also records what tells a negative G apart: the Hessian's negative eigenvalues (a saddle),
@@ -178,7 +178,7 @@ def add_arguments(ap) -> None:
 
 
 def main(argv=None) -> None:
-    run_or_report(__doc__, add_arguments, run, report, "docs/ellipse-moduli.csv", argv)
+    run_or_report(__doc__, add_arguments, run, report, "docs/notes/ellipse-moduli.csv", argv)
 
 
 if __name__ == "__main__":

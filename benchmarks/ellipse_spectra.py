@@ -3,12 +3,12 @@
 dynamical matrix with rotations (jamflow.mechanics.hessian), its three branches
 (jamflow.analysis.modes.branches) and each mode's translational fraction.
 
-    python benchmarks/ellipse_spectra.py --n 120 --alphas 1.02 1.06 1.1 1.2 1.4 1.8 --out docs/ellipse-spectra.csv
-    python benchmarks/ellipse_spectra.py --report docs/ellipse-spectra.csv
+    python benchmarks/ellipse_spectra.py --n 120 --alphas 1.02 1.06 1.1 1.2 1.4 1.8 --out docs/notes/ellipse-spectra.csv
+    python benchmarks/ellipse_spectra.py --report docs/notes/ellipse-spectra.csv
 
 One row per mode (alpha, seed, index i / (3 N'), eigenvalue, omega = sqrt(|e| / M), translational
 fraction, branch); an alpha already in the CSV is skipped (the run resumes). ``--report`` prints
-the branch table of docs/ellipses.md and draws docs/ellipse-spectra.png.
+the branch table of docs/notes/ellipses.md and draws docs/notes/ellipse-spectra.png.
 """
 
 from __future__ import annotations
@@ -103,7 +103,7 @@ def add_arguments(ap) -> None:
     ap.add_argument("--seed", type=int, default=0)
 
 def main(argv=None) -> None:
-    run_or_report(__doc__, add_arguments, run, report, "docs/ellipse-spectra.csv", argv)
+    run_or_report(__doc__, add_arguments, run, report, "docs/notes/ellipse-spectra.csv", argv)
 
 
 if __name__ == "__main__":

@@ -6,9 +6,9 @@
 2. Whole packings: ``jam()`` with the default (fast) protocol on each engine, same seeds.
    The engines run the same algorithm but sum forces in a different order, so from the same
    start they may end in different minima (phi_J differs per seed, not in distribution:
-   docs/protocol-bias-n1024.csv).
+   docs/notes/protocol-bias-n1024.csv).
 
-    python benchmarks/engines.py --sizes 256 1024 4096 --jam-n 1024 --jam-seeds 3 --out docs/engines.csv
+    python benchmarks/engines.py --sizes 256 1024 4096 --jam-n 1024 --jam-seeds 3 --out docs/notes/engines.csv
 
 The numba kernels are compiled (or loaded from cache) before timing. Run it on an otherwise
 idle machine: on this project's 2-core machine a busy second core halves single-core speed.
@@ -81,7 +81,7 @@ def main(argv=None):
     ap.add_argument("--reps", type=int, default=3)
     ap.add_argument("--jam-n", type=int, default=1024)
     ap.add_argument("--jam-seeds", type=int, default=0)
-    ap.add_argument("--out", default="docs/engines.csv")
+    ap.add_argument("--out", default="docs/notes/engines.csv")
     args = ap.parse_args(argv)
     microseconds_per_iteration(CompiledEngine, near_jamming_state(64), 10)  # compile / load the kernels
     rows = per_iteration_rows(args.sizes, args.iterations, args.reps)

@@ -11,7 +11,7 @@
    killed (SIGKILL), after 120 the whole process group gets SIGINT (a terminal's Ctrl-C);
    then the same command again. Counts packings, duplicates, and compares phi_J with run 1.
 
-Rows go to docs/ensemble-throughput.csv and docs/ensemble-robustness.csv; `uptime` is recorded.
+Rows go to docs/notes/ensemble-throughput.csv and docs/notes/ensemble-robustness.csv; `uptime` is recorded.
 """
 
 from __future__ import annotations
@@ -163,7 +163,7 @@ def main(argv=None):
     ap.add_argument("--work", default="/tmp/jamflow-ens/throughput", help="scratch directory for the stores")
     ap.add_argument("--seeds", type=int, default=200)
     ap.add_argument("--n", type=int, default=64)
-    ap.add_argument("--docs", default="docs")
+    ap.add_argument("--docs", default="docs/notes")
     ap.add_argument("--plot-only", action="store_true", help="only redraw the chart from the CSV")
     args = ap.parse_args(argv)
     if args.plot_only:

@@ -1,4 +1,4 @@
-"""The numbers docs/shear.md quotes about a family sampling (jamflow families --out DIR).
+"""The numbers docs/notes/shear.md quotes about a family sampling (jamflow families --out DIR).
 
 Reads DIR/points.h5 and prints: how far apart packings of one family lie at one strain (phi_J,
 Sigma/P, fabric) and how close distinct families with one signature come; the families by the

@@ -1,4 +1,4 @@
-"""Two checks behind docs/shear.md's family section.
+"""Two checks behind docs/notes/shear.md's family section.
 
 1. How many distinct jammed packings random starts find at one strain (gamma = 0.1), for
    N = 6, 8, 10 bidisperse disks, against the number of starts: whether the sampling of one

@@ -1,7 +1,7 @@
 """Issue 2's acceptance ensembles: 10 seeds of 2D 50:50 bidisperse disks (ratio 1.4, N=256)
 and 10 seeds of 3D monodisperse spheres (N=512), each checked independently of LAMMPS.
 
-    python benchmarks/jamming_ensembles.py --protocol fast --out docs/jamming-ensembles.csv
+    python benchmarks/jamming_ensembles.py --protocol fast --out docs/notes/jamming-ensembles.csv
 
 Per packing: phi_J, V (window 1e-16 < V < 2e-16), max |force| over non-floaters from the
 numpy all-pairs reference, isostaticity (jamflow.mechanics.contacts), time, minimisations.
@@ -60,7 +60,7 @@ def main(argv=None):
     ap.add_argument("--protocol", choices=sorted(PROTOCOLS), default="fast")
     ap.add_argument("--systems", nargs="+", choices=sorted(SYSTEMS), default=list(SYSTEMS))
     ap.add_argument("--seeds", type=int, default=10)
-    ap.add_argument("--out", default="docs/jamming-ensembles.csv")
+    ap.add_argument("--out", default="docs/notes/jamming-ensembles.csv")
     args = ap.parse_args(argv)
     out = Path(args.out)
     done = {(r["system"], r["protocol"], r["seed"], r["repeat"]) for r in csv.DictReader(out.open())} if out.exists() else set()

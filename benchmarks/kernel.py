@@ -3,7 +3,7 @@ and per bare force loop over the same pairs, at N = 256, 1024, 4096 (2D, 50:50 b
 a relaxed state at phi = 0.85, as near jamming), with the particles in their random order
 and reordered along a Morton (Z-order) curve, and the FIRE iteration cost for several skins.
 
-    python benchmarks/kernel.py --sizes 256 1024 4096 --out docs/kernel.csv
+    python benchmarks/kernel.py --sizes 256 1024 4096 --out docs/notes/kernel.csv
 
 ``floor``: the disk kernel (``compiled.spheres.forces``) called in a compiled loop, i.e. the
 pair loop alone, no integration, no Python. ``fire``: ``CompiledEngine`` FIRE iterations
@@ -90,7 +90,7 @@ def main(argv=None):
     ap.add_argument("--sizes", type=int, nargs="+", default=[256, 1024, 4096])
     ap.add_argument("--skins", type=float, nargs="+", default=[0.1, 0.2, 0.3, 0.5])
     ap.add_argument("--repeats", type=int, default=5)
-    ap.add_argument("--out", default="docs/kernel.csv")
+    ap.add_argument("--out", default="docs/notes/kernel.csv")
     args = ap.parse_args(argv)
     rows = []
     for n in args.sizes:

@@ -1,4 +1,4 @@
-"""Ensemble for the stability measurements of docs/modes.md (not a test).
+"""Ensemble for the stability measurements of docs/notes/modes.md (not a test).
 
 Jams ``--count`` 2D 50:50 bidisperse (ratio 1.4) packings of N disks with
 ``jamflow.jam(seed=s)`` (seed chapter section 2.1), caches them in ``--out`` as
@@ -6,8 +6,8 @@ onset_n{N}_s{s}.h5, and writes copies compressed affinely to phi_J + ``--dphi`` 
 re-minimised with LAMMPS (FIRE, the seed's stopping rules) as above_n{N}_s{s}.h5; it prints the
 time of each step. Then analyse them with
 
-    jamflow modes DIR/onset_n256_s*.h5 --figure docs/modes-onset.png
-    jamflow modes DIR/above_n256_s*.h5 --figure docs/modes-above.png
+    jamflow modes DIR/onset_n256_s*.h5 --figure docs/notes/modes-onset.png
+    jamflow modes DIR/above_n256_s*.h5 --figure docs/notes/modes-above.png
 
 Usage: python benchmarks/modes_ensemble.py [--n 256] [--count 20] [--dphi 1e-4] [--out DIR]
 """

@@ -1,5 +1,5 @@
 """Jammed packings of dimers (compiled engine, ``jamflow.jam``) for the stability analysis of
-docs/modes-rotations.md: symmetric dimers of two unit sites with total length ALPHA (seed
+docs/notes/modes-rotations.md: symmetric dimers of two unit sites with total length ALPHA (seed
 Figure 2.9, alpha = L / D), bidisperse sizes bi:1.4:0.5 scaling whole bodies, linear springs,
 random starts. Ellipse packings come from benchmarks/reference_jam.py until an engine jams them.
 

@@ -1,4 +1,4 @@
-"""Ensemble moduli of docs/moduli.md (not a test): G, B and P against phi - phi_J.
+"""Ensemble moduli of docs/notes/moduli.md (not a test): G, B and P against phi - phi_J.
 
 For each potential and seed it jams a 2D 50:50 bidisperse (ratio 1.4) packing of N disks at onset
 (``jamflow.jam``), compresses it above onset by each DPHI (``jamflow.compress_above``: affine, then

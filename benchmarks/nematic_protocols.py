@@ -3,10 +3,10 @@ section 4.3, Figure 2.23(c, d): "two different packing-generation methods", one 
 aligned ellipses with P2 = 0.64, the other randomly oriented ones with P2 = 0.11, N = 256).
 
     flock /tmp/jamflow-bench.lock python benchmarks/nematic_protocols.py --n 64 --alpha 3 --seeds 10 \
-        --protocol compression --out docs/nematic-protocols.csv --keep /tmp/nematic
+        --protocol compression --out docs/notes/nematic-protocols.csv --keep /tmp/nematic
     flock /tmp/jamflow-bench.lock python benchmarks/nematic_protocols.py --n 64 --alpha 3 --seeds 5 \
-        --protocol anneal --dalpha 0.1 --out docs/nematic-protocols.csv --keep /tmp/nematic
-    python benchmarks/nematic_protocols.py --report docs/nematic-protocols.csv --keep /tmp/nematic
+        --protocol anneal --dalpha 0.1 --out docs/notes/nematic-protocols.csv --keep /tmp/nematic
+    python benchmarks/nematic_protocols.py --report docs/notes/nematic-protocols.csv --keep /tmp/nematic
 
 ``compression``: ``jam(shape="ellipse:ALPHA", sizes="mono", seed=s)``, isotropic compression from a
 random start with orientations uniform on the circle. ``anneal``: seed s jams monodisperse disks,
@@ -135,7 +135,7 @@ def main(argv=None) -> None:
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--protocol", choices=("compression", "anneal"), default="compression")
     ap.add_argument("--dalpha", type=float, default=0.1)
-    ap.add_argument("--out", default="docs/nematic-protocols.csv")
+    ap.add_argument("--out", default="docs/notes/nematic-protocols.csv")
     ap.add_argument("--keep", default=None, help="directory of the final packings (HDF5)")
     ap.add_argument("--report", default=None, metavar="CSV")
     args = ap.parse_args(argv)

@@ -2,7 +2,7 @@
 configurations (issue 14): the worst relative differences of energy, body forces, torques and
 the molecular pressure tensor, per body, dimension and box.
 
-    python benchmarks/nmer_crosscheck.py --out docs/nmers/crosscheck.csv
+    python benchmarks/nmer_crosscheck.py --out docs/notes/nmers/crosscheck.csv
 
 Each configuration: 40 (2D) or 100 (3D) bodies, 50:50 sizes 1 and 1.4, random positions and
 orientations at phi 0.95 (2D) / 0.75 (3D), linear spring (LAMMPS harmonic/cut) and Hertz (LAMMPS
@@ -45,7 +45,7 @@ def rel(a, b) -> float:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--out", default="docs/nmers/crosscheck.csv")
+    ap.add_argument("--out", default="docs/notes/nmers/crosscheck.csv")
     args = ap.parse_args(argv)
     rows = []
     for spec in SPECS:

@@ -2,7 +2,7 @@
 that made it.
 
     python benchmarks/nmer_ensembles.py --shape nmer:2:1.5 --dim 2 --n 128 --seeds 0-19 \
-        --packings /tmp/nmers/packings --out docs/nmers/ensembles.csv
+        --packings /tmp/nmers/packings --out docs/notes/nmers/ensembles.csv
     python benchmarks/nmer_ensembles.py ... --engine lammps --minimizer md --damping 0.1   # the LAMMPS route
 
 One row per packing (appended; a row already in the CSV or in ``--rejects`` is skipped, so runs
@@ -119,7 +119,7 @@ def main(argv=None) -> int:
     ap.add_argument("--out", required=True, help="CSV, appended")
     ap.add_argument("--rejects", help="CSV for the rows of packings that fail the checks (default: --out)")
     ap.add_argument("--creep", default="auto", choices=CREEP_METHODS,
-                    help="MinimizerSettings.creep (docs/soft-modes.md); rows before 2026-12-02 were made without")
+                    help="MinimizerSettings.creep (docs/notes/soft-modes.md); rows before 2026-12-02 were made without")
     ap.add_argument("--max-iterations", type=int, default=MinimizerSettings().max_iterations,
                     help="per minimisation (a creeping one that reaches it fails its packing)")
     ap.add_argument("--verbose", action="store_true", help="log every soft-mode step and polish")

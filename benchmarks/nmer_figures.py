@@ -1,7 +1,7 @@
 """Figures and tables of issue 14 from the ensembles of benchmarks/nmer_ensembles.py.
 
-    python benchmarks/nmer_figures.py --csv docs/nmers/ensembles.csv docs/nmers/ensembles3d.csv \
-        --q6 docs/nmers/q6-256.csv --routes docs/nmers/routes.csv --out docs/nmers
+    python benchmarks/nmer_figures.py --csv docs/notes/nmers/ensembles.csv docs/notes/nmers/ensembles3d.csv \
+        --q6 docs/notes/nmers/q6-256.csv --routes docs/notes/nmers/routes.csv --out docs/notes/nmers
 
 - ``q6-alpha.png`` / ``q6.csv`` rows: Q6 (global, ``jamflow.analysis.order.BondOrder`` on the body
   centres, neighbours within the first minimum of the ensemble's g(r)) against alpha for
@@ -18,7 +18,7 @@
   and exactly d once the free rotations are set aside (``analysis.free_rotations``).
 - ``routes.png``: phi_J of the same starts jammed by the compiled FIRE and by LAMMPS's damped
   rigid bodies (paired).
-Prints the tables that docs/nmers.md quotes.
+Prints the tables that docs/notes/nmers.md quotes.
 """
 
 from __future__ import annotations
@@ -365,12 +365,12 @@ def plot_acceptance(ens_rows, stab_rows, path: Path) -> None:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--csv", nargs="+", default=["docs/nmers/ensembles.csv", "docs/nmers/ensembles3d.csv",
-                                                "docs/nmers/sweep3d.csv"])
-    ap.add_argument("--q6", default="docs/nmers/q6-256.csv")
-    ap.add_argument("--routes", default="docs/nmers/routes.csv")
-    ap.add_argument("--stability", default="docs/nmers/stability.csv")
-    ap.add_argument("--out", default="docs/nmers")
+    ap.add_argument("--csv", nargs="+", default=["docs/notes/nmers/ensembles.csv", "docs/notes/nmers/ensembles3d.csv",
+                                                "docs/notes/nmers/sweep3d.csv"])
+    ap.add_argument("--q6", default="docs/notes/nmers/q6-256.csv")
+    ap.add_argument("--routes", default="docs/notes/nmers/routes.csv")
+    ap.add_argument("--stability", default="docs/notes/nmers/stability.csv")
+    ap.add_argument("--out", default="docs/notes/nmers")
     args = ap.parse_args(argv)
     out = Path(args.out)
     plot_bodies(out / "bodies.png")

@@ -5,8 +5,8 @@ zero modes against the d trivial translations and the free rotations of bodies t
 site (``jamflow.analysis.free_rotations``: the known vectors must lie in the zero-mode space and
 no zero mode may be left over), and Delta V along the lowest nonzero mode (``Stability``).
 
-    OPENBLAS_NUM_THREADS=1 python benchmarks/nmer_stability.py --csv docs/nmers/ensembles.csv \
-        --out docs/nmers/stability.csv
+    OPENBLAS_NUM_THREADS=1 python benchmarks/nmer_stability.py --csv docs/notes/nmers/ensembles.csv \
+        --out docs/notes/nmers/stability.csv
 
 One row per packing of the CSV (the ``file`` column): whether it passed ``jamflow.mechanics.checks`` (and
 the problems if not), N', N_c (site contacts), the isostatic count, the free rotations, zero
@@ -63,10 +63,10 @@ def stability_row(row: dict) -> dict:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--csv", default="docs/nmers/ensembles.csv")
+    ap.add_argument("--csv", default="docs/notes/nmers/ensembles.csv")
     ap.add_argument("--shapes", nargs="*", default=None, help="only these shape specs (default: every rigid body)")
     ap.add_argument("--dim", type=int, default=None)
-    ap.add_argument("--out", default="docs/nmers/stability.csv")
+    ap.add_argument("--out", default="docs/notes/nmers/stability.csv")
     args = ap.parse_args(argv)
     out = Path(args.out)
     with open(args.csv) as fh:

@@ -8,7 +8,7 @@ of ``--reps``. The freud column is the removed code path (``AABBQuery`` on float
 with r_max + 1e-5), timed for comparison only; "missed" counts pairs closer than rmax that it
 did not return (float32 round-off beyond its 1e-5 pad).
 
-    flock /tmp/jamflow-bench.lock python benchmarks/pair_search.py --out docs/pair-search.csv
+    flock /tmp/jamflow-bench.lock python benchmarks/pair_search.py --out docs/notes/pair-search.csv
 """
 
 from __future__ import annotations

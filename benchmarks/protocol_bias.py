@@ -2,7 +2,7 @@
 start) as the seed chapter's exact protocol; mean phi_J +- standard error per variant, and the
 paired difference to the exact protocol, as CSV and a PNG chart.
 
-    python benchmarks/protocol_bias.py --n 256 --seeds 20 --out docs/protocol-bias-n256.csv
+    python benchmarks/protocol_bias.py --n 256 --seeds 20 --out docs/notes/protocol-bias-n256.csv
 
 Every packing is checked (``jamflow.mechanics.checks.check_packing``: window, force balance, contact
 count; the ``checks`` column). To rerun one variant against stored rows of another, start the
@@ -84,7 +84,7 @@ def main(argv=None):
     ap.add_argument("--sizes", default="bi:1.4:0.5")
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--variants", nargs="+", default=["seed", "fast"], choices=list(VARIANTS))
-    ap.add_argument("--out", default="docs/protocol-bias.csv")
+    ap.add_argument("--out", default="docs/notes/protocol-bias.csv")
     args = ap.parse_args(argv)
     out = Path(args.out)
     done = {(r["variant"], r["seed"]) for r in csv.DictReader(out.open())} if out.exists() else set()

@@ -10,11 +10,11 @@ defaults (``default``: fast protocol, engine auto = the compiled FIRE for these 
     python benchmarks/scaling.py crosscheck --n 32 64 --seeds 0 1 2 3 4 5 6 7 8 9 --ranks 2
 
 ``crosscheck`` runs jamflow.decks.crosscheck (deck under mpirun -np RANKS against the serial
-controller, same start) and appends to docs/crosscheck-mpi.csv: with 2 ranks the force sums
+controller, same start) and appends to docs/notes/crosscheck-mpi.csv: with 2 ranks the force sums
 run in another order, so this measures how often phi_J and the contacts still agree.
 
 Times: the controller's JamResult.seconds (protocol only); the deck's wall time of the
-whole lmp process (start-up ~0.3 s included). Rows go to docs/scaling.csv as runs end and
+whole lmp process (start-up ~0.3 s included). Rows go to docs/notes/scaling.csv as runs end and
 are skipped when present (resumable); runs over --limit are recorded as timeouts.
 The machine is 2 shared cores: the 1-minute load average is recorded with each row.
 """

@@ -1,4 +1,4 @@
-"""The Lees-Edwards checks of docs/shear-cell.md, as numbers (the tests assert bounds on them).
+"""The Lees-Edwards checks of docs/notes/shear-cell.md, as numbers (the tests assert bounds on them).
 
 1. Shear steps gamma 0.4 -> 0.6 (dgamma 0.02, the reduced tilt flips at 0.5) in LAMMPS against
    the numpy reference on positions moved x -> x + dgamma y in numpy: largest relative

@@ -1,4 +1,4 @@
-"""One quasistatic shear path, drawn, and what a step costs (docs/shear.md).
+"""One quasistatic shear path, drawn, and what a step costs (docs/notes/shear.md).
 
 Jams N bidisperse disks at gamma0 (default protocol), shears them to --to in steps of
 --dgamma (jamflow.protocols.shear, default bisection), writes the path file and the figure
@@ -7,7 +7,7 @@ break (contacts removed and added, the phi_J jump) and the CPU time, minimisatio
 iterations per step (CPU seconds: the machine is shared).
 
     python benchmarks/shear_path.py --n 10 --seed 0 --gamma0 0.2 --dgamma 0.002 --to 0.5 \
-        --out docs/shear-path-n10
+        --out docs/notes/shear-path-n10
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ def main(argv=None) -> None:
     parser.add_argument("--dgamma", type=float, default=0.002)
     parser.add_argument("--to", type=float, default=0.5)
     parser.add_argument("--engine", default="auto")
-    parser.add_argument("--out", default="docs/shear-path-n10", help="prefix: PREFIX.png and PREFIX.shear.h5")
+    parser.add_argument("--out", default="docs/notes/shear-path-n10", help="prefix: PREFIX.png and PREFIX.shear.h5")
     args = parser.parse_args(argv)
     start = jam(n=args.n, seed=args.seed, gamma=args.gamma0, engine=args.engine)
     cpu = time.process_time()

@@ -1,4 +1,4 @@
-"""Unit period and mirror symmetry of jamming at fixed strain, over many starts (docs/shear.md).
+"""Unit period and mirror symmetry of jamming at fixed strain, over many starts (docs/notes/shear.md).
 
 For each seed, one random start of N bidisperse disks is jammed at gamma, at gamma + 1 (the
 same start) and, mirrored x -> -x, at 1 - gamma; the three packings are compared: largest
@@ -7,7 +7,7 @@ V and the contact network among non-floaters (a floater may touch a neighbour at
 mirrors as doubles) and 0.2 / 1.2 / 0.8 (1.2 - 1 = 0.19999999999999996 is 5.6e-17 away from
 0.2), with the default (fast) and the seed protocol, compiled engine.
 
-    python benchmarks/shear_symmetry.py --seeds 20 --out docs/shear-symmetry.csv
+    python benchmarks/shear_symmetry.py --seeds 20 --out docs/notes/shear-symmetry.csv
 """
 
 from __future__ import annotations
@@ -48,7 +48,7 @@ def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=10)
     parser.add_argument("--seeds", type=int, default=20)
-    parser.add_argument("--out", default="docs/shear-symmetry.csv")
+    parser.add_argument("--out", default="docs/notes/shear-symmetry.csv")
     args = parser.parse_args(argv)
     rows = []
     for protocol in PROTOCOLS:

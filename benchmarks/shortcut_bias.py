@@ -8,7 +8,7 @@ its standard error (s.d. of the differences / sqrt(k)). 2D bidisperse disks (50:
     python benchmarks/shortcut_bias.py chart                                (CSV -> PNG, table)
 
 A new shortcut is one more entry in VARIANTS (CompressionSettings overrides). Rows go to
-docs/shortcut-bias.csv as runs end; rows present are skipped (resumable); runs over the
+docs/notes/shortcut-bias.csv as runs end; rows present are skipped (resumable); runs over the
 time limit or failing are recorded with that status.
 """
 

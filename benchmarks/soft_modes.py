@@ -1,5 +1,5 @@
 """Where a creeping minimisation's residual force lies, and what one soft-mode step does
-(docs/soft-modes.md).
+(docs/notes/soft-modes.md).
 
     python benchmarks/soft_modes.py PACKING.h5                 # spectrum bands, gradient shares, energy along the mode
     python benchmarks/soft_modes.py PACKING.h5 --minimize soft-modes off   # then minimise from it with and without the steps

@@ -8,7 +8,7 @@ phi_J,ref from the reference run (dphi0 = 1e-5, V_tol = V_min = 1e-20).
     python benchmarks/speed_accuracy.py run --n 1024 --seeds 0 --variants reference seed cg
     python benchmarks/speed_accuracy.py chart                               (CSV -> PNG)
 
-Rows are appended to docs/speed-accuracy.csv as each run ends and skipped when present,
+Rows are appended to docs/notes/speed-accuracy.csv as each run ends and skipped when present,
 so an interrupted sweep resumes. Each run has its own process and a time limit; a run
 over the limit or failing is recorded with that status (never dropped). ``seconds`` is
 the protocol's wall time (JamResult.seconds), ``cpu_seconds`` the CPU time of the run's

@@ -8,10 +8,10 @@ Baseline: the seed's protocol written directly on the LAMMPS Python module -- ha
 ``change_box ... remap``, dphi0 = 1e-4 from the seed protocol's start, halve on crossing, stop at
 1e-16 < V < 2e-16.
 
-    python benchmarks/speed_table.py --dim 2 --n 64 256 1024 --seeds 1 2 3 4 5 --handwritten 64 256 1024 --out docs/speed-table.csv
-    python benchmarks/speed_table.py --dim 3 --sizes mono --n 512 --seeds 1 2 3 --handwritten 512 --out docs/speed-table.csv
-    python benchmarks/speed_table.py --chart docs/speed-table.csv --png docs/speed-2.png
-    python benchmarks/speed_table.py --summary docs/speed-table.csv    # the markdown rows of docs/speed-2.md
+    python benchmarks/speed_table.py --dim 2 --n 64 256 1024 --seeds 1 2 3 4 5 --handwritten 64 256 1024 --out docs/notes/speed-table.csv
+    python benchmarks/speed_table.py --dim 3 --sizes mono --n 512 --seeds 1 2 3 --handwritten 512 --out docs/notes/speed-table.csv
+    python benchmarks/speed_table.py --chart docs/notes/speed-table.csv --png docs/notes/speed-2.png
+    python benchmarks/speed_table.py --summary docs/notes/speed-table.csv    # the markdown rows of docs/notes/speed-2.md
 
 Whole process: ``python -m jamflow.cli jam ...`` wall and CPU (user + sys) seconds, imports
 and numba's cache load included. In process: ``jam()`` with a warm interpreter. Rows are
@@ -199,9 +199,9 @@ def main(argv=None):
     ap.add_argument("--handwritten-seeds", type=int, nargs="*", default=None, help="seeds of the baseline (default all)")
     ap.add_argument("--cap", type=int, default=100_000, help="baseline FIRE iteration cap per minimisation")
     ap.add_argument("--process-max", type=int, default=1024, help="whole-process runs only up to this N")
-    ap.add_argument("--out", default="docs/speed-table.csv")
+    ap.add_argument("--out", default="docs/notes/speed-table.csv")
     ap.add_argument("--chart", default=None, nargs="+", metavar="CSV", help="only draw the chart of these CSVs' rows")
-    ap.add_argument("--png", default="docs/speed-2.png")
+    ap.add_argument("--png", default="docs/notes/speed-2.png")
     ap.add_argument("--summary", default=None, metavar="CSV", help="only print the markdown rows of this CSV")
     args = ap.parse_args(argv)
     if args.summary:

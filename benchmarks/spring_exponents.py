@@ -2,7 +2,7 @@
 disks (seed 0) with spring:ALPHA at the smallest V_tol that jamflow.mechanics.checks.resolution accepts
 (x 1.5, at least 1e-16) and check the packing. Basis of compression.SPRING_ALPHA_RANGE.
 
-    python benchmarks/spring_exponents.py fast 1.5 2 2.5 3 4 6 8    (rows to docs/spring-exponents.csv)
+    python benchmarks/spring_exponents.py fast 1.5 2 2.5 3 4 6 8    (rows to docs/notes/spring-exponents.csv)
     python benchmarks/spring_exponents.py seed 10                   (about 20 minutes)
 
 The refusal in compress() is switched off here, since this measures what it refuses.

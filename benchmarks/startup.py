@@ -4,10 +4,10 @@ seconds of ``jamflow --help``, ``jamflow jam --help`` and ``jamflow jam --n 64``
 ``import numpy``, and the smallest numba process: one cached njit function called once), and
 what a jam's first second is made of (imports, numba's first call, the jam itself).
 
-    python benchmarks/startup.py --repeats 5 --out docs/startup.csv
-    python benchmarks/startup.py --repeats 5 --source /tmp/main-src --label main --out docs/startup.csv
-    python benchmarks/startup.py --repeats 3 --seeds 1 2 3 4 5 --floors --out docs/startup.csv
-    python benchmarks/startup.py --repeats 3 --seeds 1 2 3 4 5 --alternate /tmp/main-src --out docs/startup.csv
+    python benchmarks/startup.py --repeats 5 --out docs/notes/startup.csv
+    python benchmarks/startup.py --repeats 5 --source /tmp/main-src --label main --out docs/notes/startup.csv
+    python benchmarks/startup.py --repeats 3 --seeds 1 2 3 4 5 --floors --out docs/notes/startup.csv
+    python benchmarks/startup.py --repeats 3 --seeds 1 2 3 4 5 --alternate /tmp/main-src --out docs/notes/startup.csv
 
 ``--alternate DIR`` runs, for each repeat and seed in turn, the numba floor, ``jamflow jam --n 64``
 of DIR (label ``DIR``) and of the installed jamflow, so that both see the same load (on a
@@ -18,7 +18,7 @@ instead of the installed one, for a before/after table on the same machine and v
 Rows are appended to the CSV with the load average; take timings under
 ``flock /tmp/jamflow-bench.lock``.
 
-Since session 6 a disk jam runs ahead-of-time kernels and never starts numba (docs/speed-2.md
+Since session 6 a disk jam runs ahead-of-time kernels and never starts numba (docs/notes/speed-2.md
 section 12): the in-process phases still import numba explicitly, so the "numba" phase is what
 importing it would cost, not part of a jam; ``aot_startup.py`` times the jam itself.
 """
@@ -69,7 +69,7 @@ def main(argv=None):
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--source", default=None, help="directory holding the jamflow package to time")
     ap.add_argument("--label", default="branch")
-    ap.add_argument("--out", default="docs/startup.csv")
+    ap.add_argument("--out", default="docs/notes/startup.csv")
     ap.add_argument("--seeds", type=int, nargs="+", default=[1], help="seeds of the jam-n64 command")
     ap.add_argument("--floors", action="store_true", help="also time the floors (python, numpy, numba)")
     ap.add_argument("--alternate", default=None, help="directory of another jamflow: jam-n64 of both, alternating")

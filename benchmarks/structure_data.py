@@ -1,4 +1,4 @@
-"""Generate (and cache) the jammed packings behind docs/structure.md.
+"""Generate (and cache) the jammed packings behind docs/notes/structure.md.
 
 Usage (from the repository root)::
 

@@ -1,4 +1,4 @@
-"""Measured values behind docs/structure.md (run benchmarks/structure_data.py first).
+"""Measured values behind docs/notes/structure.md (run benchmarks/structure_data.py first).
 
 Usage (from the repository root)::
 
@@ -6,7 +6,7 @@ Usage (from the repository root)::
     python benchmarks/structure_measure.py spheres --n 1024    # g(r) first peak at Delta phi ~ 1e-2
     python benchmarks/structure_measure.py checks              # crystals and library agreement
 
-Figures go to docs/structure-*.png (override with --figures).
+Figures go to docs/notes/structure-*.png (override with --figures).
 """
 
 from __future__ import annotations
@@ -145,7 +145,7 @@ def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("what", choices=("disks", "spheres", "checks"))
     parser.add_argument("--n", type=int, default=1024)
-    parser.add_argument("--figures", type=Path, default=Path("docs"))
+    parser.add_argument("--figures", type=Path, default=Path("docs/notes"))
     args = parser.parse_args(argv)
     if args.what == "disks":
         disks(args.n, args.figures)

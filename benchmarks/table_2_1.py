@@ -1,6 +1,6 @@
 """Reproduce chapter Table 2.1 and check the chapter's polynomial coefficients.
 
-Writes docs/table-2-1.md and docs/contact-distance-figure-2-12.png.
+Writes docs/notes/table-2-1.md and docs/notes/contact-distance-figure-2-12.png.
 Run from the repo root:  python benchmarks/table_2_1.py [--grid 512]
 
 Table 2.1: log10 of the relative error |sigma_approx - sigma_exact| / sigma_exact of the

@@ -3,7 +3,7 @@ packing (window, force balance, contact count; jamflow.mechanics.checks) against
 jamflow.mechanics.checks.resolution predicts before any work (typical window overlap / position
 round-off, window contact force / force tolerance).
 
-    python benchmarks/vtol_resolution.py            (writes docs/vtol-resolution.csv)
+    python benchmarks/vtol_resolution.py            (writes docs/notes/vtol-resolution.csv)
 
 The refusal in compress() is switched off here, since this measures what it refuses.
 Load-independent: iteration counts and pass/fail only, no timings.

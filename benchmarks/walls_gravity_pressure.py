@@ -2,7 +2,7 @@
 checked with the independent numpy reference, and phi_J at constant pressure against the
 compression protocol on the same starts.
 
-    flock /tmp/jamflow-bench.lock python benchmarks/walls_gravity_pressure.py --out docs/walls-gravity-pressure
+    flock /tmp/jamflow-bench.lock python benchmarks/walls_gravity_pressure.py --out docs/notes/walls-gravity-pressure
 
 Writes OUT-walls.csv, OUT-gravity.csv, OUT-compare.csv (one row per start and case; the
 constant-pressure ensembles at P = 1e-4 and 1e-6 are the rows of the pressure sequences there),
@@ -247,7 +247,7 @@ def main(argv=None):
     ap.add_argument("--n", type=int, default=256)
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--gravity", type=float, default=1e-5)
-    ap.add_argument("--out", default="docs/walls-gravity-pressure")
+    ap.add_argument("--out", default="docs/notes/walls-gravity-pressure")
     ap.add_argument("--figures-only", action="store_true",
                     help="redraw the figures from the CSVs (re-settles the gravity piles for the profiles)")
     args = ap.parse_args(argv)

@@ -61,7 +61,7 @@ print(",".join(m for m in heavy if m in sys.modules) or "none", all(c in out.get
 @pytest.mark.parametrize("argv,lists_commands,jam_options", [(["--help"], True, False),
                                                             (["jam", "--help"], False, True)])
 def test_help_loads_only_its_subcommand(argv, lists_commands, jam_options):
-    """Start-up (issue 17, docs/speed-2.md): ``jamflow jam --help`` imports the jam command
+    """Start-up (issue 17, docs/notes/speed-2.md): ``jamflow jam --help`` imports the jam command
     and nothing heavy, ``jamflow --help`` no command; the help texts are complete."""
     import subprocess
     import sys

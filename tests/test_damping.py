@@ -151,7 +151,7 @@ def test_only_pairs_in_contact_are_damped(dim):
 def test_isolated_contact_decays_at_rate_2b_over_m():
     """One contact, no potential: velocity Verlet with the damping in post_force multiplies
     the relative normal velocity by (1 - b dt)^2 (1 - 2 b dt)^(n - 1) in n steps (m = 1):
-    the rate is 2 b / m, so an isolated contact is stable for b dt < 1 (docs/damped-md.md)."""
+    the rate is 2 b / m, so an isolated contact is stable for b dt < 1 (docs/notes/damped-md.md)."""
     p = pair_at(0.93, 2)
     rhat = p.box.minimum_image(p.positions[0] - p.positions[1])
     rhat /= np.linalg.norm(rhat)

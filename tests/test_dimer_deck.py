@@ -33,7 +33,7 @@ def test_dimer_deck_jams_rigid_dimers(tmp_path):
     and generalized torque below 1e-13 by the reference, dimers rigid (the reader checks every
     site distance to 1e-9), phi and P as the deck reports them, the last minimisation stopped by
     force. Any deck failure fails this test. (3D runs too, but near onset damped dynamics creeps
-    for 10^5 steps per minimisation: docs/nmers.md.)"""
+    for 10^5 steps per minimisation: docs/notes/nmers.md.)"""
     dim, n = 2, 16
     shape = parse_shape("nmer:2:1.5", dim)
     res = run_deck(tmp_path, {"dim": dim, "N": n, "dphi0": 0.002, "seed": 1}, deck=DECK,

@@ -1,4 +1,4 @@
-"""Where methods break down (docs/failure-modes.md): each case ends in a clear error or a
+"""Where methods break down (docs/notes/failure-modes.md): each case ends in a clear error or a
 flagged result, never a silent wrong packing."""
 
 import numpy as np

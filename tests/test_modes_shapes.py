@@ -88,7 +88,7 @@ def test_relaxed_quartic_coefficient_obeys_the_self_stress_bound(ellipses):
 
 def test_sparse_relaxed_solver_agrees_with_the_exact_one(ellipses, monkeypatch):
     """Above DENSE_MAX unknowns the relaxed problem goes to scipy's sparse trf: the same held
-    coefficients (free dimer modes reach 2e-11..9e-11 of straight there, docs/modes-rotations.md)."""
+    coefficients (free dimer modes reach 2e-11..9e-11 of straight there, docs/notes/modes-rotations.md)."""
     from jamflow.analysis import quartic
 
     spec = Spectrum().compute(ellipses[0])

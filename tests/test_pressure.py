@@ -128,7 +128,7 @@ def test_lammps_jams_at_pressure(at_pressure):
                               engine="lammps")
     ref = energy_forces_pressure(res.packing)
     assert abs(ref.pressure / 1e-6 - 1) < 1e-6
-    assert np.max(np.abs(ref.forces)) < 1e-12  # CG's line search stops near 1e-13 (docs/failure-modes.md)
+    assert np.max(np.abs(ref.forces)) < 1e-12  # CG's line search stops near 1e-13 (docs/notes/failure-modes.md)
     assert 0.78 < res.phi < 0.87
 
 
@@ -175,7 +175,7 @@ def test_pressures_float64_cannot_resolve_are_refused_before_work():
 
 def test_ellipse_pressure_floor_is_that_of_the_ellipse_force_tolerance():
     """The floor is FLOOR_MARGIN times the tolerance the minimiser runs with, which for ellipses
-    starts from their base 5e-13 (docs/ellipses.md), not the disks' 1e-14: a target between
+    starts from their base 5e-13 (docs/notes/ellipses.md), not the disks' 1e-14: a target between
     the two floors is refused before work (it was accepted, with contact forces only 20x above
     the tolerance instead of 1000x)."""
     start = initial_packing(16, 2, "bi:1.4:0.6667", "spring", 0, 0.8, shape="ellipse:1.6")

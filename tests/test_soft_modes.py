@@ -79,7 +79,7 @@ def test_soft_mode_settings_are_checked():
 
 
 def test_the_creeping_3d_dimer_state_is_resolved():
-    """The stored state of a minimisation that crept into the iteration cap (docs/soft-modes.md):
+    """The stored state of a minimisation that crept into the iteration cap (docs/notes/soft-modes.md):
     with the steps it ends by a converged rule within 20 000 iterations (measured: one step, the
     energy 2.29e-14 -> 1.5e-16, then below V_min: it was unjamming); without, 20 000 more FIRE
     iterations leave it creeping."""
@@ -109,7 +109,7 @@ def test_the_lowest_eigenpairs_repeat_bit_for_bit():
 
 def test_an_ellipse_jam_with_soft_mode_steps_repeats_bit_for_bit():
     """N = 32 ellipses, seed 3: the soft-mode steps run (73 319 iterations); before the fixed start
-    vector two runs of the same jam ended at different positions (docs/soft-modes.md)."""
+    vector two runs of the same jam ended at different positions (docs/notes/soft-modes.md)."""
     from jamflow import jam
 
     a, b = (jam(n=32, dim=2, shape="ellipse:1.6", sizes="mono", seed=3) for _ in range(2))

@@ -237,7 +237,7 @@ def test_jammed_with_walls(jammed_walls, kind):
 def test_jammed_walled_packings_are_isostatic(jammed_walls):
     """N_c,iso = N' d - d_trivial + 1, wall contacts counted: smooth walls on y leave the x
     translation (d_trivial = 1), rough walls pin both (0). Both packings come out exactly
-    isostatic (seed 2, N = 64; docs/walls-gravity-pressure.md has 20 seeds)."""
+    isostatic (seed 2, N = 64; docs/notes/walls-gravity-pressure.md has 20 seeds)."""
     smooth, rough = (Contacts().compute(jammed_walls[k].packing) for k in ("smooth", "rough"))
     assert smooth.isostatic_count == 2 * smooth.n_kept - 1 + 1 and rough.isostatic_count == 2 * rough.n_kept + 1
     assert smooth.n_contacts == smooth.isostatic_count and rough.n_contacts == rough.isostatic_count

@@ -13,7 +13,7 @@ one path with an unchanged contact network). What identifies a family:
    anisotropy within TOL_FABRIC. Two packings of one family at one strain differ only by where
    in the window V_tol < V < 2 V_tol they stopped (phi_J to ~1e-9, Sigma / P to ~1e-5 at
    N = 10); distinct families with one signature were measured >= 5e-7 apart in phi_J and
-   >= 1e-3 in Sigma / P away from gamma = k / 2 (docs/shear.md). Near integer gamma a family
+   >= 1e-3 in Sigma / P away from gamma = k / 2 (docs/notes/shear.md). Near integer gamma a family
    and its reflection in the square cell's diagonal touch (same phi_J and Sigma / P at gamma = k,
    separating quadratically): the fabric tells them apart (the reflection flips the sign of
    <n_x^2 - n_y^2>), and the strains k / 2 themselves are left out (``symmetric_strain``).

@@ -2,7 +2,7 @@
 
 A rigid body whose contacts all touch one of its sites turns freely about that site's centre:
 every contact force passes through it, so no contact distance changes (the "rotational
-rattlers" of Shiraishi, Mizuno and Ikeda, PRE 100, 012606 (2019); docs/nmers.md). Each such
+rattlers" of Shiraishi, Mizuno and Ikeda, PRE 100, 012606 (2019); docs/notes/nmers.md). Each such
 body adds d_f - d zero modes to the dynamical matrix (``jamflow.mechanics.hessian``), one per
 rotational coordinate: turn by theta about the body axis n_a through the site (lever
 l = r_site - R), i.e. rotation coordinate d_k theta and centre displacement -theta n_a x l.

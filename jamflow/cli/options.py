@@ -28,17 +28,17 @@ def add_spec_arguments(p, skip=()) -> None:
     add("--shape", default="disk",
         help="particle shape: disk | sphere (the same: round particles) | "
              "ellipse:ALPHA (2D, ALPHA = a/b >= 1) | spheroid:ALPHA (3D, ALPHA < 1 oblate); ALPHA = 1 is the "
-             "disk/sphere | rigid n-mers of fused sites (docs/nmers.md): nmer:N:ALPHA (linear, ALPHA = L/D), "
+             "disk/sphere | rigid n-mers of fused sites (docs/notes/nmers.md): nmer:N:ALPHA (linear, ALPHA = L/D), "
              "dimer:ALPHA:S (asymmetric, S = D2/D1), trimer:ALPHA:C (bent, C = h/L). --sizes scales whole "
              "particles (b; a = ALPHA b)")
     add("--contact", choices=METHODS_CONTACT, default="exact",
         help="contact distance of ellipses/spheroids (seed section 2.3.2): exact (Perram-Wertheim), "
              "gaussian (equal sizes only), cleaver; linear and quadratic are refused (no second derivatives "
              "for the packing checks; jamflow.model.shapes.contact_distance computes them); "
-             "docs/contact-distance.md")
+             "docs/notes/contact-distance.md")
     add("--protocol", choices=sorted(PROTOCOLS), default=None,
         help=f"seed: the chapter's constant-increment bisection; fast: the same stopping rule with "
-             f"growing increments and Newton jumps (docs/speed.md). Default {DEFAULT_PROTOCOL}; "
+             f"growing increments and Newton jumps (docs/notes/speed.md). Default {DEFAULT_PROTOCOL}; "
              "seed with --emit-deck (decks run the seed protocol)")
     add("--minimizer", choices=METHODS, default="fire",
         help="energy minimiser; ellipses/spheroids: fire (compiled engine, over positions and "
@@ -50,13 +50,13 @@ def add_spec_arguments(p, skip=()) -> None:
         add_md_damping_argument(p)
     add("--creep", choices=CREEP_METHODS, default="auto",
         help="what a creeping minimisation (unconverged after 20 000+ iterations near balance) does between FIRE "
-             "windows: soft-modes (Newton steps along its softest modes, docs/soft-modes.md), polish "
+             "windows: soft-modes (Newton steps along its softest modes, docs/notes/soft-modes.md), polish "
              "(Gauss-Newton active-set steps, disks/spheres and rigid bodies with the linear spring, "
-             "docs/speed-2.md section 8, docs/nmers.md), off; auto: polish for rigid bodies and 2D disks, "
+             "docs/notes/speed-2.md section 8, docs/notes/nmers.md), off; auto: polish for rigid bodies and 2D disks, "
              "soft-modes for ellipses and spheroids, in the compiled engine")
     add_engine_argument(p, skip,
                         help="auto: the compiled engine (FIRE, in process) wherever it runs the scene, else LAMMPS "
-                             "(docs/speed.md). The engines sum forces in different orders, so from one start they "
+                             "(docs/notes/speed.md). The engines sum forces in different orders, so from one start they "
                              "can reach different minima and phi_J (seed 0, N = 64: 0.8352519 numba, 0.8355434 lammps)")
     add("--phi0", type=float, default=None,
         help="initial packing fraction (default 0.80 in 2D, 0.55 in 3D; rigid bodies, which "
@@ -90,7 +90,7 @@ def add_spec_arguments(p, skip=()) -> None:
 def add_md_damping_argument(p) -> None:
     p.add_argument("--md-damping", choices=MD_DAMPINGS, default="viscous",
                    help="--minimizer md only: viscous (drag -b v on every particle) or pairwise (seed eq. 2.3: "
-                        "-b (v_ij . rhat) rhat on contacting pairs; docs/damped-md.md)")
+                        "-b (v_ij . rhat) rhat on contacting pairs; docs/notes/damped-md.md)")
 
 
 

@@ -1,7 +1,7 @@
 """One ensemble packing on several MPI ranks: ``mpirun -np K python -m jamflow.ensemble.mpi_task SPEC``.
 
 Every rank runs the Python controller on LAMMPS over MPI.COMM_WORLD (domain decomposition;
-positions and forces gathered over ranks, README "How jamflow runs LAMMPS"); rank 0 writes
+positions and forces gathered over ranks, docs/guide/lammps.md); rank 0 writes
 the packing file, or the failure record, atomically. SPEC is the JSON that
 ``jamflow.ensemble.tasks.make_packing`` passes (the ``JamSpec`` fields and the paths).
 """

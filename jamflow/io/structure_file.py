@@ -10,7 +10,7 @@ from jamflow.support.files import atomic_path
 
 
 def write_results(path, res: dict, files) -> None:
-    """HDF5 layout: see docs/structure.md."""
+    """HDF5 layout: see docs/notes/structure.md."""
     rdf, sk, corr = res["rdf"], res["sk"], res["corr"]
     with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
         f.attrs.update(schema="jamflow.structure", schema_version=1, jamflow_version=__version__,

@@ -141,7 +141,7 @@ def generalized_forces(packing: Packing, state, rows=None) -> np.ndarray:
     return np.concatenate([forces, generalized_torques(packing, state.torques)[rows][:, axes].ravel()])
 
 
-# The refusal thresholds (benchmarks/vtol_resolution.py, docs/vtol-resolution.csv, 96 runs at
+# The refusal thresholds (benchmarks/vtol_resolution.py, docs/notes/vtol-resolution.csv, 96 runs at
 # N = 64 and 256, springs and Hertz): net force / contact force ~ 1.1 / (window force / ftol),
 # and at window force / ftol <= 1.8e3 at least half of the N = 256 packings failed their
 # checks (lost contacts first); of the 32 runs at >= 1e4, 31 passed. The overlap ratio never

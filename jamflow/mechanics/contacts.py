@@ -30,7 +30,7 @@
   through it (the "rotational rattlers" of 2D dimers, Shiraishi, Mizuno, Ikeda, PRE 100, 012606
   (2019)). Such bodies (``one_site``) can keep d_f + 1 contacts and are not floaters by the
   convex rule, but have d_f - d free rotations (zero modes); ``free_rotations`` counts them and
-  ``isostatic_count - free_rotations`` is the isostatic count without them (docs/nmers.md).
+  ``isostatic_count - free_rotations`` is the isostatic count without them (docs/notes/nmers.md).
 - N' = N - N_f, N_c = contacts among non-floaters, <z> = 2 N_c / N',
   N_c,iso = N' d_f - d + 1 (d trivial translations subtracted, one added for phi); packings
   of particles that turn are generally hypostatic (N_c < N_c,iso, seed section 4.1).

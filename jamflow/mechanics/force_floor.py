@@ -5,7 +5,7 @@ Round-off in positions of a box of side L limits forces to ~L * 1e-16 * d2V/dr2,
 ``base * max(1, L / 20) * max(1, k)``, k the contact stiffness of the potential (repulsive LJ is
 72x stiffer at contact than the linear spring) and ``base`` the shape's ``force_tol_base``
 (1e-14; 5e-13 for ellipses/spheroids, whose quartic modes make every minimiser creep near onset,
-docs/ellipses.md). Forces in eps/diameter."""
+docs/notes/ellipses.md). Forces in eps/diameter."""
 
 from __future__ import annotations
 

@@ -11,7 +11,7 @@ then accepts x + alpha dx by Armijo backtracking on the engine's exact energy; w
 decrease is below the energy's round-off, the step must lower the max force instead. The
 Hessian's tension terms (-delta / (r sigma) (I - n n^T), of order -P) are left out: J^T J is
 positive semidefinite, so a step never heads for a saddle, which is why this converges where
-Newton on the full active-set Hessian did not (docs/speed-2.md sections 3-4 and 8). The shift mu
+Newton on the full active-set Hessian did not (docs/notes/speed-2.md sections 3-4 and 8). The shift mu
 (1e-12 of the largest diagonal) fixes the d translations and the rattlers, whose right-hand
 side is zero. Convergence is linear near a minimum (rate ~ tension / stiffness along the
 softest mode); its use is the creep of the final minimisations near onset, where FIRE spends
@@ -30,12 +30,12 @@ model is linear in the rotations too and a step moves and turns the bodies rigid
 (``analysis.deformation.displaced``); its neglected terms are the tensions and the rotations'
 second order, which the exact-energy line search absorbs. The creep it is for is the
 contact-change kind that the soft-mode steps (``jamflow.minimize.soft_modes``) undo: 3D dimers creeping
-1e5-1e6 iterations per minimisation at max force 1e-11 to 5e-9 (docs/nmers.md).
+1e5-1e6 iterations per minimisation at max force 1e-11 to 5e-9 (docs/notes/nmers.md).
 
 Only the linear spring at a fixed periodic box (``polish_reason``); the engine is any
 ``jamflow.engines.base.Engine`` (positions, set_positions, evaluate, packing); disk and sphere
 pairs come from the compiled disk kernel's builder. Measured in benchmarks/gauss_newton_polish.py
-(docs/speed-2.md section 8: N = 1024 median CPU time -19% to -38%, phi_J statistically equal).
+(docs/notes/speed-2.md section 8: N = 1024 median CPU time -19% to -38%, phi_J statistically equal).
 """
 
 from __future__ import annotations
@@ -48,7 +48,7 @@ import numpy as np
 
 from jamflow.minimize.creep import CreepTrigger
 
-RIGID_CREEP_FORCE = 1e-6  # rigid bodies: their minimisations also creep at 1e-9 - 5e-9 (docs/nmers.md)
+RIGID_CREEP_FORCE = 1e-6  # rigid bodies: their minimisations also creep at 1e-9 - 5e-9 (docs/notes/nmers.md)
 SKIN = 0.05  # candidate pairs within sigma + SKIN (diameters): the gaps a step may close
 SHIFT = 1e-12  # mu, relative to the largest diagonal of J^T J
 ARMIJO = 1e-4
@@ -276,8 +276,8 @@ class PolishSteps:
 
 def polish_trigger(packing, after: int) -> CreepTrigger:
     """The polish's measured trigger: rigid bodies every ``after`` iterations from
-    ``RIGID_CREEP_FORCE`` (docs/nmers.md, "The creep of rigid bodies"); disks and spheres once,
-    below ``CREEP_FORCE`` (docs/speed-2.md sections 8 and 11); at multiples of ``after``."""
+    ``RIGID_CREEP_FORCE`` (docs/notes/nmers.md, "The creep of rigid bodies"); disks and spheres once,
+    below ``CREEP_FORCE`` (docs/notes/speed-2.md sections 8 and 11); at multiples of ``after``."""
     if packing.shape.kind == "rigid":
         return CreepTrigger(after, every=after, creep_force=RIGID_CREEP_FORCE, aligned=True)
     return CreepTrigger(after, aligned=True)

@@ -3,13 +3,13 @@
 Methods:
 - ``fire``: LAMMPS ``min_style fire`` (FIRE 2.0), ``min_modify norm max``.
 - ``cg``: Polak-Ribiere conjugate gradient, ``min_modify line forcezero`` (the default
-  backtracking line search stalls at forces ~1e-10, see docs/failure-modes.md).
+  backtracking line search stalls at forces ~1e-10, see docs/notes/failure-modes.md).
 - ``md``: damped molecular dynamics (velocity Verlet, ``fix nve``) with one of two dampings:
   ``md_damping="viscous"`` (default), ``fix viscous b``: a drag -b v on every particle. It
   also damps rattlers and is not Galilean invariant.
   ``md_damping="pairwise"``, ``fix jamflow/damping b`` (jamflow's plugin): seed eq. 2.3
   exactly, -b (v_ij . rhat_ij) rhat_ij on every pair in contact; conserves momentum and
-  leaves free (rattler) and tangential motion undamped. docs/damped-md.md compares them.
+  leaves free (rattler) and tangential motion undamped. docs/notes/damped-md.md compares them.
   For ellipsoids ``fix nve/asphere`` + ``fix langevin`` at T = 0 with ``angmom`` (drag
   ``rotating_damping`` on translations and rotations, the only LAMMPS route that turns them).
 
@@ -18,7 +18,7 @@ Stopping rules, checked after every ``window`` iterations (LAMMPS runs the windo
    the contact stiffness, since round-off in positions of a box of side L limits forces to
    ~L * 1e-16 * d2V/dr2; repulsive LJ is 72x stiffer at contact than the linear spring;
    ellipses/spheroids start from 5e-13 instead of 1e-14: near onset their quartic modes make
-   every minimiser creep, docs/ellipses.md),
+   every minimiser creep, docs/notes/ellipses.md),
    and, for particles that turn, every generalized torque component tau_a / d_k below it too
    (torque balance; d_k the rotational length of ``jamflow.model.shapes``).
 2. ``energy-below-vmin``: energy per particle below ``v_min`` (seed rule b, V_min = 1e-16),

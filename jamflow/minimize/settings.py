@@ -29,7 +29,7 @@ class MinimizerSettings:
     v_min: float = 1e-16  # seed's V_min (per particle)
     max_iterations: int = 500_000
     window: int = 10000  # iterations per LAMMPS call between rule checks
-    timestep: float = 0.05  # FIRE initial step (0.1 diverges: docs/failure-modes.md), in sqrt(m diameter^2 / eps)
+    timestep: float = 0.05  # FIRE initial step (0.1 diverges: docs/notes/failure-modes.md), in sqrt(m diameter^2 / eps)
     md_timestep: float = 0.1  # damped-MD step
     damping: float = 0.3  # md only: damping coefficient b, in sqrt(m eps) / diameter
     md_damping: str = "viscous"  # md only: "viscous" (-b v on every particle) or "pairwise" (seed eq. 2.3)
@@ -38,7 +38,7 @@ class MinimizerSettings:
     stress: str = "iso"  # with pressure: iso | aniso (each P_aa) | tri (also the shear stresses -> 0)
     # md of particles that turn (LAMMPS ellipsoids: fix langevin at T = 0, drag rate b / m on translations
     # and rotations). Near onset 0.01 reached the force tolerance where 0.3 was 500x off after 3e5 steps
-    # (docs/ellipses.md)
+    # (docs/notes/ellipses.md)
     rotating_damping: float = 0.01
     # what a creeping minimisation (not converged, max force below 1e-9; 1e-6 for the polish of rigid bodies)
     # does between FIRE windows at a fixed box:
@@ -46,7 +46,7 @@ class MinimizerSettings:
     # active-set steps (``jamflow.minimize.polish``; disks/spheres and rigid bodies, linear spring), "off"; "auto" =
     # what was measured to pay: the polish for rigid bodies (repeated every creep_after iterations) and for
     # 2D disks (once) with the linear spring, soft modes for the other shapes that turn (ellipses, spheroids,
-    # rigid bodies with other laws) (docs/nmers.md, docs/soft-modes.md, docs/speed-2.md section 8), nothing
+    # rigid bodies with other laws) (docs/notes/nmers.md, docs/notes/soft-modes.md, docs/notes/speed-2.md section 8), nothing
     # otherwise
     creep: str = "auto"
     creep_after: int | None = None  # iterations before the first attempt; None: the method's measured value
@@ -77,7 +77,7 @@ class MinimizerSettings:
             self._check_md()
 
     def _check_md(self) -> None:
-        """The explicit damping must not overshoot (docs/damped-md.md derives both limits)."""
+        """The explicit damping must not overshoot (docs/notes/damped-md.md derives both limits)."""
         bdt = self.damping * self.md_timestep
         if self.rotating_damping * self.md_timestep >= 2.0:
             raise ValueError(f"rotating_damping x md_timestep = {self.rotating_damping * self.md_timestep:g} >= 2: "

@@ -1,10 +1,10 @@
 """Newton steps along the softest modes of a creeping minimisation.
 
 Near onset a hypostatic packing of rigid bodies has a few modes whose eigenvalues lie far below
-the contact stiffness (the quartic modes of docs/modes-rotations.md, held by the pressure
+the contact stiffness (the quartic modes of docs/notes/modes-rotations.md, held by the pressure
 only; 3D dimers, alpha 1.5, N = 128: one at 2.6e-7 eps/diameter^2 below a band starting at
 2.6e-5). FIRE relaxes such a mode at a rate ~ sqrt(lambda) per unit time, so the final
-minimisation creeps: 7.8e5 iterations at max force 5e-11 in one seed of docs/nmers.md, where
+minimisation creeps: 7.8e5 iterations at max force 5e-11 in one seed of docs/notes/nmers.md, where
 the residual force lay along that one mode (1.1e-10 of its 1.1e-10 norm).
 
 ``SoftModeSteps`` is a strategy of ``minimize.creep``: once a minimisation has run ``after``
@@ -16,7 +16,7 @@ xi -> xi - a sum_k c_k / |lambda_k| e_k over the modes with |lambda_k| > ``ZERO_
 contact stiffness (the trivial translations and free rotations excluded), with a in
 ``STEP_FACTORS`` the factor of lowest energy; the step is kept only if it lowers the energy,
 else the configuration is put back. FIRE then resumes. It repeats every ``after`` iterations.
-Unlike the disks' saddle escape of docs/speed-2.md (negative modes only, measured not to pay),
+Unlike the disks' saddle escape of docs/notes/speed-2.md (negative modes only, measured not to pay),
 it follows the positive soft modes too, where the creep of rigid bodies is.
 """
 

@@ -17,7 +17,7 @@ lattice with the tilts folded into LAMMPS's range (xy, xz in [-lx/2, lx/2), yz i
 [-ly/2, ly/2)); the lattice-dependent operations (``wrap``, ``minimum_image``, ``widths``)
 and the cell handed to LAMMPS and freud use the reduced cell, so they do not depend on how
 the strain was reached.
-See docs/shear-cell.md.
+See docs/notes/shear-cell.md.
 
 Walls (seed section 2.3): an axis that is not ``periodic`` is bounded by flat walls at its
 faces, x_a = 0 and x_a = L_a; separations along it are direct (no image) and positions are

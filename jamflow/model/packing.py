@@ -206,7 +206,7 @@ def separated_positions(shape, diameters, orientations, box: Box, rng: np.random
     position, drawn again while any of its sites overlaps a site of a body already placed
     (minimum image). Soft
     concave bodies started on top of each other can stay interlocked (two crossed dimers at
-    alpha = 2 are a local energy minimum, site overlaps 1 - 1/sqrt 2: docs/nmers.md)."""
+    alpha = 2 are a local energy minimum, site overlaps 1 - 1/sqrt 2: docs/notes/nmers.md)."""
     n, dim = len(diameters), box.dim
     local = shape.world_sites(np.zeros((n, dim)), orientations, diameters)  # (N, S, d) about each centre
     site_d = diameters[:, None] * shape.site_diameters[None, :]

@@ -8,7 +8,7 @@ the cell list compiled ahead of time with the disk kernels (``engines.compiled.c
 pair set as scipy's periodic cKDTree, which serves when that module is not built); tilted ones a
 cKDTree over the wrapped positions plus the ghost images that lie within ``rmax`` of the cell.
 scipy.spatial is imported only where a cKDTree is used (0.3 CPU s of a disk jam's start-up).
-See docs/shear-cell.md. Walled axes (``Box.periodic``) have no images: the search is not periodic
+See docs/notes/shear-cell.md. Walled axes (``Box.periodic``) have no images: the search is not periodic
 along them and no ghost crosses them.
 """
 

@@ -5,7 +5,7 @@ The state the elastic moduli are measured on (seed section 4.5; O'Hern et al., P
 ``change_box ... remap``; orientations unchanged), then one energy minimisation at that fixed
 box with the seed's stopping rules (``jamflow.minimize.rules``). The minimisation can rearrange the
 packing; if it relaxes to V < V_min (measured: 3 of 20 2D N = 256 spring packings compressed by
-1e-3 from onset, none of 20 at 1e-6, 1e-5, 1e-4, 1e-2; docs/moduli.md) the result is not jammed and
+1e-3 from onset, none of 20 at 1e-6, 1e-5, 1e-4, 1e-2; docs/notes/moduli.md) the result is not jammed and
 ``JammingFailed`` is raised.
 ``dphi`` is an absolute step in
 packing fraction; the onset packing's own distance above phi_J (V ~ 1e-16: overlaps ~1e-8) is

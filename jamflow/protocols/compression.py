@@ -242,7 +242,7 @@ def bisect(sim, settings: CompressionSettings, *, observers=()) -> JamResult:
         in_window = settings.v_tol < v < 2 * settings.v_tol and result.reason != "energy-below-vmin"
         if in_window and result.reason == "iteration-cap" and resumes < WINDOW_RESUMES:
             # not yet a minimum (near onset FIRE can creep off a saddle for 10^5-10^6
-            # iterations, docs/speed.md): keep minimising before the window decides
+            # iterations, docs/notes/speed.md): keep minimising before the window decides
             resumes += 1
             stepper.last_step = 0.0
             continue

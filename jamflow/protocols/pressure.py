@@ -38,7 +38,7 @@ from jamflow.model.packing import Packing
 from jamflow.minimize.rules import minimize
 
 FLOOR_MARGIN = 1000.0
-DEFAULT_START_PRESSURE = 1e-4  # from a random start; starting higher raises phi_J (docs/walls-gravity-pressure.md)
+DEFAULT_START_PRESSURE = 1e-4  # from a random start; starting higher raises phi_J (docs/notes/walls-gravity-pressure.md)
 PRESSURE_COLUMNS = ("target_pressure", "phi", "pressure", "shear_stress", "energy_per_particle", "iterations",
                     "max_force", "max_box_force", "converged")  # max_box_force: largest box (or torque) force component
 

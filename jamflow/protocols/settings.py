@@ -87,7 +87,7 @@ def seed_protocol(**overrides) -> CompressionSettings:
 
 
 def fast_protocol(**overrides) -> CompressionSettings:
-    """Same stopping rule, fewer and cheaper minimisations (docs/speed.md measures its bias)."""
+    """Same stopping rule, fewer and cheaper minimisations (docs/notes/speed.md measures its bias)."""
     return CompressionSettings(**{**FAST_PROTOCOL, **overrides})
 
 
@@ -97,5 +97,5 @@ PROTOCOLS = {"seed": seed_protocol, "fast": fast_protocol}
 # "fast" is the default since 20 seeds at N = 256 gave mean phi_J 0.83820 +- 0.00063 against
 # 0.83784 +- 0.00064 for "seed" (paired difference +0.00036 +- 0.00074), 4x faster in the median,
 # and at N = 1024 0.84018 +- 0.00027 against 0.83980 +- 0.00039 (paired +0.00039 +- 0.00042),
-# 3.5x fewer iterations: docs/protocol-bias-n256.csv, -n1024.csv, made by benchmarks/protocol_bias.py.
+# 3.5x fewer iterations: docs/notes/protocol-bias-n256.csv, -n1024.csv, made by benchmarks/protocol_bias.py.
 DEFAULT_PROTOCOL = "fast"

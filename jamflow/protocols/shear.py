@@ -12,7 +12,7 @@ i < j, with r_ij < sigma_ij; the same pair touching through another periodic ima
 separation jumps by more than half a contact distance) counts as removed and added.
 
 Strains are the accumulated Lees-Edwards strain of ``Box`` (any value; the engines hold the
-reduced cell and flip it at |xy| = l_x / 2, docs/shear-cell.md).
+reduced cell and flip it at |xy| = l_x / 2, docs/notes/shear-cell.md).
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 discrete species), S(k), Q6 global/local, G, the g(r) - 1 envelope length and the q6
 correlation functions with their length. FILES are jamflow HDF5 packings or LAMMPS data /
 dump files (every dump frame counts as one packing); all of them form one ensemble.
-Results go to one HDF5 file (layout in docs/structure.md) and PNG plots. Jamflow packings
+Results go to one HDF5 file (layout in docs/notes/structure.md) and PNG plots. Jamflow packings
 are checked for force balance first (a warning for each that is not at an energy minimum;
 order/force_balanced is 1, 0, or -1 for LAMMPS inputs, whose potential is unknown)."""
 

@@ -2,7 +2,7 @@
 particles of a jammed disk/sphere packing IN.h5 to ALPHA in steps of D, re-jamming at every
 step (random major-axis directions at the first one). The last packing is written to --out
 (checked like jamflow jam's), with one row per step (phi_J, <z>, floaters, ...) in its
-``anneal`` group; docs/ellipses.md compares the result with compression."""
+``anneal`` group; docs/notes/ellipses.md compares the result with compression."""
 
 from __future__ import annotations
 

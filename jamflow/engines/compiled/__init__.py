@@ -13,7 +13,7 @@ first call of any of them (``start_numba``) imports numba, swaps every deferred 
 loaded modules for its numba dispatcher (so compiled code calls compiled code, as with
 ``numba.njit`` at import) and runs the registrations (``overload`` and friends) queued by
 ``when_numba_starts``. A disk jam served by the ahead-of-time kernels never starts numba (~1 CPU s of
-start-up; docs/speed-2.md section 12). Code outside jamflow that calls jamflow's kernels from
+start-up; docs/notes/speed-2.md section 12). Code outside jamflow that calls jamflow's kernels from
 its own numba functions calls ``start_numba()`` first (numba cannot type a ``Deferred``; see
 benchmarks/kernel.py).
 

@@ -1,7 +1,7 @@
 """The disk/sphere kernels compiled ahead of time: a disk jam without numba's start-up.
 
 numba's first call in a process costs ~1 CPU s (import, target set-up, cache load) and scipy.spatial's
-import 0.3 s more, where a whole N = 64 jam needs 0.06 s (docs/speed-2.md sections 7.1, 10). So the
+import 0.3 s more, where a whole N = 64 jam needs 0.06 s (docs/notes/speed-2.md sections 7.1, 10). So the
 compiled engine's FIRE and force evaluation for disks and spheres with the spring law (``alpha`` 2:
 harmonic, 2.5: Hertzian), and the cell-list pair search of ``cells``, are compiled once with
 numba.pycc (``aot_build``) into an extension module that imports no numba; ``CompiledEngine`` calls

@@ -4,7 +4,7 @@ numba.pycc compiles the compiled engine's own disk/sphere FIRE and force evaluat
 law -- the very functions ``fire.fire`` and ``fire.forces`` over the ``spheres`` kernel, behind
 wrappers of plain arrays with explicit signatures that build the ``Pairs`` / ``Field`` /
 ``SpringParams`` tuples inside compiled code -- and ``cells.cell_pairs`` into one extension module
-that imports no numba at run time (docs/speed-2.md sections 10 and 12). ``aot`` runs this in a
+that imports no numba at run time (docs/notes/speed-2.md sections 10 and 12). ``aot`` runs this in a
 subprocess and moves the module into its cache.
 """
 
@@ -53,7 +53,7 @@ def forces_spheres_spring(pi, pj, shift, sigma, alpha, epsilon, h, walled, half,
 
 def build(out_dir: Path, target_cpu: str = "host") -> None:
     """Compile the module ``MODULE`` into ``out_dir`` for ``target_cpu`` ("host": this CPU, as numba's
-    own kernels; "": pycc's generic target, 5-19 % slower per iteration, docs/speed-2.md section 10)."""
+    own kernels; "": pycc's generic target, 5-19 % slower per iteration, docs/notes/speed-2.md section 10)."""
     start_numba()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # NumbaPendingDeprecationWarning: pycc (still in numba 0.68)

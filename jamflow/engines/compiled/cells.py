@@ -1,5 +1,5 @@
 """A cell-list pair search for orthogonal boxes, compiled ahead of time into the disk/sphere
-kernels (``aot_build``) so that a disk jam needs no scipy.spatial (docs/speed-2.md sections 7.1
+kernels (``aot_build``) so that a disk jam needs no scipy.spatial (docs/notes/speed-2.md sections 7.1
 and 10): the same pair set as scipy's periodic cKDTree (per axis the difference folded into
 [-L/2, L/2], squared distance <= rmax^2). ``jamflow.model.pairs.neighbor_pairs`` calls the ahead-of-time
 copy when it is there; this numba one is what ``aot_build`` compiles and the tests compare."""

@@ -8,7 +8,7 @@ notes), so ``LammpsEngine`` relaxes them by damped rigid-body dynamics at zero t
 Not ``fix rigid/small``: its ``setup()`` allocates the Langevin force array and adds it to the body
 forces before ``post_force`` first fills it, so the first half-step of a run integrates
 uninitialised memory (found by valgrind; it made the dimer deck blow up or give NaN pressures
-depending on the environment's size: docs/nmers.md). ``fix rigid`` zeroes that array in setup.
+depending on the environment's size: docs/notes/nmers.md). ``fix rigid`` zeroes that array in setup.
 Intra-body site pairs are excluded (``neigh_modify exclude molecule/intra all``).
 
 LAMMPS computes site forces; this module does the rigid-body bookkeeping from the sites:

@@ -37,7 +37,7 @@ from jamflow.model.shapes.union import union_moments
 # default force tolerance before box scaling (``mechanics.force_floor``): disks, spheres, rigid bodies
 FORCE_TOL_BASE = 1e-14
 # ellipses/spheroids: near onset FIRE creeps along the quartic (rotational) modes: N = 64, alpha = 1.6
-# reached max force 5e-13 after 2e4 iterations of the final minimisation, 2e-13 after 3.4e5 (docs/ellipses.md)
+# reached max force 5e-13 after 2e4 iterations of the final minimisation, 2e-13 after 3.4e5 (docs/notes/ellipses.md)
 ELLIPSOID_FORCE_TOL_BASE = 5e-13
 
 

@@ -1,3 +1,5 @@
+// SPDX-License-Identifier: GPL-2.0-only -- part of jamflow's LAMMPS plugin, GPL-2.0 like the LAMMPS headers it
+// compiles against (the rest of jamflow is MIT); see NOTICE (repository root) and COPYING (the GPL-2.0 text) here.
 /* jamflow LAMMPS plugin: the pairwise normal damping of damped MD (seed chapter eq. 2.3).
 
      fix ID group jamflow/damping B

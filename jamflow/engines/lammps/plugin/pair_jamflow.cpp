@@ -1,3 +1,5 @@
+// SPDX-License-Identifier: GPL-2.0-only -- part of jamflow's LAMMPS plugin, GPL-2.0 like the LAMMPS headers it
+// compiles against (the rest of jamflow is MIT); see NOTICE (repository root) and COPYING (the GPL-2.0 text) here.
 /* jamflow LAMMPS plugin: purely repulsive contact potentials with per-atom sizes.
 
    Distributed under the GNU General Public License, version 2 (GPL-2.0), like LAMMPS: it is

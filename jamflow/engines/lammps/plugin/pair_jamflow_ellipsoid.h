@@ -1,3 +1,5 @@
+// SPDX-License-Identifier: GPL-2.0-only -- part of jamflow's LAMMPS plugin, GPL-2.0 like the LAMMPS headers it
+// compiles against (the rest of jamflow is MIT); see NOTICE (repository root) and COPYING (the GPL-2.0 text) here.
 /* jamflow LAMMPS plugin: pair style jamflow/ellipsoid for atom_style ellipsoid.
 
      pair_style jamflow/ellipsoid CONTACT spring ALPHA CUTOFF   pair_coeff * * EPSILON

@@ -1,3 +1,5 @@
+// SPDX-License-Identifier: GPL-2.0-only -- part of jamflow's LAMMPS plugin, GPL-2.0 like the LAMMPS headers it
+// compiles against (the rest of jamflow is MIT); see NOTICE (repository root) and COPYING (the GPL-2.0 text) here.
 /* jamflow LAMMPS plugin: what its styles share (pair_jamflow.cpp, pair_jamflow_ellipsoid.h,
    fix_jamflow_damping.cpp): checked numeric arguments, the largest diameter over all MPI ranks,
    the arrays of a neighbour list, the overlap test of two spheres (sigma_ij = radius_i + radius_j,
