@@ -118,6 +118,56 @@ def test_a_bar_closed_before_its_first_draw_still_shows_its_final_line():
     assert "jam: 1min" in shown.getvalue() and "min/s" in shown.getvalue() and refused.getvalue() == ""
 
 
+def test_a_finished_jam_bar_ends_at_100_percent(capsys):
+    """The compression bar's total is an estimate (halvings left); a run that ends sets it to the
+    count, so the last line reads 100 % (issue 29: the README's first jam ended at "76% 42/55").
+    Before the first increment (dphi 0) the bar shows no total: it drew "1/1 100%" there."""
+    from jamflow.cli.progress import CompressionProgress
+
+    result = type("R", (), {"energy_per_particle": 1e-12})()
+    with CompressionProgress(disable=False) as progress:
+        progress({"step": 0, "phi": 0.8, "dphi": 0.0, "result": result})
+        assert progress.bar.total is None
+        for k, dphi in enumerate((1e-3, 5e-4, 2.5e-4), 1):
+            progress({"step": k, "phi": 0.8 + dphi, "dphi": dphi, "result": result})
+        assert progress.bar.total > 4  # still the estimate while running
+    last = capsys.readouterr().err.replace("\r", "\n").strip().splitlines()[-1]
+    assert "100%" in last and "4/4" in last
+
+
+def test_the_summary_names_the_kernels_and_the_file_keeps_engine_numba(tmp_path, capsys, monkeypatch):
+    """The summary line says which compiled kernels ran ("compiled, numba" here, with the ahead-of-time
+    ones off); the file's engine attribute stays "numba" (a file contract other tools read)."""
+    import h5py
+
+    monkeypatch.setenv("JAMFLOW_AOT", "0")
+    assert main(["jam", "--n", "16", "--out", str(tmp_path / "p.h5"), "--quiet"]) == 0
+    assert "iterations (compiled, numba)," in capsys.readouterr().out
+    with h5py.File(tmp_path / "p.h5") as f:
+        assert f["protocol"].attrs["engine"] == "numba"
+
+
+def test_the_kernels_are_built_before_the_bar_starts(tmp_path, monkeypatch):
+    """A first disk jam builds the ahead-of-time kernels (one plain line, ~20 s) before its progress
+    bar exists, so the bar times minimisations, not the build (issue 29)."""
+    import jamflow.cli.commands.jam as jam_command
+    from jamflow.cli.progress import CompressionProgress
+    from jamflow.engines.compiled import aot
+
+    events = []
+    real = aot.kernels_for
+    monkeypatch.setattr(aot, "kernels_for", lambda packing: events.append("build") or real(packing))
+
+    class Recorded(CompressionProgress):
+        def __init__(self, *args, **kwargs):
+            events.append("bar")
+            super().__init__(*args, **kwargs)
+
+    monkeypatch.setattr(jam_command, "CompressionProgress", Recorded)
+    assert main(["jam", "--n", "16", "--out", str(tmp_path / "p.h5"), "--quiet"]) == 0
+    assert events == ["build", "bar"]
+
+
 def test_a_valueerror_jamflow_raises_is_bad_input(tmp_path, capsys, monkeypatch):
     """jamflow's own ValueError (its check of the input): one line, exit 2, no traceback."""
     from jamflow.model.sizes import parse_sizes

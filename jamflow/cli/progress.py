@@ -60,7 +60,11 @@ class CompressionProgress:
     """A tqdm bar over minimisations with rate, phi, V and the current increment.
 
     The total is unknown in advance (the bisection ends when V lands in the window), so
-    the bar's ETA estimates it from the halvings still needed to shrink dphi to ~1e-9.
+    the bar's ETA estimates it from the halvings still needed to shrink dphi to ~1e-9; before
+    the first increment (dphi 0: the minimisation at the start) there is nothing to estimate
+    from and the bar shows a count without a total. A run that ends sets the total to the
+    minimisations it made, so its last line reads 100 % (the estimate is usually above or below
+    the count: issue 29); a run that fails leaves the bar where it stopped.
     """
 
     def __init__(self, disable: bool = False):
@@ -69,13 +73,18 @@ class CompressionProgress:
     def __enter__(self):
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, exc_type, *exc):
+        if exc_type is None and self.bar.n > 0:
+            self.bar.total = self.bar.n  # the count is known now: the final line reads 100 %
         self.bar.close()
 
     def __call__(self, step: dict) -> None:
         res = step["result"]
-        halvings_left = max(0.0, math.log2(max(step["dphi"], 1e-300) / 1e-9))
-        self.bar.total = max(self.bar.n + 1, int(self.bar.n + 1 + 2 * halvings_left))
+        if step["dphi"] > 0:
+            halvings_left = max(0.0, math.log2(step["dphi"] / 1e-9))
+            self.bar.total = max(self.bar.n + 1, int(self.bar.n + 1 + 2 * halvings_left))
+        else:
+            self.bar.total = None  # no increment yet: no total the bar could know
         self.bar.set_postfix_str(f"phi={step['phi']:.9f} V={res.energy_per_particle:.2e} dphi={step['dphi']:.1e}",
                                  refresh=False)
         self.bar.update(1)

@@ -120,7 +120,8 @@ class Engine(Protocol):
     Everything the minimisers, protocols and commands call on an engine is here; both
     ``CompiledEngine`` and ``LammpsEngine`` implement all of it."""
 
-    name: str  # "numba" or "lammps": recorded with every result
+    name: str  # "numba" or "lammps": recorded with every result (the files' ``engine``)
+    kernels: str  # the code that ran: "ahead-of-time" or "numba" (compiled engine), "lammps"; summary lines only
     template: object  # the Packing it was built from (shape, sizes, potential)
     box: object  # the current Box
     commands: list  # LAMMPS commands sent (empty for engines that send none)

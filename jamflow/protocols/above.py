@@ -24,7 +24,7 @@ import numpy as np
 from jamflow.engines.choose import open_engine
 from jamflow.minimize.settings import MinimizerSettings, MinimizeResult
 from jamflow.model.packing import Packing
-from jamflow.protocols.outcome import JammingFailed
+from jamflow.protocols.outcome import JammingFailed, engine_label
 from jamflow.minimize.rules import minimize
 
 
@@ -40,6 +40,7 @@ class AboveResult:
     minimization: MinimizeResult
     engine: str
     seconds: float
+    kernels: str = ""  # the engine's ``kernels`` (summary line only)
 
     @property
     def pressure(self) -> float:
@@ -49,7 +50,7 @@ class AboveResult:
         m = self.minimization
         return (f"above onset by {self.dphi:g}: phi = {self.packing.phi:.10f}  V = {self.energy_per_particle:.3e}  "
                 f"P = {self.pressure:.3e}  max|F| = {m.max_force:.1e}  stop: {m.reason}, {m.iterations} iterations "
-                f"({self.engine}), {self.seconds:.2f} s")
+                f"({engine_label(self.engine, self.kernels)}), {self.seconds:.2f} s")
 
 
 def check_dphi(dphi, phi: float) -> float:
@@ -83,7 +84,7 @@ def compress_above(packing: Packing, dphi: float, minimizer: MinimizerSettings |
     with open_engine(packing, minimizer.method, engine, **(engine_options or {})) as sim:
         sim.set_box(packing.box.scaled((phi / (phi + dphi)) ** (1.0 / packing.dim)))
         result = minimize(sim, minimizer)
-        state, out, name = sim.state(), sim.packing(), sim.name
+        state, out, name, kernels = sim.state(), sim.packing(), sim.name, sim.kernels
     if result.reason == "blown-up":
         raise RuntimeError(f"the minimisation at phi = {phi + dphi:.10f} diverged (V = {result.energy_per_particle:.3g}, "
                            f"max force {result.max_force:.3g}); lower the minimiser timestep")
@@ -95,4 +96,4 @@ def compress_above(packing: Packing, dphi: float, minimizer: MinimizerSettings |
         warnings.warn(f"the minimisation at phi_J + {dphi:g} stopped by '{result.reason}' with max force "
                       f"{result.max_force:.2e}; force balance is only that good", stacklevel=2)
     return AboveResult(out, phi, float(dphi), result.energy_per_particle, state.pressure_tensor, result, name,
-                       time.perf_counter() - start)
+                       time.perf_counter() - start, kernels)

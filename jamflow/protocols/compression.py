@@ -444,5 +444,5 @@ def _finish(engine, phi, result, rows, settings, start_time, version) -> JamResu
     return JamResult(packing=packing, phi_j=phi, energy_per_particle=result.energy_per_particle,
                      pressure_tensor=state.pressure_tensor, max_force=result.max_force, history=history,
                      settings=settings, seconds=time.perf_counter() - start_time, lammps_version=version,
-                     engine=engine.name, max_torque=result.max_torque,
+                     engine=engine.name, kernels=engine.kernels, max_torque=result.max_torque,
                      wall_forces=wall_loads(packing) if packing.box.walls else None, counters=engine.counters())

@@ -57,7 +57,7 @@ def settle(start: Packing, minimizer: MinimizerSettings | None = None, *, observ
                 observe({"step": step, "phi": rows["phi"][-1], "dphi": 0.0, "result": result})
             if result.converged:
                 break
-        name = sim.name
+        name, kernels = sim.name, sim.kernels
     if not result.converged:
         warnings.warn(f"settling stopped by '{result.reason}' with max force {result.max_force:.2e}: force balance "
                       "is only as good as that", stacklevel=2)
@@ -71,4 +71,5 @@ def settle(start: Packing, minimizer: MinimizerSettings | None = None, *, observ
     return JamResult(packing=packing, phi_j=pile_fraction(packing), energy_per_particle=result.energy_per_particle,
                      pressure_tensor=state.pressure_tensor, max_force=result.max_force, history=history,
                      settings=CompressionSettings(phi0=start.phi, minimizer=minimizer), seconds=time.perf_counter() - t0,
-                     lammps_version=lammps_version(), engine=name, max_torque=result.max_torque, wall_forces=loads)
+                     lammps_version=lammps_version(), engine=name, kernels=kernels,
+                     max_torque=result.max_torque, wall_forces=loads)

@@ -27,10 +27,11 @@ class JamResult:
     settings: CompressionSettings
     seconds: float
     lammps_version: int
-    engine: str = "lammps"  # which engine minimised: "lammps" or "numba"
+    engine: str = "lammps"  # which engine minimised: "lammps" or "numba" (the files' engine attribute)
     max_torque: float = 0.0  # largest generalized torque component tau / d_k (0 for disks, spheres)
     wall_forces: np.ndarray | None = None  # (d, 2, d) force of the particles on each face (walled boxes)
     counters: dict = field(default_factory=dict)  # what the engine's kernel counted (ellipsoids: fallbacks, ...)
+    kernels: str = ""  # the engine's ``kernels``: "ahead-of-time" / "numba" (compiled) or "lammps"
 
     @property
     def pressure(self) -> float:
@@ -57,7 +58,15 @@ class JamResult:
                         for a, (lo, hi) in zip(self.packing.box.walls, self.wall_pressures))
         return (f"phi_J = {self.phi_j:.10f}  V = {self.energy_per_particle:.3e}  "
                 f"P = {self.pressure:.3e}{walls}  max|F| = {self.max_force:.1e}{torque}  "
-                f"{self.minimizations} minimisations, {self.iterations} iterations ({self.engine}), {self.seconds:.2f} s")
+                f"{self.minimizations} minimisations, {self.iterations} iterations ({engine_label(self.engine, self.kernels)}), {self.seconds:.2f} s")
+
+
+def engine_label(engine: str, kernels: str = "") -> str:
+    """The engine as a summary line names it: "compiled, ahead-of-time" or "compiled, numba" for the
+    compiled engine (which kernels ran; files keep ``engine`` = "numba"), "lammps" for LAMMPS."""
+    if engine == "numba":
+        return f"compiled, {kernels or 'numba'}"
+    return engine
 
 
 class JammingFailed(RuntimeError):

@@ -36,6 +36,7 @@ from jamflow.model.box import STRESS_MODES
 from jamflow.minimize.settings import MinimizerSettings
 from jamflow.model.packing import Packing
 from jamflow.minimize.rules import minimize
+from jamflow.protocols.outcome import engine_label
 
 FLOOR_MARGIN = 1000.0
 DEFAULT_START_PRESSURE = 1e-4  # from a random start; starting higher raises phi_J (docs/notes/walls-gravity-pressure.md)
@@ -127,6 +128,7 @@ class PressureResult:
     seconds: float
     engine: str
     lammps_version: int
+    kernels: str = ""  # the engine's ``kernels`` (summary line only)
 
     @property
     def phi(self) -> float:
@@ -161,7 +163,7 @@ class PressureResult:
         return (f"P_target = {target:.3e}  P = {self.pressure:.6e} (rel. {self.pressure / target - 1:+.1e})  "
                 f"phi = {self.phi:.10f}  {phi_j_text(self.phi_j)}  shear stress {shear:.1e}  "
                 f"max|F| = {self.max_force:.1e}  {len(self.history['phi'])} pressures, {self.iterations} iterations "
-                f"({self.engine}), {self.seconds:.2f} s")
+                f"({engine_label(self.engine, self.kernels)}), {self.seconds:.2f} s")
 
 
 def phi_j_text(phi_j: float) -> str:
@@ -209,9 +211,9 @@ def jam_at_pressure(start: Packing, settings: PressureSettings | None = None, *,
             if not result.converged:
                 warnings.warn(f"the minimisation at P = {target:g} stopped by '{result.reason}' (max force "
                               f"{result.max_force:.2e}, box force {result.max_torque:.2e})", stacklevel=2)
-        name = sim.name
+        name, kernels = sim.name, sim.kernels
     history = {k: np.array(v) for k, v in rows.items()}
     history["reason"] = np.array(reasons).astype("S")
     return PressureResult(packing, state.pressure_tensor, history, settings, time.perf_counter() - t0, name,
-                          lammps_version())
+                          lammps_version(), kernels)
 

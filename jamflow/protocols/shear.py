@@ -29,7 +29,7 @@ from jamflow.engines.choose import open_engine
 from jamflow.model.packing import Packing
 from jamflow.model.pairs import separations
 from jamflow.protocols.settings import CompressionSettings, fast_protocol
-from jamflow.protocols.outcome import JamResult
+from jamflow.protocols.outcome import JamResult, engine_label
 from jamflow.protocols.compression import bisect, check_resolution, check_strain
 
 MAX_STEPS = 1_000_000
@@ -115,6 +115,7 @@ class ShearPath:
     settings: CompressionSettings
     engine: str
     seconds: float
+    kernels: str = ""  # the engine's ``kernels`` (summary line only)
 
     def column(self, name: str) -> np.ndarray:
         """gamma, phi_j, shear_stress or changed at every step, as an array."""
@@ -141,7 +142,7 @@ class ShearPath:
         g, phi = self.gamma, self.phi_j
         return (f"gamma {g[0]:.6g} -> {g[-1]:.6g} in {len(g) - 1} steps of {self.dgamma:.3g}: phi_J "
                 f"{phi.min():.8f}..{phi.max():.8f}, contact network changed at {self.n_changes} steps "
-                f"({self.engine}, {self.seconds:.1f} s)")
+                f"({engine_label(self.engine, self.kernels)}, {self.seconds:.1f} s)")
 
 
 def shear_strains(gamma0: float, dgamma, to) -> np.ndarray:
@@ -187,8 +188,8 @@ def shear(packing: Packing, dgamma: float, to: float, settings: CompressionSetti
                 _warn_if_rearranged(steps, dgamma)
             for observe in observers:
                 observe(steps[-1], k, len(strains) - 1)
-        name = sim.name
-    return ShearPath(steps, float(dgamma), settings, name, time.perf_counter() - start)
+        name, kernels = sim.name, sim.kernels
+    return ShearPath(steps, float(dgamma), settings, name, time.perf_counter() - start, kernels)
 
 
 def _static(sim, settings, gamma, before: Network | None, sigma) -> ShearStep:

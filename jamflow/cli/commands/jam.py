@@ -59,6 +59,7 @@ def run(args) -> int:
     if args.emit_deck:
         return emit(args, start, settings)
     t0 = time.perf_counter()
+    build_kernels_first(spec, start)
     with CompressionProgress(disable=args.quiet) as progress:
         result, checks = run_jam(spec, observers=[progress], prepared=prepared, destination=args.out)
     if spec.above is not None:
@@ -68,6 +69,18 @@ def run(args) -> int:
     save_jam_result(args.out, result, checks, target_pressure=spec.pressure, stress=spec.stress, force=args.force)
     print(f"{result.summary()}  -> {args.out} ({time.perf_counter() - t0:.2f} s)")
     return 0
+
+
+def build_kernels_first(spec: JamSpec, start) -> None:
+    """Build the ahead-of-time disk kernels, if this jam runs them and they are not built yet (once per
+    machine, ~20 s, announced by one line on stderr), before the progress bar starts: the bar then
+    counts minimisations only, instead of drawing a first "1/1 100%" line after the build (issue 29)."""
+    from jamflow.engines.choose import engine_name
+
+    if engine_name(start, spec.minimizer, spec.engine, pressure=spec.pressure is not None) == "numba":
+        from jamflow.engines.compiled.aot import kernels_for
+
+        kernels_for(start)
 
 
 def save_above(args, result, t0) -> int:

@@ -70,7 +70,9 @@ class CompiledEngine:
         self._built_at = self._x.copy()
         self._turned = np.zeros(n)
         self._counts = np.zeros(len(COUNTERS[packing.shape.kind]), np.int64)  # kernel counters of dropped lists
-        self._kernels = kernels_for(packing) or fire  # fire.fire / fire.forces, ahead of time where they exist
+        aot = kernels_for(packing)
+        self._kernels = aot or fire  # fire.fire / fire.forces, ahead of time where they exist
+        self.kernels = "ahead-of-time" if aot is not None else "numba"  # which ran (summary lines; name stays "numba")
 
     # lifecycle ---------------------------------------------------------------------------------
     def __enter__(self):

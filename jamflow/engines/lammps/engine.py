@@ -81,6 +81,7 @@ class LammpsEngine:
     """
 
     name = "lammps"
+    kernels = "lammps"
     CAPABILITIES = Capabilities(shapes=frozenset({"sphere", "ellipsoid", "rigid"}), potentials=frozenset({"spring", "rlj"}),
                                 methods=frozenset({"fire", "cg", "md"}), tilted_boxes=True, mpi=True,
                                 options=frozenset({"skin", "comm", "args"}),
