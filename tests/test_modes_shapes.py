@@ -258,3 +258,32 @@ def test_cli_stores_mode_character_and_profiles(tmp_path, capsys):
     assert (tmp_path / (target.stem + ".modes.png")).read_bytes()[:4] == b"\x89PNG"
     with h5py.File(target, "r") as f:
         assert "eigenvalues" not in f
+
+
+def test_cli_figure_colours_modes_by_character(tmp_path, monkeypatch):
+    """``jamflow modes`` on ellipses colours each mode of panel (a) by its translational fraction
+    (Figure 2.17's three branches) and draws the translational part of D(omega), as the API does:
+    it once dropped the eigenvectors before drawing, and every mode came out grey (0.5)."""
+    from matplotlib.axes import Axes
+
+    from jamflow.analysis.modes import branch_labels
+    from jamflow.cli.commands import modes
+
+    drawn, stairs = [], []
+    scatter, stair = Axes.scatter, Axes.stairs
+    monkeypatch.setattr(Axes, "scatter", lambda ax, x, y, **kw: drawn.append(np.asarray(kw["c"])) or scatter(ax, x, y, **kw))
+    monkeypatch.setattr(Axes, "stairs", lambda ax, v, e, **kw: stairs.append(kw.get("label")) or stair(ax, v, e, **kw))
+    target = tmp_path / ELLIPSES[0].name
+    target.write_bytes(ELLIPSES[0].read_bytes())
+    parser = argparse.ArgumentParser()
+    modes.add_arguments(parser)
+    assert modes.run(parser.parse_args([str(target)])) == 0
+    assert (tmp_path / (target.stem + ".modes.png")).read_bytes()[:4] == b"\x89PNG"
+    spec = Spectrum().compute(ellipses_packing := load_packing(target))
+    order = np.argsort(np.abs(spec.eigenvalues))[spec.dim:]
+    order = order[np.argsort(spec.eigenvalues[order])]
+    (colours,) = drawn
+    np.testing.assert_allclose(colours, spec.translational_fraction[order], atol=1e-8)
+    labels = branch_labels(spec)[order]
+    assert colours[labels == 2].max() < 0.5 < colours[labels == 3].min()  # rotational blue-red split, not grey
+    assert "translational part" in stairs and ellipses_packing.shape.oriented

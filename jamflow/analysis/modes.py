@@ -11,7 +11,7 @@ share of each eigenvector in the centre coordinates (the mode character; 1 - it 
   invariance). Frequencies omega_i = sqrt(e_i / M) with M = N m, m = 1 (the seed's definition,
   N including floaters), for e_i > e_min; unit mass and inertia m d_k^2, so xi has unit mass.
 - ``DensityOfStates``: D(omega) = (N(omega + d omega) - N(omega)) / d omega, modes per unit
-  frequency per packing, averaged over packings (seed Figure 2.16); with eigenvectors also its
+  frequency per packing, averaged over packings (seed Figure 2.16); with eigenvectors (or their kept fractions) also its
   translational part (each mode weighted by its translational fraction).
 - ``Stability``: mechanically stable (exactly d zero modes, none negative), stable at quartic
   order (every extra zero mode raises the energy as delta^4: hypostatic packings of ellipses
@@ -25,7 +25,7 @@ share of each eigenvector in the centre coordinates (the mode character; 1 - it 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import scipy.linalg as sla
@@ -49,6 +49,13 @@ class SpectrumResult:
     e_min: float
     mass: float  # M in omega = sqrt(e / M)
     complete: bool  # False: only the lowest m modes (sparse solver)
+    # the translational fractions kept by ``without_vectors`` (not compared, not in the repr)
+    kept_fraction: np.ndarray | None = field(default=None, repr=False, compare=False)
+
+    def without_vectors(self) -> "SpectrumResult":
+        """This spectrum without its eigenvectors ((d_f N')^2 numbers) but with their translational
+        fractions (m numbers), so that figures and D(omega) still show each mode's character."""
+        return replace(self, eigenvectors=None, kept_fraction=self.translational_fraction)
 
     @property
     def dim(self) -> int:
@@ -90,10 +97,11 @@ class SpectrumResult:
 
     @property
     def translational_fraction(self) -> np.ndarray | None:
-        """(m,) share of each eigenvector in the centre coordinates (None without vectors):
-        1 for every mode of disks and spheres, between 0 (purely rotational) and 1 otherwise."""
+        """(m,) share of each eigenvector in the centre coordinates (None without vectors, unless
+        ``without_vectors`` kept it): 1 for every mode of disks and spheres, between 0 (purely
+        rotational) and 1 otherwise."""
         if self.eigenvectors is None:
-            return None
+            return self.kept_fraction
         return self.dynamical.translational_fraction(self.eigenvectors)
 
     @property
@@ -239,7 +247,7 @@ class DensityOfStates:
         norm = len(spectra) * np.diff(edges)
         counts, _ = np.histogram(omegas, edges)
         translational = None
-        if all(s.eigenvectors is not None for s in spectra):
+        if all(s.translational_fraction is not None for s in spectra):
             weights = np.concatenate([s.translational_fraction[s.eigenvalues > s.e_min] for s in spectra])
             translational = np.histogram(omegas, edges, weights=weights)[0] / norm
         return DensityOfStatesResult(edges, counts / norm, len(spectra), len(omegas), translational)

@@ -48,7 +48,8 @@ def sorted_modes_with_character(ax, spectra):
         order = np.argsort(np.abs(s.eigenvalues))[s.dim:]
         order = order[np.argsort(s.eigenvalues[order])]
         omega = np.sqrt(np.abs(s.eigenvalues[order]) / s.mass)
-        colour = s.translational_fraction[order] if s.eigenvectors is not None else np.full(len(order), 0.5)
+        fraction = s.translational_fraction  # None only for a spectrum computed without vectors: grey
+        colour = fraction[order] if fraction is not None else np.full(len(order), 0.5)
         points = ax.scatter(np.arange(1, len(order) + 1) / s.n_dof, omega, c=colour, cmap="coolwarm_r", vmin=0,
                             vmax=1, s=6, lw=0)
     if spectra:

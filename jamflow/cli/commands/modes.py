@@ -10,7 +10,6 @@ of hypostatic packings against the missing contacts N' d_f - d + 1 - N_c)."""
 from __future__ import annotations
 
 import warnings
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -77,7 +76,8 @@ def run(args) -> int:
 def analyse_file(path, spectrum, save_vectors=False, force=False):
     """One packing: checks, spectrum, stability class, results file (``force``: it may replace a
     symlink, device or read-only file); the spectrum comes back without eigenvectors (they stay
-    in the results file with --save-vectors)."""
+    in the results file with --save-vectors) but with their translational fractions, which colour
+    the figure's modes by character and split D(omega)."""
     packing = load_packing(path)
     checks = checked(path, packing)
     spec = spectrum.compute(packing)
@@ -86,7 +86,7 @@ def analyse_file(path, spectrum, save_vectors=False, force=False):
     with replacing([out] if force else []):
         save_modes(out, path, spec, stab, vectors=save_vectors, checks=checks)
     line = summary_line(path, spec, stab) + ("" if checks.force_balanced else "  [NOT FORCE BALANCED]")
-    return line, replace(spec, eigenvectors=None), stab
+    return line, spec.without_vectors(), stab
 
 
 def checked(path, packing):
