@@ -10,6 +10,7 @@ that ``import jamflow`` starts neither LAMMPS nor numba.
 from importlib import import_module
 
 from jamflow import _moved
+from jamflow.support import hooks
 
 __version__ = "0.1.0"
 
@@ -33,20 +34,40 @@ _EXPORTS = {
     "MinimizerSettings": "jamflow.minimize.settings",
     "check_packing": "jamflow.mechanics.checks",
     "save_packing": "jamflow.io.packing_file",
+    "save_result": "jamflow.io.packing_file",
     "load_packing": "jamflow.io.packing_file",
     "run_ensemble": "jamflow.ensemble",
 }
 
 __all__ = sorted(_EXPORTS)
 
+# the layer packages (docs/architecture.md): ``jamflow.analysis`` etc. import on first use
+LAYERS = ("support", "model", "mechanics", "engines", "minimize", "protocols", "analysis", "io", "decks", "plots",
+          "ensemble", "cli")
+
 _moved.install()
+
+
+def _save_result(result, path, checks=None, force=False):
+    """``JamResult.save`` and ``PressureResult.save``: the protocols layer may not import the io
+    layer, so this package (outside the layers) provides the writer through ``support.hooks``:
+    ``jamflow.save_result``, loaded on use like every public name here (the io modules import
+    ``jamflow.__version__``, so a static import of them here would be an import cycle)."""
+    return __getattr__("save_result")(result, path, checks, force=force)
+
+
+hooks.register("save_result", _save_result)
 
 
 def __getattr__(name):
     if name in _EXPORTS:
         return getattr(import_module(_EXPORTS[name]), name)
+    if name in LAYERS:
+        return import_module(f"jamflow.{name}")
     raise AttributeError(f"module 'jamflow' has no attribute {name!r}")
 
 
 def __dir__():
-    return sorted(set(globals()) | set(_EXPORTS))
+    """The public API (``__all__``), the layer packages and the version, not the module's helpers."""
+    return sorted(set(__all__) | set(LAYERS) | {"__version__", "__all__", "__doc__", "__file__", "__name__",
+                                                "__path__"})

@@ -52,6 +52,13 @@ class SpectrumResult:
     # the translational fractions kept by ``without_vectors`` (not compared, not in the repr)
     kept_fraction: np.ndarray | None = field(default=None, repr=False, compare=False)
 
+    def __repr__(self) -> str:
+        """One line: modes (of d_f N'), zero and negative counts, lowest nonzero e, e_min, vectors."""
+        vectors = "None" if self.eigenvectors is None else str(self.eigenvectors.shape)
+        return (f"SpectrumResult(modes={len(self.eigenvalues)}, n_dof={self.n_dof}, complete={self.complete}, "
+                f"n_zero={self.n_zero}, n_negative={self.n_negative}, lowest_nonzero={self.lowest_nonzero:.4e}, "
+                f"e_min={self.e_min:g}, eigenvectors={vectors})")
+
     def without_vectors(self) -> "SpectrumResult":
         """This spectrum without its eigenvectors ((d_f N')^2 numbers) but with their translational
         fractions (m numbers), so that figures and D(omega) still show each mode's character."""
@@ -214,6 +221,12 @@ class DensityOfStatesResult:
     n_modes: int  # nonzero modes over all packings
     translational: np.ndarray | None = None  # (bins,) part of D carried by centre motion; None without vectors
 
+    def __repr__(self) -> str:
+        """One line: bins and their range, packings, modes, whether the translational part is known."""
+        return (f"DensityOfStatesResult(bins={len(self.density)}, omega=[{self.edges[0]:.4g}, {self.edges[-1]:.4g}], "
+                f"n_packings={self.n_packings}, n_modes={self.n_modes}, "
+                f"translational={'yes' if self.translational is not None else 'None'})")
+
     @property
     def rotational(self) -> np.ndarray | None:
         """(bins,) part of D carried by rotations (D - translational)."""
@@ -278,6 +291,12 @@ class ModeProfile:
     quartic_straight: float = float("nan")  # zero modes: fourth-order coefficient along the line (``quartic``)
     quartic_relaxed: float = float("nan")  # ... and its minimum over curved paths; nan: not computed
 
+    def __repr__(self) -> str:
+        """One line: eigenvalue, behaviour, power, character, participation, amplitudes."""
+        return (f"ModeProfile(eigenvalue={self.eigenvalue:.4e}, behaviour={self.behaviour!r}, power={self.power:.3g}, "
+                f"translational_fraction={self.translational_fraction:.3f}, participation={self.participation:.2f}, "
+                f"deltas={len(self.deltas)})")
+
     @property
     def delta_v(self) -> np.ndarray:
         """Symmetric part (odd orders, e.g. a residual force, cancel)."""
@@ -315,6 +334,13 @@ class StabilityResult:
     flat: bool
     sign: int
     profiles: tuple = ()  # ModeProfile per profiled mode, ascending eigenvalue
+
+    def __repr__(self) -> str:
+        """One line: class, zero and negative modes, the lowest mode's eigenvalue and behaviour, profiles."""
+        behaviour = self.behaviour if self.profiles else "none"
+        return (f"StabilityResult(label={self.label!r}, n_zero={self.n_zero}, n_negative={self.n_negative}, "
+                f"mode_eigenvalue={self.mode_eigenvalue:.4e}, behaviour={behaviour!r}, profiles={len(self.profiles)}, "
+                f"n_quartic={self.n_quartic})")
 
     @property
     def delta_v(self) -> np.ndarray:

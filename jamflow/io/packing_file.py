@@ -69,7 +69,7 @@ from jamflow.model.packing import Packing
 from jamflow.model.potentials import potential_from_attrs
 from jamflow.model.shapes.shape import shape_from_attrs
 from jamflow.model.walls import face_pressures, parse_walls, wall_type
-from jamflow.support.files import atomic_path, replacing
+from jamflow.support.files import atomic_path, check_writable, replacing
 
 SCHEMA = "jamflow.packing"
 SCHEMA_VERSION = 2
@@ -165,6 +165,31 @@ def save_jam_result(path, result, checks, *, target_pressure=None, stress=None, 
                             wall_forces=getattr(result, "wall_forces", None), target_pressure=target_pressure,
                             stress=stress if target_pressure is not None else None, checks=checks,
                             phi_j=result.phi_j)
+
+
+def save_result(result, path, checks=None, *, force: bool = False) -> Path:
+    """Write a jam result (``jamflow.jam``, ``run_jam``: a ``JamResult``, or a constant-pressure
+    ``PressureResult``) to ``path`` as ``jamflow jam --out`` does: the same file, with its checks
+    group and the protocol group (settings and engine). ``checks`` None: the packing is checked
+    here as the command checks it (``protocols.spec.checked``: the energy window of
+    ``settings.v_tol``, none under gravity or at constant pressure); a result that fails its checks
+    is refused (``JammingFailed``, nothing written), so no file holds an unchecked packing as if it
+    were jammed. ``force``: replace a symlink, device node or read-only file. ``JamResult.save``
+    and ``PressureResult.save`` call this."""
+    from jamflow.protocols.outcome import JammingFailed
+    from jamflow.protocols.spec import checked
+
+    check_writable(path, force)
+    settings = result.settings
+    pressures = getattr(settings, "pressures", None)  # PressureSettings: the last target is the one reached
+    if checks is None:
+        window = None if pressures is not None or result.packing.gravity else settings.v_tol
+        checks = checked(result, settings.minimizer, window, destination=path)
+    elif not checks.passed:
+        raise JammingFailed(f"the packing failed its checks: {'; '.join(checks.problems())}. Nothing was written to "
+                            f"{path}; a packing that fails its checks is not written as jammed")
+    return save_jam_result(path, result, checks, target_pressure=None if pressures is None else pressures[-1],
+                           stress=getattr(settings, "stress", None), force=force)
 
 
 @contextlib.contextmanager

@@ -59,6 +59,12 @@ class PackingChecks:
     def passed(self) -> bool:
         return self.in_window is not False and self.force_balanced and self.jammed
 
+    def __repr__(self) -> str:
+        """One line: passed, V (in the window?), force ratio, contacts against isostatic, floaters."""
+        return (f"PackingChecks(passed={self.passed}, V={self.energy_per_particle:.3e}, in_window={self.in_window}, "
+                f"force_ratio={self.force_ratio:.2e}, N_c={self.n_contacts}, isostatic={self.isostatic_count}, "
+                f"floaters={self.n_floaters}, mean_z={self.mean_z:.4f})")
+
     def problems(self) -> list[str]:
         """One sentence per failed check, saying what is wrong."""
         out = []

@@ -77,6 +77,13 @@ class ContactsResult:
     n_body_contacts: int | None = None  # rigid bodies: touching pairs of non-floater bodies
     one_site: np.ndarray | None = None  # rigid bodies (N,) bool: a non-floater whose contacts all touch one site
 
+    def __repr__(self) -> str:
+        """One line: N, N', floaters, N_c against isostatic, <z>; the arrays are the fields."""
+        walls = f", wall_contacts={self.n_wall_contacts}" if self.wall_contacts is not None else ""
+        return (f"ContactsResult(N={len(self.floater)}, dim={self.dim}, kept={self.n_kept}, floaters={self.n_floaters}, "
+                f"N_c={self.n_contacts}, isostatic={self.isostatic_count}, excess={self.excess_contacts:+d}, "
+                f"mean_z={self.mean_z:.4f}{walls})")
+
     @property
     def n_balanced(self) -> int:
         """Non-floaters with fewer than d_f + 1 contacts whose contact forces balance them."""

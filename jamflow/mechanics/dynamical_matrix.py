@@ -22,6 +22,12 @@ class DynamicalMatrixResult:
     contacts: ContactsResult | None  # None when floaters were kept
     n_total: int  # N, particles in the original packing
 
+    def __repr__(self) -> str:
+        """One line: matrix shape and stored entries, N' of N, dim, shape."""
+        p = self.packing
+        return (f"DynamicalMatrixResult(shape={self.matrix.shape}, nnz={self.matrix.nnz}, kept={p.n}, "
+                f"N={self.n_total}, dim={p.dim}, particle_shape={p.shape.spec(p.dim)!r})")
+
     @property
     def dim(self) -> int:
         return self.packing.dim

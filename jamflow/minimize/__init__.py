@@ -4,6 +4,9 @@
 from jamflow.minimize.rules import minimize
 from jamflow.minimize.settings import (CONVERGED_REASONS, CREEP_METHODS, MD_DAMPINGS, METHODS, MinimizeResult,
                                        MinimizerSettings)
+from jamflow.support.lazy import lazy_submodules as _lazy_submodules
 
 __all__ = ["CONVERGED_REASONS", "CREEP_METHODS", "MD_DAMPINGS", "METHODS", "MinimizeResult", "MinimizerSettings",
            "minimize"]
+
+__getattr__, __dir__ = _lazy_submodules(__name__, __path__)  # dir() lists the modules; each imports on use

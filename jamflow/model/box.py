@@ -65,6 +65,10 @@ class Box:
         object.__setattr__(self, "h", h)
         object.__setattr__(self, "periodic", periodic)
 
+    def __repr__(self) -> str:
+        """One line, evaluable: the cell matrix (rows) and the periodic axes."""
+        return f"Box(h={self.h.tolist()}, periodic={self.periodic})"
+
     # construction -----------------------------------------------------------------
     @classmethod
     def cube(cls, length: float, dim: int, periodic=None) -> "Box":

@@ -82,6 +82,17 @@ class Packing:
         object.__setattr__(self, "positions", pos)
         object.__setattr__(self, "diameters", dia)
 
+    def __repr__(self) -> str:
+        """One line: N, dim, shape, phi, potential, box lengths (and walls, strain, fixed particles,
+        gravity when present); the arrays are the fields."""
+        box = self.box
+        extra = (f", walls={box.wall_spec!r}" if box.walls else "") + (
+            f", gamma={box.shear_strain:.6g}" if box.is_triclinic else "") + (
+            f", fixed={int(self.fixed.sum())}" if self.fixed is not None else "") + (
+            f", gravity={self.gravity:g}" if self.gravity else "")
+        return (f"Packing(N={self.n}, dim={self.dim}, shape={self.shape.spec(self.dim)!r}, phi={self.phi:.6f}, "
+                f"potential={self.potential.spec!r}, box={' x '.join(f'{v:.6g}' for v in box.lengths)}{extra})")
+
     def _check_boundary(self, n: int) -> None:
         if self.fixed is not None:
             fixed = np.array(self.fixed, dtype=bool)

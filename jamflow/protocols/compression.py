@@ -50,12 +50,15 @@ WINDOW_RESUMES = 3  # a state in the window cut off by the iteration cap is mini
 
 
 
-def jam(n: int = 256, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | Potential = "spring",
+def jam(n: int = 64, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | Potential = "spring",
         seed: int = 0, settings: CompressionSettings | None = None, *, start: Packing | None = None,
         observers=(), engine: str = "auto", engine_options: dict | None = None, shape="disk",
         walls=None, wall_type: str = "smooth", gravity: float = 0.0, contact: str = "exact",
         gamma: float | None = None) -> JamResult:
     """Jam N particles by isotropic compression; ``start`` overrides the random start.
+
+    The defaults are those of ``jamflow jam`` and ``JamSpec`` (N = 64, 2D, 50:50 bidisperse 1 : 1.4
+    disks, springs, seed 0, the fast protocol).
 
     ``shape``: a ``--shape`` spec or shape object (``jamflow.model.shapes``; default disks/spheres);
     ``sizes`` scale whole particles (an ellipse's b; a = ALPHA b). ``contact``: the contact-distance

@@ -10,6 +10,7 @@ from jamflow.minimize.settings import MinimizeResult
 from jamflow.model.box import AXES
 from jamflow.model.packing import Packing
 from jamflow.protocols.settings import CompressionSettings
+from jamflow.support import hooks
 
 HISTORY_COLUMNS = ("phi", "energy_per_particle", "pressure", "dphi", "iterations", "max_force", "converged")
 
@@ -32,6 +33,22 @@ class JamResult:
     wall_forces: np.ndarray | None = None  # (d, 2, d) force of the particles on each face (walled boxes)
     counters: dict = field(default_factory=dict)  # what the engine's kernel counted (ellipsoids: fallbacks, ...)
     kernels: str = ""  # the engine's ``kernels``: "ahead-of-time" / "numba" (compiled) or "lammps"
+
+    def __repr__(self) -> str:
+        """One line: N, dim, shape, phi_J, V, P, max|F|, minimisations, engine; ``summary()`` is the
+        CLI's line, the fields hold the packing and its history."""
+        p = self.packing
+        return (f"JamResult(N={p.n}, dim={p.dim}, shape={p.shape.spec(p.dim)!r}, phi_j={self.phi_j:.10f}, "
+                f"V={self.energy_per_particle:.3e}, P={self.pressure:.3e}, max_force={self.max_force:.1e}, "
+                f"minimizations={self.minimizations}, engine={self.engine!r})")
+
+    def save(self, path, checks=None, force: bool = False):
+        """Write this result to the packing file ``path`` exactly as ``jamflow jam --out`` does
+        (``jamflow.save_result``: checks group, protocol and engine record); ``checks`` None: checked
+        first, as the command does. A result that fails its checks raises ``JammingFailed`` and
+        nothing is written. Returns the path. (The writer lives in the io layer, above this one: it
+        is reached through ``jamflow.support.hooks``, registered by ``jamflow/__init__.py``.)"""
+        return hooks.call("save_result", self, path, checks, force=force)
 
     @property
     def pressure(self) -> float:

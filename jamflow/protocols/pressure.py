@@ -37,6 +37,7 @@ from jamflow.minimize.settings import MinimizerSettings
 from jamflow.model.packing import Packing
 from jamflow.minimize.rules import minimize
 from jamflow.protocols.outcome import engine_label
+from jamflow.support import hooks
 
 FLOOR_MARGIN = 1000.0
 DEFAULT_START_PRESSURE = 1e-4  # from a random start; starting higher raises phi_J (docs/notes/walls-gravity-pressure.md)
@@ -129,6 +130,18 @@ class PressureResult:
     engine: str
     lammps_version: int
     kernels: str = ""  # the engine's ``kernels`` (summary line only)
+
+    def __repr__(self) -> str:
+        """One line: N, dim, shape, phi and pressure at the last target, targets, engine."""
+        p = self.packing
+        return (f"PressureResult(N={p.n}, dim={p.dim}, shape={p.shape.spec(p.dim)!r}, phi={self.phi:.10f}, "
+                f"P={self.pressure:.3e}, targets={len(self.settings.pressures)}, stress={self.settings.stress!r}, "
+                f"engine={self.engine!r})")
+
+    def save(self, path, checks=None, force: bool = False):
+        """Write this result as ``jamflow jam --pressure P --out`` does (``jamflow.save_result``:
+        checked first when ``checks`` is None; a result that fails its checks is not written)."""
+        return hooks.call("save_result", self, path, checks, force=force)
 
     @property
     def phi(self) -> float:

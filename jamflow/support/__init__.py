@@ -1,2 +1,6 @@
 """The lowest layer, standard library only: atomic file writes and output paths (``files``), the
 cache directory and the check that a compiled shared object is whole (``cache``)."""
+
+from jamflow.support.lazy import lazy_submodules as _lazy_submodules
+
+__getattr__, __dir__ = _lazy_submodules(__name__, __path__)  # dir() lists the modules; each imports on use
