@@ -22,7 +22,7 @@ import numpy as np
 from jamflow import jam
 from jamflow.mechanics.contacts import Contacts
 from jamflow.mechanics.reference import energy_forces_pressure
-from jamflow.protocols.settings import PROTOCOLS
+from jamflow.protocols.settings import PROTOCOL_NAMES, protocol_settings
 
 SYSTEMS = {"2d-bi-256": dict(n=256, dim=2, sizes="bi:1.4:0.5"), "3d-mono-512": dict(n=512, dim=3, sizes="mono")}
 COLUMNS = ["system", "protocol", "seed", "repeat", "phi_j", "v", "max_force_nonfloater", "floaters",
@@ -30,7 +30,7 @@ COLUMNS = ["system", "protocol", "seed", "repeat", "phi_j", "v", "max_force_nonf
 
 
 def check(system, protocol, seed, repeat):
-    res = jam(**SYSTEMS[system], seed=seed, settings=PROTOCOLS[protocol]())
+    res = jam(**SYSTEMS[system], seed=seed, settings=protocol_settings(protocol))
     contacts = Contacts().compute(res.packing)
     forces = energy_forces_pressure(res.packing).forces[~contacts.floater]
     return [system, protocol, seed, repeat, repr(res.phi_j), res.energy_per_particle, float(np.abs(forces).max()),
@@ -57,7 +57,7 @@ def summarize(rows):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--protocol", choices=sorted(PROTOCOLS), default="fast")
+    ap.add_argument("--protocol", choices=PROTOCOL_NAMES, default="fast")
     ap.add_argument("--systems", nargs="+", choices=sorted(SYSTEMS), default=list(SYSTEMS))
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--out", default="docs/notes/jamming-ensembles.csv")

@@ -35,7 +35,7 @@ from jamflow.mechanics.reference import energy_forces_pressure
 from jamflow.support.files import atomic_path, check_writable
 from jamflow.io.packing_file import save_packing
 from jamflow.minimize.settings import CREEP_METHODS, MinimizerSettings
-from jamflow.protocols.settings import PROTOCOLS
+from jamflow.protocols.settings import PROTOCOL_NAMES, protocol_settings
 from jamflow.protocols.compression import compress, initial_packing
 from jamflow.mechanics.checks import generalized_torques
 
@@ -114,7 +114,7 @@ def main(argv=None) -> int:
     ap.add_argument("--engine", default="numba", choices=("numba", "lammps"))
     ap.add_argument("--minimizer", default="fire")
     ap.add_argument("--damping", type=float, default=MinimizerSettings().damping, help="damped dynamics only")
-    ap.add_argument("--protocol", default="fast", choices=sorted(PROTOCOLS))
+    ap.add_argument("--protocol", default="fast", choices=PROTOCOL_NAMES)
     ap.add_argument("--packings", required=True, help="directory for the packing files")
     ap.add_argument("--out", required=True, help="CSV, appended")
     ap.add_argument("--rejects", help="CSV for the rows of packings that fail the checks (default: --out)")
@@ -131,7 +131,7 @@ def main(argv=None) -> int:
     where.mkdir(parents=True, exist_ok=True)
     check_writable(out)
     check_writable(rejects)
-    settings = PROTOCOLS[args.protocol](minimizer=MinimizerSettings(method=args.minimizer, damping=args.damping,
+    settings = protocol_settings(args.protocol, minimizer=MinimizerSettings(method=args.minimizer, damping=args.damping,
                                                                       creep=args.creep,
                                                                       max_iterations=args.max_iterations))
     base = {"shape": args.shape, "dim": args.dim, "n": args.n, "sizes": args.sizes, "engine": args.engine,

@@ -38,11 +38,11 @@ def controller(n, seed, protocol="seed", engine="lammps"):
     import warnings
 
     from jamflow import jam
-    from jamflow.protocols.settings import PROTOCOLS
+    from jamflow.protocols.settings import protocol_settings
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        r = jam(n=n, dim=2, sizes="bi:1.4:0.5", seed=seed, settings=PROTOCOLS[protocol](), engine=engine)
+        r = jam(n=n, dim=2, sizes="bi:1.4:0.5", seed=seed, settings=protocol_settings(protocol), engine=engine)
     return dict(seconds=f"{r.seconds:.3f}", phi_j=repr(r.phi_j), minimizations=r.minimizations,
                 iterations=r.iterations)
 

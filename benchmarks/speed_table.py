@@ -103,7 +103,7 @@ def jamflow_row(n, dim, sizes, seed, tmp, process: bool) -> dict:
 
 
 def handwritten_row(n, dim, sizes, seed, tmp, cap=100_000) -> dict:
-    start = initial_packing(n, dim, sizes, "spring", seed, PROTOCOLS["seed"]().start_phi(dim))
+    start = initial_packing(n, dim, sizes, "spring", seed, PROTOCOLS["chapter"]().start_phi(dim))
     c0 = time.process_time()
     phi, v, m, seconds = handwritten_jam(start, Path(tmp) / "start.data", cap=cap)
     return {"method": "handwritten", "n": n, "dim": dim, "sizes": sizes, "seed": seed, "phi_j": f"{phi:.10f}",

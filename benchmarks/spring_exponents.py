@@ -14,6 +14,7 @@ import csv
 import sys
 
 import jamflow.protocols.compression as compression
+from jamflow.protocols.settings import protocol_name
 from jamflow.mechanics.checks import check_packing, resolution
 from jamflow.minimize.settings import MinimizerSettings
 from common import DOCS, jam_quietly  # (benchmarks/ is the script's directory)
@@ -24,7 +25,7 @@ COLUMNS = ["alpha", "protocol", "vtol", "status", "phi_j", "final_reason", "forc
 
 
 def one(alpha: float, protocol: str) -> dict:
-    make = compression.PROTOCOLS[protocol]
+    make = compression.PROTOCOLS[protocol_name(protocol)]
     start = compression.initial_packing(32, 2, "bi:1.4:0.5", f"spring:{alpha}", 0, make().start_phi(2))
     ftol = make().minimizer.resolved_force_tol(start.box, start.potential.contact_stiffness)
     vtol = max(resolution(start, 1e-16, ftol).smallest_v_tol, 1e-16) * 1.5

@@ -1,4 +1,4 @@
-"""Jam bidisperse ellipses (seed chapter section 2.3.3; sizes 1 : 1.4 with the chapter's 2:1
+"""Jam bidisperse ellipses (chapter section 2.3.3; sizes 1 : 1.4 with the chapter's 2:1
 number ratio) and show their sorted normal modes with rotations as coordinates, coloured by
 mode character (Figure 2.17: a zero branch, a rotational branch and a translational branch);
 the extra zero (quartic) modes match the missing contacts of these hypostatic packings.

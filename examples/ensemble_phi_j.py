@@ -1,6 +1,6 @@
 """An ensemble of jammed packings and the distribution P(phi_J): a plain loop over seeds
 with jamflow.jam, one packing per seed (2D bidisperse disks). The width of P(phi_J)
-shrinks with N (O'Hern et al., PRE 68, 011306, 2003; the seed chapter's section 2.1).
+shrinks with N (O'Hern et al., PRE 68, 011306, 2003; the chapter's section 2.1).
 
     python examples/ensemble_phi_j.py --n 64 --seeds 20 --out ensemble_phi_j.png
 """

@@ -1,6 +1,6 @@
 """Normal modes of jammed packings: the eigenvalues of the dynamical matrix over the
-non-floaters and the density of states D(omega), averaged over a few packings (seed
-chapter section 3, Figure 2.16: a plateau of low-frequency modes at jamming onset).
+non-floaters and the density of states D(omega), averaged over a few packings (chapter
+section 3, Figure 2.16: a plateau of low-frequency modes at jamming onset).
 
     python examples/modes_dos.py --n 128 --seeds 4 --out modes_dos.png
 """

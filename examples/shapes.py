@@ -1,4 +1,4 @@
-"""Jam two packings of nonspherical particles and draw them side by side (seed chapter section
+"""Jam two packings of nonspherical particles and draw them side by side (chapter section
 2.3): bidisperse ellipses with the exact contact distance (convex, Figure 2.18) and rigid
 dimers of two fused disks (concave, Figures 2.9 and 2.26), coloured by director angle mod pi;
 contacts drawn with width proportional to force.

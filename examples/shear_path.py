@@ -1,4 +1,4 @@
-"""Quasistatic shear at zero pressure (seed chapter section 2.2): jam N bidisperse disks, then
+"""Quasistatic shear at zero pressure (chapter section 2.2): jam N bidisperse disks, then
 follow the packing by strain steps x_i -> x_i + dgamma y_i, each brought back to the jamming
 onset at its strain; plot phi_J, the shear stress Sigma = -P_xy and Sigma / P against gamma with
 the steps where the contact network changed marked (continuous geometric families in between).

@@ -1,6 +1,6 @@
-"""Structure of polydisperse disks (diameters uniform on [1, 1.4], the seed's p = 1.4):
+"""Structure of polydisperse disks (diameters uniform on [1, 1.4], the chapter's p = 1.4):
 g(r), S(k) and the bond-orientational order Q6 (global and local) over a few packings
-(seed chapter section 4.2-4.3).
+(chapter section 4.2-4.3).
 
     python examples/structure_polydisperse.py --n 256 --seeds 3 --out structure_polydisperse.png
 """

@@ -1,6 +1,6 @@
 """jamflow: jammed packings of soft, frictionless particles.
 
-Generate them (isotropic compression to onset, seed chapter section 2.1, with the compiled engine
+Generate them (isotropic compression to onset, chapter section 2.1, with the compiled engine
 or LAMMPS), check their mechanical stability (dynamical matrix), measure their structure. The
 package is layered (docs/architecture.md): model -> mechanics -> engines -> minimize -> protocols,
 with analysis, io, plots, decks, ensemble and cli on top. Public names are imported lazily so

@@ -158,17 +158,17 @@ def test_deck_refuses_what_it_cannot_run(kwargs, match):
 
 def test_emit_deck_refuses_shortcut_protocol(tmp_path):
     start = initial_packing(16, 2, "bi:1.4:0.5", "spring", 5, 0.8)
-    with pytest.raises(ValueError, match="seed's bisection"):
+    with pytest.raises(ValueError, match="chapter's bisection"):
         emit_deck(tmp_path / "d.lmp", start, fast_protocol())
     assert not (tmp_path / "d.lmp").exists() and not (tmp_path / "d.start.data").exists()
 
 
 def test_emit_deck_with_the_default_fast_protocol_says_what_to_do(tmp_path, capsys):
     argv = ["jam", "--n", "16", "--emit-deck", str(tmp_path / "d.lmp"), "--out", str(tmp_path / "p.h5")]
-    if main(argv) == 0:  # the default protocol is the seed's: nothing to refuse
+    if main(argv) == 0:  # the default protocol is the chapter's: nothing to refuse
         assert (tmp_path / "d.lmp").is_file()
     else:
-        assert "--protocol seed" in capsys.readouterr().err and not (tmp_path / "d.lmp").exists()
+        assert "--protocol chapter" in capsys.readouterr().err and not (tmp_path / "d.lmp").exists()
 
 
 @pytest.mark.parametrize("variables,message", [

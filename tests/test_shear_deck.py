@@ -88,7 +88,7 @@ def test_shear_deck_rejects_bad_parameters(tmp_path, start_02, change, message):
 
 
 def test_shear_deck_refuses_what_it_cannot_run():
-    with pytest.raises(ValueError, match="seed's bisection"):
+    with pytest.raises(ValueError, match="chapter's bisection"):
         shear_deck_variables(seed_protocol(newton=True))
     with pytest.raises(ValueError, match="linear spring"):
         shear_deck_variables(potential="hertz")

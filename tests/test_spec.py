@@ -5,6 +5,7 @@ spec gives the same packing."""
 
 import argparse
 import json
+import re
 
 import numpy as np
 import pytest
@@ -62,3 +63,37 @@ def test_library_and_command_line_make_the_same_packing(tmp_path):
     assert args.run(args) == 0
     written = load_packing(tmp_path / "p.h5")
     assert np.array_equal(written.positions, result.packing.box.wrap(result.packing.positions))  # files hold wrapped positions
+
+
+def test_the_chapter_protocol_is_named_chapter_and_seed_stays_its_alias(tmp_path, capsys):
+    """Issue 26: "seed" meant the chapter and the random seed; the protocol is "chapter" now, and
+    "seed" (old command lines, specs, ensemble stores) still means it. Files record the settings,
+    not the name, so both names write the same file."""
+    from jamflow.cli.app import main
+    from jamflow.io.packing_file import read_protocol
+    from jamflow.protocols.settings import PROTOCOLS, chapter_protocol, protocol_settings, seed_protocol
+    from jamflow.protocols.spec import compression_settings
+
+    assert sorted(PROTOCOLS) == ["chapter", "fast"] and seed_protocol is chapter_protocol
+    assert JamSpec(protocol="seed").protocol_name == JamSpec(protocol="chapter").protocol_name == "chapter"
+    assert JamSpec(protocol="seed").protocol == "seed"  # kept as given: a stored ensemble spec reopens unchanged
+    assert compression_settings(JamSpec(protocol="seed")) == compression_settings(JamSpec(protocol="chapter"))
+    assert protocol_settings("seed", dphi0=1e-3) == chapter_protocol(dphi0=1e-3)
+    with pytest.raises(ValueError, match="unknown protocol 'slow'; use one of chapter, fast, seed"):
+        protocol_settings("slow")
+    with pytest.raises(ValueError, match="--protocol 'slow' is not one of chapter, fast"):
+        prepare(JamSpec(protocol="slow"))
+    with pytest.raises(SystemExit):
+        main(["jam", "--help"])
+    jam_help = capsys.readouterr().out
+    assert "--protocol {chapter,fast}" in jam_help and "'seed' is accepted as the old name of chapter" in " ".join(
+        jam_help.split())
+    assert "seed: the chapter's" not in jam_help
+    for name in ("chapter", "seed"):
+        assert main(["jam", "--n", "16", "--seed", "2", "--protocol", name, "--quiet",
+                     "--out", str(tmp_path / f"{name}.h5")]) == 0
+    assert read_protocol(tmp_path / "chapter.h5") == read_protocol(tmp_path / "seed.h5")
+    assert np.array_equal(load_packing(tmp_path / "chapter.h5").positions, load_packing(tmp_path / "seed.h5").positions)
+    with pytest.raises(SystemExit):
+        build_parser("jam").parse_args(["jam", "--protocol", "slow"])
+    assert re.search(r"choose from '?chapter'?, '?fast'?, '?seed'?", capsys.readouterr().err)

@@ -1,4 +1,4 @@
-"""Spatial correlations and correlation lengths (seed section 4.4, Figures 2.27-2.29).
+"""Spatial correlations and correlation lengths (chapter section 4.4, Figures 2.27-2.29).
 
 - Envelope of g(r) - 1: its local maxima beyond the first neighbour shell decay as
   exp(-r / xi) (Figure 2.28b).
@@ -10,7 +10,7 @@
   C(r) = |<q6(r) q6*(0)> - <q6(inf) q6*(0)>|, where the r -> inf value is estimated by the
   mean of Re Q_i . conj(Q_j) over *all* distinct pairs of the packing (its large-r limit for
   a homogeneous system). The local maxima of C(r) give xi (Figure 2.28a).
-Exponential fits are least squares on log(y) against r (straight lines on the seed's
+Exponential fits are least squares on log(y) against r (straight lines on the chapter's
 semi-log plots). Maxima are used from the first neighbour minimum outwards until the first
 one that is not 3 statistical errors above zero. r in units of <sigma^2>^(1/2), float64.
 """
@@ -123,7 +123,7 @@ class BondCorrelationResult:
 
 
 class BondCorrelation:
-    """Complex and magnitude q_l correlation functions and their length (seed section 4.4).
+    """Complex and magnitude q_l correlation functions and their length (chapter section 4.4).
 
     ``r_min`` (neighbour cutoff, units of <sigma^2>^(1/2)): None = first minimum of the
     ensemble's g(r). ``dr``, ``r_max``: binning of the correlation functions (same units;

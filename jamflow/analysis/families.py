@@ -1,4 +1,4 @@
-"""Geometric families from sampled shear paths (seed chapter section 2.2, Figure 2.7).
+"""Geometric families from sampled shear paths (chapter section 2.2, Figure 2.7).
 
 Input: the points of ``jamflow.protocols.families.sample`` (every static packing met: strain,
 phi_J, mu = Sigma / P, a relabelling-invariant network signature, and its segment, the run of

@@ -1,4 +1,4 @@
-"""Normal modes, density of states and mechanical-stability class (seed chapter section 3).
+"""Normal modes, density of states and mechanical-stability class (chapter section 3).
 
 Every shape: the dynamical matrix is over xi = (centres, d_k theta) (``hessian``), so its
 d_f N' modes mix translations and rotations; ``SpectrumResult.translational_fraction`` is the
@@ -6,16 +6,16 @@ share of each eigenvector in the centre coordinates (the mode character; 1 - it 
 
 - ``Spectrum``: eigenvalues e_i (eps / diameter^2) of the dynamical matrix over the
   non-floaters; dense for small systems, sparse shift-invert for the lowest modes of large
-  ones. |e_i| <= e_min (default 1e-6, seed ref. [28]) counts as zero; a periodic packing of any
+  ones. |e_i| <= e_min (default 1e-6, chapter ref. [28]) counts as zero; a periodic packing of any
   shape has d trivial zero modes (uniform translations; periodic boundaries break rotational
-  invariance). Frequencies omega_i = sqrt(e_i / M) with M = N m, m = 1 (the seed's definition,
+  invariance). Frequencies omega_i = sqrt(e_i / M) with M = N m, m = 1 (the chapter's definition,
   N including floaters), for e_i > e_min; unit mass and inertia m d_k^2, so xi has unit mass.
 - ``DensityOfStates``: D(omega) = (N(omega + d omega) - N(omega)) / d omega, modes per unit
-  frequency per packing, averaged over packings (seed Figure 2.16); with eigenvectors (or their kept fractions) also its
+  frequency per packing, averaged over packings (chapter Figure 2.16); with eigenvectors (or their kept fractions) also its
   translational part (each mode weighted by its translational fraction).
 - ``Stability``: mechanically stable (exactly d zero modes, none negative), stable at quartic
   order (every extra zero mode raises the energy as delta^4: hypostatic packings of ellipses
-  at onset, seed Figure 2.17), locally stable (other extra zero modes, seed Figure 2.15b) or
+  at onset, chapter Figure 2.17), locally stable (other extra zero modes, chapter Figure 2.15b) or
   unstable (e_i < -e_min), with the evidence Delta V(delta) = V(xi_0 + delta e) - V(xi_0) along
   the lowest nontrivial modes and the power p of its symmetric part ~ delta^p (2 stable,
   4 quartic, "flat" for a floppy mode). Energy changes along a displacement:
@@ -134,7 +134,7 @@ BRANCH_NAMES = ("1 zero", "2 rotational", "3 translational")
 
 
 def branch_labels(spec: SpectrumResult) -> np.ndarray | None:
-    """Per mode 1, 2 or 3, the branch of the spectrum of particles that turn (seed Figure 2.17):
+    """Per mode 1, 2 or 3, the branch of the spectrum of particles that turn (chapter Figure 2.17):
     1 the nontrivial zero modes (|e| <= e_min: the quartic modes at onset), 2 the nonzero modes
     that are mostly rotational (translational fraction < 1/2), 3 the mostly translational ones;
     0 for the d trivial translations (the zero modes of largest translational fraction). None
@@ -169,7 +169,7 @@ class Spectrum:
     """Eigenvalues (and vectors) of the dynamical matrix.
 
     ``e_min``: zero-mode threshold (eps / diameter^2). ``mass``: M in omega = sqrt(e / M),
-    None for the seed's M = N m (m = 1). ``method``: "auto" (dense up to 4096 DOF), "dense"
+    None for the chapter's M = N m (m = 1). ``method``: "auto" (dense up to 4096 DOF), "dense"
     or "sparse" (shift-invert about -e_min for the ``n_modes`` lowest modes, enlarged until
     the zero modes are bracketed; eigenvalues far below -e_min can be missed there).
     ``vectors``: keep eigenvectors. ``dynamical``: how to build the matrix.
@@ -356,7 +356,7 @@ class StabilityResult:
 
     @property
     def n_quartic(self) -> int:
-        """Profiled modes whose energy rises as delta^4 (seed Figure 2.17, branch 1)."""
+        """Profiled modes whose energy rises as delta^4 (chapter Figure 2.17, branch 1)."""
         return sum(b == "quartic" for b in self.behaviours)
 
     @property
@@ -367,7 +367,7 @@ class StabilityResult:
 
 
 class Stability:
-    """Classify a packing (seed section 3) with the Delta V(delta) evidence.
+    """Classify a packing (chapter section 3) with the Delta V(delta) evidence.
 
     ``n_modes``: how many of the lowest nontrivial modes to profile; "zero" (default): every
     nontrivial zero mode (|e| <= e_min) and the lowest nonzero one. ``deltas``: amplitudes
@@ -378,7 +378,7 @@ class Stability:
     amplitude at which a pair not in contact would touch (to second order). A zero mode's energy
     shows there what holds it (its power is fitted to Delta V - e delta^2 / 2, the part beyond
     its sub-threshold quadratic term): contacts that open (disks, spheres: "flat") or contacts that overlap at second
-    order, Delta V ~ delta^4 ("quartic": the just-touching limit of ellipse packings, seed
+    order, Delta V ~ delta^4 ("quartic": the just-touching limit of ellipse packings, chapter
     Figure 2.17). Moving along a mode moves centres by delta u and turns particles by
     delta (d_k theta) / d_k. Class: unstable if any e < -e_min; mechanically stable if exactly
     d zero modes; stable at quartic order if every extra zero mode was profiled and is quartic;

@@ -1,4 +1,4 @@
-"""Order parameters (seed section 4.3): nematic P2, bond-orientational Q6, translational G.
+"""Order parameters (chapter section 4.3): nematic P2, bond-orientational Q6, translational G.
 
 Bond-orientational order (eqs. 2.30-2.33), neighbours j of i are the particles with
 r_ij < r_min, r_min the first minimum of g(r) (found by ``first_minimum``), in units of
@@ -83,7 +83,7 @@ def neighbour_rdf(packing: Packing, dr: float = 0.02, r_max: float = 3.0) -> RDF
 # --- translational order G ---------------------------------------------------------------------
 @dataclass(frozen=True)
 class TranslationalOrderResult:
-    """G = g(r_min) / g(r_max) (seed section 4.3); r in units of <sigma^2>^(1/2)."""
+    """G = g(r_min) / g(r_max) (chapter section 4.3); r in units of <sigma^2>^(1/2)."""
 
     G: float
     r_min: float
@@ -152,7 +152,7 @@ def _bond_harmonics(dr: np.ndarray, l: int) -> np.ndarray:
 
 @dataclass(frozen=True)
 class BondOrderResult:
-    """Q_l global and local (seed eqs. 2.30-2.33) and the per-particle values behind them."""
+    """Q_l global and local (chapter eqs. 2.30-2.33) and the per-particle values behind them."""
 
     global_order: float
     local_order: float
@@ -175,7 +175,7 @@ class BondOrderResult:
 
 
 def bond_order_parameters(q: np.ndarray, n: np.ndarray, dim: int) -> tuple[float, float]:
-    """(global, local) from per-particle Q and neighbour counts, seed eqs. 2.30-2.33."""
+    """(global, local) from per-particle Q and neighbour counts, chapter eqs. 2.30-2.33."""
     have = n > 0
     if not np.any(have):
         raise ValueError("no particle has a neighbour within r_min; increase r_min")

@@ -4,7 +4,7 @@ Along a zero mode e of a packing at onset no contact changes at first order (C e
 compatibility matrix ds_c / dxi), so the contacts change at second order, ds_c = delta^2 b_c with
 b_c = e^T (d2s_c) e / 2, and in the just-touching limit (V' -> 0) the energy is
 sum_c V''(s_c)/2 min(0, ds_c)^2 ~ delta^4 (a contact that opens costs nothing): the quartic
-modes of hypostatic ellipse packings (seed Figure 2.17; Mailman et al., Phys. Rev. Lett. 102,
+modes of hypostatic ellipse packings (chapter Figure 2.17; Mailman et al., Phys. Rev. Lett. 102,
 255501 (2009)). That straight line can overstate it: a motion along a curved path
 xi = xi_0 + delta e + delta^2 eta changes the contacts by delta^2 (C eta + b), and where some eta
 makes every contact open or stay (C eta + b >= 0), the mode is free to fourth order -- e.g. a

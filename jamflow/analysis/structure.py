@@ -1,14 +1,14 @@
-"""Pair distribution function g(r) and static structure factor S(k) (seed section 4.2).
+"""Pair distribution function g(r) and static structure factor S(k) (chapter section 4.2).
 
 Conventions (lengths in small diameters; results in reduced units):
 
-- r is reported in units of the rms contact distance ``<sigma^2>^(1/2)`` (seed text after
+- r is reported in units of the rms contact distance ``<sigma^2>^(1/2)`` (chapter text after
   eq. 2.28), where sigma_ij = (d_i + d_j) / 2 is averaged over all distinct pairs; k is
   reported as ``k <sigma^2>^(1/2)``. For monodisperse particles the scale is the diameter.
 - g(r) (eq. 2.28) is normalised by N(N-1) rather than the chapter's N^2, so that an ideal
   gas gives g -> 1 exactly rather than 1 - 1/N (this is freud's ``finite_size`` mode).
   It is computed up to half the shortest box width: beyond it spherical shells are cut by
-  the cell and, as the seed notes, statistics are greatly reduced.
+  the cell and, as the chapter notes, statistics are greatly reduced.
 - S(k) = |sum_i exp(i k.r_i)|^2 / N over the allowed wavevectors k = 2 pi h^-T n (n integer,
   n != 0) of the (possibly tilted) cell. This is the chapter's ``N^-1 <rho(k) rho(-k)>``;
   the printed eq. 2.29 omits the i = j terms, which would give S(k) - 1. Because
@@ -112,7 +112,7 @@ def check_r_max(r_max, packings: Sequence[Packing]) -> float:
     positive("r_max", r_max, UNITS_R)
     if r_max > limit * (1 + 1e-12):
         raise ValueError(f"r_max = {r_max:g} exceeds half the shortest box width ({limit:.4g} in units of "
-                         "<sigma^2>^1/2); beyond it shells are cut by the periodic cell (seed section 4.2). "
+                         "<sigma^2>^1/2); beyond it shells are cut by the periodic cell (chapter section 4.2). "
                          "Use a smaller r_max or larger packings")
     return float(r_max)
 
@@ -154,7 +154,7 @@ class RDFResult:
 
 
 class RDF:
-    """Pair distribution function g(r) (seed eq. 2.28), total and partial, 2D/3D, tilted boxes.
+    """Pair distribution function g(r) (chapter eq. 2.28), total and partial, 2D/3D, tilted boxes.
 
     ``dr`` and ``r_max`` are in units of <sigma^2>^(1/2); ``r_max`` defaults to half the
     shortest box width. ``partial=True`` also returns g_ab for discrete species (at most
@@ -268,7 +268,7 @@ class StructureFactorResult:
 
 
 class StructureFactor:
-    """Angularly averaged S(k) over the allowed wavevectors (seed eq. 2.29 and text).
+    """Angularly averaged S(k) over the allowed wavevectors (chapter eq. 2.29 and text).
 
     ``k_max`` and ``dk`` are in units of 1/<sigma^2>^(1/2). Shell m collects
     |k| in [(m - 1/2) dk, (m + 1/2) dk); ``dk`` defaults to 2 pi / (longest box side), the

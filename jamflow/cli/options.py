@@ -9,7 +9,7 @@ from jamflow.minimize.settings import CREEP_METHODS, MD_DAMPINGS, METHODS, Minim
 from jamflow.model.box import STRESS_MODES
 from jamflow.model.shapes.contact_distance import METHODS as METHODS_CONTACT
 from jamflow.model.walls import WALL_TYPES
-from jamflow.protocols.settings import DEFAULT_PROTOCOL, PROTOCOLS
+from jamflow.protocols.settings import DEFAULT_PROTOCOL, PROTOCOL_NAMES, PROTOCOLS
 from jamflow.protocols.spec import JamSpec
 
 
@@ -32,14 +32,15 @@ def add_spec_arguments(p, skip=()) -> None:
              "dimer:ALPHA:S (asymmetric, S = D2/D1), trimer:ALPHA:C (bent, C = h/L). --sizes scales whole "
              "particles (b; a = ALPHA b)")
     add("--contact", choices=METHODS_CONTACT, default="exact",
-        help="contact distance of ellipses/spheroids (seed section 2.3.2): exact (Perram-Wertheim), "
+        help="contact distance of ellipses/spheroids (chapter section 2.3.2): exact (Perram-Wertheim), "
              "gaussian (equal sizes only), cleaver; linear and quadratic are refused (no second derivatives "
              "for the packing checks; jamflow.model.shapes.contact_distance computes them); "
              "docs/notes/contact-distance.md")
-    add("--protocol", choices=sorted(PROTOCOLS), default=None,
-        help=f"seed: the chapter's constant-increment bisection; fast: the same stopping rule with "
+    add("--protocol", choices=PROTOCOL_NAMES, default=None, metavar="{" + ",".join(sorted(PROTOCOLS)) + "}",
+        help=f"chapter: the chapter's constant-increment bisection; fast: the same stopping rule with "
              f"growing increments and Newton jumps (docs/notes/speed.md). Default {DEFAULT_PROTOCOL}; "
-             "seed with --emit-deck (decks run the seed protocol)")
+             "chapter with --emit-deck (decks run the chapter's protocol). 'seed' is accepted as the "
+             "old name of chapter")
     add("--minimizer", choices=METHODS, default="fire",
         help="energy minimiser; ellipses/spheroids: fire (compiled engine, over positions and "
              "orientations) or md (LAMMPS damped dynamics with rotations; no LAMMPS minimiser turns them); "
@@ -85,11 +86,11 @@ def add_spec_arguments(p, skip=()) -> None:
         help="with --pressure: iso (box shape kept), aniso (each P_aa = P), tri (shear stresses relaxed to "
              "0 too: the box tilts)")
     add("--gamma", type=float, default=None,
-        help="jam at this fixed Lees-Edwards shear strain (any finite value; seed section 2.2)")
+        help="jam at this fixed Lees-Edwards shear strain (any finite value; chapter section 2.2)")
 
 def add_md_damping_argument(p) -> None:
     p.add_argument("--md-damping", choices=MD_DAMPINGS, default="viscous",
-                   help="--minimizer md only: viscous (drag -b v on every particle) or pairwise (seed eq. 2.3: "
+                   help="--minimizer md only: viscous (drag -b v on every particle) or pairwise (chapter eq. 2.3: "
                         "-b (v_ij . rhat) rhat on contacting pairs; docs/notes/damped-md.md)")
 
 

@@ -187,15 +187,15 @@ def crosscheck_shear(n: int = 10, dim: int = 2, sizes: str = "bi:1.4:0.5", seed:
                      settings: CompressionSettings | None = None, *, gamma: float = 0.2, dgamma: float = 0.002,
                      to: float = 0.21, workdir=None, lmp=None, ranks: int = 1, tolerance: float = 1e-8,
                      timeout: float | None = None) -> ShearCrossCheck:
-    """Jam one random start at strain ``gamma`` (controller, LAMMPS, seed protocol), then shear it
+    """Jam one random start at strain ``gamma`` (controller, LAMMPS, chapter protocol), then shear it
     to ``to`` in steps of ``dgamma`` twice: with the shear deck (``lmp``) and with the controller.
-    ``settings``: the bisection after each step (the seed protocol; default dphi0 = 1e-6)."""
+    ``settings``: the bisection after each step (the chapter's protocol; default dphi0 = 1e-6)."""
     from jamflow.protocols.compression import jam
-    from jamflow.protocols.settings import seed_protocol
+    from jamflow.protocols.settings import chapter_protocol
     from jamflow.protocols.shear import shear, shear_strains
     from jamflow.decks.shear import run_shear_deck, start_variables
 
-    settings = settings or seed_protocol(dphi0=1e-6)
+    settings = settings or chapter_protocol(dphi0=1e-6)
     if not tolerance > 0:
         raise ValueError(f"tolerance must be positive, got {tolerance}")
     shear_strains(gamma, dgamma, to)  # bad strains refused before any work

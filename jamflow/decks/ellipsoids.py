@@ -2,7 +2,7 @@
 the packing back.
 
 The deck (``jamflow.decks.ellipsoids_script``; rendered with the defaults as
-``lammps_inputs/jam-ellipses.lmp``) runs the seed protocol (section 2.1) with jamflow's plugin pair
+``lammps_inputs/jam-ellipses.lmp``) runs the chapter's protocol (section 2.1) with jamflow's plugin pair
 style ``jamflow/ellipsoid`` and minimises by damped dynamics over positions and orientations, as
 ``LammpsEngine`` does for ellipsoids, stopping on forces and generalized torques. It covers the
 linear spring (alpha = 2, eps = 1), one or two sizes, every contact-distance method.

@@ -3,7 +3,7 @@ plugin pair style jamflow/ellipsoid and damped dynamics over positions and orien
 
 ``HEADER`` (formatted by ``jamflow.decks.ellipsoids.deck_text``) documents the deck and sets its
 parameters as ``index`` variables (``lmp -var NAME VALUE`` overrides them); ``BODY`` is the
-seed protocol (section 2.1), minimising as ``LammpsEngine`` does for ellipsoids (its rotating
+chapter protocol (section 2.1), minimising as ``LammpsEngine`` does for ellipsoids (its rotating
 session: fix nve/asphere + fix langevin at T = 0 with angmom; forces and generalized torques
 measured without the drag) and stopping by ``jamflow.minimize.rules``'s rules on both. The window's
 stopping rules and the bisection that follows each minimisation are the disk deck's own text
@@ -19,7 +19,7 @@ _FTOL_BASE = repr(ELLIPSOID_FORCE_TOL_BASE)  # the force floor's base (ellipses,
 
 HEADER = """\
 # jamflow deck: jam N soft ellipses (dim 2) or spheroids (dim 3) at onset by isotropic
-# compression (Schreck & O'Hern, seed chapter section 2.1) in the LAMMPS input language alone,
+# compression (Schreck & O'Hern, chapter section 2.1) in the LAMMPS input language alone,
 # with jamflow's plugin pair style jamflow/ellipsoid (exact contact distance, section 2.3.2) and
 # damped dynamics over positions and orientations. Written by jamflow {version};
 # `jamflow jam --shape ellipse:ALPHA --emit-deck FILE ...` writes it again.
@@ -98,7 +98,7 @@ variable jf_v2 internal $(ternary(v_dim==2,PI*v_jf_a2*v_d2/4.0,PI*v_jf_a2*v_d2^2
 variable jf_ntypes internal $(ternary(v_d1==v_d2,1,2))
 if "${jf_hasdata} == 1" then "jump SELF jf_read"
 
-# ---- random start (seed step 1): uniform positions and orientations at phi0 ----
+# ---- random start (chapter step 1): uniform positions and orientations at phi0 ----
 """ + random_atoms("jf_v") + r"""set type 1 shape ${jf_a1} ${d1} ${d1}
 if "$(v_jf_n2 > 0)" then "set type 2 shape ${jf_a2} ${d2} ${d2}"
 set group all quat/random $(v_seed+2)
@@ -155,7 +155,7 @@ group jf_wrong variable jf_wrong
 if "$(count(jf_wrong) > 0)" then "variable jf_bad string '$(count(jf_wrong)) atoms are not ellipsoids of axes alpha d, d (d1 = ${d1} type 1, d2 = ${d2} type 2, alpha = ${alpha}): pass -var alpha, d1, d2'" "jump SELF jf_fail"
 group jf_wrong delete
 
-# ---- protocol state (seed steps 2-4) ----
+# ---- protocol state (chapter steps 2-4) ----
 variable jf_basephi internal $(v_phi0:%.17g)
 variable jf_lx0 internal $(lx:%.17g)
 variable jf_ly0 internal $(ly:%.17g)

@@ -1,8 +1,8 @@
 """The compression protocol as a LAMMPS input deck: write it, run it with ``lmp``, read it back.
 
 The deck (``jamflow.decks.jam_script``; rendered with the defaults as ``lammps_inputs/jam.lmp``)
-runs seed chapter section 2.1 in the LAMMPS input language alone and mirrors the Python
-controller (``jamflow.protocols.compression``) command for command. It covers the seed
+runs chapter section 2.1 in the LAMMPS input language alone and mirrors the Python
+controller (``jamflow.protocols.compression``) command for command. It covers the chapter's
 protocol with the linear spring (alpha = 2, eps = 1) for one or two discrete diameters,
 which LAMMPS's built-in ``harmonic/cut`` computes exactly, so any LAMMPS build runs it.
 
@@ -90,8 +90,8 @@ def system_values(sizes, potential) -> tuple[float, float]:
 
 
 def protocol_values(settings: CompressionSettings) -> dict:
-    """The bisection's and minimiser's deck variables (the seed protocol only)."""
-    _check_seed_protocol(settings)
+    """The bisection's and minimiser's deck variables (the chapter's protocol only)."""
+    _check_chapter_protocol(settings)
     m: MinimizerSettings = settings.minimizer
     return dict(vtol=_num(settings.v_tol), dphi0=_num(settings.dphi0), minimizer=m.method, vmin=_num(m.v_min),
                 delta=_num(m.delta), window=m.window, maxiter=m.max_iterations, dt=_num(m.timestep),
@@ -118,15 +118,15 @@ def _plugin_path() -> str:
     return str(library)
 
 
-def _check_seed_protocol(settings: CompressionSettings) -> None:
-    """The deck mirrors the seed's bisection; optional speed-ups of the controller are refused."""
+def _check_chapter_protocol(settings: CompressionSettings) -> None:
+    """The deck mirrors the chapter's bisection; optional speed-ups of the controller are refused."""
     defaults = CompressionSettings()
     extra = [f.name for f in fields(CompressionSettings)
              if f.name not in ("phi0", "dphi0", "v_tol", "max_steps", "minimizer")
              and getattr(settings, f.name) != getattr(defaults, f.name)]
     if extra:
-        raise ValueError(f"the deck runs the seed's bisection only, without the controller's shortcuts "
-                         f"({', '.join(extra)}): use --protocol seed (jamflow.protocols.settings.seed_protocol)")
+        raise ValueError(f"the deck runs the chapter's bisection only, without the controller's shortcuts "
+                         f"({', '.join(extra)}): use --protocol chapter (jamflow.protocols.settings.chapter_protocol)")
 
 
 # --- the deck text -------------------------------------------------------------------------------

@@ -25,13 +25,13 @@ variable maxiter   index {maxiter:<12} # iteration cap per minimisation
 variable dt        index {dt:<12} # FIRE initial step
 variable mddt      index {mddt:<12} # damped-MD step
 variable damping   index {damping:<12} # md only: damping coefficient b
-variable mddamping index {mddamping:<12} # md only: viscous (-b v) | pairwise (seed eq. 2.3, needs plugin)
+variable mddamping index {mddamping:<12} # md only: viscous (-b v) | pairwise (chapter eq. 2.3, needs plugin)
 variable mdsample  index {mdsample:<12} # md only: steps between energy samples (energy-steady rule)
 """
 
 HEADER = """\
 # jamflow deck: jam N soft disks (dim 2) or spheres (dim 3) at onset by isotropic
-# compression (Schreck & O'Hern, seed chapter section 2.1) in the LAMMPS input language
+# compression (Schreck & O'Hern, chapter section 2.1) in the LAMMPS input language
 # alone. Written by jamflow {version}; `jamflow jam --emit-deck FILE ...` writes it again.
 #
 #   lmp -in jam.lmp -var N 256 -var seed 1 -var out jammed              2D, 50:50 d 1 and 1.4
@@ -44,7 +44,7 @@ HEADER = """\
 # when jammed (V_tol < V < 2 V_tol), 1 when the protocol failed (reason in both logs).
 # Units: LJ with small diameter 1, epsilon 1, mass 1; V is the energy per particle.
 # Potential: V(r) = eps/2 (1 - r/sigma_ij)^2 for r < sigma_ij (pair_style harmonic/cut).
-# Walls (-var walls y, xy, ...; seed section 2.3): those axes are boundary f with smooth walls
+# Walls (-var walls y, xy, ...; chapter section 2.3): those axes are boundary f with smooth walls
 # at both faces, the same law at contact distance a/2 (fix wall/harmonic per size), and phi
 # is measured between them (jamflow/model/walls.py; jamflow jam --walls y --emit-deck FILE).
 # Optional variables (not set here):
@@ -68,7 +68,7 @@ variable walls     index {walls:<12} # none | x | y | z | xy | xz | yz | xyz: sm
 """
 
 SHEAR_HEADER = """# jamflow deck: shear a jammed packing of soft disks (dim 2) or spheres (dim 3) quasistatically
-# at zero pressure (Schreck & O'Hern, seed chapter section 2.2, eq. 2.4) in the LAMMPS input
+# at zero pressure (Schreck & O'Hern, chapter section 2.2, eq. 2.4) in the LAMMPS input
 # language alone: steps x_i -> x_i + dgamma y_i with shear-periodic boundaries (change_box ...
 # xy final ... remap), each minimised at fixed strain and brought back into the energy window by
 # the compression loop of jam.lmp at that strain. Written by jamflow {version};
@@ -127,7 +127,7 @@ if "${jf_autoftol} == 1" then "variable ftol string auto"
 """
 
 # the compression decks' log header and phi0 default (shared with the ellipse deck)
-JAM_START_OPTIONS = r"""print "# jamflow deck: isotropic compression to jamming onset (seed chapter section 2.1)" append ${jf_logtmp} screen no
+JAM_START_OPTIONS = r"""print "# jamflow deck: isotropic compression to jamming onset (chapter section 2.1)" append ${jf_logtmp} screen no
 variable jf_autophi internal $(!is_defined(variable,phi0))
 if "${jf_autophi} == 1" then "variable phi0 string auto"
 """
@@ -136,7 +136,7 @@ _JAM_OPTIONS = JAM_START_OPTIONS + r"""print "# dim ${dim} N ${N} d1 ${d1} d2 ${
 
 """
 
-_SHEAR_OPTIONS = r"""print "# jamflow deck: quasistatic shear at zero pressure (seed chapter section 2.2)" append ${jf_logtmp} screen no
+_SHEAR_OPTIONS = r"""print "# jamflow deck: quasistatic shear at zero pressure (chapter section 2.2)" append ${jf_logtmp} screen no
 variable jf_autoxy internal $(!is_defined(variable,xy0))
 variable jf_autosteps internal $(!is_defined(variable,steps))
 variable jf_autovsum internal $(!is_defined(variable,vsum))
@@ -211,7 +211,7 @@ if "$(v_jf_n2 > 0)" then "create_atoms 2 random $(v_jf_n2) $(v_seed+1000001) NUL
 
 
 def random_atoms(volume: str) -> str:
-    """The deck lines that create N random atoms of types 1 and 2 at phi0 (seed step 1);
+    """The deck lines that create N random atoms of types 1 and 2 at phi0 (chapter step 1);
     ``volume``: the stem of the deck's per-type particle-volume variables (``jf_a``, ``jf_v``)."""
     return _RANDOM_ATOMS.replace("VOLUME", volume)
 
@@ -229,7 +229,7 @@ variable jf_before internal $(step)
 
 _RANDOM_START = r"""if "${jf_hasdata} == 1" then "jump SELF jf_read"
 
-# ---- random start (seed step 1): uniform positions in a square/cubic box at phi0 ----
+# ---- random start (chapter step 1): uniform positions in a square/cubic box at phi0 ----
 """ + random_atoms("jf_a") + r"""set type 1 diameter ${d1}
 if "$(v_jf_n2 > 0)" then "set type 2 diameter ${d2}"
 jump SELF jf_atoms_ready
@@ -294,7 +294,7 @@ if "${dim} == 2" then "fix jf_2d all enforce2d"
 
 """
 
-_JAM_STATE = r"""# ---- protocol state (seed steps 2-4); the cell the bisection scales is the start's ----
+_JAM_STATE = r"""# ---- protocol state (chapter steps 2-4); the cell the bisection scales is the start's ----
 variable jf_basephi internal $(v_phi0:%.17g)
 variable xy0 internal $(xy:%.17g)
 variable jf_iters internal 0
@@ -333,7 +333,7 @@ variable jf_lmax internal $(ternary(lx>ly,lx,ly):%.17g)
 if "${dim} == 3" then "variable jf_lmax internal $(ternary(lz>v_jf_lmax,lz,v_jf_lmax):%.17g)"
 if "${jf_autoftol} == 1" then "variable jf_ftol internal $(""" + _FTOL_BASE + r"""*ternary(v_jf_lmax/20.0>1.0,v_jf_lmax/20.0,1.0):%.17g)" else "variable jf_ftol internal ${ftol}"
 
-# ---- one minimisation with the seed's stopping rules (jamflow/minimize/rules.py) ----
+# ---- one minimisation with the chapter's stopping rules (jamflow/minimize/rules.py) ----
 if "${minimizer} == md" then "timestep ${mddt}" else "timestep ${dt}"
 variable jf_epp equal pe/atoms
 fix jf_halt all halt 1 v_jf_epp < ${vmin} error continue
@@ -437,7 +437,7 @@ quit 0
 
 _SHEAR_START = r"""
 # ---- the shear path (jamflow/protocols/shear.py): step 0 brings the start into the window at its
-# own strain; step k shears x_i -> x_i + dgamma y_i (the cell's xy tilt to gamma_k l_y, seed eq. 2.4)
+# own strain; step k shears x_i -> x_i + dgamma y_i (the cell's xy tilt to gamma_k l_y, chapter eq. 2.4)
 # and runs the bisection at that fixed strain. The accumulated tilt xy0 of the start (the data file
 # holds the reduced one) sets gamma_0 = xy0 / l_y. ----
 if "${jf_autoxy} == 1" then "variable xy0 delete" "variable xy0 string $(xy:%.17g)"

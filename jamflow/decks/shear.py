@@ -1,7 +1,7 @@
 """The quasistatic shear protocol as a LAMMPS input deck (``lammps_inputs/shear.lmp``).
 
 The deck (``jamflow.decks.jam_script.SHEAR_BODY``) runs ``jamflow.protocols.shear.shear`` with the
-seed's bisection after each step, in the LAMMPS input language alone, from a packing written as
+chapter's bisection after each step, in the LAMMPS input language alone, from a packing written as
 a data file: step 0 brings it into the energy window at its own strain, step k sets the tilt to
 gamma_k l_y (x_i -> x_i + dgamma y_i, with the reduced cell flipped at |xy| = l_x / 2 as
 ``LammpsEngine.set_box`` does) and runs the compression loop of ``jam.lmp`` at that strain. From
@@ -22,7 +22,7 @@ from jamflow.decks.jam import (DeckFailed, PROTOCOL_COLUMNS, _num, check_workdir
 from jamflow.support.files import atomic_path
 from jamflow.io.packing_file import write_lammps_data
 from jamflow.model.packing import Packing
-from jamflow.protocols.settings import CompressionSettings, seed_protocol
+from jamflow.protocols.settings import CompressionSettings, chapter_protocol
 from jamflow.protocols.shear import shear_strains
 
 SHEAR_DECK_NAME = "shear.lmp"
@@ -38,7 +38,7 @@ def shear_deck_variables(settings: CompressionSettings | None = None, *, dim: in
     accumulated tilt), ``steps`` and ``vsum`` (total particle volume) are passed by jamflow at
     full precision so the deck repeats the controller's arithmetic; the deck computes them
     itself when they are left out."""
-    settings = settings or seed_protocol(dphi0=1e-6)
+    settings = settings or chapter_protocol(dphi0=1e-6)
     d2, _ = system_values(sizes, potential)
     for name, value in (("dgamma", dgamma), ("to", to)):
         if not (isinstance(value, (int, float)) and math.isfinite(value)):

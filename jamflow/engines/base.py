@@ -36,7 +36,7 @@ class State:
 
     ``torques`` are world-frame torques: (N,) about z in 2D, (N, 3) in 3D; None for disks and
     spheres. ``pressure_tensor`` is the virial part of the stress (athermal packings),
-    P_ab = V^-1 sum_pairs r_ij,a f_ij,b (seed eq. 2.34; for rigid bodies r_ij joins the
+    P_ab = V^-1 sum_pairs r_ij,a f_ij,b (chapter eq. 2.34; for rigid bodies r_ij joins the
     centres), positive under compression."""
 
     energy: float  # total, eps

@@ -1,7 +1,7 @@
 """Is a packing what it claims to be? The checks run before a packing is written
 (``jamflow jam``) and before one is analysed (``jamflow modes``, ``analyze``).
 
-- window: V_tol < V < 2 V_tol (seed section 2.1, step 4), V the energy per particle;
+- window: V_tol < V < 2 V_tol (chapter section 2.1, step 4), V the energy per particle;
 - force balance: the largest net force component on any particle, and for particles that
   turn the largest generalized torque tau_a / d_k (body frame, the minimiser's coordinates),
   is at most ``BALANCE_RTOL`` of the mean contact force (a packing at an energy minimum has
@@ -9,9 +9,9 @@
   most the float64 round-off floor of forces (the minimiser's default tolerance, ~L 1e-16
   times the contact stiffness) when the contacts themselves are that weak; wall and gravity
   forces count (fixed particles are held);
-- contact count among the non-floaters (seed section 4.1, ``jamflow.mechanics.contacts``):
+- contact count among the non-floaters (chapter section 4.1, ``jamflow.mechanics.contacts``):
   disks and spheres need N_c >= N_c,iso = N' d - d_trivial + 1; particles that turn are
-  generally hypostatic (N_c < N' d_f - d + 1, seed section 4.1), so for them the check asks for
+  generally hypostatic (N_c < N' d_f - d + 1, chapter section 4.1), so for them the check asks for
   the translational count N' d - d_trivial + 1 that any jammed packing exceeds or meets.
 
 Forces, torques and energies are recomputed here in float64 from the packing itself with the

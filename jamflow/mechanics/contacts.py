@@ -1,4 +1,4 @@
-"""Contact network, floaters and the isostatic count (seed chapter section 4.1).
+"""Contact network, floaters and the isostatic count (chapter section 4.1).
 
 - A pair is in contact iff r_ij < sigma_ij exactly, no tolerance (``overlapping_pairs``,
   float64 separations). Pairs with |r_ij / sigma_ij - 1| < ``near_tol`` are counted as a
@@ -7,11 +7,11 @@
   contacts among the remaining particles (d_f the degrees of freedom per particle: d for
   disks and spheres, 3 for ellipses, 5 for spheroids, ``jamflow.model.shapes``), or, for disks and
   spheres, if its contact directions do not positively span R^d (all contacts in one closed
-  half-space, e.g. three contacts on one side of a disk's equator; seed Figure 2.19). The
+  half-space, e.g. three contacts on one side of a disk's equator; chapter Figure 2.19). The
   half-space rule is the disks' and spheres' only: for other shapes a contact's normal is not
   along the centre line. Removing a floater can make its neighbours floaters, so the test is
   repeated until nothing changes.
-- The exception of seed Figure 2.19: a particle that turns and has at least d + 1 but fewer
+- The exception of chapter Figure 2.19: a particle that turns and has at least d + 1 but fewer
   than d_f + 1 contacts is kept if its contact forces balance its force and torque (the
   generalized force of its live contacts is below ``BALANCE_TOL`` times its largest contact
   term). With three contacts on an ellipse this is the condition that their normals meet in
@@ -33,7 +33,7 @@
   ``isostatic_count - free_rotations`` is the isostatic count without them (docs/notes/nmers.md).
 - N' = N - N_f, N_c = contacts among non-floaters, <z> = 2 N_c / N',
   N_c,iso = N' d_f - d + 1 (d trivial translations subtracted, one added for phi); packings
-  of particles that turn are generally hypostatic (N_c < N_c,iso, seed section 4.1).
+  of particles that turn are generally hypostatic (N_c < N_c,iso, chapter section 4.1).
 - Walls and gravity (``jamflow.model.walls``), following the same counting: a mobile particle
   touching a smooth wall (h < a_i / 2) has a contact with it, whose direction is the wall
   normal; contacts with fixed (rough-wall) particles are contacts. Walls and fixed particles
@@ -146,7 +146,7 @@ class ContactsResult:
         return self.n_kept > 0 and self.excess_contacts == 0
 
     def z_distribution(self) -> tuple[np.ndarray, np.ndarray]:
-        """(z values, fraction of non-floaters with that z), seed Figure 2.20."""
+        """(z values, fraction of non-floaters with that z), chapter Figure 2.20."""
         counts = np.bincount(self.z[self.kept], minlength=1)
         values = np.arange(len(counts))
         return values, counts / max(self.n_kept, 1)
@@ -161,7 +161,7 @@ class Contacts:
     ``count``: rigid bodies only: "bodies" (one contact per touching pair of bodies) or "sites"
     (one per overlapping site pair).
     ``balanced_exception``: keep force-balanced particles that turn with d + 1 to d_f contacts
-    (seed Figure 2.19; only with the default ``min_contacts``, in periodic packings).
+    (chapter Figure 2.19; only with the default ``min_contacts``, in periodic packings).
     """
 
     def __init__(self, min_contacts: int | None = None, half_space: bool = True, near_tol: float = 1e-12,

@@ -1,7 +1,7 @@
 """Moving a packing along a generalized displacement: centre displacements u (N, d) and
 rotations d_k theta (N, r) in the coordinates of ``hessian.Coordinates`` (each particle turns
 by the world rotation vector sum_a theta_a n_a about its centre, as the dynamical matrix
-counts it). Used to test stability along modes (seed section 3, Figure 2.15c).
+counts it). Used to test stability along modes (chapter section 3, Figure 2.15c).
 
 - ``displaced``: the new packing.
 - ``pair_changes``: reduced distance s = r / sigma of every pair within reach and its change,

@@ -1,4 +1,4 @@
-"""The dynamical matrix of a packing with its floaters removed, and its result (seed chapter section 3, eq. 2.27)."""
+"""The dynamical matrix of a packing with its floaters removed, and its result (chapter section 3, eq. 2.27)."""
 
 from __future__ import annotations
 

@@ -57,7 +57,7 @@ class StrainTerms:
                    centre_separations(packing), coords.size)
 
     def pressure_tensor(self, volume: float) -> np.ndarray:
-        """P_ab = -V^-1 sum r_a dV/dr_b (seed eq. 2.34, the virial with centre separations)."""
+        """P_ab = -V^-1 sum r_a dV/dr_b (chapter eq. 2.34, the virial with centre separations)."""
         d = self.separations.shape[1]
         return -np.einsum("pa,pb->ab", self.separations, self.gradient[:, :d]) / volume
 

@@ -1,4 +1,4 @@
-"""Dynamical matrix of every shape (seed chapter section 3, eq. 2.27).
+"""Dynamical matrix of every shape (chapter section 3, eq. 2.27).
 
 M_kl = d^2 V / d xi_k d xi_l, V the total potential energy, unit masses, fixed periodic box
 (any tilt). Coordinates xi (``Coordinates``): first the centres (d per particle, particle
@@ -53,7 +53,7 @@ from jamflow.model.shapes.rotations import rotation_matrices
 
 @dataclass(frozen=True)
 class Coordinates:
-    """The generalized coordinates xi of a packing (seed section 3) and their layout:
+    """The generalized coordinates xi of a packing (chapter section 3) and their layout:
     rows [k d + a] are centre coordinate a of particle k, rows [N d + k r + b] the rotation
     d_k theta about rotational axis b of particle k (r axes per particle)."""
 

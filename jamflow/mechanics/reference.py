@@ -10,7 +10,7 @@ and its gradient (``jamflow.model.shapes.contact_distance``).
 For a pair energy V(s), s = r_ij / sigma_ij(r_hat, u_i, u_j): the force on i is
 -V'(s) (r_hat / sigma - r grad_r sigma / sigma^2) (grad_r sigma = tangential gradient in r_hat
 over r), the torque on i is V'(s) r / sigma^2 (u_i x dsigma/du_i); for rigid bodies each site
-force acts at its site. Pressure tensor (seed eq. 2.34) P_ab = V^-1 sum_pairs r_ij,a f_ij,b with
+force acts at its site. Pressure tensor (chapter eq. 2.34) P_ab = V^-1 sum_pairs r_ij,a f_ij,b with
 r_ij joining the particle centres. Walls and gravity (disks and spheres, ``jamflow.model.walls``):
 the smooth walls' energy, forces and virial and the weight are added; fixed particles do not
 interact with each other and their forces are reported as zero (they are held), while the
@@ -152,7 +152,7 @@ def energy_forces_pressure(packing: Packing, pairs: str = "all") -> ReferenceRes
 
 
 def pair_damping_forces(packing: Packing, velocities: np.ndarray, damping: float) -> np.ndarray:
-    """Dissipative forces of damped MD, seed eq. 2.3: -b [(v_i - v_j) . rhat_ij] rhat_ij on i
+    """Dissipative forces of damped MD, chapter eq. 2.3: -b [(v_i - v_j) . rhat_ij] rhat_ij on i
     (and the opposite on j) for every pair in contact, r_ij < sigma_ij; (N, d), eps/diameter
     for b in sqrt(m eps)/diameter and velocities in diameter/time. LAMMPS: fix jamflow/damping."""
     i, j = all_pairs(packing.n)

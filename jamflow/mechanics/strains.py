@@ -1,16 +1,16 @@
-"""The two homogeneous strains of the elastic moduli (seed section 4.5), written once for both the
+"""The two homogeneous strains of the elastic moduli (chapter section 4.5), written once for both the
 strain sweeps and the Hessian route.
 
 A strain of amplitude a maps the cell and every particle centre affinely, x -> F(a) x
 (orientations unchanged), and the modulus is the slope of a stress response R at a = 0, with the
 particles relaxed at every a:
 
-- ``SHEAR``: simple shear x -> x + gamma y (seed eq. 2.4, the shear-periodic cell: the xy tilt
+- ``SHEAR``: simple shear x -> x + gamma y (chapter eq. 2.4, the shear-periodic cell: the xy tilt
   grows by gamma L_y), F = I + gamma e_x e_y^T; R = Sigma = -P_xy; G = dSigma/dgamma.
 - ``BULK``: isotropic compression by a = ln(phi / phi_0), F = exp(-a / d) I; R = P = tr(P) / d;
   B = dP/da = phi dP/dphi.
 
-P_ab is the virial pressure tensor of seed eq. 2.34 (``engine.base.State``, positive under
+P_ab is the virial pressure tensor of chapter eq. 2.34 (``engine.base.State``, positive under
 compression). The Hessian route needs, per strain, the velocity L = dF/da at a = 0 (a pair's
 separation changes by L r_ij) and how the relaxed energy curvature d^2U/da^2 becomes the modulus:
 G = U''/V (Sigma = U'/V at every gamma, V fixed); B = (U''_L - V tr(P F''))/V + P (P = U'/V, V =

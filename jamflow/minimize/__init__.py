@@ -1,4 +1,4 @@
-"""The minimisers layer: settings, the seed's stopping rules applied to any engine's windows
+"""The minimisers layer: settings, the chapter's stopping rules applied to any engine's windows
 (``rules``), and the creep steps between windows (``polish``, ``soft_modes``)."""
 
 from jamflow.minimize.rules import minimize

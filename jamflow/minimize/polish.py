@@ -1,7 +1,7 @@
 """Gauss-Newton active-set polish of a disk/sphere minimisation near force balance (issue 17).
 
 With the linear spring (alpha = 2, eps = 1) the energy is a nonlinear least-squares objective,
-V = 1/2 sum_pairs max(0, delta_ij)^2 with delta = 1 - r_ij / sigma_ij (seed eq. 2.1). Its
+V = 1/2 sum_pairs max(0, delta_ij)^2 with delta = 1 - r_ij / sigma_ij (chapter eq. 2.1). Its
 Gauss-Newton model about x, m(dx) = 1/2 sum max(0, delta + J dx)^2 + mu/2 |dx|^2 (J = d delta / dx
 over the pairs within sigma + ``SKIN``), is convex and piecewise quadratic, and any dx with
 m(dx) < m(0) = V is a descent direction of V. A polish step minimises m by semismooth Newton

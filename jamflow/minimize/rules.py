@@ -1,4 +1,4 @@
-"""Energy minimisation in LAMMPS with the seed's stopping rules (chapter section 2.1, step 3).
+"""Energy minimisation in LAMMPS with the chapter's stopping rules (chapter section 2.1, step 3).
 
 Methods:
 - ``fire``: LAMMPS ``min_style fire`` (FIRE 2.0), ``min_modify norm max``.
@@ -7,7 +7,7 @@ Methods:
 - ``md``: damped molecular dynamics (velocity Verlet, ``fix nve``) with one of two dampings:
   ``md_damping="viscous"`` (default), ``fix viscous b``: a drag -b v on every particle. It
   also damps rattlers and is not Galilean invariant.
-  ``md_damping="pairwise"``, ``fix jamflow/damping b`` (jamflow's plugin): seed eq. 2.3
+  ``md_damping="pairwise"``, ``fix jamflow/damping b`` (jamflow's plugin): chapter eq. 2.3
   exactly, -b (v_ij . rhat_ij) rhat_ij on every pair in contact; conserves momentum and
   leaves free (rattler) and tangential motion undamped. docs/notes/damped-md.md compares them.
   For ellipsoids ``fix nve/asphere`` + ``fix langevin`` at T = 0 with ``angmom`` (drag
@@ -23,7 +23,7 @@ Stopping rules, checked after every ``window`` iterations (LAMMPS runs the windo
    (torque balance; d_k the rotational length of ``jamflow.model.shapes``).
 2. ``energy-below-vmin``: energy per particle below ``v_min`` (seed rule b, V_min = 1e-16),
    also caught inside a window by ``fix halt``.
-3. ``energy-steady`` (md only): the seed's MD rule, <(V - <V>)^2>^(1/2) / <V> < ``delta``
+3. ``energy-steady`` (md only): the chapter's MD rule, <(V - <V>)^2>^(1/2) / <V> < ``delta``
    over the energies sampled every ``md_sample_every`` steps inside the window (needs 2
    samples). Checked before ``no-progress``; reported as not converged by force, like it.
 4. ``no-progress``: over a whole window the relative energy decrease was below ``delta``

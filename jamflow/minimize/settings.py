@@ -25,14 +25,14 @@ class MinimizerSettings:
     method: str = "fire"
     force_tol: float | None = None  # None: base * max(1, L / 20) * k, L the longest box side, k the contact
     # stiffness, base the shape's ``force_tol_base`` (1e-14; 5e-13 for ellipses/spheroids)
-    delta: float = 1e-16  # seed's relative energy change threshold
-    v_min: float = 1e-16  # seed's V_min (per particle)
+    delta: float = 1e-16  # the chapter's relative energy change threshold
+    v_min: float = 1e-16  # the chapter's V_min (per particle)
     max_iterations: int = 500_000
     window: int = 10000  # iterations per LAMMPS call between rule checks
     timestep: float = 0.05  # FIRE initial step (0.1 diverges: docs/notes/failure-modes.md), in sqrt(m diameter^2 / eps)
     md_timestep: float = 0.1  # damped-MD step
     damping: float = 0.3  # md only: damping coefficient b, in sqrt(m eps) / diameter
-    md_damping: str = "viscous"  # md only: "viscous" (-b v on every particle) or "pairwise" (seed eq. 2.3)
+    md_damping: str = "viscous"  # md only: "viscous" (-b v on every particle) or "pairwise" (chapter eq. 2.3)
     md_sample_every: int = 10  # md only: steps between the energy samples of the energy-steady rule
     pressure: float | None = None  # target pressure (eps / diameter^d): the box relaxes to it; None: fixed box
     stress: str = "iso"  # with pressure: iso | aniso (each P_aa) | tri (also the shear stresses -> 0)

@@ -9,7 +9,7 @@ The cell is an upper-triangular matrix ``h`` whose *columns* are the cell vector
 
 which is exactly LAMMPS's restricted triclinic cell (``xy``, ``xz``, ``yz`` are tilt
 *lengths*). The shear strain of Lees-Edwards boundaries is ``gamma = xy / ly``
-(seed eq. 2.4, Figure 2.4). freud and HOOMD use dimensionless tilts ``xy / ly``; see ``to_freud``.
+(chapter eq. 2.4, Figure 2.4). freud and HOOMD use dimensionless tilts ``xy / ly``; see ``to_freud``.
 
 ``h`` may hold any tilt: it is the *accumulated* cell of a shear run (gamma = 3.7 is a
 different strain history from gamma = 0.7, but the same lattice). ``reduced()`` is the same
@@ -19,7 +19,7 @@ and the cell handed to LAMMPS and freud use the reduced cell, so they do not dep
 the strain was reached.
 See docs/notes/shear-cell.md.
 
-Walls (seed section 2.3): an axis that is not ``periodic`` is bounded by flat walls at its
+Walls (chapter section 2.3): an axis that is not ``periodic`` is bounded by flat walls at its
 faces, x_a = 0 and x_a = L_a; separations along it are direct (no image) and positions are
 not wrapped along it. A walled axis can take part in no tilt: a shear across a wall has no
 periodic image to act on, and a tilted face is no flat axis-aligned wall.
@@ -125,7 +125,7 @@ class Box:
 
     @property
     def shear_strain(self) -> float:
-        """Lees-Edwards strain gamma = xy / ly (seed eq. 2.4)."""
+        """Lees-Edwards strain gamma = xy / ly (chapter eq. 2.4)."""
         return float(self.h[0, 1] / self.h[1, 1])
 
     @property

@@ -1,4 +1,4 @@
-"""Nematic order P2 of the particles' directors (seed section 4.3)."""
+"""Nematic order P2 of the particles' directors (chapter section 4.3)."""
 
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ class NematicResult:
 
 
 class Nematic:
-    """Nematic order P2 (seed section 4.3) of particle axes in 2D or 3D.
+    """Nematic order P2 (chapter section 4.3) of particle axes in 2D or 3D.
 
     ``compute(orientations)``: unit (or any non-zero) axis vectors (N, d), in 2D angles (N,)
     in radians, or a ``Packing`` of particles that turn (their directors, the long axes of

@@ -10,7 +10,7 @@ across-axis length b of an ellipse/spheroid, the scale factor of a rigid body's 
 (``jamflow.model.shapes``). Orientations (``jamflow.model.shapes.rotations``): None for disks and
 spheres; (N,) angles in 2D, (N, 4) unit quaternions in 3D for every other shape.
 
-Boundaries (seed section 2.3, ``jamflow.model.walls``): the box's walled axes carry flat walls at
+Boundaries (chapter section 2.3, ``jamflow.model.walls``): the box's walled axes carry flat walls at
 their faces; ``fixed`` marks particles held in place (the particles of rough walls, which
 sit on the wall faces); ``gravity`` g pulls every mobile particle (mass 1) along -e_(d-1)
 onto the floor x_(d-1) = 0, which must be a wall.
@@ -147,7 +147,7 @@ class Packing:
 
     @property
     def dof_per_particle(self) -> int:
-        """d_f of the seed chapter (section 3)."""
+        """d_f of the chapter (section 3)."""
         return self.shape.dof(self.dim)
 
     @property
@@ -187,7 +187,7 @@ class Packing:
 def random_packing(n: int, dim: int, sizes: SizeSpec, phi: float, seed: int,
                    potential: Potential | None = None, shape=SPHERE, separated: bool = False) -> Packing:
     """Uniformly random positions in a square/cubic box at packing fraction ``phi`` and, for
-    shapes that are not round, uniformly random orientations (seed step 1). Diameters are
+    shapes that are not round, uniformly random orientations (chapter step 1). Diameters are
     drawn first, then positions, then orientations, from one generator. ``separated`` (rigid
     bodies): orientations first, then positions by random sequential addition, so that no two
     bodies overlap (``separated_positions``)."""

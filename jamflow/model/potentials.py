@@ -1,12 +1,12 @@
-"""Purely repulsive contact potentials of the seed chapter, each written once.
+"""Purely repulsive contact potentials of the chapter, each written once.
 
 A potential is a law of the reduced distance s = r / sigma_ij (sigma_ij the contact
 distance: (a_i + a_j)/2 for disks and spheres, the exact ellipse contact distance for
 ellipses): V(s) > 0 for s < 1 and V = 0 for s >= 1. Energies in epsilon.
 
-- ``Spring(alpha)``: V = eps/alpha (1 - s)^alpha  (seed eq. 2.1; alpha = 2 linear,
+- ``Spring(alpha)``: V = eps/alpha (1 - s)^alpha  (chapter eq. 2.1; alpha = 2 linear,
   alpha = 5/2 Hertzian).
-- ``RepulsiveLJ``: V = eps [s^-12 - 2 s^-6 + 1]  (seed eq. 2.2).
+- ``RepulsiveLJ``: V = eps [s^-12 - 2 s^-6 + 1]  (chapter eq. 2.2).
 
 The law of each potential is one pair of plain functions of (s, params) --
 ``energy_force`` (V and dV/ds) and ``curvature`` (d2V/ds2) -- valid for s < 1, written with
@@ -36,7 +36,7 @@ class SpringParams(NamedTuple):
 
 
 def spring_energy_force(s, p: SpringParams):
-    """V = eps/alpha (1 - s)^alpha and dV/ds = -eps (1 - s)^(alpha - 1) (seed eq. 2.1)."""
+    """V = eps/alpha (1 - s)^alpha and dV/ds = -eps (1 - s)^(alpha - 1) (chapter eq. 2.1)."""
     x = 1.0 - s
     if p.alpha == 2.0:
         return 0.5 * p.epsilon * x * x, -p.epsilon * x
@@ -53,7 +53,7 @@ class RLJParams(NamedTuple):
 
 
 def rlj_energy_force(s, p: RLJParams):
-    """V = eps (s^-6 - 1)^2 = eps [s^-12 - 2 s^-6 + 1] (seed eq. 2.2; the square form has no
+    """V = eps (s^-6 - 1)^2 = eps [s^-12 - 2 s^-6 + 1] (chapter eq. 2.2; the square form has no
     cancellation near contact) and dV/ds = -12 eps s^-6 (s^-6 - 1) / s."""
     q6 = 1.0 / (s * s * s * s * s * s)
     return p.epsilon * (q6 - 1.0) * (q6 - 1.0), -12.0 * p.epsilon * q6 * (q6 - 1.0) / s
@@ -93,7 +93,7 @@ class _Law:
 
 @dataclass(frozen=True)
 class Spring(_Law):
-    """Repulsive spring V = eps/alpha (1 - r/sigma)^alpha for r < sigma (seed eq. 2.1)."""
+    """Repulsive spring V = eps/alpha (1 - r/sigma)^alpha for r < sigma (chapter eq. 2.1)."""
 
     alpha: float = 2.0
     epsilon: float = 1.0
@@ -140,14 +140,14 @@ class Spring(_Law):
 
 @dataclass(frozen=True)
 class RepulsiveLJ(_Law):
-    """Repulsive Lennard-Jones V = eps[(s/r)^12 - 2(s/r)^6 + 1] for r < s (seed eq. 2.2)."""
+    """Repulsive Lennard-Jones V = eps[(s/r)^12 - 2(s/r)^6 + 1] for r < s (chapter eq. 2.2)."""
 
     epsilon: float = 1.0
 
     name = "rlj"
     spec = "rlj"
     alpha = math.nan  # no spring exponent (stored as NaN in packing files)
-    soft_start = True  # forces diverge as r -> 0: random starts are relaxed first (seed step 1)
+    soft_start = True  # forces diverge as r -> 0: random starts are relaxed first (chapter step 1)
     Params = RLJParams
     energy_force = staticmethod(rlj_energy_force)
     curvature = staticmethod(rlj_curvature)

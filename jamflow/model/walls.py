@@ -1,4 +1,4 @@
-"""Walls and gravity: the chapter's other boundary conditions (seed section 2.3).
+"""Walls and gravity: the chapter's other boundary conditions (chapter section 2.3).
 
 - **Smooth walls** sit at both faces of every walled (non-periodic) axis of the box,
   x_a = 0 and x_a = L_a (``jamflow.model.box``). A mobile disk/sphere i at distance h from a face

@@ -1,5 +1,5 @@
 """Figures of the stability analysis, drawn with matplotlib's Agg canvas and written
-atomically: (a) sorted frequencies omega_i vs i / (d N') (seed Figure 2.16a); for particles
+atomically: (a) sorted frequencies omega_i vs i / (d N') (chapter Figure 2.16a); for particles
 that turn, every nontrivial mode sqrt(|e_i| / M) on a log scale coloured by its translational
 fraction, with the zero threshold, so the branches and their character show (Figure 2.17);
 (b) D(omega) averaged over packings (Figure 2.16b; for shapes also its translational part),

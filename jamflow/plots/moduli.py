@@ -1,7 +1,7 @@
 """Figures of the moduli, drawn with matplotlib's Agg canvas and written atomically.
 
 - ``stress_strain_figure``: one packing's sweeps: |Sigma - Sigma_0| against |gamma| and |P - P_0|
-  against |ln phi/phi_0| on log axes (seed Figure 2.31: linear over decades) with the fitted
+  against |ln phi/phi_0| on log axes (chapter Figure 2.31: linear over decades) with the fitted
   line, the Hessian line, the linear regime (filled) and the yield marked; the deviation of the
   central slopes from the Hessian modulus (round-off ~1/a at small a, curvature ~a^2 at large a,
   the window between them: the chapter's remark on Figure 2.32); Sigma(gamma) on linear axes.

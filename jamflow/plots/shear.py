@@ -1,4 +1,4 @@
-"""Figures of quasistatic shear (seed section 2.2), drawn with matplotlib's Agg canvas and
+"""Figures of quasistatic shear (chapter section 2.2), drawn with matplotlib's Agg canvas and
 written atomically: a shear path (phi_J(gamma) with the contact changes marked, Figure 2.6;
 the shear stress Sigma = -P_xy and Sigma / P along it) and the map of geometric families
 (phi_J(gamma) of every family, Figure 2.7)."""

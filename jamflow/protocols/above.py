@@ -1,9 +1,9 @@
 """Packings above jamming onset: the onset packing compressed affinely by dphi and minimised again.
 
-The state the elastic moduli are measured on (seed section 4.5; O'Hern et al., PRE 68, 011306
+The state the elastic moduli are measured on (chapter section 4.5; O'Hern et al., PRE 68, 011306
 (2003)): phi_J -> phi_J + dphi by one affine compression of box and centres (LAMMPS
 ``change_box ... remap``; orientations unchanged), then one energy minimisation at that fixed
-box with the seed's stopping rules (``jamflow.minimize.rules``). The minimisation can rearrange the
+box with the chapter's stopping rules (``jamflow.minimize.rules``). The minimisation can rearrange the
 packing; if it relaxes to V < V_min (measured: 3 of 20 2D N = 256 spring packings compressed by
 1e-3 from onset, none of 20 at 1e-6, 1e-5, 1e-4, 1e-2; docs/notes/moduli.md) the result is not jammed and
 ``JammingFailed`` is raised.

@@ -1,4 +1,4 @@
-"""Particle-shape annealing (seed section 2.3.3): from a jammed packing of disks/spheres, grow
+"""Particle-shape annealing (chapter section 2.3.3): from a jammed packing of disks/spheres, grow
 the aspect ratio in steps of dalpha (random major-axis directions at the first step), re-jamming
 with the compression protocol of section 2.1 at every step.
 

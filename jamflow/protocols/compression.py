@@ -1,4 +1,4 @@
-"""Isotropic compression to jamming onset (seed chapter section 2.1, steps 1-4).
+"""Isotropic compression to jamming onset (chapter section 2.1, steps 1-4).
 
 Start from random positions (and orientations) at phi0; after each minimisation compress by dphi if
 V < V_tol, decompress if V > 2 V_tol, halve dphi whenever the state crosses from one
@@ -68,7 +68,7 @@ def jam(n: int = 64, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | P
     compressing it (``jamflow.protocols.gravity``; needs walls on the last axis).
     A start of a potential that diverges at contact (repulsive LJ) with deep overlaps (the
     random one always) is first relaxed with the linear spring (``remove_overlaps``).
-    ``gamma``: jam at this fixed Lees-Edwards shear strain (seed section 2.2; any finite value,
+    ``gamma``: jam at this fixed Lees-Edwards shear strain (chapter section 2.2; any finite value,
     the random start placed in the sheared cell, see ``at_shear_strain``); the packing's box
     carries gamma as its accumulated strain (periodic cells only).
     ``observers`` are callables ``f(step: dict)`` called after every minimisation
@@ -78,8 +78,8 @@ def jam(n: int = 64, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | P
     if settings is None:
         settings = PROTOCOLS[DEFAULT_PROTOCOL]()
     if not isinstance(settings, CompressionSettings):
-        raise TypeError(f"settings must be a CompressionSettings, e.g. fast_protocol() or seed_protocol() from "
-                        f"jamflow.protocols.compression, got {settings!r}")
+        raise TypeError(f"settings must be a CompressionSettings, e.g. fast_protocol() or chapter_protocol() from "
+                        f"jamflow.protocols.settings, got {settings!r}")
     check_engine(engine)
     if gamma is not None:
         check_strain(gamma)
@@ -115,7 +115,7 @@ def check_strain(gamma, name: str = "shear strain gamma") -> float:
 def at_shear_strain(packing: Packing, gamma: float) -> Packing:
     """``packing`` (particles where they are, Cartesian) in the Lees-Edwards cell at strain
     ``gamma`` of its cell, held as the reduced strain gamma - k (k the nearest integer, the
-    subtraction exact): cells at gamma and gamma + 1 are one lattice (seed Figure 2.4), so
+    subtraction exact): cells at gamma and gamma + 1 are one lattice (chapter Figure 2.4), so
     strains that are exactly one apart as doubles run the same floating-point operations.
     ``with_accumulated_strain`` gives the result its accumulated strain back."""
     k = math.floor(check_strain(gamma) + 0.5)
@@ -136,7 +136,7 @@ MAX_SEED = 2**63 - 1  # seeds are stored as int64 in the packing file
 
 def initial_packing(n, dim, sizes, potential, seed, phi0, shape="disk", walls=None, wall_type="smooth",
                     gravity=0.0, contact="exact") -> Packing:
-    """Validated random start (seed step 1), with walls and gravity if given; errors before any
+    """Validated random start (chapter step 1), with walls and gravity if given; errors before any
     engine work. ``contact``: the contact-distance method of ellipses/spheroids."""
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
         raise ValueError(f"n must be an integer >= 2, got {n!r}")
@@ -188,7 +188,7 @@ def _check_memory(n: int) -> None:
 
 def remove_overlaps(packing: Packing, minimizer: MinimizerSettings, engine: str = "auto") -> Packing:
     """Relax a random start with the linear spring until V < V_min, so that a potential
-    that diverges at r -> 0 (repulsive LJ) starts without significant overlaps (seed step 1;
+    that diverges at r -> 0 (repulsive LJ) starts without significant overlaps (chapter step 1;
     from a raw random start RLJ forces reach ~1e13 and LAMMPS loses atoms)."""
     soft = replace(packing, potential=Spring())
     with open_engine(soft, minimizer.method, engine) as sim:
@@ -202,7 +202,7 @@ def remove_overlaps(packing: Packing, minimizer: MinimizerSettings, engine: str 
 
 def compress(packing: Packing, settings: CompressionSettings, *, observers=(), engine: str = "auto",
              engine_options=None) -> JamResult:
-    """Run the compression/decompression bisection from ``packing`` (seed steps 2-4)."""
+    """Run the compression/decompression bisection from ``packing`` (chapter steps 2-4)."""
     _check_start(packing)
     check_resolution(packing, settings)
     if packing.gravity > 0:
@@ -214,7 +214,7 @@ def compress(packing: Packing, settings: CompressionSettings, *, observers=(), e
 
 def bisect(sim, settings: CompressionSettings, *, observers=()) -> JamResult:
     """The bisection on an open engine from its current configuration and box, whose shape
-    (and shear strain) it keeps: every box is the current one scaled (seed steps 2-4). The
+    (and shear strain) it keeps: every box is the current one scaled (chapter steps 2-4). The
     engine is left holding the jammed packing (the shear protocol continues from it)."""
     from jamflow.engines.lammps.library import lammps_version
 
@@ -358,7 +358,7 @@ class PhiStepper:
     ``newton_ratio`` per jump (and to no less than 3x the window's distance before the last
     jump, as the prediction errs by a few % of phi - phi_J) so the packing stays jammed and
     in the same basin while the prediction sharpens. A jump that lands below jamming is
-    followed by the seed's rule with dphi = that jump: compress by half of it, then by a
+    followed by the chapter's rule with dphi = that jump: compress by half of it, then by a
     growing step while still below. (An
     earlier version bisected between the latest below and above states; the above state
     can belong to another path's basin, and the bisection then converged onto it without
@@ -411,7 +411,7 @@ class PhiStepper:
         window = width * (1.5 * self.s.v_tol / v) ** (1.0 / self.alpha)  # predicted phi - phi_J at V = 1.5 V_tol
         self.final_approach = width <= 2 * NEWTON_FINAL_FACTOR * window
         stop_at = window if self.final_approach else max(NEWTON_FINAL_FACTOR * window, width / self.s.newton_ratio)
-        self.dphi = width - stop_at  # a jump that lands below is then halved by the seed rule
+        self.dphi = width - stop_at  # a jump that lands below is then halved by the chapter rule
         return phi - self.dphi
 
     def _check(self, phi, target):
@@ -419,7 +419,7 @@ class PhiStepper:
             raise JammingFailed(f"the compression reached phi = {phi:.4f} without any minimisation ending above "
                                 f"V_tol = {self.s.v_tol:g}: the minimiser's stops cannot see jamming with this "
                                 "potential and tolerances; use a larger vtol, a smaller force tolerance, or the "
-                                "seed protocol")
+                                "chapter protocol")
         if target <= 0.0:
             raise JammingFailed(f"the decompression reached phi = {phi:.4f} without any minimisation ending below "
                                 f"2 V_tol = {2 * self.s.v_tol:g}: the minimiser never removes the overlaps; use a "

@@ -1,4 +1,4 @@
-"""Sampling geometric families (seed chapter section 2.2, Figures 2.6-2.7).
+"""Sampling geometric families (chapter section 2.2, Figures 2.6-2.7).
 
 On a grid of strains gamma_s (spacing Delta gamma), jam many random starts at each gamma_s
 (compression at fixed strain, ``jam(gamma=...)``) and follow each packing by quasistatic shear
@@ -38,7 +38,7 @@ class FamilySampling:
     sizes: str = "bi:1.4:0.5"
     gamma_min: float = 0.0
     gamma_max: float = 1.0
-    spacing: float = 0.01  # Delta gamma between grid points (the seed's example)
+    spacing: float = 0.01  # Delta gamma between grid points (the chapter's example)
     substeps: int = 10  # n shear steps between grid points: delta gamma = spacing / substeps
     starts: int = 20  # random starts per grid point
     seed: int = 0

@@ -1,4 +1,4 @@
-"""Packings settled under gravity on a floor (seed section 2.3, "gravity [36]").
+"""Packings settled under gravity on a floor (chapter section 2.3, "gravity [36]").
 
 From a random start in a box with walls on the last axis (the floor x_(d-1) = 0 and a
 ceiling at the top, periodic sides), minimise the total energy -- pairs, walls and g x_(d-1)

@@ -1,4 +1,4 @@
-"""Bulk and shear moduli of a jammed packing, two ways (seed section 4.5, eq. 2.34).
+"""Bulk and shear moduli of a jammed packing, two ways (chapter section 4.5, eq. 2.34).
 
 - Strain sweeps (``analysis.sweeps``): B = phi dP/dphi from small isotropic compressions and
   decompressions, G = dSigma/dgamma (Sigma = -P_xy) from small simple shears x -> x + gamma y with
@@ -9,7 +9,7 @@
   Hertzian moduli near onset by ~1e-6 relative).
 
 ``Moduli.check`` refuses, before any work, a packing the moduli are not defined for (walls,
-gravity or fixed particles; V below the seed's V_min = 1e-16, i.e. not jammed; every particle a
+gravity or fixed particles; V below the chapter's V_min = 1e-16, i.e. not jammed; every particle a
 floater; a scene no engine relaxes) and a sweep
 whose smallest amplitude lies below the round-off scale of the response
 (``sweeps.roundoff_amplitude``, from the Hessian moduli of the input). The measurement is of the packing as

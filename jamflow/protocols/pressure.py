@@ -1,4 +1,4 @@
-"""Jamming at constant pressure: the box as a degree of freedom (seed section 2.3, "constant
+"""Jamming at constant pressure: the box as a degree of freedom (chapter section 2.3, "constant
 stress [35]"; the enthalpy-minimising definition of jamming, e.g. Dagois-Bohy et al., PRL 109,
 095703 (2012), which also relaxes the shear stress).
 
@@ -188,7 +188,7 @@ def phi_j_text(phi_j: float) -> str:
 
 
 def shear_stress(tensor: np.ndarray) -> float:
-    """Largest |P_ab|, a != b (the residual shear stress; Sigma = -P_xy in 2D, seed eq. 2.34)."""
+    """Largest |P_ab|, a != b (the residual shear stress; Sigma = -P_xy in 2D, chapter eq. 2.34)."""
     t = np.asarray(tensor)
     off = t - np.diag(np.diag(t))
     return float(np.abs(off).max())

@@ -1,4 +1,4 @@
-"""Quasistatic shear at fixed zero pressure (seed chapter section 2.2, eq. 2.4, Figures 2.5-2.6).
+"""Quasistatic shear at fixed zero pressure (chapter section 2.2, eq. 2.4, Figures 2.5-2.6).
 
 From a static packing at strain gamma_0, each step applies x_i -> x_i + dgamma y_i with the
 shear-periodic cell (the cell's xy tilt grows by dgamma l_y: ``Engine.set_box`` is affine, so
@@ -150,7 +150,7 @@ def shear_strains(gamma0: float, dgamma, to) -> np.ndarray:
     bad input (non-finite, dgamma 0 or pointing away from ``to``, too many steps)."""
     dgamma, to = check_strain(dgamma, "the strain step dgamma (--dgamma)"), check_strain(to, "the final strain to (--to)")
     if dgamma == 0.0:
-        raise ValueError("dgamma must not be zero; the seed's quasistatic steps are ~1e-3 (Delta gamma / n)")
+        raise ValueError("dgamma must not be zero; the chapter's quasistatic steps are ~1e-3 (Delta gamma / n)")
     if to == gamma0:
         raise ValueError(f"--to {to:g} is the start's own strain: nothing to shear")
     if (to - gamma0) * dgamma < 0:

@@ -30,7 +30,7 @@ from jamflow.protocols.compression import (
     with_accumulated_strain,
 )
 from jamflow.protocols.outcome import JammingFailed
-from jamflow.protocols.settings import DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings
+from jamflow.protocols.settings import DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, protocol_name
 
 
 @dataclass(frozen=True)
@@ -44,7 +44,7 @@ class JamSpec:
     potential: str = "spring"  # spring | hertz | spring:ALPHA | rlj
     shape: str = "disk"  # jamflow.model.shapes.parse.parse_shape
     contact: str = "exact"  # contact distance of ellipses/spheroids
-    protocol: str | None = None  # seed | fast; None: fast
+    protocol: str | None = None  # chapter | fast (seed: the old name of chapter, kept as given); None: fast
     minimizer: str = "fire"  # fire | cg | md
     damping: float = MinimizerSettings.damping  # md only, sqrt(m eps)/diameter
     md_damping: str = "viscous"  # viscous | pairwise (md only)
@@ -83,7 +83,8 @@ class JamSpec:
 
     @property
     def protocol_name(self) -> str:
-        return self.protocol or DEFAULT_PROTOCOL
+        """The protocol run: ``protocol`` (the old name "seed" is "chapter"), or the default."""
+        return protocol_name(self.protocol or DEFAULT_PROTOCOL)
 
 
 def compression_settings(spec: JamSpec) -> CompressionSettings:

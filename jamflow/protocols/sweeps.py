@@ -1,4 +1,4 @@
-"""Strain sweeps: the moduli from the relaxed stress at small strains (seed section 4.5).
+"""Strain sweeps: the moduli from the relaxed stress at small strains (chapter section 4.5).
 
 For each strain of ``analysis.strains`` (simple shear with the shear-periodic cell, isotropic
 compression) and each amplitude a of the sweep, both signs, the packing is strained affinely from

@@ -1,4 +1,4 @@
-"""Particle-shape annealing (seed section 2.3.3, Figure 2.18): grow the aspect ratio of the
+"""Particle-shape annealing (chapter section 2.3.3, Figure 2.18): grow the aspect ratio of the
 particles of a jammed disk/sphere packing IN.h5 to ALPHA in steps of D, re-jamming at every
 step (random major-axis directions at the first one). The last packing is written to --out
 (checked like jamflow jam's), with one row per step (phi_J, <z>, floaters, ...) in its
@@ -15,7 +15,7 @@ from jamflow.io.packing_file import load_packing, save_packing
 from jamflow.minimize.settings import MinimizerSettings
 from jamflow.cli.progress import progress_bar
 from jamflow.protocols.anneal import anneal, anneal_alphas, check_anneal
-from jamflow.protocols.settings import DEFAULT_PROTOCOL, PROTOCOLS
+from jamflow.protocols.settings import DEFAULT_PROTOCOL, PROTOCOL_NAMES, PROTOCOLS, protocol_settings
 from jamflow.protocols.compression import MAX_SEED
 from jamflow.model.shapes.contact_distance import METHODS as METHODS_CONTACT
 
@@ -29,8 +29,10 @@ def add_arguments(p) -> None:
     p.add_argument("--contact", choices=METHODS_CONTACT, default=None,
                    help="contact distance (default: the input's, exact for disks/spheres)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the first step's major-axis directions")
-    p.add_argument("--protocol", choices=sorted(PROTOCOLS), default=DEFAULT_PROTOCOL,
-                   help="compression protocol of each re-jam (jamflow jam --protocol)")
+    p.add_argument("--protocol", choices=PROTOCOL_NAMES, default=DEFAULT_PROTOCOL,
+                   metavar="{" + ",".join(sorted(PROTOCOLS)) + "}",
+                   help="compression protocol of each re-jam (jamflow jam --protocol; 'seed' is accepted as the old "
+                        "name of chapter)")
     add_vtol_argument(p)
     add_engine_argument(p, help="engine of each re-jam (FIRE: the compiled one)")
     p.add_argument("--out", required=True, help="output HDF5 file (the last packing and the per-step table)")
@@ -46,7 +48,7 @@ def run(args) -> int:
         raise ValueError(f"--vtol must be a positive number below 1, got {args.vtol}")
     start = load_packing(args.input)
     alpha0 = check_anneal(start, args.to, args.dalpha, args.contact)
-    settings = PROTOCOLS[args.protocol](v_tol=args.vtol, minimizer=MinimizerSettings(v_min=args.vtol))
+    settings = protocol_settings(args.protocol, v_tol=args.vtol, minimizer=MinimizerSettings(v_min=args.vtol))
     steps = len(anneal_alphas(alpha0, args.to, args.dalpha))
     t0 = time.perf_counter()
     with progress_bar(total=steps, desc="anneal", unit="step", disable=args.quiet) as bar:

@@ -38,7 +38,7 @@ def add_arguments(p) -> None:
     p.add_argument("--gamma", type=float, default=0.2, help="--shear: strain at which the start is jammed")
     p.add_argument("--dgamma", type=float, default=0.002, help="--shear: strain step")
     p.add_argument("--to", type=float, default=0.21, help="--shear: final strain")
-    p.set_defaults(protocol="seed")  # the deck mirrors the seed protocol only (jamflow/decks/jam.py)
+    p.set_defaults(protocol="chapter")  # the deck mirrors the chapter's protocol only (jamflow/decks/jam.py)
 
 
 def run(args) -> int:

@@ -1,11 +1,11 @@
 """Jam N particles (disks, spheres, or the shapes of ``--shape``) at onset by isotropic
-compression (seed section 2.1) and write the packing as HDF5 (schema: jamflow/io/packing_file.py).
+compression (chapter section 2.1) and write the packing as HDF5 (schema: jamflow/io/packing_file.py).
 With --walls the box is bounded by walls on those axes (smooth or rough); with --gravity the
 particles settle on the floor instead; with --pressure the box relaxes to a target pressure
-(seed section 2.3, jamflow/model/walls.py, jamflow/protocols/gravity.py, pressure.py); with --gamma the
+(chapter section 2.3, jamflow/model/walls.py, jamflow/protocols/gravity.py, pressure.py); with --gamma the
 periodic cell is sheared to that fixed Lees-Edwards strain (section 2.2, docs/notes/shear.md). With --above
 DPHI the onset packing is compressed affinely by DPHI and minimised again, and that packing is
-written (attribute dphi_above; the state jamflow moduli measures, seed section 4.5)."""
+written (attribute dphi_above; the state jamflow moduli measures, chapter section 4.5)."""
 
 from __future__ import annotations
 
@@ -32,10 +32,10 @@ def add_arguments(p) -> None:
 
 
 def spec_from_args(args) -> JamSpec:
-    """The jam specification of parsed options (a deck runs the seed protocol unless one is named)."""
+    """The jam specification of parsed options (a deck runs the chapter's protocol unless one is named)."""
     options = spec_options(args)
     if options.get("protocol") is None and getattr(args, "emit_deck", None):
-        options["protocol"] = "seed"
+        options["protocol"] = "chapter"
     return JamSpec.from_options(**options)
 
 

@@ -1,4 +1,4 @@
-"""Mechanical stability of jammed packings (seed sections 3 and 4.1): contacts, floaters,
+"""Mechanical stability of jammed packings (chapter sections 3 and 4.1): contacts, floaters,
 the dynamical matrix's spectrum and the stability class of each PACKING.h5, written to the
 sibling results file PACKING.modes.hdf5 (schema jamflow.modes v2; not *.h5, so that a
 glob over packing files does not pick results up); with several files, D(omega)
@@ -26,7 +26,7 @@ def add_arguments(p) -> None:
     p.add_argument("files", nargs="+", metavar="PACKING.h5", help="packing files (jamflow jam --out) or ensemble store directories")
     p.add_argument("--e-min", type=float, default=1e-6, help="zero-mode threshold on eigenvalues (eps/diameter^2)")
     p.add_argument("--mass", type=float, default=None,
-                   help="M in omega = sqrt(e/M); default N m with m = 1, as the seed defines it")
+                   help="M in omega = sqrt(e/M); default N m with m = 1, as the chapter defines it")
     p.add_argument("--method", choices=("auto", "dense", "sparse"), default="auto",
                    help="eigen-solver: dense (all modes) or sparse shift-invert (lowest modes only)")
     p.add_argument("--bins", type=int, default=40, help="number of D(omega) bins")

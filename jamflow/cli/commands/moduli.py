@@ -1,4 +1,4 @@
-"""Bulk and shear moduli of packings (seed section 4.5): strain sweeps (B = phi dP/dphi from small
+"""Bulk and shear moduli of packings (chapter section 4.5): strain sweeps (B = phi dP/dphi from small
 compressions, G = dSigma/dgamma from small simple shears, each relaxed; linear fit, yield) and the
 Hessian route (affine term minus the non-affine relaxation) on the packing in each IN.h5 as it is
 (make one with jamflow jam --above DPHI). Writes IN.moduli.h5 (schema jamflow.moduli v1: root

@@ -1,6 +1,6 @@
 """Distribution of jamming onsets of an ensemble store DIR (jamflow ensemble --out DIR): P(phi_J)
 and P(<z>) per N, the width W(N) with bootstrap errors, the fit W ~ N^-nu and <phi_J>(N)
-extrapolated to large N (seed section 2.4). Writes a table (CSV) and a four-panel PNG."""
+extrapolated to large N (chapter section 2.4). Writes a table (CSV) and a four-panel PNG."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from pathlib import Path
 
 from jamflow.support.files import atomic_path, check_writable
 
-# large-N phi_J (O'Hern, Silbert, Liu & Nagel, PRE 68, 011306, 2003; quoted by the seed chapter)
+# large-N phi_J (O'Hern, Silbert, Liu & Nagel, PRE 68, 011306, 2003; quoted by the chapter)
 PUBLISHED = {(2, "bi:1.4:0.5"): 0.842, (3, "mono"): 0.639}
 
 

@@ -1,4 +1,4 @@
-"""Shear a jammed packing quasistatically at zero pressure (seed section 2.2, eq. 2.4): steps
+"""Shear a jammed packing quasistatically at zero pressure (chapter section 2.2, eq. 2.4): steps
 x_i -> x_i + dgamma y_i in the shear-periodic cell, each minimised at fixed strain and brought
 back into the energy window by compression/decompression. Writes DIR/STEM.shear.h5 (every
 step: gamma, phi_J, pressure tensor, contact network and its changes, the packing; schema in
@@ -18,7 +18,7 @@ from jamflow.support.files import check_writable, output_directory, replacing
 from jamflow.io.packing_file import load_packing
 from jamflow.minimize.settings import MinimizerSettings
 from jamflow.cli.progress import ShearProgress
-from jamflow.protocols.settings import PROTOCOLS
+from jamflow.protocols.settings import PROTOCOL_NAMES, PROTOCOLS, protocol_name
 from jamflow.protocols.shear import shear, shear_protocol, shear_strains
 from jamflow.io.shear_file import path_columns, save_shear_path
 
@@ -26,14 +26,15 @@ from jamflow.io.shear_file import path_columns, save_shear_path
 def add_arguments(p) -> None:
     p.add_argument("packing", metavar="IN.h5", help="a packing file (jamflow jam --out), in the energy window")
     p.add_argument("--dgamma", type=float, required=True,
-                   help="strain step (either sign; the seed uses Delta gamma / n ~ 1e-3)")
+                   help="strain step (either sign; the chapter uses Delta gamma / n ~ 1e-3)")
     p.add_argument("--to", type=float, required=True, help="final accumulated strain")
     p.add_argument("--out", default=None, metavar="DIR", help="output directory (created if its parent exists; "
                    "required unless --emit-deck)")
     add_engine_argument(p, help="auto: the compiled engine where it runs the scene")
-    p.add_argument("--protocol", choices=sorted(PROTOCOLS), default=None,
-                   help="bisection after each step: fast (growing increments, Newton jumps; the default) or seed "
-                        "(the chapter's; the default with --emit-deck, which runs it only)")
+    p.add_argument("--protocol", choices=PROTOCOL_NAMES, default=None, metavar="{" + ",".join(sorted(PROTOCOLS)) + "}",
+                   help="bisection after each step: fast (growing increments, Newton jumps; the default) or chapter "
+                        "(the chapter's; the default with --emit-deck, which runs it only). 'seed' is accepted as "
+                        "the old name of chapter")
     p.add_argument("--dphi0", type=float, default=1e-6, help="initial packing-fraction increment after each step")
     add_vtol_argument(p)
     add_ftol_argument(p)
@@ -51,8 +52,8 @@ def settings_from_args(args):
         if not (math.isfinite(value) and value > 0):
             raise ValueError(f"--{name} must be a finite positive number, got {value}")
     minimizer = MinimizerSettings(force_tol=args.ftol, v_min=args.vtol)
-    if (args.protocol or ("seed" if args.emit_deck else "fast")) == "seed":
-        return PROTOCOLS["seed"](dphi0=args.dphi0, v_tol=args.vtol, minimizer=minimizer)
+    if protocol_name(args.protocol or ("chapter" if args.emit_deck else "fast")) == "chapter":
+        return PROTOCOLS["chapter"](dphi0=args.dphi0, v_tol=args.vtol, minimizer=minimizer)
     return shear_protocol(dphi0=args.dphi0, v_tol=args.vtol, minimizer=minimizer)
 
 

@@ -1,4 +1,4 @@
-"""Kernel for rigid bodies of fused spherical sites (seed section 2.3.1, Figure 2.9): the energy
+"""Kernel for rigid bodies of fused spherical sites (chapter section 2.3.1, Figure 2.9): the energy
 is the sum of V(r_st / sigma_st) over site pairs s, t of different bodies, sigma_st =
 (a_s + a_t) / 2; each site force acts on its body's centre and exerts the torque
 lever x force (lever = site - centre). The virial is the molecular one,

@@ -1,5 +1,5 @@
 """Kernel for ellipses (2D) and spheroids (3D): V(r_ij / sigma_ij) with the contact distance
-sigma_ij(r_hat, u_i, u_j) of ``jamflow.model.shapes.contact_distance`` (seed section 2.3.2), forces,
+sigma_ij(r_hat, u_i, u_j) of ``jamflow.model.shapes.contact_distance`` (chapter section 2.3.2), forces,
 torques and the virial. Units: eps, diameter (the across-axis length b of the small particle).
 
 The formulas are the numpy module's own algebra (``pw_terms``, ``sigma_partials``, ``quartic``,

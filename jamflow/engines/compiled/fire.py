@@ -4,7 +4,7 @@ This is LAMMPS's ``min_style fire`` (FIRE 2.0, Guenole et al., Comput. Mater. Sc
 109584 (2020); LAMMPS src/min_fire.cpp) with its defaults -- semi-implicit Euler, half step
 back, delaystep 20, dtgrow 1.1, dtshrink 0.5, alpha0 0.25, alphashrink 0.99, tmax 10, tmin
 0.02, dmax 0.1, unit masses, ``min_modify norm max`` -- extended to rotational coordinates the
-way the seed's dynamical matrix counts them (section 3): particle i's rotation about body
+way the chapter's dynamical matrix counts them (section 3): particle i's rotation about body
 axis a is the coordinate d_k theta (a length), its generalized force the body-frame torque
 tau_a / d_k, its velocity w = d_k omega. FIRE sees one flat vector of coordinates; a step
 moves centres by dt v and turns each particle by the body-frame rotation dt w / d_k

@@ -61,7 +61,7 @@ def rotate(o, i, phi):
 @jit
 def generalized_torques(o, tau, dk, mask, g):
     """g[i, a] = mask[a] (R_i^T tau_i)_a / dk[i, a]: torques as forces on the coordinates
-    d_k theta (seed section 3). 2D: tau and g are (N, 1). The compiled twin of
+    d_k theta (chapter section 3). 2D: tau and g are (N, 1). The compiled twin of
     ``rotations.generalized_torques`` (numpy, the reference; tests/test_engines.py compares them)."""
     n, r = g.shape
     if r == 1:

@@ -1,4 +1,4 @@
-"""Kernel for disks and spheres: V(r_ij / sigma_ij), sigma_ij = (a_i + a_j) / 2 (seed eq. 2.1,
+"""Kernel for disks and spheres: V(r_ij / sigma_ij), sigma_ij = (a_i + a_j) / 2 (chapter eq. 2.1,
 2.2, Fig. 2.1), over a pair list with fixed periodic image offsets. Units: eps, diameter."""
 
 from __future__ import annotations

@@ -18,7 +18,7 @@ LAMMPS computes site forces; this module does the rigid-body bookkeeping from th
 - orientations: the rotation carrying the body-frame sites onto the world sites
   (``shapes.rotations.fit_orientations``);
 - body forces: sums of site forces; torques: sums of lever x site force (world frame);
-- the molecular virial sum over site pairs of (R_I - R_J) f_st (seed eq. 2.34 with centre
+- the molecular virial sum over site pairs of (R_I - R_J) f_st (chapter eq. 2.34 with centre
   separations, as the reference and the compiled engine): LAMMPS's pair virial of the sites,
   sum (r_s - r_t) f_st, minus sum over sites of lever_s f_s.
 Box changes move the centres affinely (x -> h' h^-1 x) and put each body's sites back rigidly

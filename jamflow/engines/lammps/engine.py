@@ -474,7 +474,7 @@ class LammpsEngine:
 
     def _energy_fluctuation(self, before: int, after: int, every: int) -> float | None:
         """<(V - <V>)^2>^(1/2) / <V> over the samples ``fix vector`` stored on the steps in
-        [before, after] that are multiples of ``every`` (seed section 2.1, step 3); None with
+        [before, after] that are multiples of ``every`` (chapter section 2.1, step 3); None with
         fewer than 2 samples, inf when <V> = 0. Two-pass in LAMMPS's own variables, so the
         deck (lammps_inputs/jam.lmp) computes the same number."""
         if after // every - (before + every - 1) // every + 1 < 2:

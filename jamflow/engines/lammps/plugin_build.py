@@ -2,14 +2,14 @@
 
 The plugin (``jamflow/engines/lammps/plugin/pair_jamflow.cpp``, GPL-2.0 like the LAMMPS headers it is
 compiled against) defines two pair styles for ``atom_style sphere`` with sigma_ij = radius_i +
-radius_j (seed eqs. 2.1, 2.2) and one for ``atom_style ellipsoid`` with the contact distance of
+radius_j (chapter eqs. 2.1, 2.2) and one for ``atom_style ellipsoid`` with the contact distance of
 ellipses/spheroids (``pair_jamflow_ellipsoid.h``, ``contact_distance.h``; section 2.3.2):
 
     pair_style jamflow/spring ALPHA CUTOFF ; pair_coeff * * EPSILON
     pair_style jamflow/rlj CUTOFF          ; pair_coeff * * EPSILON
     pair_style jamflow/ellipsoid CONTACT spring ALPHA CUTOFF | CONTACT rlj CUTOFF ; pair_coeff * * EPSILON
 
-and (``fix_jamflow_damping.cpp``) the pairwise damping of damped MD (seed eq. 2.3):
+and (``fix_jamflow_damping.cpp``) the pairwise damping of damped MD (chapter eq. 2.3):
 
     fix ID group jamflow/damping B
 

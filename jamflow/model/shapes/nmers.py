@@ -1,4 +1,4 @@
-"""Rigid n-mers of fused disks/spheres (seed section 2.3.1, Figure 2.9 (b)-(d)) and their specs.
+"""Rigid n-mers of fused disks/spheres (chapter section 2.3.1, Figure 2.9 (b)-(d)) and their specs.
 
 Figure 2.9 names the parameters alpha = L / D, s = D2 / D1 and c = h / L; it leaves the
 reference lengths open, so jamflow fixes them as follows (lengths at scale 1; ``--sizes``

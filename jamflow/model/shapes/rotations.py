@@ -3,7 +3,7 @@
 Conventions used throughout jamflow:
 - 2D: ``orientation`` theta (radians, shape (N,)) rotates the body frame by theta about z;
   the director (long axis of an ellipse, axis of a linear body) is the body x-axis,
-  u = (cos theta, sin theta) (seed section 2.3.1: theta is the angle between x and the
+  u = (cos theta, sin theta) (chapter section 2.3.1: theta is the angle between x and the
   long axis).
 - 3D: a unit quaternion q = (w, x, y, z) per particle (shape (N, 4)) rotates body-frame
   vectors into the world frame, v_world = R(q) v_body; the director is R(q) x_body.
@@ -155,7 +155,7 @@ def fit_orientations(body: np.ndarray, world: np.ndarray, weights: np.ndarray) -
 
 
 def generalized_torques(orientations, torques, dim: int, rotational_lengths, mask) -> np.ndarray:
-    """(N, r) torques as forces on the coordinates d_k theta (seed section 3): the body-frame
+    """(N, r) torques as forces on the coordinates d_k theta (chapter section 3): the body-frame
     components (R^T tau)_a / d_k on the axes that are degrees of freedom (``mask``), 0 elsewhere.
     torques: world frame, (N,) in 2D (about z), (N, 3) in 3D; rotational_lengths (N, r)."""
     tau = np.asarray(torques, float)

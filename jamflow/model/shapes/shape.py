@@ -5,13 +5,13 @@ Every particle of a packing has the packing's shape, scaled by its own size fact
 b of an ellipse/spheroid, the scale of a rigid body's sites), and, for shapes that are not
 round, an orientation (``jamflow.model.shapes.rotations``). A shape provides:
 
-- ``dof(dim)``: degrees of freedom per particle d_f (seed section 3: 2 for disks, 3 for
+- ``dof(dim)``: degrees of freedom per particle d_f (chapter section 3: 2 for disks, 3 for
   ellipses; 5 for spheroids and linear 3D bodies, whose rotation about the axis is void);
 - ``rotation_mask(dim)``: which body-frame rotations are degrees of freedom (2D: one, about
   z; 3D: body x, y, z; the director is the body x-axis);
 - ``volumes(scale, dim)``: particle areas/volumes, for phi;
 - ``rotational_lengths(scale, dim)``: d_k per body axis, the radius of gyration sqrt(I/m)
-  of a uniform particle (seed section 3: d_k = sqrt(a^2 + b^2)/4 for an ellipse), which
+  of a uniform particle (chapter section 3: d_k = sqrt(a^2 + b^2)/4 for an ellipse), which
   turns rotations into lengths (d_k theta) and torques into forces (tau / d_k);
 - ``reach(scale)``: the radius of the smallest centred sphere that holds the particle (pair
   search and neighbour-list skin); ``smallest_contact(scale)``: the smallest contact distance;
@@ -151,7 +151,7 @@ class Ellipsoid:
         return math.pi * a * b / 4.0 if dim == 2 else math.pi * a * b * b / 6.0
 
     def rotational_lengths(self, scale, dim: int) -> np.ndarray:
-        """2D: sqrt(a^2 + b^2) / 4 (seed section 3); 3D: sqrt((a^2 + b^2) / 20) about the two
+        """2D: sqrt(a^2 + b^2) / 4 (chapter section 3); 3D: sqrt((a^2 + b^2) / 20) about the two
         axes across the director (I/m = (A^2 + B^2)/5 for semi-axes A, B), 1 about the director
         (not a degree of freedom)."""
         a, b = self.axes(scale).T
@@ -172,7 +172,7 @@ class Ellipsoid:
 
 @dataclass(frozen=True, eq=False)
 class RigidBody:
-    """A rigid body of fused spherical sites (seed section 2.3.1, Figure 2.9).
+    """A rigid body of fused spherical sites (chapter section 2.3.1, Figure 2.9).
 
     ``sites`` (S, d) and ``site_diameters`` (S,) describe the body at scale 1, in any frame:
     the constructor moves the origin to the centre of mass of the union of the sites and turns

@@ -1,6 +1,6 @@
 """Exact mass properties of a union of overlapping disks (2D) or spheres (3D).
 
-A rigid body made of fused spherical sites (seed Figure 2.9) has the volume, centre of mass
+A rigid body made of fused spherical sites (chapter Figure 2.9) has the volume, centre of mass
 and moment of inertia of the union of its sites (uniform density), not of their sum: the
 overlaps count once.
 
