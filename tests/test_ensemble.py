@@ -59,7 +59,9 @@ def summary_seeds(directory, status="ok"):
 
 # -- bad input, before any work ---------------------------------------------------------------
 @pytest.mark.parametrize("seeds, what", [("5:5", "empty"), ("9:3", "reversed"), ("-2:4", "negative"),
-                                         ("0-10", "write A:B")])
+                                         ("0-10", "write A:B"),
+                                         ("0:9223372036854775808", "past 2\\^63 - 1"),  # was: OverflowError
+                                         ("9223372036854775808:9223372036854775809", "past 2\\^63 - 1")])
 def test_bad_seed_ranges_are_refused(seeds, what):
     with pytest.raises(ValueError, match=what):
         seed_range(seeds)
@@ -350,3 +352,30 @@ def test_a_damaged_manifest_is_bad_input_not_a_bug(tmp_path):
     assert done.returncode == 2, done.stderr
     assert "ensemble.json is not a valid jamflow ensemble manifest: damaged JSON" in done.stderr
     assert "Traceback" not in done.stderr
+
+
+# -- issue 29: a huge seed range streams -------------------------------------------------------
+def test_a_huge_seed_range_streams_in_chunks(tmp_path, monkeypatch, threaded):
+    """Was: `--seeds 0:1000000000` built every task (and classified them all) before the first
+    packing: ~140 MB/s of memory and no output. Now tasks are made CHUNK at a time."""
+    from jamflow.ensemble.store import Store as StoreClass
+
+    sizes, real = [], StoreClass.classify
+
+    def recording(self, tasks, *args, **kwargs):
+        sizes.append(len(tasks))
+        return real(self, tasks, *args, **kwargs)
+
+    def stop_after_three(task, row, client):
+        made.append(task.seed)
+        if len(made) == 3:
+            raise KeyboardInterrupt  # as Ctrl-C: the run stops, keeps what it made
+
+    made = []
+    monkeypatch.setattr(StoreClass, "classify", recording)
+    monkeypatch.setattr(ensemble_runner, "CHUNK", 4)
+    report = run_ensemble(tmp_path / "s", "0:1000000000", 8, client=threaded, progress=False,
+                          on_result=stop_after_three)
+    assert report.requested == 1_000_000_000 and report.interrupted
+    assert sizes and max(sizes) <= 4  # never the whole range
+    assert len(packings(tmp_path / "s")) >= 3  # (a task running at the interrupt may still be writing)

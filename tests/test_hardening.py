@@ -747,3 +747,277 @@ def test_a_contact_method_without_second_derivatives_is_refused_before_work(tmp_
     assert list(tmp_path.iterdir()) == []
     with pytest.raises(ValueError, match="cannot make a checked packing"):
         prepare(JamSpec(n=16, sizes="mono", shape=shape, dim=dim, contact=contact))
+
+
+# --- issue 29: crashes, hangs, concurrency, paths and environment ------------------------------
+ENOSPC_TEXT = os.strerror(28)
+H5_FLUSH_FAILED = ("Can't decrement id ref count (file write failed: time = Thu Dec  3 11:48:15 2026, filename = "
+                   "'x.tmp', file descriptor = 3, errno = 28, error message = 'No space left on device')")
+
+
+def one_line_disk_full(code, err, path):
+    assert code == 2 and no_traceback(err) and len(err.strip().splitlines()) == 1, err
+    assert f"cannot write {path}" in err and "no space left" in err and "free space and rerun" in err, err
+
+
+@pytest.mark.parametrize("where", ["h5py-oserror", "h5py-flush", "fsync"])
+def test_a_full_disk_is_one_line_and_keeps_the_earlier_file(tmp_path, capsys, monkeypatch, packing_file, where):
+    """Was: h5py tracebacks (OSError [Errno 28], RuntimeError '... errno = 28 ...') and, for
+    analyze, a segmentation fault; now one line, exit 2, the earlier file intact, no temporary file."""
+    import errno
+
+    out = tmp_path / "p.h5"
+    out.write_bytes(packing_file.read_bytes())
+    before = out.read_bytes()
+    if where == "h5py-oserror":  # a dataset write that hits the full disk
+        def full(self, name, value):
+            raise OSError(errno.ENOSPC, f"Can't synchronously write data ({ENOSPC_TEXT})")
+        monkeypatch.setattr(h5py.Group, "__setitem__", full)
+    elif where == "h5py-flush":  # HDF5's flush at close: a RuntimeError that carries errno = 28 in its text
+        def full(self, name, value):
+            raise RuntimeError(H5_FLUSH_FAILED)
+        monkeypatch.setattr(h5py.Group, "__setitem__", full)
+    else:  # the file layer under every writer
+        def full(fd):
+            raise OSError(errno.ENOSPC, ENOSPC_TEXT)
+        monkeypatch.setattr("jamflow.support.files.os.fsync", full)
+    code, err = run_jam(tmp_path, capsys, "--n", "16", "--out", str(out), "--force")
+    one_line_disk_full(code, err, out)
+    assert out.read_bytes() == before and sorted(p.name for p in tmp_path.iterdir()) == ["p.h5"]
+
+
+def test_a_figure_on_a_full_disk_is_one_line(tmp_path, capsys, monkeypatch, packing_file):
+    import errno
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, ENOSPC_TEXT)
+
+    monkeypatch.setattr("matplotlib.figure.Figure.savefig", full)
+    out = tmp_path / "pic.png"
+    code = main(["draw", str(packing_file), "-o", str(out)])
+    one_line_disk_full(code, capsys.readouterr().err, out)
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.fixture
+def tiny_tmpfs(tmp_path):
+    """A 64 kB tmpfs (as root): a disk that really fills."""
+    if os.geteuid() != 0:
+        pytest.skip("mounting a tmpfs needs root")
+    where = tmp_path / "full"
+    where.mkdir()
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(where)]).returncode != 0:
+        pytest.skip("cannot mount a tmpfs here")
+    try:
+        yield where
+    finally:
+        subprocess.run(["umount", str(where)], check=True)
+
+
+def test_analyze_onto_a_really_full_disk(tiny_tmpfs, packing_file):
+    """Was (N = 64 and 32): h5py tracebacks, then 'Fatal Python error: Segmentation fault' (exit 139),
+    and the hidden temporary file left on the full disk."""
+    out = tiny_tmpfs / "s.h5"
+    out.write_bytes(b"the earlier result")
+    (tiny_tmpfs / "filler").write_bytes(bytes(48 * 1024))  # ~12 kB left: less than the results file
+    plots = tiny_tmpfs.parent / "plots"
+    plots.mkdir()
+    done = subprocess.run([*JAMFLOW, "analyze", str(packing_file), "--out", str(out), "--plots", str(plots)],
+                          capture_output=True, text=True, timeout=300)
+    one_line_disk_full(done.returncode, done.stderr, out)
+    assert out.read_bytes() == b"the earlier result"
+    assert sorted(p.name for p in tiny_tmpfs.iterdir()) == ["filler", "s.h5"]
+
+
+def test_a_full_numba_cache_warns_once_and_runs(tmp_path, monkeypatch):
+    """Was: numba's OSError [Errno 28] traceback out of the first call of a kernel (a full
+    JAMFLOW_CACHE_DIR); now the kernels run from memory after one warning."""
+    import errno
+    import warnings
+
+    import numba.core.caching
+
+    from jamflow.engines import compiled
+
+    compiled.start_numba()
+    monkeypatch.setattr(compiled, "cache_dir", lambda: tmp_path)
+    monkeypatch.setattr(compiled, "_cache_unwritable", False)
+
+    def full(self, name, data):
+        raise OSError(errno.ENOSPC, ENOSPC_TEXT)
+
+    monkeypatch.setattr(numba.core.caching.IndexDataCacheFile, "_save_data", full)
+
+    def twice(x):
+        return 2 * x
+
+    def thrice(x):
+        return 3 * x
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert compiled.jit(twice)(2) == 4 and compiled.jit(thrice)(2) == 6 and compiled.jit(twice)(2.5) == 5.0
+    messages = [str(w.message) for w in caught if "cannot be cached" in str(w.message)]
+    assert len(messages) == 1 and str(tmp_path) in messages[0] and "No space left" in messages[0], messages
+
+
+FAMILIES = ["families", "--n", "10", "--spacing", "0.5", "--starts", "1", "--quiet"]
+
+
+def test_families_resume_of_a_damaged_points_file(tmp_path, capsys, monkeypatch):
+    """Was: OSError traceback 'Unable to synchronously open file (truncated file ...)', no advice."""
+    monkeypatch.setattr("jamflow.cli.commands.families.sample", lambda *a, **k: pytest.fail("work started"))
+    out = tmp_path / "fam"
+    out.mkdir()
+    with h5py.File(out / "whole.h5", "w") as f:
+        f["points/gamma"] = np.zeros(4000)
+    (out / "points.h5").write_bytes((out / "whole.h5").read_bytes()[:3000])
+    (out / "whole.h5").unlink()
+    code = main([*FAMILIES, "--out", str(out), "--resume"])
+    err = capsys.readouterr().err
+    assert code == 2 and no_traceback(err) and len(err.strip().splitlines()) == 1, err
+    assert f"{out / 'points.h5'} is truncated or damaged" in err and "cannot --resume it: delete" in err
+
+
+def test_two_families_runs_into_one_out(tmp_path, capsys, monkeypatch):
+    """Was: both exited 0 and the later one's files replaced the other's. Now the directory is
+    locked (support.files.lock_directory, the ensemble store's lock); a new directory that a
+    failed run made is removed, its lock file with it."""
+    from jamflow.support.files import lock_directory
+
+    monkeypatch.setattr("jamflow.cli.commands.families.sample", lambda *a, **k: pytest.fail("work started"))
+    out = tmp_path / "fam"
+    out.mkdir()
+    with lock_directory(out, "held by the test"):  # as a first run still sampling
+        code = main([*FAMILIES, "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and no_traceback(err) and f"another jamflow families run is writing {out}" in err, err
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("injected")
+
+    monkeypatch.setattr("jamflow.cli.commands.families.sample", broken)
+    with pytest.raises(RuntimeError, match="injected"):
+        main([*FAMILIES, "--out", str(tmp_path / "new")])
+    assert not (tmp_path / "new").exists()
+
+
+def test_families_lock_between_processes(tmp_path):
+    """Two real runs into one new --out: the second is refused while the first samples."""
+    out = tmp_path / "fam"
+    first = subprocess.Popen([*JAMFLOW, *FAMILIES, "--starts", "2", "--out", str(out)], stdout=subprocess.DEVNULL,
+                             stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.time() + 60
+        while not (out / ".lock").exists() and time.time() < deadline:
+            time.sleep(0.05)
+        second = subprocess.run([*JAMFLOW, *FAMILIES, "--starts", "2", "--out", str(out)], capture_output=True,
+                                text=True, timeout=120)
+    finally:
+        assert first.wait(timeout=300) == 0, first.stderr.read()
+    assert second.returncode == 2 and "another jamflow families run is writing" in second.stderr, second.stderr
+    assert (out / "families.h5").exists()
+
+
+@pytest.mark.parametrize("seeds", ["0:9223372036854775808", "9223372036854775808:9223372036854775810"])
+def test_ensemble_seeds_past_int64_are_refused_before_work(tmp_path, seeds):
+    """Was: the task list for every seed was built first (memory without bound), then an
+    OverflowError traceback. Run with 2 GB of address space, so a regression fails, not the machine."""
+    import resource
+
+    def limit():
+        resource.setrlimit(resource.RLIMIT_AS, (2 << 30, 2 << 30))
+
+    done = subprocess.run([*JAMFLOW, "ensemble", "--seeds", seeds, "--out", str(tmp_path / "s"), "--quiet"],
+                          capture_output=True, text=True, timeout=120, preexec_fn=limit)
+    assert done.returncode == 2 and no_traceback(done.stderr) and "past 2^63 - 1" in done.stderr, done.stderr
+    assert not (tmp_path / "s").exists()
+
+
+def test_analyze_k_max_too_large_is_refused_with_what_fits(tmp_path, capsys, monkeypatch, packing_file):
+    """Was: numpy's 'Unable to allocate 471. GiB' traceback (--k-max 100000). The value named as
+    fitting does fit: with it S(k) is computed."""
+    import re
+
+    from jamflow.analysis import structure
+
+    monkeypatch.setattr(structure, "physical_memory", lambda: 200e6)  # a machine of 200 MB
+    monkeypatch.setattr("jamflow.analysis.structure.RDF.compute", lambda *a, **k: pytest.fail("work started"))
+    code = main(["analyze", str(packing_file), "--out", str(tmp_path / "s.h5"), "--k-max", "100000"])
+    err = capsys.readouterr().err
+    assert code == 2 and no_traceback(err) and len(err.strip().splitlines()) == 1, err
+    largest = float(re.search(r"use k_max \(--k-max\) <= ([0-9.e+]+)", err).group(1))
+    assert 20 < largest < 100000 and list(tmp_path.iterdir()) == []
+    packing = load_packing(packing_file)
+    assert structure.StructureFactor(k_max=largest).compute(packing).k.max() <= largest
+    with pytest.raises(ValueError, match="needs about"):
+        structure.StructureFactor(k_max=largest * 1.5).compute(packing)
+
+
+def test_jam_repulsive_lj_at_a_target_pressure(tmp_path, capsys):
+    """Was: exit 2 'array is too big; arr.size * arr.dtype.itemsize is larger than the maximum
+    possible size' (numpy's ValueError shown as bad input): the random start's deep overlaps gave
+    RLJ forces that blew the box up. The start is now relaxed first, as at fixed volume."""
+    out = tmp_path / "rlj.h5"
+    code, err = run_jam(tmp_path, capsys, "--pressure", "1e-3", "--potential", "rlj", "--n", "32", "--out", str(out))
+    assert code == 0, err
+    assert load_packing(out).potential.spec == "rlj" and read_checks(out).passed
+    assert abs(read_attrs(out)["pressure"] / 1e-3 - 1) < 1e-6
+
+
+@pytest.mark.parametrize("tmpdir", ["a b", "a b/é"])
+def test_lammps_with_a_tmpdir_holding_a_space_or_non_ascii(tmp_path, tmpdir):
+    """Was: exit 4 'LAMMPS rejected read_data /tmp/a b/é/...' and advice to reinstall LAMMPS: the
+    path was unquoted (a space) and LAMMPS's parser drops bytes of non-ASCII characters."""
+    scratch = tmp_path / tmpdir
+    scratch.mkdir(parents=True)
+    out = tmp_path / "p.h5"
+    done = subprocess.run([*JAMFLOW, "jam", "--engine", "lammps", "--n", "16", "--quiet", "--out", str(out)],
+                          env={**os.environ, "TMPDIR": str(scratch)}, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert read_checks(out).passed and list(scratch.iterdir()) == []
+
+
+def test_lammps_file_names_are_quoted_or_refused():
+    from jamflow.engines.lammps.library import lammps_quote
+
+    assert lammps_quote("/tmp/a b/x.data") == '"/tmp/a b/x.data"'
+    assert lammps_quote('/tmp/"q"/x') == "'/tmp/\"q\"/x'"
+    with pytest.raises(ValueError, match="non-ASCII"):
+        lammps_quote("/tmp/é/x.data")
+
+
+def test_an_emitted_deck_with_a_space_in_its_name_runs(tmp_path, capsys):
+    """Was: `variable data index jam deck.start.data` (an index variable of two values): lmp read
+    the file 'jam' and failed."""
+    from jamflow.decks.jam import run_deck
+
+    deck = tmp_path / "dir" / "jam deck.lmp"
+    deck.parent.mkdir()
+    assert main(["jam", "--n", "16", "--protocol", "seed", "--emit-deck", str(deck),
+                 "--out", str(tmp_path / "jammed.h5")]) == 0
+    assert "run: cd " in capsys.readouterr().out
+    result = run_deck(deck.parent, deck=deck, timeout=300)
+    assert result.packing.n == 16 and (deck.parent / "jammed.data").exists()
+
+
+def test_an_emitted_deck_refuses_an_out_that_lammps_cannot_write(tmp_path, capsys):
+    code = main(["jam", "--n", "16", "--protocol", "seed", "--emit-deck", str(tmp_path / "d.lmp"),
+                 "--out", str(tmp_path / "my run.h5")])
+    err = capsys.readouterr().err
+    assert code == 2 and "choose an --out without them" in err and list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("suffix, magic", [(".svg", b"<?xml"), (".pdf", b"%PDF"), (".png", b"\x89PNG")])
+def test_draw_writes_the_format_its_suffix_asks_for(tmp_path, packing_file, suffix, magic):
+    # was: PNG bytes in pic.svg and pic.pdf
+    out = tmp_path / f"pic{suffix}"
+    assert main(["draw", str(packing_file), "-o", str(out)]) == 0
+    assert out.read_bytes().startswith(magic)
+
+
+def test_draw_refuses_a_suffix_it_cannot_write(tmp_path, capsys, packing_file, monkeypatch):
+    monkeypatch.setattr("jamflow.cli.commands.draw.load_packing", lambda *a: pytest.fail("work started"))
+    code = main(["draw", str(packing_file), "-o", str(tmp_path / "pic.jpg")])
+    err = capsys.readouterr().err
+    assert code == 2 and no_traceback(err) and "not .jpg" in err and list(tmp_path.iterdir()) == []

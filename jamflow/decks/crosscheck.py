@@ -12,7 +12,6 @@ minimisation at which the histories differ.
 
 from __future__ import annotations
 
-import tempfile
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -22,9 +21,10 @@ from jamflow.decks.jam import DeckResult, deck_variables, run_deck
 from jamflow.io.packing_file import write_lammps_data
 from jamflow.model.packing import Packing
 from jamflow.model.pairs import overlapping_pairs
-from jamflow.protocols.settings import CompressionSettings
-from jamflow.protocols.outcome import JamResult
 from jamflow.protocols.compression import compress, initial_packing
+from jamflow.protocols.outcome import JamResult
+from jamflow.protocols.settings import CompressionSettings
+
 
 @dataclass(frozen=True)
 class CrossCheck:
@@ -99,7 +99,9 @@ def run_from(workdir, start: Packing, run):
     afterwards) and return ``run(directory)``."""
     if workdir is not None and not Path(workdir).is_dir():
         raise ValueError(f"work directory {workdir} does not exist; create it first")
-    with tempfile.TemporaryDirectory(prefix="jamflow-crosscheck-") as tmp:
+    from jamflow.engines.lammps.library import scratch_directory
+
+    with scratch_directory("jamflow-crosscheck-") as tmp:
         where = Path(workdir) if workdir is not None else Path(tmp)
         write_lammps_data(where / "start.data", start)
         return run(where)
@@ -190,10 +192,10 @@ def crosscheck_shear(n: int = 10, dim: int = 2, sizes: str = "bi:1.4:0.5", seed:
     """Jam one random start at strain ``gamma`` (controller, LAMMPS, chapter protocol), then shear it
     to ``to`` in steps of ``dgamma`` twice: with the shear deck (``lmp``) and with the controller.
     ``settings``: the bisection after each step (the chapter's protocol; default dphi0 = 1e-6)."""
+    from jamflow.decks.shear import run_shear_deck, start_variables
     from jamflow.protocols.compression import jam
     from jamflow.protocols.settings import chapter_protocol
     from jamflow.protocols.shear import shear, shear_strains
-    from jamflow.decks.shear import run_shear_deck, start_variables
 
     settings = settings or chapter_protocol(dphi0=1e-6)
     if not tolerance > 0:

@@ -15,14 +15,25 @@ from pathlib import Path
 
 import numpy as np
 
-from jamflow.decks.jam import (OPTIONAL, _atoms_table, _data_box, _num, _section_rows, optional_values,
-                               protocol_values, render, start_values, system_values)
-from jamflow.support.files import atomic_path
+from jamflow.decks.jam import (
+    OPTIONAL,
+    _atoms_table,
+    _data_box,
+    _num,
+    _section_rows,
+    check_output_name,
+    optional_values,
+    protocol_values,
+    render,
+    start_values,
+    system_values,
+)
 from jamflow.io.packing_file import write_lammps_data
 from jamflow.model.packing import Packing
 from jamflow.model.potentials import Potential, Spring
-from jamflow.protocols.settings import CompressionSettings
 from jamflow.model.shapes.shape import Ellipsoid
+from jamflow.protocols.settings import CompressionSettings
+from jamflow.support.files import atomic_path
 
 DECK_NAME = "jam-ellipses.lmp"
 DEFAULT_PLUGIN = "jamflow_pairs.so"
@@ -71,6 +82,7 @@ def emit_deck(path, start: Packing, settings: CompressionSettings | None = None,
 
     path = Path(path)
     data = path.with_name(path.stem + ".start.data")
+    check_output_name(out)
     values = start.species()[0]
     if values[0] != 1.0 or len(values) > 2:
         raise ValueError(f"the deck's small size is 1 with at most one other, got {values}")

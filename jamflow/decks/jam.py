@@ -22,14 +22,14 @@ from pathlib import Path
 import numpy as np
 
 from jamflow import __version__
-from jamflow.model.box import Box
-from jamflow.support.files import atomic_path
 from jamflow.io.packing_file import write_lammps_data
 from jamflow.minimize.settings import MinimizerSettings
+from jamflow.model.box import Box
 from jamflow.model.packing import Packing
 from jamflow.model.potentials import Potential, Spring, parse_potential
-from jamflow.protocols.settings import CompressionSettings
 from jamflow.model.sizes import parse_sizes
+from jamflow.protocols.settings import CompressionSettings
+from jamflow.support.files import atomic_path
 
 DECK_NAME = "jam.lmp"
 OPTIONAL = ("data", "phi0", "ftol", "plugin")
@@ -140,9 +140,33 @@ def deck_text(variables: dict | None = None) -> str:
 def render(header: str, body: str, optional_names, variables: dict) -> str:
     """A deck: ``header`` formatted with ``variables`` (the optional ones, if given, as extra
     ``index`` lines), then ``body``."""
-    values = dict(variables)
+    values = {k: deck_word(v) for k, v in variables.items()}
     optional = "".join(f"variable {k:<9} index {values.pop(k)}\n" for k in optional_names if k in values)
-    return header.format(version=__version__, optional=optional, **{k: str(v) for k, v in values.items()}) + body
+    return header.format(version=__version__, optional=optional, **values) + body
+
+
+_SPECIAL = "\"'#$&"  # quotes, comment, variable, continuation: LAMMPS reads them in a command
+
+
+def plain_word(text: str) -> bool:
+    """Does ``text`` stay one word in a LAMMPS command, unquoted?"""
+    return bool(text) and not any(c.isspace() or c in _SPECIAL for c in text)
+
+
+def deck_word(value) -> str:
+    """A deck variable's value as written on its ``variable NAME index VALUE`` line. A file name
+    with a space (``jam deck.start.data``) is written "'jam deck.start.data'": LAMMPS strips the
+    outer quotes when it stores the value, and ``read_data ${data}`` then reads one quoted word
+    (unquoted, the space made it an index variable of two values and read_data opened "jam")."""
+    text = str(value)
+    if plain_word(text):
+        return text
+    from jamflow.engines.lammps.library import readable_by_lammps
+
+    if not readable_by_lammps(text) or "'" in text or '"' in text:
+        raise ValueError(f"{text!r} cannot be a file name in a LAMMPS deck (LAMMPS cannot read quotes, non-ASCII or "
+                         "control characters in it); rename it")
+    return f"\"'{text}'\""
 
 
 def write_deck(path, variables: dict | None = None) -> Path:
@@ -374,6 +398,7 @@ def emit_deck(path, start: Packing, settings: CompressionSettings | None = None,
     directory: run it there). Returns (deck path, data path)."""
     path = Path(path)
     data = path.with_name(path.stem + ".start.data")
+    check_output_name(out)
     if start.fixed is not None or start.gravity > 0:
         raise ValueError("the deck runs smooth walls at most: no rough walls (fixed particles) or gravity")
     variables = deck_variables(start.n, start.dim, start.metadata.get("sizes", "bi:1.4:0.5"),
@@ -384,6 +409,14 @@ def emit_deck(path, start: Packing, settings: CompressionSettings | None = None,
         raise ValueError(f"the deck's small diameter is 1, got {values[0]}; rescale the packing")
     write_lammps_data(data, start)
     return write_deck(path, variables), data
+
+
+def check_output_name(out: str) -> None:
+    """The deck names its outputs ``${out}.data``, ``${out}.protocol.txt``: a quoted name cannot be
+    joined to a suffix in LAMMPS, so ``out`` must be one plain word."""
+    if not plain_word(str(out)):
+        raise ValueError(f"the deck names its outputs {out}.data and {out}.protocol.txt, which LAMMPS cannot write "
+                         "with spaces, quotes, '#', '$' or '&' in the name; choose an --out without them")
 
 
 # --- the constant-pressure deck (lammps_inputs/pressure.lmp, written by hand) ------------------------

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from jamflow.plots.figure import save_png
+from jamflow.plots.figure import save_figure
 from jamflow.protocols.pressure import DEFAULT_START_PRESSURE
 
 
@@ -215,6 +215,6 @@ def onsets_figure(result: OnsetResult, path, bins: int = 30, published: float | 
     fig.suptitle(f"{result.dim}D jamming onsets: {sum(s.count for s in result.sizes)} packings, "
                  f"{result.n_bootstrap} bootstrap replicates")
     fig.tight_layout()
-    save_png(fig, path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
     return path

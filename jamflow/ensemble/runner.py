@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import itertools
 import signal
 import threading
 import time
@@ -13,16 +14,19 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from jamflow.protocols.spec import JamSpec, prepare
-from jamflow.ensemble.cluster import WAIT_WORKERS, dask_client, workers_line, workers_state
 from jamflow.ensemble.checks import packing_row
+from jamflow.ensemble.cluster import WAIT_WORKERS, dask_client, workers_line, workers_state
 from jamflow.ensemble.store import Store, Task, failure_row, write_failure
+from jamflow.protocols.spec import JamSpec, prepare
 
 TASK_KEYS = ("n", "seed")  # set per task, not store parameters
 SUMMARY_EVERY = 10.0  # seconds between summary.csv rewrites during a run
 MAX_ERRORS_BEFORE_SUCCESS = 3  # the same broken set-up fails every task: stop early
 SETTLED = ("finished", "error", "cancelled")  # future states with an outcome ("lost": being recomputed)
 STOP_GRACE = 30.0  # seconds a stopped run waits for the tasks already running (cancelling cannot stop them)
+MAX_SEED = 2**63 - 1  # seeds are stored as int64
+CHUNK = 256  # tasks classified and submitted at a time (at least 4 per worker thread): memory does not grow with
+# the seed range, and Dask stays fast (2000 pending futures: the client grew ~30 MB/s and made half the packings)
 
 
 @dataclass
@@ -65,6 +69,9 @@ def seed_range(seeds) -> range:
     if seeds.start < 0 or seeds.stop <= seeds.start:
         raise ValueError(f"seed range {seeds.start}:{seeds.stop} is empty, reversed or negative; "
                          "give A:B with 0 <= A < B, e.g. 0:200")
+    if seeds.stop > MAX_SEED:  # a packing file stores its seed as a 64-bit integer
+        raise ValueError(f"seed range {seeds.start}:{seeds.stop} goes past 2^63 - 1 = {MAX_SEED} (seeds are 64-bit "
+                         f"integers); give A:B with A < B <= {MAX_SEED}")
     return seeds
 
 
@@ -92,18 +99,34 @@ def run_ensemble(out, seeds, n=(64,), *, workers=None, scheduler=None, client=No
         raise ValueError(f"--wait-workers must be a positive number of seconds, got {wait_workers}")
     for size in sizes:  # every grid point is validated before any work
         prepare(JamSpec(**fixed, n=size, seed=seeds.start))
-    tasks = [Task((("n", size),), seed) for size in sizes for seed in seeds]
+    tasks = (Task((("n", size),), seed) for size in sizes for seed in seeds)  # made CHUNK at a time, as needed
     with Store(out).open(fixed, ["n"], defaults=jam_parameters()) as store:
-        done, failed, todo, corrupt = store.classify(tasks, fixed, retry_failed)
-        report = EnsembleReport(store.dir, len(tasks), len(done), 0, len(failed), corrupt=corrupt,
-                                rows={**done, **failed})
+        report = EnsembleReport(store.dir, len(sizes) * (seeds.stop - seeds.start))
+        cached, todo = store.summary_rows(), []
+        bar = tqdm(total=report.requested, desc="ensemble", unit="packing", disable=not progress, dynamic_ncols=True)
         try:
-            if todo:
-                with _interrupt_flag() as interrupted, dask_client(workers, scheduler, client, wait_workers) as c:
-                    _run(c, store, fixed, todo, report, progress, on_result, interrupted, mpi_ranks)
+            with _interrupt_flag() as interrupted, contextlib.ExitStack() as cluster:
+                c = None
+                while not (report.stopped or report.interrupted):
+                    if interrupted.is_set():
+                        report.interrupted = True
+                        break
+                    chunk = list(itertools.islice(tasks, CHUNK if c is None else max(CHUNK, 4 * _threads(c))))
+                    if not chunk:
+                        break
+                    done, failed, todo, corrupt = store.classify(chunk, fixed, retry_failed, cached)
+                    report.done_before += len(done)
+                    report.failed += len(failed)
+                    report.corrupt += corrupt
+                    report.rows.update({**done, **failed})
+                    bar.update(len(done) + len(failed))
+                    if todo:
+                        c = c or cluster.enter_context(dask_client(workers, scheduler, client, wait_workers))
+                        _run(c, store, fixed, todo, report, bar, on_result, interrupted, mpi_ranks)
         except KeyboardInterrupt:
             report.interrupted = True
         finally:
+            bar.close()
             store.remove_debris()
             _collect_late(store, fixed, todo, report)
             _write_summary(store, report)
@@ -142,7 +165,8 @@ def _collect_late(store, fixed, todo, report):
                 pass  # an unreadable file is moved aside and redone by the next run
 
 
-def _run(client, store, fixed, todo, report, progress, on_result, interrupted, mpi_ranks):
+def _run(client, store, fixed, todo, report, bar, on_result, interrupted, mpi_ranks):
+    """Make the packings of ``todo`` (one chunk of the run), advancing ``bar`` as they finish."""
     from distributed import wait
 
     todo = sorted(todo, key=lambda t: (-dict(t.point)["n"], t.seed))  # longest first balances the load
@@ -151,8 +175,7 @@ def _run(client, store, fixed, todo, report, progress, on_result, interrupted, m
                              mpi_ranks, key=f"jam-{task.stem}-{run_id}", pure=False, priority=-k): task
                for k, task in enumerate(todo)}
     pending = set(futures)
-    bar = tqdm(total=len(todo), desc="ensemble", unit="packing", disable=not progress, dynamic_ncols=True)
-    line = tqdm(bar_format="{desc}", position=1, disable=not progress, leave=False)
+    line = tqdm(bar_format="{desc}", position=1, disable=bar.disable, leave=False)
     bar.set_postfix_str(f"failed={report.failed}, done before={report.done_before}")
     seen = set(workers_state(client) or {})  # worker addresses at the last poll (a worker lost before the first counts)
     last_write = time.monotonic()
@@ -185,7 +208,6 @@ def _run(client, store, fixed, todo, report, progress, on_result, interrupted, m
             _drain_running(client, pending, futures, store, fixed, report)
         client.cancel(list(pending))
         line.close()
-        bar.close()
 
 
 def _drain_running(client, pending, futures, store, fixed, report):
@@ -216,6 +238,10 @@ def _settle(fut, pending, futures, store, fixed, report):
     if row is not None:
         report.rows[row["file"]] = row
     return row
+
+
+def _threads(client) -> int:
+    return sum(client.nthreads().values())
 
 
 def _check_mpi(ranks, engine):

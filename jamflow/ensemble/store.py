@@ -13,7 +13,6 @@ killed task leaves at most a ``.NAME.*.tmp`` file, removed when the store is nex
 from __future__ import annotations
 
 import csv
-import fcntl
 import json
 import os
 import re
@@ -21,10 +20,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from jamflow import __version__
-from jamflow.support.files import atomic_path, read_json
 from jamflow.ensemble.checks import packing_row
+from jamflow.support.files import DirectoryLocked, atomic_path, lock_directory, read_json
 
-MANIFEST, SUMMARY, FAILED, CORRUPT, LOCK = "ensemble.json", "summary.csv", "failed", "corrupt", ".lock"
+MANIFEST, SUMMARY, FAILED, CORRUPT = "ensemble.json", "summary.csv", "failed", "corrupt"
 SCHEMA = "jamflow.ensemble"
 BOOKKEEPING = ("file", "reason", "file_size", "file_mtime_ns")
 
@@ -52,8 +51,7 @@ def _token(value) -> str:
     return re.sub(r"[^A-Za-z0-9.+-]", "-", str(value))
 
 
-class StoreLocked(ValueError):
-    pass
+StoreLocked = DirectoryLocked  # the store's lock is support.files.lock_directory's
 
 
 class Store:
@@ -101,14 +99,8 @@ class Store:
                              "choose a writable --out directory") from None
 
     def _acquire_lock(self):
-        fh = open(self.dir / LOCK, "a")
-        try:
-            fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            fh.close()
-            raise StoreLocked(f"another jamflow ensemble is writing {self.dir}; wait for it to end or "
-                              "use another --out") from None
-        self._lock = fh
+        self._lock = lock_directory(self.dir, f"another jamflow ensemble is writing {self.dir}; wait for it to end "
+                                              "or use another --out")
 
     def _check_manifest(self, fixed: dict, axes: list[str], defaults: dict):
         path = self.dir / MANIFEST
@@ -150,11 +142,16 @@ class Store:
         return self.dir / FAILED / (task.stem + ".json")
 
     # -- what is done ------------------------------------------------------------------
-    def classify(self, tasks, fixed: dict, retry_failed: bool = False):
+    def summary_rows(self) -> dict:
+        """The rows of summary.csv by file name."""
+        return {row["file"]: row for row in self.read_summary()}
+
+    def classify(self, tasks, fixed: dict, retry_failed: bool = False, cached: dict | None = None):
         """Split ``tasks`` into rows of finished packings, rows of recorded failures and the
-        tasks still to do. Existing files are checked (re-read unless summary.csv holds a row
-        for the same size and modification time); unreadable ones go to corrupt/ and are redone."""
-        cached = {row["file"]: row for row in self.read_summary()}
+        tasks still to do. Existing files are checked (re-read unless summary.csv -- or
+        ``cached``, its ``summary_rows()`` read once -- holds a row for the same size and
+        modification time); unreadable ones go to corrupt/ and are redone."""
+        cached = self.summary_rows() if cached is None else cached
         done, failed, todo, corrupt = {}, {}, [], []
         for task in tasks:
             path, fail = self.packing_path(task), self.failure_path(task)

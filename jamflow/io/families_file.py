@@ -5,12 +5,10 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import h5py
 import numpy as np
 
 from jamflow import __version__
-from jamflow.io.packing_file import _attr
-from jamflow.support.files import atomic_path
+from jamflow.io.packing_file import _attr, hdf5_output, open_hdf5
 
 FAMILY_SCHEMA, FAMILY_SCHEMA_VERSION = "jamflow.families", 1
 
@@ -19,7 +17,7 @@ def save_family_points(out, plan, points: dict, failures=()) -> Path:
     """The sampled points of ``jamflow.protocols.families.sample``, the plan and the failed jams
     and paths (schema ``jamflow.families`` v1, group /points: one dataset per POINT_FIELDS
     column; root attribute ``failures``: JSON list of messages)."""
-    with atomic_path(out) as tmp, h5py.File(tmp, "w") as f:
+    with hdf5_output(out) as f:
         f.attrs.update(schema=FAMILY_SCHEMA, schema_version=FAMILY_SCHEMA_VERSION, jamflow_version=__version__,
                        rounds=int(len(np.unique(points["start"]))), failures=json.dumps(list(failures)))
         f.create_group("plan").attrs.update({k: _attr(v) for k, v in plan.as_dict().items()})
@@ -29,13 +27,22 @@ def save_family_points(out, plan, points: dict, failures=()) -> Path:
     return Path(out)
 
 
-def load_family_points(path) -> tuple[dict, dict, list]:
-    """(plan attributes, point columns, failures) of a points file."""
-    with h5py.File(path, "r") as f:
+def load_family_points(path, remedy: str | None = None) -> tuple[dict, dict, list]:
+    """(plan attributes, point columns, failures) of a points file; a damaged or foreign file is
+    a one-line ValueError naming it (ending with ``remedy``, what to do)."""
+    also = f"; {remedy}" if remedy else ""
+    with open_hdf5(path, "jamflow families points file", remedy) as f:
         if f.attrs.get("schema") != FAMILY_SCHEMA:
-            raise ValueError(f"{path} is not a jamflow families file (schema {f.attrs.get('schema')!r})")
+            raise ValueError(f"{path} is not a jamflow families file (schema {f.attrs.get('schema')!r}){also}")
         plan = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f["plan"].attrs.items()}
-        return plan, {k: v[...] for k, v in f["points"].items()}, json.loads(f.attrs.get("failures", "[]"))
+        points = {k: v[...] for k, v in f["points"].items()}
+        try:
+            failures = json.loads(f.attrs.get("failures", "[]"))
+        except ValueError as err:
+            raise ValueError(f"{path} is damaged (its failures attribute is not JSON: {err}){also}") from None
+    if len({len(column) for column in points.values()}) > 1:
+        raise ValueError(f"{path} is damaged (its point columns differ in length){also}")
+    return plan, points, failures
 
 
 def save_family_table(out, plan, families, convergence, mirror, richness) -> Path:
@@ -43,7 +50,7 @@ def save_family_table(out, plan, families, convergence, mirror, richness) -> Pat
     phi_J(gamma) of every family (/curves: family, gamma, phi_j, phi_j_spread), the count against
     the number of starts (/convergence), the mirror check and the richness estimate (attributes)."""
     rows = families.table()
-    with atomic_path(out) as tmp, h5py.File(tmp, "w") as f:
+    with hdf5_output(out) as f:
         f.attrs.update(schema=FAMILY_SCHEMA, schema_version=FAMILY_SCHEMA_VERSION, jamflow_version=__version__,
                        families=families.count, mirror_matched=mirror.matched(), mirror_unpaired=len(mirror.unpaired),
                        mirror_worst_phi=mirror.worst_phi,

@@ -8,8 +8,7 @@ import h5py
 import numpy as np
 
 from jamflow import __version__
-from jamflow.io.packing_file import open_hdf5
-from jamflow.support.files import atomic_path
+from jamflow.io.packing_file import hdf5_output, open_hdf5
 
 SCHEMA, SCHEMA_VERSION = "jamflow.modes", 2  # v2 adds the shape, mode character and per-mode profiles
 
@@ -37,7 +36,7 @@ def save_modes(out, source, spec, stab, vectors=False, checks=None) -> Path:
                  translation_residual=spec.translation_residual)
     if checks is not None:
         attrs["force_balanced"] = checks.force_balanced
-    with atomic_path(out) as tmp, h5py.File(tmp, "w") as f:
+    with hdf5_output(out) as f:
         f.attrs.update(attrs)
         if checks is not None:
             f.create_group("checks").attrs.update(checks.as_attrs())

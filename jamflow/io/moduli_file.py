@@ -8,8 +8,8 @@ import h5py
 import numpy as np
 
 from jamflow import __version__
+from jamflow.io.packing_file import hdf5_output
 from jamflow.mechanics.strains import STRAINS
-from jamflow.support.files import atomic_path
 
 SCHEMA, SCHEMA_VERSION = "jamflow.moduli", 1
 
@@ -32,7 +32,7 @@ def save_moduli(out, source, packing, result, dphi_above, moduli) -> Path:
         sweep, m = result.sweep(strain), strain.modulus
         attrs.update({f"{m}_error": sweep.error, f"{m}_curvature": sweep.curvature, f"{m}_linear_max": sweep.linear_max,
                       f"{m}_roundoff_strain": result.roundoff[m]})
-    with atomic_path(out) as tmp, h5py.File(tmp, "w") as f:
+    with hdf5_output(out) as f:
         f.attrs.update(attrs)
         for strain in STRAINS:
             sweep = result.sweep(strain)

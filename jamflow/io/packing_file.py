@@ -56,6 +56,7 @@ from __future__ import annotations
 
 import contextlib
 import datetime
+import io
 import json
 import math
 from pathlib import Path
@@ -124,7 +125,7 @@ def save_packing(path, packing: Packing, *, energy_per_particle=None, pressure_t
     )
     ptensor = None if pressure_tensor is None else np.asarray(pressure_tensor, float)
     attrs["pressure"] = math.nan if ptensor is None else float(np.trace(ptensor) / packing.dim)
-    with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
+    with hdf5_output(path) as f:
         f.attrs.update(attrs)
         f["positions"] = packing.box.wrap(packing.positions)
         f["diameters"] = packing.diameters
@@ -193,32 +194,48 @@ def save_result(result, path, checks=None, *, force: bool = False) -> Path:
 
 
 @contextlib.contextmanager
-def open_hdf5(path, what: str = "jamflow packing file"):
+def open_hdf5(path, what: str = "jamflow packing file", remedy: str | None = None):
     """``h5py.File(path, "r")`` whose failures are one-line ValueErrors naming the file and
     what is wrong with it: missing, empty, not HDF5, truncated or damaged, or lacking an
-    attribute or dataset that ``what`` needs (KeyError inside the block)."""
+    attribute or dataset that ``what`` needs (KeyError inside the block); ``remedy`` (what to do)
+    ends every message (default: rerun the command that wrote it, where that is the remedy)."""
     path = Path(path)
+    rerun = remedy or "rerun the command that wrote it"
+    also = f"; {remedy}" if remedy else ""
     if not path.is_file():
         raise FileNotFoundError(f"no {what} {path}" if not path.exists() else f"{path} is not a file; give a {what}")
     if path.stat().st_size == 0:
-        raise ValueError(f"{path} is empty (0 bytes), not a {what}; rerun the command that writes it")
+        raise ValueError(f"{path} is empty (0 bytes), not a {what}; {remedy or 'rerun the command that writes it'}")
     if not h5py.is_hdf5(path):
-        raise ValueError(f"{path} is not an HDF5 file (no HDF5 signature), so not a {what}")
+        raise ValueError(f"{path} is not an HDF5 file (no HDF5 signature), so not a {what}{also}")
     try:
         f = h5py.File(path, "r")
     except OSError as err:
-        raise ValueError(f"{path} is truncated or damaged ({_h5_reason(err)}); rerun the command that "
-                         "wrote it") from None
+        raise ValueError(f"{path} is truncated or damaged ({_h5_reason(err)}); {rerun}") from None
     try:
         with f:
             yield f
     except KeyError as err:
-        raise ValueError(f"{path} is an incomplete {what}: {_h5_reason(err)}") from None
+        raise ValueError(f"{path} is an incomplete {what}: {_h5_reason(err)}{also}") from None
     except json.JSONDecodeError as err:
         raise ValueError(f"{path} is a damaged {what}: an attribute is not valid JSON ({err}); rerun the command "
                          "that wrote it") from None
     except OSError as err:
-        raise ValueError(f"{path} is damaged ({_h5_reason(err)}); rerun the command that wrote it") from None
+        raise ValueError(f"{path} is damaged ({_h5_reason(err)}); {rerun}") from None
+
+
+@contextlib.contextmanager
+def hdf5_output(path):
+    """An HDF5 file open for writing whose bytes go to ``path`` atomically on success. HDF5 is
+    built in memory and written with plain file writes: a full disk is then a Python OSError
+    (``support.files.DiskFull``: one line), where HDF5 writing to disk itself raised from inside
+    its flush at close and could crash the process (segmentation fault)."""
+    with atomic_path(path) as tmp:
+        buffer = io.BytesIO()
+        with h5py.File(buffer, "w") as f:
+            yield f
+        with open(tmp, "wb") as fh:
+            fh.write(buffer.getbuffer())
 
 
 def _h5_reason(err) -> str:

@@ -33,9 +33,8 @@ import h5py
 import numpy as np
 
 from jamflow import __version__
+from jamflow.io.packing_file import _attr, hdf5_output
 from jamflow.model.box import Box
-from jamflow.io.packing_file import _attr
-from jamflow.support.files import atomic_path
 from jamflow.model.packing import Packing
 from jamflow.model.potentials import potential_from_attrs
 from jamflow.model.shapes.shape import shape_from_attrs
@@ -78,7 +77,7 @@ def save_shear_path(out, path, *, source: str = "", extra_columns: dict | None =
         steps=len(path.steps) - 1, n_changes=path.n_changes, seconds=path.seconds,
     )
     pairs = [np.column_stack([s.network.i, s.network.j]).reshape(-1, 2) for s in path.steps]
-    with atomic_path(out) as tmp, h5py.File(tmp, "w") as f:
+    with hdf5_output(out) as f:
         f.attrs.update(attrs)
         f["diameters"] = first.diameters
         g = f.create_group("path")

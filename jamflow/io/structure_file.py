@@ -2,17 +2,16 @@
 
 from __future__ import annotations
 
-import h5py
 import numpy as np
 
 from jamflow import __version__
-from jamflow.support.files import atomic_path
+from jamflow.io.packing_file import hdf5_output
 
 
 def write_results(path, res: dict, files) -> None:
     """HDF5 layout: see docs/notes/structure.md."""
     rdf, sk, corr = res["rdf"], res["sk"], res["corr"]
-    with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
+    with hdf5_output(path) as f:
         f.attrs.update(schema="jamflow.structure", schema_version=1, jamflow_version=__version__,
                        n_packings=rdf.n_packings, r_min=res["r_min"], G=res["G"].G,
                        xi_g=res["g_fit"].xi, xi_q6=corr.fit.xi, inputs="\n".join(map(str, files)))

@@ -34,9 +34,9 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Polygon
 
 from jamflow.mechanics.contacts import Contacts
-from jamflow.plots.figure import save_png
 from jamflow.model.packing import Packing
 from jamflow.model.pairs import overlapping_pairs, overlapping_sites, site_packing
+from jamflow.plots.figure import save_figure
 
 COLOR_BY = ("z", "q6", "orientation")
 MAX_LINE_WIDTH = 3.0  # points, for the largest contact force
@@ -84,7 +84,7 @@ def draw_packing(packing: Packing, path, *, color_by: str = "z", slice_at: float
         bar.set_ticks(np.arange(norm.boundaries[0] + 0.5, norm.boundaries[-1]))
     ax.set(xlabel="x (small diameters)", ylabel="y (small diameters)")
     ax.set_title(title or caption, fontsize=8)
-    return save_png(fig, path, dpi=130)
+    return save_figure(fig, path, dpi=130)
 
 
 def check_options(packing: Packing, color_by: str, slice_at: float) -> None:

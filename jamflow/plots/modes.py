@@ -14,7 +14,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from jamflow.plots.figure import save_png
+from jamflow.plots.figure import save_figure
 
 
 def modes_figure(path, spectra, dos=None, contacts=(), stabilities=()) -> Path:
@@ -27,7 +27,7 @@ def modes_figure(path, spectra, dos=None, contacts=(), stabilities=()) -> Path:
     _z_distribution(axes[1, 0], contacts)
     _energy_profiles(axes[1, 1], stabilities)
     fig.suptitle(f"{len(spectra)} packing(s), e_min = {spectra[0].e_min:g}" if spectra else "")
-    return save_png(fig, path)
+    return save_figure(fig, path)
 
 
 def _sorted_frequencies(ax, spectra):

@@ -19,8 +19,8 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from jamflow.plots.figure import save_png
 from jamflow.mechanics.strains import STRAINS
+from jamflow.plots.figure import save_figure
 
 
 def _new(figsize, rows, cols):
@@ -90,7 +90,7 @@ def stress_strain_figure(path, result, title: str = "") -> Path:
     _slope_deviation(axes[1, 0], result)
     _linear_axes(axes[1, 1], result.shear)
     fig.suptitle(f"{title}  phi = {result.phi:.8f}, P = {result.pressure:.3e}")
-    return save_png(fig, path)
+    return save_figure(fig, path)
 
 
 def family_figure(path, curves: dict, title: str = "") -> Path:
@@ -109,7 +109,7 @@ def family_figure(path, curves: dict, title: str = "") -> Path:
     axes[0, 1].set(xlabel="gamma", ylabel="Sigma - Sigma_0", xscale="log", title="(b) linear stress axis")
     axes[0, 0].legend(fontsize=7)
     fig.suptitle(title)
-    return save_png(fig, path)
+    return save_figure(fig, path)
 
 
 def scaling_figure(path, table: dict, fits: dict, title: str = "", published: dict | None = None) -> Path:
@@ -136,4 +136,4 @@ def scaling_figure(path, table: dict, fits: dict, title: str = "", published: di
         ax.set(xscale="log", yscale="log", xlabel="phi - phi_J", ylabel=labels[quantity], title=labels[quantity])
         ax.legend(fontsize=7)
     fig.suptitle(title)
-    return save_png(fig, path)
+    return save_figure(fig, path)

@@ -12,7 +12,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.ticker import NullFormatter, ScalarFormatter
 
-from jamflow.plots.figure import save_png
+from jamflow.plots.figure import save_figure
 
 MAX_LABELS = 12
 
@@ -39,7 +39,7 @@ def shear_path_figure(path, columns: dict, title: str = "") -> Path:
     axes[-1].set_xlabel(r"shear strain $\gamma$")
     axes[0].set_title(title or f"{len(g) - 1} steps, contact network changed at {int(changed.sum())} "
                                "(red: contacts removed/added)")
-    return save_png(fig, path)
+    return save_figure(fig, path)
 
 
 def families_figure(path, families, mirror_of=None, convergence=(), richness=None, title: str = "",
@@ -82,7 +82,7 @@ def families_figure(path, families, mirror_of=None, convergence=(), richness=Non
             axis.set_major_formatter(ScalarFormatter())
             axis.set_minor_formatter(NullFormatter())
         count.legend(fontsize=8)
-    return save_png(fig, path)
+    return save_figure(fig, path)
 
 
 def _runs(gamma, phi, step):

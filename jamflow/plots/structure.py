@@ -13,9 +13,9 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.ticker import NullFormatter
 
-from jamflow.plots.figure import save_png
 from jamflow.analysis.correlations import BondCorrelationResult, ExponentialFit
 from jamflow.analysis.structure import RDFResult, StructureFactorResult
+from jamflow.plots.figure import save_figure
 
 
 def _legend(ax) -> None:
@@ -65,7 +65,7 @@ def plot_rdf(rdf: RDFResult, path, *, r_min: float | None = None, fit: Exponenti
         _envelope(env, fit, "g - 1")
         env.set(xlabel="r / <sigma^2>^1/2", ylabel="g(r) - 1 maxima")
         _legend(env)
-    return save_png(fig, path, tight=True)
+    return save_figure(fig, path, tight=True)
 
 
 def plot_structure_factor(sk: StructureFactorResult, path, *, title: str = "") -> Path:
@@ -76,7 +76,7 @@ def plot_structure_factor(sk: StructureFactorResult, path, *, title: str = "") -
     ax.xaxis.set_minor_formatter(NullFormatter())
     ax.axhline(1.0, color="0.6", lw=0.5)
     ax.set(xlabel="k <sigma^2>^1/2", ylabel="S(k)", title=f"{title} ({sk.n_packings} packing(s))")
-    return save_png(fig, path, tight=True)
+    return save_figure(fig, path, tight=True)
 
 
 def plot_bond_correlations(corr: BondCorrelationResult, path, *, title: str = "") -> Path:
@@ -92,7 +92,7 @@ def plot_bond_correlations(corr: BondCorrelationResult, path, *, title: str = ""
     _envelope(env, corr.fit, "C")
     env.set(xlabel="r / <sigma^2>^1/2", ylabel="C(r)")
     _legend(env)
-    return save_png(fig, path, tight=True)
+    return save_figure(fig, path, tight=True)
 
 
 def plot_order(labels: Sequence[str], values: dict, path, *, title: str = "") -> Path:
@@ -105,7 +105,7 @@ def plot_order(labels: Sequence[str], values: dict, path, *, title: str = "") ->
     ax.set_xticks(x, [str(s) for s in labels], rotation=60, ha="right", fontsize=6)
     ax.set(ylabel="order parameter", ylim=(-0.02, 1.02), title=title)
     _legend(ax)
-    return save_png(fig, path, tight=True)
+    return save_figure(fig, path, tight=True)
 
 
 def plot_bond_order_map(packing, order, path, *, title: str = "") -> Path:
@@ -135,4 +135,4 @@ def plot_bond_order_map(packing, order, path, *, title: str = "") -> Path:
     ax.autoscale_view()
     ax.set_axis_off()
     ax.set_title(f"{title} Q6 global {order.global_order:.2f}, local {order.local_order:.2f}", fontsize=9)
-    return save_png(fig, path, tight=True)
+    return save_figure(fig, path, tight=True)

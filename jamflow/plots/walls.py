@@ -19,11 +19,11 @@ from matplotlib.collections import LineCollection, PatchCollection
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle
 
+from jamflow.analysis.profile import ProfileResult
 from jamflow.model.packing import Packing
 from jamflow.model.pairs import overlapping_pairs
 from jamflow.model.walls import smooth_wall_contacts
-from jamflow.plots.figure import save_png
-from jamflow.analysis.profile import ProfileResult
+from jamflow.plots.figure import save_figure
 
 
 def contact_forces(packing: Packing):
@@ -80,7 +80,7 @@ def plot_packing(packing: Packing, path, title: str = "", network: bool = True) 
     ax.set_aspect("equal")
     ax.set_title(title, fontsize=9)
     ax.set_xlabel("x (small diameters)")
-    return save_png(fig, path, tight=True)
+    return save_figure(fig, path, tight=True)
 
 
 def plot_profile(result: ProfileResult, path, title: str = "", mean=None) -> Path:
@@ -100,7 +100,7 @@ def plot_profile(result: ProfileResult, path, title: str = "", mean=None) -> Pat
     ax.set_ylabel("height z (small diameters)")
     ax.set_title(title or "pressure profile under gravity", fontsize=9)
     ax.legend(fontsize=7)
-    return save_png(fig, path, tight=True)
+    return save_figure(fig, path, tight=True)
 
 
 def plot_phi_pressure(pressures, phis, phi_j_pressure, bands: dict, path, title: str = "") -> Path:
@@ -133,4 +133,4 @@ def plot_phi_pressure(pressures, phis, phi_j_pressure, bands: dict, path, title:
     bx.set_ylabel(r"$\phi - \phi_J$")
     bx.legend(fontsize=7)
     fig.suptitle(title, fontsize=9)
-    return save_png(fig, path, tight=True)
+    return save_figure(fig, path, tight=True)

@@ -13,7 +13,6 @@ bisection runs unchanged; under gravity ``jam`` settles the packing instead
 from __future__ import annotations
 
 import math
-import os
 import time
 import warnings
 from dataclasses import replace
@@ -30,6 +29,7 @@ from jamflow.model.sizes import SizeSpec, parse_sizes
 from jamflow.model.walls import parse_walls, wall_loads, with_walls
 from jamflow.protocols.outcome import HISTORY_COLUMNS, JammingFailed, JamResult, record_minimization
 from jamflow.protocols.settings import DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings
+from jamflow.support.machine import physical_memory
 
 NEWTON_FINAL_FACTOR = 3.0  # intermediate jumps stop at >= 3x the window's predicted distance from phi_J
 LOOSE_TRUST = 10.0  # a loosely minimised state decides its side only if V > 10 V_tol
@@ -94,7 +94,7 @@ def jam(n: int = 64, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | P
             start = at_shear_strain(start, gamma)
     elif not isinstance(start, Packing):
         raise TypeError(f"start must be a Packing (or None for a random start), got {type(start).__name__}")
-    if start.potential.soft_start and (random_start or _deepest_overlap(start) < RLJ_MIN_START_RATIO):
+    if start.potential.soft_start and (random_start or deepest_overlap(start) < RLJ_MIN_START_RATIO):
         start = remove_overlaps(start, settings.minimizer, engine)
     if start.gravity > 0:
         from jamflow.protocols.gravity import settle
@@ -177,11 +177,8 @@ def _potential(potential) -> Potential:
 
 def _check_memory(n: int) -> None:
     """Refuse an N whose run cannot fit in this machine's memory, before allocating anything."""
-    try:
-        total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
-    except (ValueError, OSError, AttributeError):
-        return  # unknown on this platform
-    if n * BYTES_PER_PARTICLE > total:
+    total = physical_memory()
+    if total is not None and n * BYTES_PER_PARTICLE > total:
         raise ValueError(f"n = {n} needs about {n * BYTES_PER_PARTICLE / 1e9:.3g} GB of memory ({BYTES_PER_PARTICLE // 1024} kB "
                          f"per particle), more than this machine's {total / 1e9:.3g} GB; use n <= {total // BYTES_PER_PARTICLE}")
 
@@ -270,14 +267,14 @@ def _check_start(packing: Packing) -> None:
         _check_contact_range(packing)
     if not packing.potential.soft_start:
         return
-    deepest = _deepest_overlap(packing)
+    deepest = deepest_overlap(packing)
     if deepest < RLJ_MIN_START_RATIO:
         raise ValueError(f"repulsive LJ from a start with overlap r/sigma = {deepest:.3f} < "
                          f"{RLJ_MIN_START_RATIO}: forces diverge and LAMMPS loses atoms. Relax the start "
                          "first (jamflow.protocols.compression.remove_overlaps), or pass it to jam(), which does")
 
 
-def _deepest_overlap(packing: Packing) -> float:
+def deepest_overlap(packing: Packing) -> float:
     """Smallest r/sigma over overlapping pairs (of sites, for rigid bodies); 1.0 without overlaps."""
     from jamflow.model.pairs import (  # here, like resolution: scipy.spatial loads lazily
         overlapping_pairs,

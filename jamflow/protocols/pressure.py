@@ -32,11 +32,12 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from jamflow.engines.choose import open_engine
-from jamflow.model.box import STRESS_MODES
-from jamflow.minimize.settings import MinimizerSettings
-from jamflow.model.packing import Packing
 from jamflow.minimize.rules import minimize
 from jamflow.protocols.outcome import engine_label
+from jamflow.minimize.settings import MinimizerSettings
+from jamflow.model.box import STRESS_MODES
+from jamflow.model.packing import Packing
+from jamflow.protocols.compression import RLJ_MIN_START_RATIO, deepest_overlap, remove_overlaps
 from jamflow.support import hooks
 
 FLOOR_MARGIN = 1000.0
@@ -202,6 +203,10 @@ def jam_at_pressure(start: Packing, settings: PressureSettings | None = None, *,
     settings = settings or PressureSettings()
     check_pressure_start(start, settings)
     t0 = time.perf_counter()
+    if start.potential.soft_start and deepest_overlap(start) < RLJ_MIN_START_RATIO:
+        # repulsive LJ diverges at contact: from deep overlaps (a random start always) the forces
+        # blew the box up to an infinite size ("array is too big"); relax with the spring first, as jam() does
+        start = remove_overlaps(start, settings.minimizer, engine)
     rows = {c: [] for c in PRESSURE_COLUMNS}
     reasons = []
     method = settings.minimizer.method

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+import errno
+import fcntl
 import glob
 import json
 import os
@@ -48,9 +50,40 @@ def atomic_path(path, force: bool = False):
         if keep:
             os.chmod(tmp, mode)
         os.replace(tmp, path)
+    except Exception as err:
+        if out_of_space(err):  # h5py, matplotlib, numpy: each words it its own way
+            raise DiskFull(path) from None
+        raise
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+
+
+_NO_SPACE = (errno.ENOSPC, errno.EDQUOT)
+
+
+def out_of_space(err: BaseException) -> bool:
+    """Whether ``err`` reports a full disk or quota: an OSError with errno ENOSPC or EDQUOT, or
+    an error whose text carries it (h5py raises RuntimeError "... errno = 28 ..." from a failed
+    flush and OSError "[Errno 28] ..." from a failed write)."""
+    if isinstance(err, OSError) and err.errno in _NO_SPACE:
+        return True
+    text = str(err)
+    return any(f"errno = {code}," in text or os.strerror(code) in text for code in _NO_SPACE)
+
+
+class DiskFull(OSError):
+    """A write ran out of space: what, where, and what to do, in one line (errno ENOSPC)."""
+
+    def __init__(self, path):
+        path = Path(path)
+        super().__init__(errno.ENOSPC, f"cannot write {path}: no space left on the device holding "
+                                       f"{path.parent if str(path.parent) else Path('.')} (disk or quota full); "
+                                       "nothing was written there (earlier files are untouched); free space and rerun",
+                         str(path))
+
+    def __str__(self) -> str:
+        return self.strerror
 
 
 def _temporary_prefix(path: Path, pid: int) -> str:
@@ -101,9 +134,30 @@ def output_directory(path):
     try:
         yield path
     except BaseException:
-        if made and path.is_dir() and not any(path.iterdir()):
+        if made and path.is_dir() and all(p.name == LOCK for p in path.iterdir()):
+            (path / LOCK).unlink(missing_ok=True)  # only a lock taken inside the block: empty
             path.rmdir()
         raise
+
+
+LOCK = ".lock"
+
+
+class DirectoryLocked(ValueError):
+    """Another process holds the directory's lock."""
+
+
+def lock_directory(directory, busy: str):
+    """Take the exclusive lock of ``directory`` (``flock`` on DIR/.lock, without waiting) and
+    return the open lock file (closing it releases the lock; so does the process ending, also
+    by SIGKILL). Raise DirectoryLocked(``busy``) if another process holds it."""
+    fh = open(Path(directory) / LOCK, "a")
+    try:
+        fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        fh.close()
+        raise DirectoryLocked(busy) from None
+    return fh
 
 
 def _umask() -> int:

@@ -192,6 +192,7 @@ def run(args) -> int:
     one_each = len(packings) == len(args.files) and all(h5py.is_hdf5(f) for f in args.files)
     if (args.workers is not None or args.scheduler is not None) and not one_each:
         raise ValueError("--workers/--scheduler run one task per jamflow packing file; LAMMPS inputs run without them")
+    StructureFactor(k_max=args.k_max).check_memory(packings)  # a --k-max whose S(k) grid cannot fit: refused now
     res = analyze(packings, labels, args, files=args.files if one_each else None)
     with replacing([args.out, *(plots / f"{stem}-{s}.png" for s in PLOT_SUFFIXES)] if args.force else []):
         write_results(args.out, res, args.files)

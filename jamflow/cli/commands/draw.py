@@ -1,4 +1,4 @@
-"""Draw a packing (PNG): particles to scale in the periodic cell, contacts as lines with width
+"""Draw a packing (PNG, SVG or PDF): particles to scale in the periodic cell, contacts as lines with width
 proportional to the contact force, floaters hatched, colour by contact number z, local Q6 or
 director angle; rigid bodies drawn site by site.
 Spheres are drawn as a slice: the cross-sections of the spheres cut by the plane at height
@@ -9,14 +9,16 @@ from __future__ import annotations
 from pathlib import Path
 
 from jamflow.cli.options import add_force_argument
-from jamflow.plots.drawing import COLOR_BY, draw_packing
-from jamflow.support.files import check_writable, replacing
 from jamflow.io.packing_file import load_packing
+from jamflow.plots.drawing import COLOR_BY, draw_packing
+from jamflow.plots.figure import figure_format
+from jamflow.support.files import check_writable, replacing
 
 
 def add_arguments(p) -> None:
     p.add_argument("file", metavar="IN.h5", help="packing file (jamflow jam --out)")
-    p.add_argument("-o", "--out", default=None, help="PNG to write (default: IN.png beside the input)")
+    p.add_argument("-o", "--out", default=None,
+                   help="figure to write, PNG, SVG or PDF by its suffix (default: IN.png beside the input)")
     p.add_argument("--color-by", choices=COLOR_BY, default="z", help="colour by contact number, local |Q6| or (particles that turn) director angle")
     p.add_argument("--q6-r-min", type=float, default=None,
                    help="Q6 neighbour cutoff, units of <sigma^2>^1/2 (default: first minimum of g(r))")
@@ -26,6 +28,7 @@ def add_arguments(p) -> None:
 
 def run(args) -> int:
     out = Path(args.out) if args.out else Path(args.file).with_suffix(".png")
+    figure_format(out)  # the suffix picks PNG, SVG or PDF; another is refused before work
     check_writable(out, args.force)
     packing = load_packing(args.file)
     with replacing([out] if args.force else []):

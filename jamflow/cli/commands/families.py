@@ -11,13 +11,12 @@ from __future__ import annotations
 import csv
 from pathlib import Path
 
-
-from jamflow.cli.options import add_engine_argument, add_force_argument, add_quiet_argument
 from jamflow.analysis.families import convergence, join, mirror_by_sightings, mirror_check, richness
-from jamflow.support.files import atomic_path, check_writable, output_directory, replacing
+from jamflow.cli.options import add_engine_argument, add_force_argument, add_quiet_argument
 from jamflow.cli.progress import progress_bar
-from jamflow.protocols.families import FamilySampling, sample
 from jamflow.io.families_file import load_family_points, save_family_points, save_family_table
+from jamflow.protocols.families import FamilySampling, sample
+from jamflow.support.files import atomic_path, check_writable, lock_directory, output_directory, replacing
 
 
 def add_arguments(p) -> None:
@@ -52,23 +51,31 @@ def run(args) -> int:
     outputs = [points_file] + [out / name for name in ("families.h5", "families.csv", "families.png")]
     for path in outputs if out.is_dir() else []:  # a new directory holds nothing to refuse
         check_writable(path, args.force)
-    done, failures = _resumed(points_file, plan) if args.resume else (None, [])
-    if points_file.exists() and not args.resume:
-        raise ValueError(f"{points_file} exists; pass --resume to continue it or choose another --out")
     total = plan.starts * len(plan.grid)
     with output_directory(out), replacing(outputs if args.force else []):  # an empty new --out is removed on failure
-        with progress_bar(total=total, desc="families", unit="start", disable=args.quiet) as bar:
-            bar.update(0 if done is None else len(set(done["start"].tolist())) * len(plan.grid))
-            points, failures = sample(plan, done=done, failures=failures, observers=[lambda k, s: bar.update(1)],
-                                      checkpoint=lambda cols, why: save_family_points(points_file, plan, cols, why))
-        report(plan, points, failures, out)
+        # one run per directory: a second run into it is refused (it would replace the first's files)
+        with lock_directory(out, f"another jamflow families run is writing {out}; wait for it to end (then "
+                                 "--resume continues its points.h5) or use another --out"):
+            done, failures = _resumed(points_file, plan) if args.resume else (None, [])
+            if points_file.exists() and not args.resume:
+                raise ValueError(f"{points_file} exists; pass --resume to continue it or choose another --out")
+            _sample_and_report(plan, done, failures, points_file, out, total, args.quiet)
     return 0
+
+
+def _sample_and_report(plan, done, failures, points_file, out, total, quiet) -> None:
+    with progress_bar(total=total, desc="families", unit="start", disable=quiet) as bar:
+        bar.update(0 if done is None else len(set(done["start"].tolist())) * len(plan.grid))
+        points, failures = sample(plan, done=done, failures=failures, observers=[lambda k, s: bar.update(1)],
+                                  checkpoint=lambda cols, why: save_family_points(points_file, plan, cols, why))
+    report(plan, points, failures, out)
 
 
 def _resumed(points_file: Path, plan: FamilySampling):
     if not points_file.exists():
         return None, []
-    saved, points, failures = load_family_points(points_file)
+    saved, points, failures = load_family_points(points_file, remedy=f"cannot --resume it: delete {points_file} to "
+                                                                      "sample afresh, or use another --out")
     mine = {k: str(v) for k, v in plan.as_dict().items() if k != "starts"}
     if {k: str(saved.get(k)) for k in mine} != mine:
         raise ValueError(f"{points_file} was sampled with another plan ({saved}); use another --out")

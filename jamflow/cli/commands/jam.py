@@ -11,13 +11,13 @@ from __future__ import annotations
 
 import time
 
-from jamflow.support.files import check_writable, replacing
-from jamflow.protocols.spec import JamSpec, prepare, run_jam
-from jamflow.protocols.outcome import JammingFailed
 from jamflow.cli.options import add_quiet_argument, add_spec_arguments, spec_options
 from jamflow.cli.progress import CompressionProgress
-from jamflow.protocols.above import compress_above
 from jamflow.model.walls import wall_loads
+from jamflow.protocols.above import compress_above
+from jamflow.protocols.outcome import JammingFailed
+from jamflow.protocols.spec import JamSpec, prepare, run_jam
+from jamflow.support.files import check_writable, replacing
 
 
 def add_arguments(p) -> None:
@@ -109,10 +109,11 @@ def save_above(args, result, t0) -> int:
 def emit(args, start, settings) -> int:
     """--emit-deck: the deck and start data file, no LAMMPS run (ellipses/spheroids: the ellipse
     deck, lammps_inputs/jam-ellipses.lmp, which minimises by damped dynamics with rotations)."""
+    import shlex
     from pathlib import Path
 
-    from jamflow.decks.jam import emit_deck
     from jamflow.decks.ellipsoids import emit_deck as emit_ellipsoid_deck
+    from jamflow.decks.jam import emit_deck
 
     kind = start.shape.kind
     if kind not in ("sphere", "ellipsoid"):
@@ -123,6 +124,6 @@ def emit(args, start, settings) -> int:
     writer = emit_ellipsoid_deck if kind == "ellipsoid" else emit_deck
     with replacing(outputs if args.force else []):
         deck, data = writer(args.emit_deck, start, settings, out=Path(args.out).stem)
-    print(f"wrote {deck} and {data}; run: cd {deck.parent} && lmp -in {deck.name}  "
+    print(f"wrote {deck} and {data}; run: cd {shlex.quote(str(deck.parent))} && lmp -in {shlex.quote(deck.name)}  "
           f"(writes {Path(args.out).stem}.data and {Path(args.out).stem}.protocol.txt)")
     return 0

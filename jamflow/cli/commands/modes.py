@@ -19,6 +19,7 @@ from jamflow.ensemble.parallel import add_engine_arguments, expand_inputs, map_f
 from jamflow.io.modes_file import save_modes
 from jamflow.io.packing_file import load_packing, read_checks
 from jamflow.mechanics.checks import check_packing
+from jamflow.plots.figure import figure_format
 from jamflow.support.files import check_writable, replacing
 
 
@@ -32,7 +33,8 @@ def add_arguments(p) -> None:
     p.add_argument("--bins", type=int, default=40, help="number of D(omega) bins")
     p.add_argument("--omega-max", type=float, default=None, help="upper edge of the D(omega) bins")
     p.add_argument("--figure", default=None,
-                   help="PNG to draw (default: PACKING.modes.png for one file, modes.png beside the first)")
+                   help="figure to draw, PNG, SVG or PDF by its suffix (default: PACKING.modes.png for one file, "
+                        "modes.png beside the first)")
     p.add_argument("--no-figure", action="store_true", help="do not draw the figure")
     p.add_argument("--save-vectors", action="store_true", help="also store all eigenvectors")
     p.add_argument("--force", action="store_true",
@@ -59,6 +61,8 @@ def run(args) -> int:
     for f in args.files:  # every input is read before any work
         load_packing(f)
     written = [results_path(f) for f in args.files] + ([] if args.no_figure else [figure_path(args)])
+    if not args.no_figure:
+        figure_format(figure_path(args))  # PNG, SVG or PDF by the suffix; another is refused before work
     for out in written:
         check_writable(out, args.force)
     rows = map_files(analyse_file, args.files, spectrum, args.save_vectors, args.force, workers=args.workers,

@@ -7,6 +7,7 @@ from __future__ import annotations
 import csv
 from pathlib import Path
 
+from jamflow.plots.figure import figure_format
 from jamflow.support.files import atomic_path, check_writable
 
 # large-N phi_J (O'Hern, Silbert, Liu & Nagel, PRE 68, 011306, 2003; quoted by the chapter)
@@ -16,7 +17,7 @@ PUBLISHED = {(2, "bi:1.4:0.5"): 0.842, (3, "mono"): 0.639}
 def add_arguments(p) -> None:
     p.add_argument("directory", metavar="DIR", help="ensemble store (its summary.csv)")
     p.add_argument("--table", default=None, help="CSV of the per-N statistics (default DIR/onsets.csv)")
-    p.add_argument("--figure", default=None, help="PNG (default DIR/onsets.png)")
+    p.add_argument("--figure", default=None, help="figure, PNG, SVG or PDF by its suffix (default DIR/onsets.png)")
     p.add_argument("--bootstrap", type=int, default=1000, help="bootstrap replicates for the errors")
     p.add_argument("--bins", type=int, default=30, help="histogram bins")
     p.add_argument("--n", type=int, nargs="+", default=None, help="only these N (default: all in the store)")
@@ -37,6 +38,7 @@ def run(args) -> int:
         raise ValueError(f"--bins must be at least 2, got {args.bins}")
     table = Path(args.table or store.dir / "onsets.csv")
     figure = Path(args.figure or store.dir / "onsets.png")
+    figure_format(figure)  # PNG, SVG or PDF by the suffix; another is refused before work
     for path in (table, figure):
         check_writable(path)
     result = onset_statistics(rows, n_bootstrap=args.bootstrap)

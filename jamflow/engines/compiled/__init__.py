@@ -73,7 +73,38 @@ def _njit(fn):
     import numba
 
     with _cache_location():
-        return numba.njit(cache=True)(fn)
+        dispatcher = numba.njit(cache=True)(fn)
+    _guard_cache_writes(dispatcher)
+    return dispatcher
+
+
+_cache_unwritable = False  # a write to the kernel cache failed (full disk or quota): warned, no more writes
+
+
+def _guard_cache_writes(dispatcher) -> None:
+    """A kernel whose cache file cannot be written (ENOSPC, EDQUOT, ... : numba raises the OSError
+    out of the compiling call) runs from memory: one warning, and no more cache writes in this
+    process. (An unwritable directory never gets here: numba then picks no cache location.)"""
+    cache = getattr(dispatcher, "_cache", None)
+    save = getattr(cache, "save_overload", None)
+    if save is None:
+        return
+
+    def save_or_warn(sig, data):
+        global _cache_unwritable
+        if _cache_unwritable:
+            return
+        try:
+            save(sig, data)
+        except OSError as err:
+            _cache_unwritable = True
+            import warnings
+
+            warnings.warn(f"jamflow: the compiled kernels cannot be cached in {cache_dir()} ({err.strerror or err}); "
+                          "they run from memory and are compiled again in every process (~seconds). Free space "
+                          "there or point JAMFLOW_CACHE_DIR at another directory", RuntimeWarning, stacklevel=2)
+
+    cache.save_overload = save_or_warn
 
 
 class Deferred:

@@ -28,25 +28,23 @@ At a target pressure the box relaxes by ``fix box/relax`` (CG only, ``etol 0``).
 from __future__ import annotations
 
 import math
-import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
-
 from lammps import LMP_STYLE_GLOBAL, LMP_TYPE_SCALAR, LMP_TYPE_VECTOR
 
-from jamflow.model.box import Box
+from jamflow.engines.base import Capabilities, State, Window
+from jamflow.engines.lammps.bodies import RIGID_CHECK, RIGID_FIX, BodySites
+from jamflow.engines.lammps.library import lammps_quote, new_lammps, scratch_directory
+from jamflow.engines.lammps.pair_styles import pair_setup, uses_harmonic_cut
+from jamflow.engines.lammps.plugin_build import load_plugin
 from jamflow.io.packing_file import lammps_quaternions, write_lammps_data
+from jamflow.model.box import Box
 from jamflow.model.packing import Packing
 from jamflow.model.pairs import site_packing
 from jamflow.model.shapes.contact_distance import ENGINE_COUNTERS as COUNTERS
 from jamflow.model.shapes.rotations import generalized_torques
-from jamflow.engines.base import Capabilities, State, Window
-from jamflow.engines.lammps.bodies import RIGID_CHECK, RIGID_FIX, BodySites
-from jamflow.engines.lammps.library import new_lammps
-from jamflow.engines.lammps.pair_styles import pair_setup, uses_harmonic_cut
-from jamflow.engines.lammps.plugin_build import load_plugin
 
 MD_DAMPING_FIXES = {"viscous": "viscous", "pairwise": "jamflow/damping"}  # fix style per md_damping
 # the energy samples of a damped-MD window (fix jf_vsamples), their mean and rms deviation, and
@@ -105,7 +103,7 @@ class LammpsEngine:
         self.commands: list[str] = []
         self._turned = False  # orientations set since the last run (compute property/atom is stale)
         self.lmp = new_lammps(args=args, comm=comm)
-        self._tmp = tempfile.TemporaryDirectory(prefix="jamflow-")
+        self._tmp = scratch_directory("jamflow-")
         self.box = packing.box  # the accumulated cell; LAMMPS holds its reduced form
         self._fold = packing.box.reduction()[1]  # box.h @ _fold = the cell LAMMPS holds
         self._triclinic = packing.box.is_triclinic  # LAMMPS box style (write_lammps_data's choice)
@@ -155,7 +153,7 @@ class LammpsEngine:
         self.run_commands([
             "units lj", f"dimension {dim}", f"boundary {boundary}", f"atom_style {style}",
             "atom_modify map array", "comm_modify vel yes",
-            f"read_data {data}", *mass,
+            f"read_data {lammps_quote(data)}", *mass,
             *pair_setup(site_packing(packing)[0] if rigid else packing, self.lmp),
             f"neighbor {skin:g} bin",
             "neigh_modify every 1 delay 0 check yes" + (" exclude molecule/intra all" if rigid else ""),

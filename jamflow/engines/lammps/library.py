@@ -11,6 +11,7 @@ import ctypes
 import importlib.metadata
 import os
 import sys
+import tempfile
 from functools import lru_cache
 from pathlib import Path
 
@@ -36,6 +37,37 @@ def _mpi_candidates():
     except importlib.metadata.PackageNotFoundError:
         pass
     yield Path(sys.prefix) / "lib" / "libmpi.so.12"
+
+
+def lammps_quote(path) -> str:
+    """``path`` as one word of a LAMMPS command: in double quotes (single, or triple, if it holds
+    double quotes), so spaces and ``#`` (a comment), ``$`` and ``&`` (variables, continuation)
+    are part of the name. A name with a newline or every kind of quote is refused."""
+    text = str(path)
+    if not readable_by_lammps(text):
+        raise ValueError(f"LAMMPS cannot open {text!r}: its input parser drops bytes of non-ASCII characters "
+                         "(and takes no control characters) in a file name; use an ASCII path")
+    for quote in ('"', "'", '"""'):
+        if quote not in text:
+            return f"{quote}{text}{quote}"
+    raise ValueError(f"{text!r} cannot be quoted for LAMMPS (it holds every kind of quote); rename it")
+
+
+def readable_by_lammps(text: str) -> bool:
+    """Can LAMMPS read this file name in a command? (ASCII, printable: its parser turned "é"
+    into the lone byte 0xa9, so read_data "/tmp/é/start.data" looked for a file that is not there.)"""
+    return text.isascii() and text.isprintable()
+
+
+def scratch_directory(prefix: str = "jamflow-") -> tempfile.TemporaryDirectory:
+    """A temporary directory for files LAMMPS reads: under $TMPDIR (tempfile's choice) if LAMMPS
+    can read its path, else under the first of /tmp, /var/tmp that it can (a TMPDIR such as
+    "/tmp/a b/é" broke every LAMMPS route); a ValueError if none is writable."""
+    for base in dict.fromkeys((tempfile.gettempdir(), "/tmp", "/var/tmp")):
+        if readable_by_lammps(base) and os.path.isdir(base) and os.access(base, os.W_OK | os.X_OK):
+            return tempfile.TemporaryDirectory(prefix=prefix, dir=base)
+    raise ValueError(f"no temporary directory with a name LAMMPS can read: TMPDIR={tempfile.gettempdir()!r} is not "
+                     "printable ASCII and /tmp, /var/tmp are not writable; set TMPDIR to a writable ASCII path")
 
 
 def new_lammps(args=(), comm=None):
