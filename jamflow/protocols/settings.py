@@ -96,7 +96,7 @@ def fast_protocol(**overrides) -> CompressionSettings:
 
 PROTOCOLS = {"chapter": chapter_protocol, "fast": fast_protocol}
 
-# old names still accepted (``--protocol chapter``, ``JamSpec(protocol="seed")``, ensemble stores that
+# old names still accepted (``--protocol seed``, ``JamSpec(protocol="seed")``, ensemble stores that
 # recorded it): "seed" meant the chapter, and also the random seed, so the protocol is "chapter" now
 PROTOCOL_ALIASES = {"seed": "chapter"}
 PROTOCOL_NAMES = tuple(sorted(PROTOCOLS)) + tuple(sorted(PROTOCOL_ALIASES))  # what --protocol accepts
