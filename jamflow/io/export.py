@@ -1,5 +1,5 @@
 """Packings for viewers: a LAMMPS text dump and extended XYZ, both read by OVITO with radii,
-shapes and orientations.
+shapes and orientations; and the LAMMPS data file a simulation starts from.
 
 ``export_packing(packing, path, fmt)`` with fmt one of ``FORMATS``:
 
@@ -7,6 +7,8 @@ shapes and orientations.
   ``BOX BOUNDS`` block.
 - Extended XYZ (``xyz``): ``Lattice`` = the three cell vectors, ``Properties=species:S:1:pos:R:3:
   radius:R:1...``, ``pbc``.
+- LAMMPS data file (``lammps-data``): ``jamflow.io.packing_file.write_lammps_data`` (atom_style
+  sphere, ellipsoid, or hybrid sphere molecular for rigid bodies).
 
 Ellipses/spheroids add their axes and quaternions (``_rows``); rigid bodies are written one row
 per site with the body as molecule id. Measured with OVITO 3.17.2 (``ovito.io.import_file``):
@@ -26,11 +28,12 @@ from pathlib import Path
 
 import numpy as np
 
-from jamflow.support.files import atomic_path
+from jamflow.io.packing_file import write_lammps_data
 from jamflow.model.packing import Packing
+from jamflow.support.files import atomic_path
 
-FORMATS = ("lammps-dump", "xyz")
-SUFFIXES = {"lammps-dump": ".dump", "xyz": ".xyz"}
+FORMATS = ("lammps-dump", "xyz", "lammps-data")
+SUFFIXES = {"lammps-dump": ".dump", "xyz": ".xyz", "lammps-data": ".data"}
 MAX_TYPES = 8
 
 
@@ -38,6 +41,8 @@ def export_packing(packing: Packing, path, fmt: str) -> Path:
     """Write ``packing`` to ``path`` in format ``fmt`` (one of ``FORMATS``), atomically."""
     if fmt not in FORMATS:
         raise ValueError(f"unknown export format {fmt!r}; use one of {', '.join(FORMATS)}")
+    if fmt == "lammps-data":
+        return write_lammps_data(path, packing)
     text = (_lammps_dump if fmt == "lammps-dump" else _extended_xyz)(packing)
     with atomic_path(path) as tmp:
         tmp.write_text(text)

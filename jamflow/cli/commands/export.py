@@ -1,7 +1,9 @@
 """Write a packing in a format OVITO (and other viewers) open with particle radii, shapes and
 orientations: a LAMMPS text dump (id type x y z radius [shape, quaternion | mol], triclinic box
-bounds) or extended XYZ (Lattice, pbc, species, pos, radius, ...). Rigid bodies are written one
-row per site. Positions at full float64 precision; 2D packings get z = 0 (see jamflow.io.export)."""
+bounds) or extended XYZ (Lattice, pbc, species, pos, radius, ...); or as a LAMMPS data file
+(atom_style sphere, ellipsoid or hybrid sphere molecular) to start a simulation from. Rigid bodies
+are written one row per site. Positions at full float64 precision; 2D packings get z = 0 (see
+jamflow.io.export)."""
 
 from __future__ import annotations
 
@@ -15,7 +17,7 @@ from jamflow.io.packing_file import load_packing
 
 def add_arguments(p) -> None:
     p.add_argument("file", metavar="IN.h5", help="packing file (jamflow jam --out)")
-    p.add_argument("--format", choices=FORMATS, required=True, help="lammps-dump (.dump) or extended XYZ (.xyz)")
+    p.add_argument("--format", choices=FORMATS, required=True, help="lammps-dump (.dump), extended XYZ (.xyz) or lammps-data (.data, a LAMMPS data file)")
     p.add_argument("-o", "--out", default=None, help="file to write (default: IN with the format's suffix)")
     add_force_argument(p, "replace an --out that is a symlink, device or read-only file")
 
