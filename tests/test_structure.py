@@ -297,3 +297,29 @@ def test_analyze_command_writes_hdf5_and_plots(tmp_path, lammps_files):
         analyze.run(bad)
     with pytest.raises(ValueError, match="TYPE:DIAMETER"):
         analyze.parse_diameters("1=1.0")
+
+
+def test_analyze_makes_the_plots_directory(tmp_path):
+    """--plots DIR is made if missing (its parent must exist) and removed again if the command
+    fails before writing into it."""
+    import argparse
+
+    from jamflow.cli.commands import analyze
+    from jamflow.io.packing_file import save_packing
+
+    save_packing(tmp_path / "crystal.h5", triangular_packing(6, 6, tilted=True))
+    parser = argparse.ArgumentParser()
+    analyze.add_arguments(parser)
+    out, plots = tmp_path / "res.h5", tmp_path / "plots"
+    args = [str(tmp_path / "crystal.h5"), "--out", str(out), "--k-max", "6", "--plots"]
+    assert analyze.run(parser.parse_args([*args, str(plots)])) == 0
+    assert (plots / "res-rdf.png").stat().st_size > 1000 and out.is_file()
+    with pytest.raises(FileNotFoundError):
+        analyze.run(parser.parse_args([str(tmp_path / "missing.h5"), "--out", str(out), "--plots",
+                                       str(tmp_path / "empty")]))
+    assert not (tmp_path / "empty").exists()  # made by the failed run, removed again
+    with pytest.raises(ValueError, match="does not exist"):
+        analyze.run(parser.parse_args([*args, str(tmp_path / "no" / "plots")]))
+    (tmp_path / "file").write_text("")
+    with pytest.raises(ValueError, match="not a directory"):
+        analyze.run(parser.parse_args([*args, str(tmp_path / "file")]))

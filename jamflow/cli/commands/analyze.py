@@ -32,7 +32,7 @@ from jamflow.plots.structure import (
     plot_rdf,
     plot_structure_factor,
 )
-from jamflow.support.files import check_writable, replacing
+from jamflow.support.files import check_writable, output_directory, replacing
 
 FORMATS = ("auto", "jamflow", "data", "dump")
 HDF5_SUFFIXES = (".h5", ".hdf5")
@@ -41,7 +41,8 @@ HDF5_SUFFIXES = (".h5", ".hdf5")
 def add_arguments(p) -> None:
     p.add_argument("files", nargs="+", help="packing files: jamflow .h5, LAMMPS data or dump; or ensemble store directories")
     p.add_argument("--out", default="structure.h5", help="output HDF5 file")
-    p.add_argument("--plots", default=None, help="directory for PNG plots (default: beside --out)")
+    p.add_argument("--plots", default=None,
+                   help="directory for PNG plots, made if missing (its parent must exist; default: beside --out)")
     p.add_argument("--format", choices=FORMATS, default="auto", help="input format (auto: HDF5 or by suffix)")
     p.add_argument("--diameters", default=None,
                    help="LAMMPS input without a diameter column: TYPE:DIAMETER,... e.g. 1:1.0,2:1.4")
@@ -180,8 +181,15 @@ def run(args) -> int:
     diameters = parse_diameters(args.diameters)
     check_writable(args.out, args.force)
     plots = Path(args.plots) if args.plots else Path(args.out).resolve().parent
-    if not plots.is_dir():
-        raise ValueError(f"--plots directory {plots} does not exist; create it first")
+    if plots.exists() and not plots.is_dir():
+        raise ValueError(f"--plots {plots} is not a directory; give a directory for the PNG plots")
+    if not plots.exists():
+        check_writable(plots)  # its parent must exist and be writable; the command makes the directory
+    with output_directory(plots):  # made here: removed again if the command fails before writing into it
+        return _run(args, diameters, plots)
+
+
+def _run(args, diameters, plots: Path) -> int:
     stem = Path(args.out).stem
     for suffix in PLOT_SUFFIXES:
         check_writable(plots / f"{stem}-{suffix}.png", args.force)
