@@ -178,3 +178,14 @@ def test_export_command_lammps_data_reads_back(which, disks, spheres, tmp_path, 
     assert np.allclose(back.diameters, p.diameters, rtol=1e-6)
     assert np.allclose(back.box.h, p.box.h, rtol=1e-6)
     assert np.allclose(back.positions, p.box.wrap(p.positions), atol=1e-5)
+
+
+@pytest.mark.parametrize("fmt", ["lammps-data", "lammps-dump"])
+def test_draw_command_reads_lammps_files(fmt, disks, tmp_path, capsys):
+    """draw reads LAMMPS data files and dumps as analyze does (jamflow.cli.inputs)."""
+    from jamflow.io.export import SUFFIXES
+
+    src = export_packing(disks, tmp_path / f"p{SUFFIXES[fmt]}", fmt)
+    assert main(["draw", str(src), "-o", str(tmp_path / "p.png")]) == 0
+    assert (tmp_path / "p.png").read_bytes()[:8] == PNG
+    assert f"{src}: {disks.n} " in capsys.readouterr().out

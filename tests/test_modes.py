@@ -237,3 +237,24 @@ def test_cli_rejects_bad_input_before_work(tmp_path):
     modes, args = _modes_args([str(good), "--e-min", "-1"])
     with pytest.raises(ValueError, match="e_min"):
         modes.run(args)
+
+
+@pytest.mark.parametrize("fmt", ["lammps-data", "lammps-dump"])
+def test_cli_reads_lammps_files(fmt, tmp_path, capsys):
+    """A LAMMPS data file or dump is read as analyze reads it (jamflow.cli.inputs), not refused as
+    'not an HDF5 file'; the spectrum matches the jamflow packing's to float32 round-off."""
+    import warnings
+
+    from jamflow.io.export import SUFFIXES, export_packing
+    from jamflow.io.modes_file import read_modes
+
+    lattice = triangular_lattice(6, 6, 0.97)
+    src = export_packing(lattice, tmp_path / f"p{SUFFIXES[fmt]}", fmt)
+    modes, args = _modes_args([str(src), "--no-figure"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # float32 coordinates may not pass jamflow's force balance test
+        assert modes.run(args) == 0
+    assert f"{src}: N' = 36" in capsys.readouterr().out
+    res = read_modes(tmp_path / "p.modes.hdf5")
+    assert res["n_zero"] == 2 and res["n_contacts"] == 108
+    assert np.allclose(res["eigenvalues"], Spectrum().compute(lattice).eigenvalues, atol=1e-5)

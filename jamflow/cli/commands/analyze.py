@@ -18,10 +18,10 @@ import numpy as np
 from jamflow.analysis.correlations import BondCorrelation, rdf_correlation_length
 from jamflow.analysis.order import BondOrder, first_minimum, translational_order
 from jamflow.analysis.structure import MAX_SPECIES, RDF, StructureFactor, positive
+from jamflow.cli.inputs import add_input_arguments, load_inputs, parse_diameters
 from jamflow.ensemble.parallel import add_engine_arguments, expand_inputs, file_mapper
 from jamflow.ensemble.pooling import merge_rdf, merge_structure_factor, pooled_bins, structure_sums
 from jamflow.io.packing_file import load_packing
-from jamflow.io.readers import packings_from_lammps
 from jamflow.io.structure_file import write_results
 from jamflow.mechanics.checks import check_packing
 from jamflow.model.nematic import Nematic
@@ -34,19 +34,13 @@ from jamflow.plots.structure import (
 )
 from jamflow.support.files import check_writable, output_directory, replacing
 
-FORMATS = ("auto", "jamflow", "data", "dump")
-HDF5_SUFFIXES = (".h5", ".hdf5")
-
 
 def add_arguments(p) -> None:
     p.add_argument("files", nargs="+", help="packing files: jamflow .h5, LAMMPS data or dump; or ensemble store directories")
     p.add_argument("--out", default="structure.h5", help="output HDF5 file")
     p.add_argument("--plots", default=None,
                    help="directory for PNG plots, made if missing (its parent must exist; default: beside --out)")
-    p.add_argument("--format", choices=FORMATS, default="auto", help="input format (auto: HDF5 or by suffix)")
-    p.add_argument("--diameters", default=None,
-                   help="LAMMPS input without a diameter column: TYPE:DIAMETER,... e.g. 1:1.0,2:1.4")
-    p.add_argument("--dim", type=int, choices=(2, 3), default=None, help="LAMMPS input: dimension (default: infer)")
+    add_input_arguments(p)
     p.add_argument("--dr", type=float, default=0.02, help="g(r) bin width, units of <sigma^2>^1/2")
     p.add_argument("--k-max", type=float, default=20.0, help="largest k, units of 1/<sigma^2>^1/2")
     p.add_argument("--r-min", type=float, default=None,
@@ -55,37 +49,6 @@ def add_arguments(p) -> None:
     p.add_argument("--force", action="store_true",
                    help="replace output or plot paths that are symlinks, devices or read-only files")
     add_engine_arguments(p)
-
-
-def parse_diameters(text: str | None) -> dict | None:
-    """'1:1.0,2:1.4' -> {'1': 1.0, '2': 1.4}."""
-    if text is None:
-        return None
-    try:
-        pairs = [item.split(":") for item in text.split(",") if item.strip()]
-        mapping = {t.strip(): float(d) for t, d in pairs}
-    except ValueError:
-        raise ValueError(f"--diameters {text!r}: write TYPE:DIAMETER pairs separated by commas, e.g. 1:1.0,2:1.4") from None
-    if not mapping or not all(math.isfinite(v) and v > 0 for v in mapping.values()):
-        raise ValueError(f"--diameters {text!r}: every diameter must be a positive number")
-    return mapping
-
-
-def load_inputs(files, fmt: str, diameters, dim) -> tuple[list, list[str]]:
-    """All packings of all files, with a label (file name, and #frame for dumps) for each."""
-    missing = [f for f in files if not Path(f).is_file()]
-    if missing:
-        raise FileNotFoundError(f"input file(s) not found: {', '.join(missing)}")
-    packings, labels = [], []
-    for name in files:
-        if fmt == "jamflow" or (fmt == "auto" and (h5py.is_hdf5(name) or Path(name).suffix.lower() in HDF5_SUFFIXES)):
-            packings.append(load_packing(name))  # a damaged .h5 gets load_packing's message, not a LAMMPS parser's
-            labels.append(Path(name).name)
-            continue
-        frames = packings_from_lammps(name, None if fmt == "auto" else fmt, diameters=diameters, dim=dim)
-        packings += frames
-        labels += [Path(name).name if len(frames) == 1 else f"{Path(name).name}#{k}" for k in range(len(frames))]
-    return packings, labels
 
 
 def _check_numbers(args) -> None:

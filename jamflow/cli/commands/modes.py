@@ -5,7 +5,9 @@ glob over packing files does not pick results up); with several files, D(omega)
 and the z_i distribution are averaged and one figure is drawn. Every shape: for particles
 that turn, the modes mix translations and rotations d_k theta, each mode's translational
 fraction is stored, and the energy is profiled along every extra zero mode (quartic modes
-of hypostatic packings against the missing contacts N' d_f - d + 1 - N_c)."""
+of hypostatic packings against the missing contacts N' d_f - d + 1 - N_c). A PACKING may also be
+a LAMMPS data or dump file (the dump's last frame; float32 coordinates through MDAnalysis, so
+such a packing is rarely force balanced to jamflow's tolerance, and a warning says so)."""
 
 from __future__ import annotations
 
@@ -15,16 +17,18 @@ from pathlib import Path
 import numpy as np
 
 from jamflow.analysis.modes import DensityOfStates, Spectrum, Stability, branches
+from jamflow.cli.inputs import add_input_arguments, is_jamflow_file, load_input, parse_diameters
 from jamflow.ensemble.parallel import add_engine_arguments, expand_inputs, map_files
 from jamflow.io.modes_file import save_modes
-from jamflow.io.packing_file import load_packing, read_checks
+from jamflow.io.packing_file import read_checks
 from jamflow.mechanics.checks import check_packing
 from jamflow.plots.figure import figure_format
 from jamflow.support.files import check_writable, replacing
 
 
 def add_arguments(p) -> None:
-    p.add_argument("files", nargs="+", metavar="PACKING.h5", help="packing files (jamflow jam --out) or ensemble store directories")
+    p.add_argument("files", nargs="+", metavar="PACKING",
+                   help="packing files (jamflow jam --out), LAMMPS data or dump files, or ensemble store directories")
     p.add_argument("--e-min", type=float, default=1e-6, help="zero-mode threshold on eigenvalues (eps/diameter^2)")
     p.add_argument("--mass", type=float, default=None,
                    help="M in omega = sqrt(e/M); default N m with m = 1, as the chapter defines it")
@@ -39,6 +43,7 @@ def add_arguments(p) -> None:
     p.add_argument("--save-vectors", action="store_true", help="also store all eigenvectors")
     p.add_argument("--force", action="store_true",
                    help="replace result or figure paths that are symlinks, devices or read-only files")
+    add_input_arguments(p, dump="its last frame")
     add_engine_arguments(p)
 
 
@@ -58,14 +63,15 @@ def run(args) -> int:
     args.files = expand_inputs(args.files)  # a directory (ensemble store) stands for its packing files
     spectrum = Spectrum(e_min=args.e_min, mass=args.mass, method=args.method)
     dos = DensityOfStates(args.bins, args.omega_max)
+    source = (args.format, parse_diameters(args.diameters), args.dim)
     for f in args.files:  # every input is read before any work
-        load_packing(f)
+        load_input(f, *source)
     written = [results_path(f) for f in args.files] + ([] if args.no_figure else [figure_path(args)])
     if not args.no_figure:
         figure_format(figure_path(args))  # PNG, SVG or PDF by the suffix; another is refused before work
     for out in written:
         check_writable(out, args.force)
-    rows = map_files(analyse_file, args.files, spectrum, args.save_vectors, args.force, workers=args.workers,
+    rows = map_files(analyse_file, args.files, spectrum, args.save_vectors, args.force, source, workers=args.workers,
                      scheduler=args.scheduler, progress=len(args.files) > 1, desc="modes")
     for line, _, _ in rows:
         print(line)
@@ -77,13 +83,14 @@ def run(args) -> int:
     return 0
 
 
-def analyse_file(path, spectrum, save_vectors=False, force=False):
+def analyse_file(path, spectrum, save_vectors=False, force=False, source=("auto", None, None)):
     """One packing: checks, spectrum, stability class, results file (``force``: it may replace a
     symlink, device or read-only file); the spectrum comes back without eigenvectors (they stay
     in the results file with --save-vectors) but with their translational fractions, which colour
-    the figure's modes by character and split D(omega)."""
-    packing = load_packing(path)
-    checks = checked(path, packing)
+    the figure's modes by character and split D(omega). ``source``: (format, diameters, dim) of
+    the input (``jamflow.cli.inputs.load_input``)."""
+    packing = load_input(path, *source)
+    checks = checked(path, packing, stored=is_jamflow_file(path, source[0]))
     spec = spectrum.compute(packing)
     stab = Stability(spectrum=spectrum).compute(packing, spec)
     out = results_path(path)
@@ -93,10 +100,11 @@ def analyse_file(path, spectrum, save_vectors=False, force=False):
     return line, spec.without_vectors(), stab
 
 
-def checked(path, packing):
+def checked(path, packing, stored=True):
     """Force balance (and window, if the file records V_tol) of a packing; warns when the
-    packing is not at an energy minimum, since its modes then describe no stable state."""
-    stored = read_checks(path)
+    packing is not at an energy minimum, since its modes then describe no stable state.
+    ``stored``: the path is a jamflow packing file, which may record V_tol."""
+    stored = read_checks(path) if stored else None
     checks = check_packing(packing, v_tol=stored.v_tol if stored else None)
     if not checks.force_balanced:
         warnings.warn(f"{path} is {checks.problems()[0]}: its spectrum and stability class describe a state that "
