@@ -1,5 +1,7 @@
 """The command line: a working default and clear errors before any work."""
 
+import io
+
 import pytest
 
 from jamflow.cli.app import main
@@ -83,10 +85,12 @@ def test_a_disk_jam_does_not_import_scipy_optimize(tmp_path):
     assert result.stdout.split()[-4:] == ["0", "False", "False", "False"], result.stdout + result.stderr
 
 
-def test_a_jam_without_quiet_has_a_tqdm_bar_and_with_it_a_hidden_one():
-    """The bar (tqdm: rate, ETA) is there without --quiet; --quiet's counts and draws nothing
-    (and needs no tqdm, see above). Both take the updates the protocols and commands make."""
+def test_a_jam_without_quiet_has_a_tqdm_bar_and_with_it_a_hidden_one(monkeypatch):
+    """On a terminal the bar (tqdm: rate, ETA) is there without --quiet; --quiet's counts and draws
+    nothing (and needs no tqdm, see above). Both take the updates the protocols and commands make."""
     from tqdm import tqdm
+
+    monkeypatch.setattr("jamflow.cli.progress.is_terminal", lambda stream=None: True)
 
     from jamflow.cli.progress import CompressionProgress, HiddenBar, progress_bar
 
@@ -102,15 +106,18 @@ def test_a_jam_without_quiet_has_a_tqdm_bar_and_with_it_a_hidden_one():
     assert (bar.n, bar.total) == (2, 5)
 
 
+class _Terminal(io.StringIO):
+    def isatty(self):
+        return True
+
+
 def test_a_bar_closed_before_its_first_draw_still_shows_its_final_line():
     """tqdm draws at most every 0.1 s and a delayed bar never drawn prints nothing on close: a
     run faster than that (a warm N = 64 jam) would show no progress at all. Updated once and
     closed at once: the final line; never updated (a refusal): nothing."""
-    import io
-
     from jamflow.cli.progress import progress_bar
 
-    shown, refused = io.StringIO(), io.StringIO()
+    shown, refused = _Terminal(), _Terminal()
     with progress_bar(desc="jam", unit="min", file=shown) as bar:
         bar.update(1)
     with progress_bar(desc="jam", unit="min", file=refused):
@@ -133,6 +140,59 @@ def test_a_finished_jam_bar_ends_at_100_percent(capsys):
         assert progress.bar.total > 4  # still the estimate while running
     last = capsys.readouterr().err.replace("\r", "\n").strip().splitlines()[-1]
     assert "100%" in last and "4/4" in last
+
+
+def test_progress_in_a_pipe_is_plain_infrequent_lines(capsys):
+    """stderr not a terminal (a pipe, a batch log): no tqdm bar, so no carriage returns or cursor
+    codes; one line per tenth of a known total at most (plus none for a fast run without one but
+    its final line). A terminal keeps the tqdm bar."""
+    from tqdm import tqdm
+
+    from jamflow.cli.progress import CompressionProgress, progress_bar
+    from jamflow.ensemble.parallel import map_files, progress
+    from jamflow.support.progress import PlainProgress
+
+    with progress_bar(total=1000, desc="shear", unit="step") as bar:
+        assert isinstance(bar, PlainProgress)
+        for _ in range(1000):
+            bar.update(1)
+            bar.set_postfix_str("gamma=0.1", refresh=False)
+    result = type("R", (), {"energy_per_particle": 1e-12})()
+    with CompressionProgress() as jam_bar:
+        for k, dphi in enumerate((0.0, 1e-3, 5e-4, 2.5e-4)):
+            jam_bar({"step": k, "phi": 0.8 + dphi, "dphi": dphi, "result": result})
+    assert map_files(str.upper, list("abcdefghijklmnopqrst"), desc="modes") == list("ABCDEFGHIJKLMNOPQRST")
+    with progress(total=3, desc="ensemble", unit="packing") as ensemble_bar, \
+            progress(bar_format="{desc}", position=1, leave=False) as status:
+        status.set_description_str("workers 2 (2 busy)")
+        ensemble_bar.update(3)
+    err = capsys.readouterr().err
+    assert "\r" not in err and "\x1b[" not in err
+    lines = err.splitlines()
+    shear = [line for line in lines if line.startswith("shear:")]
+    assert len(shear) == 10 and shear[-1].startswith("shear: 100% 1000/1000 step") and "gamma=0.1" in shear[-1]
+    jam = [line for line in lines if line.startswith("jam:")]
+    assert 1 <= len(jam) <= 2 and jam[-1].startswith("jam: 100% 4/4 min")
+    assert sum(line.startswith("modes:") for line in lines) == 10 and "modes: 100% 20/20" in err
+    assert "ensemble: 100% 3/3 packing" in err and len(lines) == len(shear) + len(jam) + 10 + 1
+    terminal = _Terminal()
+    with progress_bar(total=3, desc="x", file=terminal) as bar:
+        bar.update(3)
+    assert isinstance(bar, tqdm) and "\r" in terminal.getvalue()
+    assert isinstance(progress(total=3, file=_Terminal(), disable=True), tqdm)
+
+
+def test_progress_in_a_real_pipe_has_no_control_codes():
+    """The same through an OS pipe, as ``jamflow ... 2>&1 | tail`` sees it."""
+    import subprocess
+    import sys
+
+    code = ("from jamflow.cli.progress import progress_bar\n"
+            "with progress_bar(total=500, desc='anneal', unit='step') as bar:\n"
+            "    [bar.update(1) for _ in range(500)]\n")
+    err = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stderr
+    assert "\r" not in err and "\x1b[" not in err and len(err.splitlines()) == 10
+    assert err.splitlines()[-1].startswith("anneal: 100% 500/500 step")
 
 
 def test_the_summary_names_the_kernels_and_the_file_keeps_engine_numba(tmp_path, capsys, monkeypatch):

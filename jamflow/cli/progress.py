@@ -1,9 +1,12 @@
-"""Progress display for protocols (an observer: called once per minimisation)."""
+"""Progress display for protocols (an observer: called once per minimisation): a tqdm bar on
+a terminal, plain infrequent lines (``jamflow.support.progress.PlainProgress``) in pipes and logs."""
 
 from __future__ import annotations
 
 import functools
 import math
+
+from jamflow.support.progress import PlainProgress, is_terminal
 
 QUIET_UNTIL_WORK = 1e-3  # tqdm's delay (s): > 0 and above the round-off of time.time(), so nothing draws early
 
@@ -36,9 +39,12 @@ def progress_bar(disable: bool = False, **kwargs):
     any work prints its one error line only (tqdm draws a delayed bar neither on creation nor,
     if never drawn, on close). Like every tqdm bar it draws at most every 0.1 s; a bar updated
     but closed before its first draw (a run shorter than 0.1 s) draws its final line on close.
-    Disabled: a ``HiddenBar``."""
+    Disabled: a ``HiddenBar``. Where the stream (``file``, default stderr) is not a terminal:
+    ``PlainProgress``, plain lines without carriage returns or cursor codes."""
     if disable:
         return HiddenBar(kwargs.get("total"))
+    if not is_terminal(kwargs.get("file")):
+        return PlainProgress(**kwargs)
     return _shown_bar_class()(delay=QUIET_UNTIL_WORK, dynamic_ncols=True, **kwargs)
 
 

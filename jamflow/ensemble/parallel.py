@@ -10,6 +10,15 @@ from pathlib import Path
 from tqdm import tqdm
 
 from jamflow.support.files import check_distinct
+from jamflow.support.progress import PlainProgress, is_terminal
+
+
+def progress(iterable=None, **kwargs):
+    """A tqdm bar on a terminal; elsewhere (a pipe, a batch log) plain infrequent lines
+    (``PlainProgress``; ``bar_format="{desc}"``, a status line, writes its text when it changes)."""
+    if is_terminal(kwargs.get("file")):
+        return tqdm(iterable, **kwargs)
+    return PlainProgress(iterable, status=kwargs.get("bar_format") == "{desc}", **kwargs)
 
 
 def expand_inputs(paths) -> list[str]:
@@ -36,6 +45,9 @@ def add_engine_arguments(p) -> None:
                    help="run one task per file on an existing Dask scheduler (tcp://HOST:PORT or a scheduler file)")
 
 
+_bar = progress  # file_mapper's argument ``progress`` hides the function's name
+
+
 @contextlib.contextmanager
 def file_mapper(workers=None, scheduler=None, progress=True):
     """A function ``run(func, files, *args, desc=...)`` = ``[func(f, *args) for f in files]``,
@@ -45,7 +57,7 @@ def file_mapper(workers=None, scheduler=None, progress=True):
         raise ValueError(f"--workers must be at least 1, got {workers}")
     if workers is None and scheduler is None:
         yield lambda func, files, *args, desc="packings": [
-            func(f, *args) for f in tqdm(files, desc=desc, disable=not progress or len(files) < 2)]
+            func(f, *args) for f in _bar(files, desc=desc, disable=not progress or len(files) < 2)]
         return
     from distributed import as_completed
 
@@ -54,7 +66,7 @@ def file_mapper(workers=None, scheduler=None, progress=True):
     with dask_client(workers, scheduler) as client:
         def run(func, files, *args, desc="packings"):
             futures = [client.submit(func, f, *args, pure=False) for f in files]
-            with tqdm(total=len(files), desc=desc, disable=not progress) as bar:
+            with _bar(total=len(files), desc=desc, disable=not progress) as bar:
                 for _ in as_completed(futures):
                     bar.update(1)
             return client.gather(futures)

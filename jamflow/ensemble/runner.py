@@ -12,10 +12,9 @@ import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from tqdm import tqdm
-
 from jamflow.ensemble.checks import packing_row
 from jamflow.ensemble.cluster import WAIT_WORKERS, dask_client, workers_line, workers_state
+from jamflow.ensemble.parallel import progress as progress_bar
 from jamflow.ensemble.store import Store, Task, failure_row, write_failure
 from jamflow.protocols.spec import JamSpec, prepare
 
@@ -103,7 +102,7 @@ def run_ensemble(out, seeds, n=(64,), *, workers=None, scheduler=None, client=No
     with Store(out).open(fixed, ["n"], defaults=jam_parameters()) as store:
         report = EnsembleReport(store.dir, len(sizes) * (seeds.stop - seeds.start))
         cached, todo = store.summary_rows(), []
-        bar = tqdm(total=report.requested, desc="ensemble", unit="packing", disable=not progress, dynamic_ncols=True)
+        bar = progress_bar(total=report.requested, desc="ensemble", unit="packing", disable=not progress, dynamic_ncols=True)
         try:
             with _interrupt_flag() as interrupted, contextlib.ExitStack() as cluster:
                 c = None
@@ -175,7 +174,7 @@ def _run(client, store, fixed, todo, report, bar, on_result, interrupted, mpi_ra
                              mpi_ranks, key=f"jam-{task.stem}-{run_id}", pure=False, priority=-k): task
                for k, task in enumerate(todo)}
     pending = set(futures)
-    line = tqdm(bar_format="{desc}", position=1, disable=bar.disable, leave=False)
+    line = progress_bar(bar_format="{desc}", position=1, disable=bar.disable, leave=False)
     bar.set_postfix_str(f"failed={report.failed}, done before={report.done_before}")
     seen = set(workers_state(client) or {})  # worker addresses at the last poll (a worker lost before the first counts)
     last_write = time.monotonic()

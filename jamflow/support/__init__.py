@@ -1,5 +1,6 @@
 """The lowest layer, standard library only: atomic file writes and output paths (``files``), the
-cache directory and the check that a compiled shared object is whole (``cache``)."""
+cache directory and the check that a compiled shared object is whole (``cache``), progress as
+plain lines where stderr is not a terminal (``progress``)."""
 
 from jamflow.support.lazy import lazy_submodules as _lazy_submodules
 
