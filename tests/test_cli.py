@@ -225,7 +225,9 @@ def test_the_kernels_are_built_before_the_bar_starts(tmp_path, monkeypatch):
 
     monkeypatch.setattr(jam_command, "CompressionProgress", Recorded)
     assert main(["jam", "--n", "16", "--out", str(tmp_path / "p.h5"), "--quiet"]) == 0
-    assert events == ["build", "bar"]
+    # the first build comes before the bar; the engine may ask for the (then cached) kernels again later,
+    # which it records only where its module was imported after the patch (this test run alone)
+    assert events[:2] == ["build", "bar"] and set(events[2:]) <= {"build"}
 
 
 def test_a_valueerror_jamflow_raises_is_bad_input(tmp_path, capsys, monkeypatch):
