@@ -1017,7 +1017,7 @@ def test_draw_writes_the_format_its_suffix_asks_for(tmp_path, packing_file, suff
 
 
 def test_draw_refuses_a_suffix_it_cannot_write(tmp_path, capsys, packing_file, monkeypatch):
-    monkeypatch.setattr("jamflow.cli.commands.draw.load_packing", lambda *a: pytest.fail("work started"))
+    monkeypatch.setattr("jamflow.cli.commands.draw.load_input", lambda *a: pytest.fail("work started"))
     code = main(["draw", str(packing_file), "-o", str(tmp_path / "pic.jpg")])
     err = capsys.readouterr().err
     assert code == 2 and no_traceback(err) and "not .jpg" in err and list(tmp_path.iterdir()) == []

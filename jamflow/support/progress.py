@@ -94,7 +94,13 @@ class PlainProgress:
     def _line(self, now):
         count = f"{self.n}/{self.total}" if self.total else f"{self.n}"
         percent = f"{100 * self.n / self.total:.0f}% " if self.total else ""
-        parts = [f"{self.desc}: {percent}{count} {self.unit}", f"{now - self._start:.1f} s"]
+        elapsed = now - self._start
+        parts = [f"{self.desc}: {percent}{count} {self.unit}", f"{elapsed:.1f} s"]
+        if self.n and elapsed > 0:  # rate and time left, as the terminal bar shows them
+            rate = self.n / elapsed
+            parts.append(f"{rate:.3g} {self.unit}/s")
+            if self.total and self.total > self.n:
+                parts.append(f"ETA {(self.total - self.n) / rate:.0f} s")
         self._shown = (self.n, self.total)
         self._write(", ".join(parts + ([self.postfix] if self.postfix else [])), now)
 
