@@ -1,4 +1,4 @@
-"""Distribution of jamming onsets over an ensemble (seed section 2.4, Figure 2.14).
+"""Distribution of jamming onsets over an ensemble (chapter section 2.4, Figure 2.14).
 
 Per N: P(phi_J) and P(<z>) histograms, <phi_J> with its standard error, the width
 W(N) = standard deviation of phi_J with a bootstrap error (packings resampled with
@@ -144,7 +144,7 @@ def _sd(x):
 
 
 def _isostatic(group, dim) -> np.ndarray:
-    """N_c = d (N' - 1) + 1 over the non-floaters (seed section 4.1)."""
+    """N_c = d (N' - 1) + 1 over the non-floaters (chapter section 4.1)."""
     return np.array([int(r["n_contacts"]) == dim * (int(r["n"]) - int(r["floaters"]) - 1) + 1 for r in group])
 
 

@@ -21,13 +21,13 @@ Stopping rules, checked after every ``window`` iterations (LAMMPS runs the windo
    every minimiser creep, docs/notes/ellipses.md),
    and, for particles that turn, every generalized torque component tau_a / d_k below it too
    (torque balance; d_k the rotational length of ``jamflow.model.shapes``).
-2. ``energy-below-vmin``: energy per particle below ``v_min`` (seed rule b, V_min = 1e-16),
+2. ``energy-below-vmin``: energy per particle below ``v_min`` (the chapter's rule b, V_min = 1e-16),
    also caught inside a window by ``fix halt``.
 3. ``energy-steady`` (md only): the chapter's MD rule, <(V - <V>)^2>^(1/2) / <V> < ``delta``
    over the energies sampled every ``md_sample_every`` steps inside the window (needs 2
    samples). Checked before ``no-progress``; reported as not converged by force, like it.
 4. ``no-progress``: over a whole window the relative energy decrease was below ``delta``
-   (seed rule a, delta = 1e-16) and the max force did not halve: the round-off floor.
+   (the chapter's rule a, delta = 1e-16) and the max force did not halve: the round-off floor.
    Reported as not converged by force; the protocol records it. For md the energy compared
    is the mechanical energy V + K at the window ends, which damping can only lower: V alone
    rises and falls as the dynamics trades it for kinetic energy (pairwise damping rings).

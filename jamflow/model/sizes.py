@@ -4,7 +4,7 @@ Specs (CLI ``--sizes``):
 - ``mono``: every diameter 1.
 - ``bi:RATIO:FRACTION_SMALL``: round(FRACTION_SMALL * N) diameters 1, the rest RATIO
   (seed: ``bi:1.4:0.5`` for 50:50 and ``bi:1.4:0.6667`` for the 2:1 mixture).
-- ``poly-uniform:WIDTH``: uniform on [1, 1 + WIDTH] (seed "p = 1.4" is WIDTH 0.4).
+- ``poly-uniform:WIDTH``: uniform on [1, 1 + WIDTH] (the chapter's "p = 1.4" is WIDTH 0.4).
 - ``poly-normal:WIDTH[:MEAN]``: normal, mean MEAN (default 1), standard deviation WIDTH,
   truncated to diameters > MEAN/10 by redrawing.
 - ``poly-lognormal:WIDTH[:MEAN]``: log-normal with mean MEAN (default 1) and standard

@@ -1,4 +1,4 @@
-"""Structure of one packing or an ensemble (seed sections 4.2-4.4): g(r) (partials for
+"""Structure of one packing or an ensemble (chapter sections 4.2-4.4): g(r) (partials for
 discrete species), S(k), Q6 global/local, G, the g(r) - 1 envelope length and the q6
 correlation functions with their length. FILES are jamflow HDF5 packings or LAMMPS data /
 dump files (every dump frame counts as one packing); all of them form one ensemble.

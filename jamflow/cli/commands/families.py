@@ -1,4 +1,4 @@
-"""Geometric families of small bidisperse disk packings (seed section 2.2, Figure 2.7): jam
+"""Geometric families of small bidisperse disk packings (chapter section 2.2, Figure 2.7): jam
 --starts random starts at every strain of a grid, follow each by quasistatic shear at zero
 pressure to the neighbouring grid points, and join the segments with one contact network
 into families (jamflow/analysis/families.py says what identifies a family). Writes to DIR:
