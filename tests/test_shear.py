@@ -3,6 +3,7 @@ unit period and mirror symmetry on real jammed packings, continuous families and
 reversibility, the two engines, files, the command line and bad input."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -229,6 +230,35 @@ def test_shear_command_writes_the_path_and_the_figure(tmp_path, capsys):
     assert f.columns["gamma"][-1] == 0.19 and f.attrs["dgamma"] == -0.002
     assert f.columns["checks_passed"].all() and len(f.columns["checks_passed"]) == 6
     assert (out / "p.shear.png").stat().st_size > 10_000
+
+
+def parse_change_line(line):
+    """(step, gamma text, removed pairs, added pairs, floaters text) of a --list-changes line."""
+    m = re.fullmatch(r"step (\d+)  gamma=(\S+)  removed (.+?)  added (.+?)(?:  floaters (\d+ -> \d+))?", line)
+    assert m, line
+    pairs = [set() if t == "-" else {tuple(map(int, p.split("-"))) for p in t.split()} for t in m.group(3, 4)]
+    return int(m.group(1)), m.group(2), *pairs, m.group(5)
+
+
+def test_shear_list_changes_prints_each_changed_step_as_the_networks_differ(tmp_path, capsys):
+    packing = tmp_path / "p.h5"
+    assert main(["jam", "--n", "10", "--seed", "1", "--out", str(packing), "--quiet"]) == 0
+    out = tmp_path / "run"
+    assert main(["shear", str(packing), "--dgamma", "0.002", "--to", "0.05", "--out", str(out), "--quiet",
+                 "--no-figure", "--list-changes"]) == 0
+    lines = [line for line in capsys.readouterr().out.splitlines() if line.startswith("step ")]
+    f = ShearFile(out / "p.shear.h5")
+    assert [parse_change_line(line)[0] for line in lines] == np.flatnonzero(f.columns["changed"]).tolist()
+    assert lines, "this start rearranges on the way to 0.05 (a floater appears at step 17)"
+    for line in lines:
+        k, gamma, removed, added, floaters = parse_change_line(line)
+        before, after = ({tuple(c) for c in f.contacts(s).tolist()} for s in (k - 1, k))
+        jumped = removed & added  # a pair that moved to another image is both
+        assert removed == (before - after) | jumped and added == (after - before) | jumped
+        assert gamma == f"{0.002 * k:.6g}"  # 0.006, not 0.006000000000000001
+        n_floaters = f.columns["n_floaters"]
+        assert floaters == (f"{n_floaters[k - 1]} -> {n_floaters[k]}" if n_floaters[k] != n_floaters[k - 1] else None)
+    assert any(line.endswith("floaters 0 -> 1") for line in lines)
 
 
 @pytest.mark.parametrize("args,message", [

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import dataclass
 from pathlib import Path
 
 import h5py
@@ -98,9 +99,48 @@ def save_shear_path(out, path, *, source: str = "", extra_columns: dict | None =
     return Path(out)
 
 
+@dataclass(frozen=True)
+class ContactChange:
+    """The contact changes of one step of a shear path: ``removed`` and ``added`` are sorted
+    lists of pairs (i, j); ``floaters`` is the number of floaters (before, after) the step."""
+
+    step: int
+    gamma: float
+    removed: list
+    added: list
+    floaters: tuple
+
+    def line(self) -> str:
+        """``step 7  gamma=0.014  removed 6-26  added 3-8 2-3`` (``-`` for none), with
+        ``floaters 0 -> 1`` appended when the number of floaters changed."""
+        pairs = {k: " ".join(f"{i}-{j}" for i, j in v) or "-" for k, v in (("r", self.removed), ("a", self.added))}
+        text = f"step {self.step}  gamma={self.gamma:.6g}  removed {pairs['r']}  added {pairs['a']}"
+        before, after = self.floaters
+        return text + (f"  floaters {before} -> {after}" if before != after else "")
+
+
 class ShearFile:
-    """A shear path file read back: ``attrs``, ``columns`` (per-step arrays), ``contacts(k)``,
-    ``removed`` / ``added`` rows (step, i, j) and ``packing(k)``."""
+    """A shear path file (schema ``jamflow.shear``) read back.
+
+    Attributes:
+        attrs: the file's root attributes (dict: dim, n, potential, gamma_start, gamma_end,
+            dgamma, steps, n_changes, engine, ...; the module docstring lists them).
+        columns: per-step arrays by name (dict, each of length S + 1, step 0 the start): gamma,
+            phi_j, energy_per_particle, pressure, shear_stress, pressure_tensor, n_contacts,
+            n_floaters, n_removed, n_added, minimizations, iterations, changed, checks_passed,
+            positions, box (and orientations for shapes that turn).
+        removed: (R, 3) int array, rows (step, i, j): the contacts of step - 1 that are gone at
+            step (i < j, particle indices from 0).
+        added: (A, 3) int array, rows (step, i, j): the contacts of step that were not there at
+            step - 1. A pair whose separation jumped to another periodic image is in both.
+            Contacts are counted among non-floaters, so a particle that becomes a floater has all
+            its contacts removed, and one that stops being a floater has all its contacts added.
+        diameters: (N,) the particles' diameters.
+        source: the file's path.
+
+    ``changes()`` groups ``removed`` and ``added`` by step; ``contacts(k)`` and ``packing(k)``
+    give the network and the packing at step k.
+    """
 
     def __init__(self, path):
         path = Path(path)
@@ -119,6 +159,13 @@ class ShearFile:
     def __len__(self) -> int:
         return len(self.columns["gamma"])
 
+    def changes(self) -> list[ContactChange]:
+        """One ``ContactChange`` per step whose contact network changed, in step order."""
+        floaters = self.columns["n_floaters"]
+        steps = np.union1d(self.removed[:, 0], self.added[:, 0]).astype(int)
+        return [ContactChange(int(k), float(self.columns["gamma"][k]), _pairs_at(self.removed, k),
+                              _pairs_at(self.added, k), (int(floaters[k - 1]), int(floaters[k]))) for k in steps]
+
     def contacts(self, k: int) -> np.ndarray:
         """(N_c, 2) contacts i < j among non-floaters at step k."""
         return self._pairs[self._offsets[k]:self._offsets[k + 1]]
@@ -131,3 +178,8 @@ class ShearFile:
         orient = c["orientations"][k] if "orientations" in c else None
         meta = {"seed": int(a["seed"]), "sizes": str(a["sizes"]), "source": str(self.source), "step": k}
         return Packing(c["positions"][k], self.diameters, Box(c["box"][k]), pot, meta, shape, orient)
+
+
+def _pairs_at(rows: np.ndarray, step: int) -> list:
+    """The pairs (i, j) of the (step, i, j) ``rows`` at ``step``, sorted."""
+    return sorted((int(i), int(j)) for _, i, j in rows[rows[:, 0] == step])

@@ -20,7 +20,7 @@ from jamflow.minimize.settings import MinimizerSettings
 from jamflow.cli.progress import ShearProgress
 from jamflow.protocols.settings import PROTOCOL_NAMES, PROTOCOLS, protocol_name
 from jamflow.protocols.shear import shear, shear_protocol, shear_strains
-from jamflow.io.shear_file import path_columns, save_shear_path
+from jamflow.io.shear_file import ShearFile, path_columns, save_shear_path
 
 
 def add_arguments(p) -> None:
@@ -41,6 +41,9 @@ def add_arguments(p) -> None:
     add_force_argument(p)
     add_quiet_argument(p)
     p.add_argument("--no-figure", action="store_true", help="do not draw DIR/STEM.shear.png")
+    p.add_argument("--list-changes", action="store_true",
+                   help="print one line per step whose contact network changed: the contacts removed and added "
+                        "(i-j, particle indices from 0), and the floater count when it changed")
     p.add_argument("--emit-deck", default=None, metavar="DECK.lmp",
                    help="write the LAMMPS deck that runs this shear in lmp alone (and its start, DECK.start.data) "
                         "instead of running it; then: cd DIR && lmp -in DECK.lmp")
@@ -92,11 +95,19 @@ def run(args) -> int:
         with replacing([data, figure] if args.force else []):
             save_shear_path(data, path, source=args.packing, extra_columns={"checks_passed": passed})
             print(f"{path.summary()}  -> {data}")
+            if args.list_changes:
+                print_changes(data)
             if not args.no_figure:
                 from jamflow.plots.shear import shear_path_figure
 
                 print(f"figure -> {shear_path_figure(figure, path_columns(path))}")
     return 0
+
+
+def print_changes(data) -> None:
+    """The contact changes recorded in the shear path file ``data``, one line per changed step."""
+    for change in ShearFile(data).changes():
+        print(change.line())
 
 
 def emit(args, packing, settings) -> int:
