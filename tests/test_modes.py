@@ -14,6 +14,7 @@ import h5py
 import numpy as np
 import pytest
 
+from jamflow.mechanics.contacts import Contacts
 from jamflow.mechanics.dynamical_matrix import DynamicalMatrix
 from jamflow.analysis.modes import (LOCALLY_STABLE, STABLE, UNSTABLE, DensityOfStates, Spectrum, Stability,
                                     energy_change)
@@ -21,7 +22,7 @@ from jamflow.model.box import Box
 from jamflow.mechanics.reference import energy_forces_pressure
 from jamflow.model.packing import Packing
 from jamflow.model.potentials import RepulsiveLJ, Spring
-from test_contacts import triangular_lattice
+from test_contacts import disk_in_vacancy, triangular_lattice
 from test_hessian import perturbed_lattice
 
 
@@ -224,6 +225,24 @@ def test_cli_writes_results_and_figure(jammed, tmp_path, capsys):
     assert not list(tmp_path.glob(".*tmp"))  # atomic writes leave no temporaries
     with h5py.File(files[0], "r") as f:  # the packing file itself is untouched
         assert "eigenvalues" not in f
+
+
+def test_cli_summary_prints_the_pooled_mean_z_and_floater_fraction(jammed, tmp_path, capsys):
+    """<z> pooled over the files (2 sum N_c / sum N', periodic disks) and the floater fraction
+    sum N_f / sum N on the ensemble line, not only in the figure."""
+    from jamflow.io.packing_file import save_packing
+
+    packings = [jammed, disk_in_vacancy(0, 0.0, 0.5)]  # the small disk in the lattice's vacancy: a floater
+    files = [save_packing(tmp_path / f"p{k}.h5", q) for k, q in enumerate(packings)]
+    modes, args = _modes_args([str(f) for f in files] + ["--no-figure"])
+    with pytest.warns(UserWarning, match="not at an energy minimum"):  # the vacancy's neighbours are pushed inwards
+        assert modes.run(args) == 0
+    summary = capsys.readouterr().out.splitlines()[-1]
+    found = [Contacts().compute(q) for q in packings]
+    mean_z = 2 * sum(c.n_contacts for c in found) / sum(len(c.floater) - c.n_floaters for c in found)
+    floaters, n = sum(c.n_floaters for c in found), sum(q.n for q in packings)
+    assert floaters > 0 and abs(mean_z - np.mean([c.mean_z for c in found])) > 1e-3  # pooled, not averaged per packing
+    assert summary.startswith(f"2 packing(s): pooled <z> = {mean_z:.4f}, floaters {floaters}/{n} ({floaters / n:.4f})")
 
 
 def test_cli_rejects_bad_input_before_work(tmp_path):

@@ -261,7 +261,7 @@ def test_cli_stores_mode_character_and_profiles(tmp_path, capsys):
 
 
 def test_cli_figure_colours_modes_by_character(tmp_path, monkeypatch):
-    """``jamflow modes`` on ellipses colours each mode of panel (a) by its translational fraction
+    """``jamflow modes --colour fraction`` on ellipses colours each mode of panel (a) by its translational fraction
     (Figure 2.17's three branches) and draws the translational part of D(omega), as the API does:
     it once dropped the eigenvectors before drawing, and every mode came out grey (0.5)."""
     from matplotlib.axes import Axes
@@ -277,7 +277,7 @@ def test_cli_figure_colours_modes_by_character(tmp_path, monkeypatch):
     target.write_bytes(ELLIPSES[0].read_bytes())
     parser = argparse.ArgumentParser()
     modes.add_arguments(parser)
-    assert modes.run(parser.parse_args([str(target)])) == 0
+    assert modes.run(parser.parse_args([str(target), "--colour", "fraction"])) == 0
     assert (tmp_path / (target.stem + ".modes.png")).read_bytes()[:4] == b"\x89PNG"
     spec = Spectrum().compute(ellipses_packing := load_packing(target))
     order = np.argsort(np.abs(spec.eigenvalues))[spec.dim:]
@@ -287,3 +287,55 @@ def test_cli_figure_colours_modes_by_character(tmp_path, monkeypatch):
     labels = branch_labels(spec)[order]
     assert colours[labels == 2].max() < 0.5 < colours[labels == 3].min()  # rotational blue-red split, not grey
     assert "translational part" in stairs and ellipses_packing.shape.oriented
+
+
+def drawn_modes_figure(tmp_path, monkeypatch, *options):
+    """Run ``jamflow modes`` on the first stored ellipse packing; the Figure it saves, and the packing."""
+    import jamflow.plots.modes as plots
+    from jamflow.cli.commands import modes
+
+    figures, save = [], plots.save_figure
+    monkeypatch.setattr(plots, "save_figure", lambda fig, path: figures.append(fig) or save(fig, path))
+    target = tmp_path / ELLIPSES[0].name
+    target.write_bytes(ELLIPSES[0].read_bytes())
+    parser = argparse.ArgumentParser()
+    modes.add_arguments(parser)
+    assert modes.run(parser.parse_args([str(target), *options])) == 0
+    (fig,) = figures
+    return fig, load_packing(target)
+
+
+def test_cli_figure_colours_the_three_branches_by_default(tmp_path, monkeypatch):
+    """Panel (a) of ``jamflow modes`` on ellipses: one colour per branch of ``branch_labels``
+    (the chapter's Figure 2.17), named in a legend; the colours mean one thing across the panels
+    (red = zero/quartic in (a) and quartic in (d), rotational and translational neither red nor
+    the blue of quadratic); omega's axes carry its units and normalisation."""
+    from matplotlib.colors import to_hex
+
+    from jamflow.analysis.modes import branch_labels
+
+    fig, packing = drawn_modes_figure(tmp_path, monkeypatch)
+    spec = Spectrum().compute(packing)
+    labels = branch_labels(spec)
+    a, b, _, d = fig.axes[:4]
+    legend = [t.get_text() for t in a.get_legend().get_texts()]
+    assert legend[:3] == ["1 zero (quartic)", "2 rotational", "3 translational"]
+    colours = {}
+    for collection, name, branch in zip(a.collections, legend, (1, 2, 3)):
+        omega = np.sort(np.sqrt(np.abs(spec.eigenvalues[labels == branch]) / spec.mass))
+        np.testing.assert_allclose(np.sort(collection.get_offsets()[:, 1]), omega, rtol=1e-8)
+        (colours[branch],) = {to_hex(c) for c in collection.get_facecolors()}
+    profiles = {line.get_label(): to_hex(line.get_color()) for line in d.get_lines()}
+    assert colours[1] == profiles["quartic"] and profiles["quadratic"] not in colours.values()
+    assert len(set(colours.values())) == 3 and to_hex("red") != colours[2]
+    units = r"($\sqrt{\epsilon/m}\,/\,\sigma$, M = N m)"
+    assert a.get_ylabel().endswith(units) and b.get_xlabel() == r"$\omega$ " + units
+    assert r"\Delta V(-\delta)" in d.get_ylabel()  # the symmetric part, spelled out
+
+
+def test_modes_figure_refuses_an_unknown_colouring(tmp_path):
+    from jamflow.plots.modes import modes_figure
+
+    with pytest.raises(ValueError, match="colour must be one of branches, fraction"):
+        modes_figure(tmp_path / "x.png", [], colour="rainbow")
+    assert not (tmp_path / "x.png").exists()

@@ -22,7 +22,9 @@ from jamflow.ensemble.parallel import add_engine_arguments, expand_inputs, map_f
 from jamflow.io.modes_file import save_modes
 from jamflow.io.packing_file import read_checks
 from jamflow.mechanics.checks import check_packing
+from jamflow.mechanics.contacts import pooled_contacts
 from jamflow.plots.figure import figure_format
+from jamflow.plots.modes import COLOURINGS
 from jamflow.support.files import check_writable, replacing
 
 
@@ -39,6 +41,10 @@ def add_arguments(p) -> None:
     p.add_argument("--figure", default=None,
                    help="figure to draw, PNG, SVG or PDF by its suffix (default: PACKING.modes.png for one file, "
                         "modes.png beside the first)")
+    p.add_argument("--colour", "--color", choices=COLOURINGS, default="branches",
+                   help="panel (a) for particles that turn: each mode coloured by its branch (the chapter's Figure "
+                        "2.17: 1 zero/quartic, 2 rotational, 3 translational; a legend names them) or by its "
+                        "translational fraction (a colour bar)")
     p.add_argument("--no-figure", action="store_true", help="do not draw the figure")
     p.add_argument("--save-vectors", action="store_true", help="also store all eigenvectors")
     p.add_argument("--force", action="store_true",
@@ -118,7 +124,7 @@ def _draw(args, rows, dos):
     spectra = [s for s, _ in rows]
     density = dos.compute(spectra) if all(s.complete for s in spectra) else None
     out = modes_figure(figure_path(args), spectra, density, [s.dynamical.contacts for s in spectra],
-                       [st for _, st in rows])
+                       [st for _, st in rows], colour=args.colour)
     print(f"figure -> {out}")
 
 
@@ -148,7 +154,8 @@ def ensemble_summary(spectra, stabilities=()) -> str:
     iso = sum(s.dynamical.contacts.is_isostatic for s in spectra)
     exact = sum(s.n_zero == s.dim and s.n_negative == 0 for s in spectra)
     low = np.array([s.lowest_nonzero for s in spectra])
-    line = (f"{n} packing(s): isostatic {iso}/{n}, exactly d zero modes (none negative) {exact}/{n}, "
+    line = (f"{n} packing(s): {pooled_contacts(s.dynamical.contacts for s in spectra).summary()}, isostatic "
+            f"{iso}/{n}, exactly d zero modes (none negative) {exact}/{n}, "
             f"lowest nonzero e: mean {np.nanmean(low):.4e}, median {np.nanmedian(low):.4e}, "
             f"min {np.nanmin(low):.4e}, max {np.nanmax(low):.4e}")
     if stabilities and any(s.dynamical.packing.shape.oriented for s in spectra):
