@@ -379,3 +379,40 @@ def test_a_huge_seed_range_streams_in_chunks(tmp_path, monkeypatch, threaded):
     assert report.requested == 1_000_000_000 and report.interrupted
     assert sizes and max(sizes) <= 4  # never the whole range
     assert len(packings(tmp_path / "s")) >= 3  # (a task running at the interrupt may still be writing)
+
+
+# -- issue 26: a script without the __main__ guard ------------------------------------------------
+ENSEMBLE_SCRIPT = '''import jamflow
+
+{guard}report = jamflow.run_ensemble("store", "0:1", [8], workers=1, dim=2, progress=False)
+{indent}print("made", report.made)
+'''
+
+
+def run_script(tmp_path, guarded):
+    """Run the ensembles guide's run_ensemble snippet as a script (python script.py), guarded or not."""
+    script = tmp_path / "ensemble_script.py"
+    script.write_text(ENSEMBLE_SCRIPT.format(guard='if __name__ == "__main__":\n    ' if guarded else "",
+                                             indent="    " if guarded else ""))
+    env = {**os.environ, "PYTHONPATH": str(Path(ensemble_runner.__file__).parents[2])}
+    return subprocess.run([sys.executable, str(script)], cwd=tmp_path, env=env, capture_output=True, text=True,
+                          timeout=300)
+
+
+def test_a_script_without_the_main_guard_is_told_to_add_it(tmp_path):
+    """Was: the Dask worker re-imported the script, ran the ensemble again and died on the store's
+    lock ("DirectoryLocked: another jamflow ensemble is writing store"), then "Nanny failed to
+    start". Now the worker stops at the call with one line naming the guard."""
+    done = run_script(tmp_path, guarded=False)
+    assert done.returncode != 0 and "made" not in done.stdout
+    lines = done.stderr.splitlines()
+    assert ('jamflow: jamflow.run_ensemble was called again while a worker process imported '
+            f'{tmp_path / "ensemble_script.py"}: put the call under if __name__ == "__main__":') in "\n".join(lines)
+    assert "DirectoryLocked" not in done.stderr and "another jamflow ensemble is writing" not in done.stderr
+    assert lines[-1].startswith("RuntimeError: the local Dask cluster's worker processes failed to start")
+
+
+def test_a_guarded_script_runs_its_ensemble(tmp_path):
+    done = run_script(tmp_path, guarded=True)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["made", "1"] and "called again" not in done.stderr

@@ -11,6 +11,8 @@ import os
 import signal
 from pathlib import Path
 
+from jamflow.support.spawn import GUARD, refuse_spawned_reimport
+
 SCHEDULER_TIMEOUT = 5  # seconds to reach a scheduler before giving up with a clear error
 WAIT_WORKERS = 60.0  # default seconds to wait for a first worker of an existing scheduler
 
@@ -25,6 +27,7 @@ def dask_client(workers: int | None = None, scheduler: str | None = None, client
     if client is not None:
         yield client
         return
+    refuse_spawned_reimport("a local Dask cluster")
     from distributed import Client, LocalCluster
 
     if scheduler is not None:
@@ -45,6 +48,11 @@ def dask_client(workers: int | None = None, scheduler: str | None = None, client
         cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
                                dashboard_address=":0", silence_logs=logging.ERROR,
                                preload=["jamflow.ensemble.worker_setup"])
+    except RuntimeError as e:
+        if "failed to start" not in str(e):
+            raise
+        raise RuntimeError(f"the local Dask cluster's worker processes failed to start ({e}); their own error is "
+                           f"printed above; in a script, is the jamflow call under {GUARD}?") from None
     finally:
         signal.signal(signal.SIGINT, previous)
     try:

@@ -17,6 +17,7 @@ from jamflow.ensemble.cluster import WAIT_WORKERS, dask_client, workers_line, wo
 from jamflow.ensemble.parallel import progress as progress_bar
 from jamflow.ensemble.store import Store, Task, failure_row, write_failure
 from jamflow.protocols.spec import JamSpec, prepare
+from jamflow.support.spawn import refuse_spawned_reimport
 
 TASK_KEYS = ("n", "seed")  # set per task, not store parameters
 SUMMARY_EVERY = 10.0  # seconds between summary.csv rewrites during a run
@@ -86,6 +87,7 @@ def run_ensemble(out, seeds, n=(64,), *, workers=None, scheduler=None, client=No
     worker after ``wait_workers`` seconds stops the run with an error. ``mpi_ranks`` > 1 runs
     each packing with LAMMPS on that many MPI ranks (needs engine="lammps" and mpi4py).
     """
+    refuse_spawned_reimport("jamflow.run_ensemble")  # before the store's lock, which the parent holds
     seeds = seed_range(seeds)
     sizes = sorted({int(x) for x in ([n] if isinstance(n, int) else n)})
     fixed = jam_parameters(**jam_options)
