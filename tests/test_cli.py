@@ -4,7 +4,7 @@ import io
 
 import pytest
 
-from jamflow.cli.app import main
+from jamflow.cli.app import SUBCOMMANDS, main
 from jamflow.io.packing_file import load_packing
 
 
@@ -126,20 +126,33 @@ def test_a_bar_closed_before_its_first_draw_still_shows_its_final_line():
 
 
 def test_a_finished_jam_bar_ends_at_100_percent(capsys):
-    """The compression bar's total is an estimate (halvings left); a run that ends sets it to the
-    count, so the last line reads 100 % (issue 29: the README's first jam ended at "76% 42/55").
-    Before the first increment (dphi 0) the bar shows no total: it drew "1/1 100%" there."""
+    """A run that ends sets the bar's total to the count, so the last line reads 100 % (issue 29:
+    the README's first jam ended at "76% 42/55")."""
     from jamflow.cli.progress import CompressionProgress
 
     result = type("R", (), {"energy_per_particle": 1e-12})()
     with CompressionProgress(disable=False) as progress:
-        progress({"step": 0, "phi": 0.8, "dphi": 0.0, "result": result})
-        assert progress.bar.total is None
-        for k, dphi in enumerate((1e-3, 5e-4, 2.5e-4), 1):
+        for k, dphi in enumerate((0.0, 1e-3, 5e-4, 2.5e-4)):
             progress({"step": k, "phi": 0.8 + dphi, "dphi": dphi, "result": result})
-        assert progress.bar.total > 4  # still the estimate while running
     last = capsys.readouterr().err.replace("\r", "\n").strip().splitlines()[-1]
     assert "100%" in last and "4/4" in last
+
+
+def test_a_running_jam_bar_counts_without_a_moving_total(capsys):
+    """Was: a total estimated from the halvings left, which grew when the fast protocol grew its
+    increment again, so the percentage jumped back (60% 59/98, then 70% 91/130, issue 26). Now
+    the bar counts minimisations with no total and no percentage until the run ends."""
+    from jamflow.cli.progress import CompressionProgress
+
+    result = type("R", (), {"energy_per_particle": 1e-12})()
+    with CompressionProgress(disable=False) as progress:
+        for k, dphi in enumerate((0.0, 1e-3, 5e-4, 1e-3, 2e-3, 1e-3, 5e-4)):  # increments grow after a reversal
+            progress({"step": k, "phi": 0.8, "dphi": dphi, "result": result})
+            assert progress.bar.total is None
+        running = capsys.readouterr().err
+    assert "%" not in running  # no percentage of a guessed total (a line, if any, is a count)
+    last = capsys.readouterr().err.replace("\r", "\n").strip().splitlines()[-1]
+    assert "100%" in last and "7/7" in last
 
 
 def test_progress_in_a_pipe_is_plain_infrequent_lines(capsys):
@@ -249,3 +262,32 @@ def test_a_valueerror_from_inside_a_library_is_a_bug(tmp_path, capsys, monkeypat
     with pytest.raises(ValueError, match="same shape"):
         main(["jam", "--n", "16", "--out", str(tmp_path / "x.h5"), "--quiet"])
     assert "error:" not in capsys.readouterr().err
+
+
+def subcommand_help(name) -> str:
+    """The --help text of one subcommand, as argparse prints it, with line breaks folded."""
+    from jamflow.cli.app import build_parser
+
+    parser = build_parser(name)
+    sub = next(a for a in parser._actions if a.__class__.__name__ == "_SubParsersAction")
+    return " ".join(sub.choices[name].format_help().split())
+
+
+@pytest.mark.parametrize("name", sorted(SUBCOMMANDS))
+def test_help_states_each_default_once_and_points_to_docs_not_source(name):
+    """Was: "(default: all cores) (default: None)", "(default DIR/onsets.csv) (default: None)",
+    and descriptions naming source files (jamflow/io/shear_file.py, jamflow/ensemble/store.py)."""
+    import re
+
+    text = subcommand_help(name)
+    assert "(default: None)" not in text
+    options = re.split(r" (?=--?[a-z])", text)  # roughly one piece per option
+    twice = [o for o in options if "(default: " in o and len(re.findall(r"\bdefault", o, re.IGNORECASE)) > 1]
+    assert not twice  # argparse's "(default: X)" after a help that already gives it
+    assert not re.findall(r"jamflow/[\w/]+\.py", text)
+
+
+def test_help_still_shows_defaults_the_text_does_not_give():
+    text = subcommand_help("modes")
+    assert "number of D(omega) bins (default: 40)" in text and "(default: branches)" in text
+    assert "see the docs, reference/schemas" in subcommand_help("shear")

@@ -45,6 +45,17 @@ EXIT_USER, EXIT_JAMMING, EXIT_LAMMPS, EXIT_PLUGIN = 2, 3, 4, 5
 EXIT_INTERRUPTED, EXIT_TERMINATED = 130, 143
 
 
+class DefaultsHelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
+    """argparse's "(default: X)" after an option's help, unless the help already says what the
+    default is (it would show twice) or the default is None (which tells the reader nothing)."""
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        if action.default is None or re.search(r"\bdefault", text, re.IGNORECASE):
+            return text
+        return super()._get_help_string(action)
+
+
 class Terminated(BaseException):
     """Raised by the SIGTERM handler, so that context managers and ``finally`` blocks run
     (temporary files and LAMMPS scratch directories are removed) before the exit."""
@@ -66,7 +77,7 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
             continue
         mod = import_module(module)
         p = sub.add_parser(name, help=help_text, description=mod.__doc__,
-                           formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+                           formatter_class=DefaultsHelpFormatter)
         p._negative_number_matcher = NEGATIVE_NUMBER  # so --dgamma -1e-3 is a value, not an option
         mod.add_arguments(p)
         p.set_defaults(run=mod.run)

@@ -4,7 +4,6 @@ a terminal, plain infrequent lines (``jamflow.support.progress.PlainProgress``) 
 from __future__ import annotations
 
 import functools
-import math
 
 from jamflow.support.progress import PlainProgress, is_terminal
 
@@ -65,12 +64,13 @@ def _shown_bar_class():
 class CompressionProgress:
     """A tqdm bar over minimisations with rate, phi, V and the current increment.
 
-    The total is unknown in advance (the bisection ends when V lands in the window), so
-    the bar's ETA estimates it from the halvings still needed to shrink dphi to ~1e-9; before
-    the first increment (dphi 0: the minimisation at the start) there is nothing to estimate
-    from and the bar shows a count without a total. A run that ends sets the total to the
-    minimisations it made, so its last line reads 100 % (the estimate is usually above or below
-    the count: issue 29); a run that fails leaves the bar where it stopped.
+    The number of minimisations is unknown in advance (the bisection ends when V lands in the
+    window, and the fast protocol grows its increments again after each reversal), so while the
+    run goes the bar counts minimisations without a total, and the postfix's dphi tells how far
+    the bisection has come. An estimated total (from the halvings still needed) moved up and down
+    and made the percentage jump back (60% 59/98, then 70% 91/130: issue 26). A run that ends sets
+    the total to the minimisations it made, so its last line reads 100 %; a run that fails leaves
+    the bar where it stopped.
     """
 
     def __init__(self, disable: bool = False):
@@ -86,11 +86,6 @@ class CompressionProgress:
 
     def __call__(self, step: dict) -> None:
         res = step["result"]
-        if step["dphi"] > 0:
-            halvings_left = max(0.0, math.log2(step["dphi"] / 1e-9))
-            self.bar.total = max(self.bar.n + 1, int(self.bar.n + 1 + 2 * halvings_left))
-        else:
-            self.bar.total = None  # no increment yet: no total the bar could know
         self.bar.set_postfix_str(f"phi={step['phi']:.9f} V={res.energy_per_particle:.2e} dphi={step['dphi']:.1e}",
                                  refresh=False)
         self.bar.update(1)

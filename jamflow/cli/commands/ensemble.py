@@ -1,5 +1,5 @@
 """Jam one packing per seed (and per N) on a Dask cluster into a resumable store DIR: one HDF5
-packing per task plus DIR/summary.csv (layout: jamflow/ensemble/store.py, docs/notes/ensembles.md).
+packing per task plus DIR/summary.csv (layout: see the docs, reference/schemas).
 Every `jamflow jam` option applies to all packings. A rerun of the same command skips what is
 done and finishes what is not; a store made with other parameters is refused."""
 

@@ -1,7 +1,7 @@
 """Geometric families of small bidisperse disk packings (chapter section 2.2, Figure 2.7): jam
 --starts random starts at every strain of a grid, follow each by quasistatic shear at zero
 pressure to the neighbouring grid points, and join the segments with one contact network
-into families (jamflow/analysis/families.py says what identifies a family). Writes to DIR:
+into families (what identifies a family: see the docs, notes/shear). Writes to DIR:
 points.h5 (every static packing met; written after every round of starts, --resume continues
 it), families.h5 (family table, count against starts, mirror check), families.csv and
 families.png (phi_J(gamma) of all families, the mirror overlay, the convergence)."""

@@ -1,8 +1,8 @@
 """Jam N particles (disks, spheres, or the shapes of ``--shape``) at onset by isotropic
-compression (chapter section 2.1) and write the packing as HDF5 (schema: jamflow/io/packing_file.py).
+compression (chapter section 2.1) and write the packing as HDF5 (schema: see the docs, reference/schemas).
 With --walls the box is bounded by walls on those axes (smooth or rough); with --gravity the
 particles settle on the floor instead; with --pressure the box relaxes to a target pressure
-(chapter section 2.3, jamflow/model/walls.py, jamflow/protocols/gravity.py, pressure.py); with --gamma the
+(chapter section 2.3; see the docs, guide/boundaries); with --gamma the
 periodic cell is sheared to that fixed Lees-Edwards strain (section 2.2, docs/notes/shear.md). With --above
 DPHI the onset packing is compressed affinely by DPHI and minimised again, and that packing is
 written (attribute dphi_above; the state jamflow moduli measures, chapter section 4.5)."""

@@ -1,8 +1,8 @@
 """Shear a jammed packing quasistatically at zero pressure (chapter section 2.2, eq. 2.4): steps
 x_i -> x_i + dgamma y_i in the shear-periodic cell, each minimised at fixed strain and brought
 back into the energy window by compression/decompression. Writes DIR/STEM.shear.h5 (every
-step: gamma, phi_J, pressure tensor, contact network and its changes, the packing; schema in
-jamflow/io/shear_file.py) and the figure DIR/STEM.shear.png."""
+step: gamma, phi_J, pressure tensor, contact network and its changes, the packing; schema: see
+the docs, reference/schemas) and the figure DIR/STEM.shear.png."""
 
 from __future__ import annotations
 
