@@ -114,3 +114,25 @@ def test_state_in_window_cut_off_by_the_cap_is_minimised_again():
     assert len(capped_in_window) == WINDOW_RESUMES
     for i in capped_in_window:
         assert h["dphi"][i + 1] == 0.0 and h["phi"][i + 1] == h["phi"][i]
+
+
+def test_early_decisions_land_in_the_window_and_pass_the_checks():
+    """Issue 27 item 1: approach minimisations stopped "stalled" (far above the window, where
+    only the side and a rough V and P are needed) still lead to a checked packing in the window;
+    the stalled ones were far above it, the window-deciding one ran to force balance."""
+    from jamflow.mechanics.checks import check_packing
+    from jamflow.minimize.stall import STALL_ABOVE
+
+    settings = fast_protocol(early_decisions=True)
+    res = jam(n=128, seed=2, settings=settings)  # a seed whose jam stops one minimisation early
+    assert_jammed(res)
+    assert check_packing(res.packing, res.energy_per_particle, None, settings.v_tol).passed
+    h = res.history
+    stalled = h["reason"] == b"stalled"
+    assert stalled.any()
+    assert np.all(h["energy_per_particle"][stalled] > STALL_ABOVE * 2 * settings.v_tol)
+    assert h["reason"][-1] == b"force"
+
+
+def test_early_decisions_are_off_in_the_chapter_protocol():
+    assert not seed_protocol().early_decisions and seed_protocol().minimizer.stall_above is None

@@ -110,3 +110,117 @@ def test_md_window_reports_the_energy_fluctuation_of_its_samples(config, damping
     assert fluctuation == pytest.approx(expected, rel=1e-9) and fluctuation > 1e-6  # relaxing: V changes
     assert before == 0 and one_sample[4] is None and two_samples[4] is not None and gmax == 0.0
     assert kinetic == pytest.approx(0.5 * np.sum(v**2), rel=1e-12) and kinetic > 0
+
+
+# --- early decisions (jamflow.minimize.stall, issue 27 item 1) ---------------------------------------
+
+def _decision(trace, above=2e-13):
+    """The iteration at which StallWatch decides on the energy trace V(t) (sampled every 500
+    iterations, as the compiled engine does), or None."""
+    from jamflow.minimize.stall import EVERY, StallWatch
+
+    watch = StallWatch(above, n=1)
+    for t in range(EVERY, 60_001, EVERY):
+        if watch.sample(t, trace(t)):
+            return t
+    return None
+
+
+def test_a_stalled_jammed_state_is_decided_near_its_minimum():
+    """V relaxing exponentially to a jammed minimum 1e-8 far above the window: decided once the
+    relative drop over SPAN iterations is below FLOOR, with V within ~FLOOR of the minimum."""
+    from jamflow.minimize.stall import FLOOR, SPAN
+
+    v_min, tau = 1e-8, 2000.0
+    t = _decision(lambda t: v_min * (1 + 0.5 * np.exp(-t / tau)))
+    assert t is not None and t >= SPAN
+    v = v_min * (1 + 0.5 * np.exp(-t / tau))
+    assert (v - v_min) / v_min < FLOOR  # the remaining drop is below the floor
+    assert t < 20_000  # and it did not wait for force balance
+
+
+@pytest.mark.parametrize("trace", [
+    lambda t: 1e-7 * np.exp(-t / 3000.0),  # unjammed: falling steadily to zero
+    lambda t: 1e-7 * (1 + t / 1000.0) ** -2.0,  # unjammed near onset: a slow power law
+    lambda t: 1e-14 * (1 + np.exp(-t / 500.0)),  # stalled, but near the window (V < above): full accuracy
+], ids=["exponential", "power-law", "near-window"])
+def test_falling_or_near_window_traces_are_never_decided_early(trace):
+    assert _decision(trace) is None
+
+
+def test_a_transient_plateau_is_not_a_stall():
+    """The measured plateau of a default N = 1024 jam (seed 2, first jammed state,
+    docs/notes/speed-3.md): V pauses at ~5.8e-8, falling 0.75 % per 2000 iterations, for
+    4000 iterations, then falls 4x; the rule waits for the real stall."""
+    def trace(t):
+        if t < 9000:
+            return 2e-7 * (5.84e-8 / 2e-7) ** (t / 9000)
+        if t < 13000:
+            return 5.84e-8 * (1 - 0.0075 * (t - 9000) / 2000)
+        return 1.485e-8 + (5.75e-8 - 1.485e-8) * np.exp(-(t - 13000) / 4000.0)
+    t = _decision(trace)
+    assert t is not None and t > 13000
+    assert trace(t) < 1.01 * 1.485e-8
+
+
+def test_a_window_end_sampled_twice_counts_once():
+    from jamflow.minimize.stall import StallWatch
+
+    watch = StallWatch(1e-10, n=4)
+    assert not watch(500, 4e-8) and not watch(500, 4e-8)  # objective: total energy of n = 4
+    assert watch.samples == [(500, 1e-8)]
+    watch.offset = 500  # the next window
+    assert not watch(500, 4e-8) and watch.samples[-1] == (1000, 1e-8)
+
+
+def test_compiled_engine_watch_keeps_the_dynamics_and_ends_the_window(config):
+    """Sampling every EVERY iterations splits a window into kernel calls that continue FIRE
+    exactly (same trajectory as one call); a watch that says True ends the window there."""
+    from jamflow.engines.compiled.engine import CompiledEngine
+
+    d = np.where(np.arange(64) % 2 == 0, 1.0, 1.4)
+    p = config(64, 2, 0.86, seed=3, diameters=d)
+    s = MinimizerSettings(force_tol=1e-30)
+
+    class Watch:
+        every = 500
+
+        def __init__(self, stop_at=None):
+            self.calls, self.stop_at = [], stop_at
+
+        def __call__(self, iterations, objective):
+            self.calls.append(iterations)
+            return iterations == self.stop_at
+
+    runs = {}
+    for name, watch in (("plain", None), ("watched", Watch()), ("stopped", Watch(stop_at=1500))):
+        with CompiledEngine(p) as eng, eng.minimizer_session(s, 1e-30, watch) as window:
+            runs[name] = (window(3000), eng.positions())
+    assert runs["watched"][0] == runs["plain"][0]
+    assert np.array_equal(runs["watched"][1], runs["plain"][1])
+    assert runs["stopped"][0].iterations == 1500
+
+
+def test_minimize_stops_a_stalled_state_and_not_a_converging_one(config):
+    """``stall_above``: a jammed state near onset (N = 256, V ~ 1e-7, far above the threshold)
+    stops "stalled" before force balance, at its energy to the floor; with the threshold above
+    its V the same minimisation converges by force as before."""
+    from jamflow.engines.compiled.engine import CompiledEngine
+    from jamflow.minimize.stall import FLOOR
+
+    d = np.where(np.arange(256) % 2 == 0, 1.0, 1.4)
+    p = config(256, 2, 0.84, seed=3, diameters=d)
+    results = {}
+    for above in (1e-12, 1.0):
+        with CompiledEngine(p) as eng:
+            results[above] = minimize(eng, MinimizerSettings(force_tol=1e-13, stall_above=above))
+    early, full = results[1e-12], results[1.0]
+    assert full.reason == "force" and early.reason == "stalled" and not early.converged
+    assert early.iterations < full.iterations
+    assert early.energy_per_particle == pytest.approx(full.energy_per_particle, rel=FLOOR)
+
+
+@pytest.mark.parametrize("value", [0.0, -1e-10, float("inf"), float("nan")])
+def test_bad_stall_threshold_rejected(value):
+    with pytest.raises(ValueError, match="stall_above"):
+        MinimizerSettings(stall_above=value)

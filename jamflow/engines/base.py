@@ -175,7 +175,10 @@ class Engine(Protocol):
         where the shape counts nothing."""
         ...
 
-    def minimizer_session(self, settings, ftol: float):
+    def minimizer_session(self, settings, ftol: float, watch=None):
         """Context manager yielding ``window(steps) -> Window``; each window is one restart of the
-        minimiser ``settings.method`` stopping at max force ``ftol``."""
+        minimiser ``settings.method`` stopping at max force ``ftol``. ``watch(iterations, objective)
+        -> bool`` (``minimize.stall``), if given, may be called every ``watch.every`` iterations
+        inside a window without changing its dynamics, and ends the window when it returns True
+        (the compiled engine does; LAMMPS runs a window as one command)."""
         ...

@@ -33,7 +33,11 @@ Stopping rules, checked after every ``window`` iterations (LAMMPS runs the windo
    rises and falls as the dynamics trades it for kinetic energy (pairwise damping rings).
 5. ``linesearch``: CG's line search could not move (LAMMPS stopped early).
 6. ``iteration-cap``: ``max_iterations`` reached (not converged).
-7. ``blown-up``: non-finite energy or force, or V < V_min with a force no state at V < V_min
+7. ``stalled`` (only with ``stall_above``, at a fixed box): the energy per particle stalled far
+   above the energy window (``jamflow.minimize.stall``: fell by less than 0.3 % over 2000
+   iterations while above ``stall_above``); sampled every 500 iterations inside the compiled
+   engine's windows, at window ends in LAMMPS. Not converged; an early decision "jammed".
+8. ``blown-up``: non-finite energy or force, or V < V_min with a force no state at V < V_min
    can have (``_force_bound``): the integration diverged (not converged).
 
 At a target ``pressure`` (constant stress, the box as a degree of freedom: compiled FIRE's box
@@ -53,6 +57,7 @@ import numpy as np
 
 from jamflow.minimize.creep import Creep, CreepTrigger
 from jamflow.minimize.settings import CONVERGED_REASONS, MinimizeResult, MinimizerSettings
+from jamflow.minimize.stall import StallWatch
 
 
 def minimize(engine, settings: MinimizerSettings | None = None) -> MinimizeResult:
@@ -70,16 +75,20 @@ def minimize(engine, settings: MinimizerSettings | None = None) -> MinimizeResul
     fmax_at_vmin = _force_bound(engine.template, n * settings.v_min)
     done, energy_prev, fmax_prev = 0, math.inf, math.inf
     creep = _creep_method(engine, settings, stiffness, ftol)
-    with engine.minimizer_session(settings, ftol) as run_window:
+    watch = _stall_watch(settings, n)
+    with engine.minimizer_session(settings, ftol, watch) as run_window:
         while True:
             steps = min(settings.window, settings.max_iterations - done)
+            if watch is not None:
+                watch.offset = done
             w = run_window(steps)
             done += w.iterations
             energy = w.objective / n
             mechanical = energy + w.kinetic / n  # V + K per particle: what damping can only lower
             worst = max(w.max_force, w.max_torque)  # forces and generalized torques share the units and the tolerance
+            stalled = watch is not None and watch(w.iterations, w.objective)
             reason = _stop_reason(settings, ftol, energy, worst, energy_prev, fmax_prev, w.iterations, steps, done,
-                                  fmax_at_vmin, w.fluctuation, mechanical)
+                                  fmax_at_vmin, w.fluctuation, mechanical, stalled)
             if reason:
                 if settings.pressure is not None:  # report the potential energy, not the enthalpy
                     energy = engine.state().energy / n
@@ -90,6 +99,14 @@ def minimize(engine, settings: MinimizerSettings | None = None) -> MinimizeResul
             energy_prev, fmax_prev = mechanical, worst
             if creep is not None and creep.due(done, worst) and creep.step(engine, done):
                 energy_prev, fmax_prev = math.inf, math.inf  # a new state: the next window must not read "no-progress"
+
+
+def _stall_watch(settings: MinimizerSettings, n: int) -> StallWatch | None:
+    """The early decision of this minimisation (``MinimizerSettings.stall_above``), or None: off, and
+    off at a target pressure and for damped MD (whose V oscillates)."""
+    if settings.stall_above is None or settings.pressure is not None or settings.method == "md":
+        return None
+    return StallWatch(settings.stall_above, n)
 
 
 def _creep_method(engine, settings: MinimizerSettings, stiffness: float, ftol: float) -> Creep | None:
@@ -162,9 +179,10 @@ def _contact_force_bound(pot, sigma: float, energy: float) -> float:
 
 
 def _stop_reason(s, ftol, energy, fmax, energy_prev, fmax_prev, ran, steps, done, fmax_at_vmin, fluctuation=None,
-                 mechanical=None):
+                 mechanical=None, stalled=False):
     """The stop reason or None. ``energy_prev`` is the previous window's ``mechanical`` energy
-    (V + K per particle; V for the minimisers, where K = 0), which no-progress compares."""
+    (V + K per particle; V for the minimisers, where K = 0), which no-progress compares;
+    ``stalled``: the early decision (``minimize.stall``) says the energy stalled far above the window."""
     mechanical = energy if mechanical is None else mechanical
     fixed_box = s.pressure is None
     if not (math.isfinite(energy) and math.isfinite(fmax)) or (fixed_box and energy < s.v_min and fmax > fmax_at_vmin):
@@ -173,6 +191,8 @@ def _stop_reason(s, ftol, energy, fmax, energy_prev, fmax_prev, ran, steps, done
         return "force"
     if fixed_box and energy < s.v_min:
         return "energy-below-vmin"
+    if stalled:
+        return "stalled"
     if fluctuation is not None and fluctuation < s.delta:
         return "energy-steady"
     if math.isfinite(energy_prev) and (energy_prev - mechanical) < s.delta * mechanical and fmax > 0.5 * fmax_prev:

@@ -50,6 +50,9 @@ class MinimizerSettings:
     # otherwise
     creep: str = "auto"
     creep_after: int | None = None  # iterations before the first attempt; None: the method's measured value
+    # early decision (``jamflow.minimize.stall``): stop ("stalled") once V per particle, above this, has stalled;
+    # None: off (the chapter's rules only). CompressionSettings.early_decisions sets it on approach minimisations
+    stall_above: float | None = None
 
     def __post_init__(self):
         if self.method not in METHODS:
@@ -60,6 +63,8 @@ class MinimizerSettings:
                 raise ValueError(f"minimizer {name} must be a finite positive number, got {value}")
         if self.force_tol is not None and not (math.isfinite(self.force_tol) and self.force_tol > 0):
             raise ValueError(f"force_tol must be a finite positive number, got {self.force_tol}")
+        if self.stall_above is not None and not (math.isfinite(self.stall_above) and self.stall_above > 0):
+            raise ValueError(f"stall_above must be a finite positive energy per particle or None, got {self.stall_above!r}")
         if self.creep not in CREEP_METHODS:
             raise ValueError(f"unknown creep method {self.creep!r}; use one of {', '.join(CREEP_METHODS)}")
         if self.creep_after is not None and self.creep_after < 1:

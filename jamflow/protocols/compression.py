@@ -22,6 +22,7 @@ import numpy as np
 from jamflow.engines.choose import check_engine, open_engine
 from jamflow.minimize.rules import minimize
 from jamflow.minimize.settings import MinimizerSettings
+from jamflow.minimize.stall import STALL_ABOVE
 from jamflow.model.packing import DENSEST_PHI, Packing, SeparationFailed, random_packing
 from jamflow.model.potentials import POTENTIALS, Potential, Spring, parse_potential
 from jamflow.model.shapes.parse import parse_shape
@@ -349,6 +350,9 @@ class PhiStepper:
     crossing); a state that lands in the window anyway is re-minimised in place;
     ``coarse_v_min`` ends minimisations before the first crossing once V < coarse_v_min
     (counted as below jamming; a jammed state then shows up as V > coarse_v_min);
+    ``early_decisions`` ends every minimisation that is not a final approach once its V has
+    stalled far above the window (V > ``STALL_ABOVE`` x 2 V_tol; ``jamflow.minimize.stall``):
+    counted as above jamming, its V and P feed the next step;
     ``newton`` jumps from a state above jamming to where V = 1.5 V_tol is predicted by
     V ~ (phi - phi_J)^alpha and the virial pressure P = phi^2 dV/dphi / v (v the mean particle
     volume), i.e. phi_J = phi - alpha V phi^2 / (P v), shrinking phi - phi_J by at most
@@ -379,6 +383,8 @@ class PhiStepper:
             from_pressure = self.crossed and self.pressure > 0  # a state below jamming has P = 0
             loose = self.s.approach_force_rtol * self.pressure if from_pressure else self.s.coarse_force_tol
             m = replace(m, force_tol=max(loose, m.force_tol or 0.0))
+        if self.s.early_decisions and not self.final_approach:
+            m = replace(m, stall_above=STALL_ABOVE * 2 * self.s.v_tol)
         return m
 
     def next_phi(self, phi: float, v: float, pressure: float, unjammed: bool = False) -> float:

@@ -171,11 +171,14 @@ class CompiledEngine:
 
     # minimisation -------------------------------------------------------------------------------------
     @contextmanager
-    def minimizer_session(self, settings, ftol: float):
+    def minimizer_session(self, settings, ftol: float, watch=None):
         """Yield ``window(steps) -> (iterations, objective, max force component, max generalized
         torque or box force component)``; each window restarts FIRE (v = 0, dt = timestep) like
         one LAMMPS ``minimize`` command. The objective is the total energy, or at a target
-        pressure the enthalpy U + P V with the box as coordinates (``compiled.field``)."""
+        pressure the enthalpy U + P V with the box as coordinates (``compiled.field``).
+        ``watch(iterations, objective) -> bool`` (``minimize.stall``), if given, is called every
+        ``watch.every`` iterations of a window, between calls of the FIRE kernel that continue
+        its dynamics exactly; True ends the window there."""
         if settings.method != "fire":
             raise ValueError(f"the compiled engine runs FIRE only, not {settings.method}; use engine lammps")
         n = self.template.n
@@ -192,16 +195,20 @@ class CompiledEngine:
             v, w, u = np.zeros_like(self._x), np.zeros_like(self._g), np.zeros_like(self._gb)
             done = 0
             while True:
+                chunk = steps - done if watch is None else min(steps - done, watch.every - done % watch.every)
                 ran, reason, energy = self._kernels.fire(self._model(), self._field, self._x, v, self._f, self._o,
                                                          w, self._tau, self._g, self._dk, self._mask, self._virial, u,
                                                          self._gb, state, self._built_at, self._turned, self._reach,
-                                                         half_skin_sq, steps - done, ftol, halt)
+                                                         half_skin_sq, chunk, ftol, halt)
                 done += ran
                 self._energy = energy
                 self._sync_box()
-                if reason != fire.REBUILD or done >= steps:
+                if done >= steps or reason in (fire.FORCE, fire.ENERGY_BELOW):
                     break
-                self._build_pairs()
+                if reason == fire.CAP and watch(done, float(energy)):  # a chunk's end (only with a watch)
+                    break
+                if reason == fire.REBUILD:
+                    self._build_pairs()
             if reason == fire.REBUILD:  # the cap fell on a rebuild step: forces with a fresh list
                 self._build_pairs()
                 self.evaluate()

@@ -342,7 +342,7 @@ class LammpsEngine:
 
     # minimisation ------------------------------------------------------------------------------
     @contextmanager
-    def minimizer_session(self, settings, ftol: float):
+    def minimizer_session(self, settings, ftol: float, watch=None):
         """Install the minimiser (FIRE 2.0 ``norm max``, CG ``line forcezero``, or damped MD:
         ``fix nve`` + ``fix viscous`` or ``fix jamflow/damping``; for ellipsoids ``fix nve/asphere``
         + ``fix langevin`` at T = 0 with ``angmom``, drag time 1 / rotating_damping for translations
@@ -358,7 +358,9 @@ class LammpsEngine:
         of 1e-11) and makes a moving state below V_min look blown up. The ellipsoid route
         measures its forces and torques with the drag fix removed instead (``_rotating_session``).
         Rigid bodies: damped rigid-body dynamics (``lammps_bodies``), checked every RIGID_CHECK
-        steps; their windows add None (no energy samples) and the kinetic energy."""
+        steps; their windows add None (no energy samples) and the kinetic energy. ``watch``
+        (``minimize.stall``) is not called inside a window: one LAMMPS command runs it whole, and
+        ``minimize`` samples the watch at its end."""
         s, lmp = settings, self.lmp
         md, rigid = s.method == "md", self.bodies is not None
         if self._ellipsoids:
