@@ -77,6 +77,9 @@ BENCHMARKS: dict[str, Benchmark] = {
         "accuracy", "bias of mean phi_J for each protocol shortcut (paired against the seed protocol)",
         ["run", "--n", "32", "--seeds", "0", "--variants", "seed", "fast (all)", "--limit", "60", "--strict",
          "--out", "{tmp}/shortcut-bias.csv"]),
+    "early_decisions": Benchmark(
+        "accuracy", "the fast protocol with and without early decisions: iterations by phase, phi_J bias, checks",
+        ["--n", "32", "--seeds", "1", "--out", "{tmp}/early-decisions.csv"]),
     "protocol_bias": Benchmark(
         "accuracy", "does a protocol shortcut bias phi_J? variants against the exact protocol, same seeds",
         ["--n", "32", "--seeds", "1", "--variants", "seed", "fast", "--out", "{tmp}/protocol-bias.csv"]),

@@ -139,6 +139,19 @@ def stats(values):
     return statistics.mean(v), (statistics.stdev(v) / len(v) ** 0.5 if len(v) > 1 else float("nan")), len(v)
 
 
+def phase_iterations(history: dict, v_tol: float) -> dict:
+    """Iterations in the compress / approach / final phases of one run: before the first jammed
+    state, from it to the last change of phi, at the final phi (the window-deciding ones)."""
+    import numpy as np
+
+    phi, its, v = history["phi"], history["iterations"], history["energy_per_particle"]
+    jammed = np.flatnonzero((v > v_tol) & (history["reason"] != b"energy-below-vmin"))
+    first = int(jammed[0]) if len(jammed) else len(phi)
+    final = int(np.flatnonzero(phi != phi[-1])[-1]) + 1 if np.any(phi != phi[-1]) else 0
+    first = min(first, final)
+    return {"compress": int(its[:first].sum()), "approach": int(its[first:final].sum()), "final": int(its[final:].sum())}
+
+
 # --- figures --------------------------------------------------------------------------------------
 def pyplot():
     """matplotlib.pyplot on the Agg backend."""

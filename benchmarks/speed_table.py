@@ -37,23 +37,12 @@ from jamflow.mechanics.checks import check_packing
 from jamflow.protocols.settings import PROTOCOLS, DEFAULT_PROTOCOL
 from jamflow.protocols.compression import initial_packing, jam
 
-from common import append_row, run_process  # (benchmarks/ is the script's directory)
+from common import append_row, phase_iterations, run_process  # (benchmarks/ is the script's directory)
 
 
 def whole_process(n, dim, sizes, seed, tmp) -> tuple[float, float]:
     return run_process([sys.executable, "-m", "jamflow.cli", "jam", "--n", str(n), "--dim", str(dim), "--sizes",
                         sizes, "--seed", str(seed), "--quiet", "--force", "--out", f"{tmp}/p.h5"])[:2]
-
-
-def phase_iterations(history: dict, v_tol: float) -> dict:
-    """Iterations in the compress / approach / final phases of one run."""
-    phi, its, v = history["phi"], history["iterations"], history["energy_per_particle"]
-    jammed = np.flatnonzero((v > v_tol) & (history["reason"] != b"energy-below-vmin"))
-    first = int(jammed[0]) if len(jammed) else len(phi)
-    final = int(np.flatnonzero(phi != phi[-1])[-1]) + 1 if np.any(phi != phi[-1]) else 0
-    first = min(first, final)
-    return {"compress": int(its[:first].sum()), "approach": int(its[first:final].sum()), "final": int(its[final:].sum())}
-
 
 
 def handwritten_jam(packing, data_path, cap=100_000, v_tol=1e-16, dphi0=1e-4):
