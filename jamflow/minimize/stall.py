@@ -23,9 +23,11 @@ coarser accuracy, with guards:
 Minimisations that decide the window (V near V_tol .. 2 V_tol) never stop this way: the rule is
 off there by ``above``, and the protocol runs them at full force accuracy.
 
-Measured (``CompressionSettings.early_decisions``, docs/notes/speed-3.md): unbiased, but it saves
-no iterations -- the relaxation a stalled state leaves undone is done in the next minimisation,
-and the Newton jump, which removes ~90 % of phi - phi_J, magnifies its error ~10x -- so the fast
+Measured (``CompressionSettings.early_decisions``, docs/notes/speed-3.md): it saves few
+iterations (-1.3 % at N = 256, -3.1 % at N = 1024) -- the relaxation a stalled state leaves
+undone is done in the next minimisation, and the Newton jump, which removes ~90 % of
+phi - phi_J, magnifies its error ~10x -- and a state creeping just above a threshold can be
+called jammed where it would have unjammed (3 of 12 onsets at N = 1024 moved), so the fast
 protocol does not use it by default.
 """
 

@@ -33,7 +33,7 @@ class CompressionSettings:
     coarse_v_min: float | None = None  # before the first crossing, V below this counts as unjammed (speed-up)
     approach_force_rtol: float | None = None  # before the final approach: force tol = this x pressure (speed-up)
     coarse_force_tol: float = 1e-10  # force tolerance before the first crossing when approach_force_rtol is set
-    early_decisions: bool = False  # approach minimisations stop once V stalls far above the window (measured: no gain)
+    early_decisions: bool = False  # approach minimisations stop once V stalls far above the window (measured: little gain, off)
     minimizer: MinimizerSettings = field(default_factory=MinimizerSettings)
 
     def __post_init__(self):
