@@ -71,7 +71,7 @@ def test_double_double_operations_agree_with_fractions_to_1e_30():
     assert all(arr[0][k] == dd.dd_mul(x[k], 0.0, y[k], 0.0)[0] for k in range(50))
 
 
-def _exact_spring(xh, xl, lh, ll, diameters, eps=1.0):
+def exact_spring(xh, xl, lh, ll, diameters, eps=1.0):
     """Energy, forces, virial and overlaps of every pair in exact arithmetic: the law of
     ``potentials.spring_energy_force`` on Fractions, minimum image by rounding."""
     n, d = xh.shape
@@ -113,7 +113,7 @@ def test_double_double_spring_agrees_with_exact_arithmetic(n, dim, seed):
     ll = lh * 0.3 * 2**-53
     i, j = np.triu_indices(n, 1)
     got = spring_dd(xh, xl, lh, ll, diameters, i, j, 1.0)
-    energy, forces, virial, overlaps = _exact_spring(xh, xl, lh, ll, diameters)
+    energy, forces, virial, overlaps = exact_spring(xh, xl, lh, ll, diameters)
     assert sum(1 for o in overlaps.values() if o > 0) >= n  # a dense, overlapping configuration
     fscale = max(abs(v) for row in forces for v in row)
     assert relerr(exact(*got.energy), energy) < 1e-30

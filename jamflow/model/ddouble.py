@@ -100,6 +100,6 @@ def dd_sqrt(ah, al):
     """sqrt(a) in double-double for a > 0 (one Newton correction of the float64 root, Karp & Markstein)."""
     x = ah**0.5
     sh, sl = two_prod(x, x)
-    rh, rl = dd_sub(ah, al, sh, sl)
+    rh = dd_sub(ah, al, sh, sl)[0]
     return fast_two_sum(x, rh / (2.0 * x))
 

@@ -52,11 +52,12 @@ def separation(xh, xl, lh, ll, i, j, a):
 
 
 @jit
-def spring_pairs(xh, xl, lh, ll, diameters, i, j, epsilon, fh, fl, wh, wl, oh, ol):
+def spring_pairs(xh, xl, lh, ll, diameters, i, j, epsilon, bilateral, fh, fl, wh, wl, oh, ol):
     """Over the candidate pairs (i[p], j[p]): overlaps sigma - r into (oh, ol) (negative: apart),
     forces on every particle into (fh, fl) (N, d), the virial sum r_a f_b into (wh, wl) (d, d);
-    returns the energy (hi, lo). All outputs are overwritten."""
-    n, d = xh.shape
+    returns the energy (hi, lo). All outputs are overwritten. ``bilateral``: every pair given is a
+    spring of the contact network, apart or not (the same quadratic law continued to s > 1)."""
+    d = xh.shape[1]
     fh[:] = 0.0
     fl[:] = 0.0
     wh[:] = 0.0
@@ -75,7 +76,7 @@ def spring_pairs(xh, xl, lh, ll, diameters, i, j, epsilon, fh, fl, wh, wl, oh, o
         sh, sl = 0.5 * sh, 0.5 * sl
         rh, rl = dd_sqrt(r2h, r2l)
         oh[p], ol[p] = dd_sub(sh, sl, rh, rl)
-        if oh[p] <= 0.0:
+        if oh[p] <= 0.0 and not bilateral:
             continue
         xh_, xl_ = dd_div(oh[p], ol[p], sh, sl)  # x = 1 - s
         vh, vl = dd_mul(xh_, xl_, xh_, xl_)
@@ -105,14 +106,14 @@ class SpringDD(NamedTuple):
     virial: tuple  # (d, d) sum over pairs r_a f_b, eps
 
 
-def spring_dd(xh, xl, lh, ll, diameters, i, j, epsilon: float) -> SpringDD:
+def spring_dd(xh, xl, lh, ll, diameters, i, j, epsilon: float, bilateral: bool = False) -> SpringDD:
     """Evaluate ``spring_pairs`` on positions xh + xl (N, d) in the orthogonal periodic box of sides
-    lh + ll (d,), over the candidate pairs i, j."""
+    lh + ll (d,), over the candidate pairs i, j (``bilateral``: a fixed contact network)."""
     n, d = xh.shape
     i, j = np.ascontiguousarray(i, np.int64), np.ascontiguousarray(j, np.int64)
     f = np.zeros((2, n, d))
     w = np.zeros((2, d, d))
     o = np.zeros((2, len(i)))
     args = [np.ascontiguousarray(v, float) for v in (xh, xl, lh, ll, diameters)]
-    eh, el = spring_pairs(*args, i, j, float(epsilon), f[0], f[1], w[0], w[1], o[0], o[1])
+    eh, el = spring_pairs(*args, i, j, float(epsilon), bool(bilateral), f[0], f[1], w[0], w[1], o[0], o[1])
     return SpringDD(i, j, (o[0], o[1]), (eh, el), (f[0], f[1]), (w[0], w[1]))
