@@ -91,8 +91,10 @@ def test_n64_at_1e_14():
 
 def test_targets_below_the_double_double_floor_are_refused_with_the_floor(onset32):
     floor = dd_pressure_floor(onset32)
-    assert floor == pytest.approx(pressure_floor(onset32, jamflow.MinimizerSettings()) * 2.0**-52)
-    assert 1e-28 < floor < 1e-26  # 1.8e-27 for 2D bidisperse disks at N = 32
+    # float64: 1000 x the round-off floor; double-double: 2^-52 of it, and 1 / force_tol = 1e12 x
+    assert floor == pytest.approx(pressure_floor(onset32, jamflow.MinimizerSettings()) / 1000 * 2.0**-52 * 1e12)
+    assert 1e-18 < floor < 3e-18  # 1.9e-18 for 2D bidisperse disks at N = 32
+    assert dd_pressure_floor(onset32, 1e-6) == pytest.approx(floor * 1e-6)
     with pytest.raises(ValueError, match=f"P >= {floor:.1e}"):
         refine(onset32, floor / 2)
     with pytest.raises(ValueError, match="linear spring"):
@@ -123,3 +125,43 @@ def test_files_with_bad_low_parts_are_refused_with_their_name(onset32, tmp_path,
         f["positions_lo"] = bad
     with pytest.raises(ValueError, match=f"{path}.*{message}"):
         load_packing(path)
+
+
+def test_cli_jam_double_double_and_refine(tmp_path, capsys):
+    from jamflow.cli.app import main
+
+    out = tmp_path / "dd.h5"
+    assert main(["jam", "--n", "32", "--seed", "1", "--precision", "double-double", "--pressure", "1e-14",
+                 "--out", str(out), "--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert "float64 onset phi_J" in text and "N_c = 61 (isostatic 61" in text
+    p = load_packing(out)
+    assert p.precision == "double-double"
+    again = tmp_path / "again.h5"
+    assert main(["refine", str(out), "--pressure", "1e-12", "--out", str(again)]) == 0
+    with h5py.File(again) as f:
+        assert f.attrs["precision"] == "double-double" and abs(f.attrs["pressure"] / 1e-12 - 1) < 1e-2
+        assert f["checks"].attrs["passed"] and f["checks"].attrs["n_contacts"] == 61
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["jam", "--precision", "double-double", "--pressure", "1e-14", "--engine", "lammps"], "needs the numba engine"),
+    (["jam", "--precision", "double-double"], "give --pressure P"),
+    (["jam", "--precision", "double-double", "--pressure", "1e-30"], "P >= 1.9e-18"),
+    (["jam", "--pressure", "1e-14"], "or --precision double-double"),
+])
+def test_cli_refusals_before_work(tmp_path, capsys, argv, message):
+    from jamflow.cli.app import main
+
+    out = tmp_path / "x.h5"
+    assert main([*argv, "--out", str(out)]) == 2
+    assert message in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_cli_refine_refuses_a_target_below_the_floor(onset32, tmp_path, capsys):
+    from jamflow.cli.app import main
+
+    path = save_packing(tmp_path / "onset.h5", onset32)
+    assert main(["refine", str(path), "--pressure", "1e-25", "--out", str(tmp_path / "x.h5")]) == 2
+    assert "below what double-double resolves" in capsys.readouterr().err

@@ -25,11 +25,15 @@ Pressure walk: the box and all positions are scaled by 1 + mu (in double-double)
 balanced again; mu is chosen by the secant on p(L) (linear in L for the spring near onset),
 one decade of pressure at a time from the start pressure down (or up) to the target.
 
-Resolution (``dd_pressure_floor``): the float64 floor is FLOOR_MARGIN times the force round-off
-floor (k eps_64 L / 20 with eps_64 ~ 1e-14 as the minimiser's base force tolerance); in
-double-double the round-off of a force is eps_dd / eps_64 = 2^-104 / 2^-52 = 2^-52 (~2.2e-16)
-times smaller, so the floor is pressure_floor * 2^-52 (1.8e-27 for 2D bidisperse disks up to
-N ~ 300). A target below it is refused before any work.
+Resolution (``dd_pressure_floor``): float64 refuses targets below ``pressure.pressure_floor``,
+FLOOR_MARGIN = 1000 times the force round-off floor f_64 (the minimiser's base force tolerance,
+1e-14 max(1, L/20) eps/diameter for disks) over a^(d-1): there force balance is resolved to
+1/FLOOR_MARGIN = 1e-3 of a contact force. In double-double the round-off of a position, hence of
+an overlap and a force, is eps_dd / eps_64 = 2^-104 / 2^-52 = 2^-52 times smaller, f_dd = 2^-52 f_64,
+and the refinement asks for a balance of ``force_tol`` (1e-12) of the mean contact force, so the
+margin is 1 / force_tol: P >= f_dd / (force_tol a^(d-1)), 1.9e-18 for 2D bidisperse disks up to
+N ~ 300 at the default tolerance (measured: ``jamflow refine`` of an N = 64 onset converges at
+1e-18 with max|F|/<f> = 1.3e-13 and fails at 1e-20). A target below it is refused before any work.
 """
 
 from __future__ import annotations
@@ -50,7 +54,8 @@ from jamflow.model import ddouble as dd
 from jamflow.model.box import Box
 from jamflow.model.packing import Packing
 from jamflow.model.pairs import candidate_pairs
-from jamflow.protocols.pressure import _check_pressure, pressure_floor, pressure_sequence
+from jamflow.protocols.outcome import JammingFailed
+from jamflow.protocols.pressure import _check_pressure, pressure_sequence
 from jamflow.support import hooks
 
 PAIR_SKIN = 0.05  # candidate pairs within the largest diameter + this (diameters)
@@ -80,9 +85,11 @@ class RefineSettings:
                 "pressure_tol": self.pressure_tol}
 
 
-def dd_pressure_floor(packing: Packing) -> float:
-    """Lowest target pressure double-double resolves for this packing (module docstring)."""
-    return pressure_floor(packing, MinimizerSettings()) * dd.EPS_DD / dd.EPS_DOUBLE
+def dd_pressure_floor(packing: Packing, force_tol: float = 1e-12) -> float:
+    """Lowest target pressure double-double resolves for this packing to a force balance of
+    ``force_tol`` of the mean contact force (module docstring)."""
+    f_dd = MinimizerSettings().force_tol_for(packing) * dd.EPS_DD / dd.EPS_DOUBLE
+    return f_dd / (force_tol * float(np.mean(packing.diameters)) ** (packing.dim - 1))
 
 
 def check_refine(packing: Packing, settings: RefineSettings) -> None:
@@ -96,12 +103,13 @@ def check_refine(packing: Packing, settings: RefineSettings) -> None:
     if packing.box.walls or packing.box.is_triclinic or packing.fixed is not None or packing.gravity > 0:
         raise ValueError("double-double refinement needs an orthogonal periodic box without walls, gravity or fixed "
                          "particles")
-    floor = dd_pressure_floor(packing)
+    floor = dd_pressure_floor(packing, settings.force_tol)
     if settings.pressure < floor:
+        f_dd = MinimizerSettings().force_tol_for(packing) * dd.EPS_DD / dd.EPS_DOUBLE
         raise ValueError(f"target pressure {settings.pressure:g} is below what double-double resolves at N = "
-                         f"{packing.n} (box side {packing.box.lengths.max():.3g}): the float64 floor "
-                         f"{pressure_floor(packing, MinimizerSettings()):.1e} times eps_dd / eps_64 = 2^-52, so "
-                         f"P >= {floor:.1e}; choose a larger target pressure")
+                         f"{packing.n} (box side {packing.box.lengths.max():.3g}): contact forces ~ P a^(d-1) must "
+                         f"stay 1/force_tol = {1 / settings.force_tol:.0e} times above the double-double force "
+                         f"round-off {f_dd:.1e}, so P >= {floor:.1e}; choose a larger target pressure")
 
 
 class _State:
@@ -333,6 +341,7 @@ class RefineResult:
     history: dict  # per balanced state: target_pressure, pressure, phi, contacts, floaters, newton_steps
     start_contacts: set
     seconds: float
+    onset: object = None  # the float64 JamResult refined (``jamflow jam --precision double-double``), if any
 
     @property
     def pressure(self) -> float:
@@ -397,7 +406,8 @@ class RefineResult:
     def summary(self) -> str:
         opened, closed = self.contact_changes()
         target = self.settings.pressure
-        return (f"P_target = {target:.3e}  P = {self.pressure:.6e} (rel. {self.pressure / target - 1:+.1e})  "
+        onset = "" if self.onset is None else f"float64 onset {self.onset.summary()}\n"
+        return onset + (f"double-double: P_target = {target:.3e}  P = {self.pressure:.6e} (rel. {self.pressure / target - 1:+.1e})  "
                 f"phi = {self.packing.phi:.15f}  N_c = {self.n_contacts} (isostatic {self.isostatic_contacts}, "
                 f"{self.n_floaters} floaters; {len(opened)} opened, {len(closed)} closed)  max|F|/<f> = "
                 f"{self.force_balance:.1e}  {len(self.history['pressure'])} states, "
@@ -409,12 +419,14 @@ def _pairs(net: Network) -> set:
     return set(zip(net.i[b].tolist(), net.j[b].tolist()))
 
 
-def refine(packing: Packing, pressure: float, *, settings: RefineSettings | None = None,
-           observers=()) -> RefineResult:
+def refine(packing: Packing, pressure: float, *, settings: RefineSettings | None = None, observers=(),
+           onset=None) -> RefineResult:
     """Balance ``packing`` (disks/spheres, linear spring, periodic orthogonal box; its ``extended``
     low parts if it has them) in double-double and walk it to the target ``pressure``
     (eps / diameter^d) by affine dilation and Newton correction (module docstring).
-    ``observers``: callables given {"target", "pressure", "contacts"} after each balanced state."""
+    ``observers``: callables given {"target", "pressure", "contacts"} after each balanced state;
+    ``onset``: the float64 result ``packing`` came from, kept for the record. Raises
+    ``JammingFailed`` where the refinement does not converge."""
     settings = settings or RefineSettings(pressure)
     if settings.pressure != pressure:
         settings = replace(settings, pressure=pressure)
@@ -432,17 +444,21 @@ def refine(packing: Packing, pressure: float, *, settings: RefineSettings | None
         for observe in observers:
             observe({"target": target, "pressure": net.pressure, "contacts": net.n_contacts})
 
-    st, net, steps = balance(packing, _State.of(packing), settings)
-    start_contacts = _pairs(net)
-    record(math.nan, st, net, steps)
-    if net.pressure <= 0:
-        raise ValueError("the packing carries no pressure (no contacts between non-floaters): refine a jammed packing")
-    slope = 0.7 * _affine_slope(packing, st, net)  # non-affine relaxation softens the affine response (~0.7 in 2D)
-    for target in _targets(net.pressure, pressure):
-        tol = settings.pressure_tol if target == pressure else 1e-2
-        st, net, slope = _walk(packing, st, net, target, tol, settings, record, slope)
+    try:
+        st, net, steps = balance(packing, _State.of(packing), settings)
+        start_contacts = _pairs(net)
+        record(math.nan, st, net, steps)
+        if net.pressure <= 0 or not net.n_contacts:
+            raise RuntimeError("the packing carries no pressure (no contacts between non-floaters): refine a jammed "
+                               "packing")
+        slope = 0.7 * _affine_slope(packing, st, net)  # non-affine relaxation softens the affine response (~0.7, 2D)
+        for target in _targets(net.pressure, pressure):
+            tol = settings.pressure_tol if target == pressure else 1e-2
+            st, net, slope = _walk(packing, st, net, target, tol, settings, record, slope)
+    except RuntimeError as err:
+        raise JammingFailed(f"double-double refinement failed: {err}") from None
     return RefineResult(st.wrapped().packing(packing), net, settings, {k: np.array(v) for k, v in rows.items()},
-                        start_contacts, time.perf_counter() - t0)
+                        start_contacts, time.perf_counter() - t0, onset)
 
 
 def _targets(start: float, target: float) -> tuple:
