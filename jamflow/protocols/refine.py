@@ -85,11 +85,16 @@ class RefineSettings:
                 "pressure_tol": self.pressure_tol}
 
 
+def dd_force_floor(packing: Packing) -> float:
+    """Round-off floor of a double-double force: the float64 floor (the minimiser's base force
+    tolerance) times eps_dd / eps_64 = 2^-52, eps / diameter."""
+    return MinimizerSettings().force_tol_for(packing) * dd.EPS_DD / dd.EPS_DOUBLE
+
+
 def dd_pressure_floor(packing: Packing, force_tol: float = 1e-12) -> float:
     """Lowest target pressure double-double resolves for this packing to a force balance of
     ``force_tol`` of the mean contact force (module docstring)."""
-    f_dd = MinimizerSettings().force_tol_for(packing) * dd.EPS_DD / dd.EPS_DOUBLE
-    return f_dd / (force_tol * float(np.mean(packing.diameters)) ** (packing.dim - 1))
+    return dd_force_floor(packing) / (force_tol * float(np.mean(packing.diameters)) ** (packing.dim - 1))
 
 
 def check_refine(packing: Packing, settings: RefineSettings) -> None:
@@ -105,11 +110,10 @@ def check_refine(packing: Packing, settings: RefineSettings) -> None:
                          "particles")
     floor = dd_pressure_floor(packing, settings.force_tol)
     if settings.pressure < floor:
-        f_dd = MinimizerSettings().force_tol_for(packing) * dd.EPS_DD / dd.EPS_DOUBLE
         raise ValueError(f"target pressure {settings.pressure:g} is below what double-double resolves at N = "
                          f"{packing.n} (box side {packing.box.lengths.max():.3g}): contact forces ~ P a^(d-1) must "
                          f"stay 1/force_tol = {1 / settings.force_tol:.0e} times above the double-double force "
-                         f"round-off {f_dd:.1e}, so P >= {floor:.1e}; choose a larger target pressure")
+                         f"round-off {dd_force_floor(packing):.1e}, so P >= {floor:.1e}; choose a larger target pressure")
 
 
 class _State:
@@ -124,9 +128,6 @@ class _State:
             return cls(packing.box.wrap(packing.positions), np.zeros_like(packing.positions), packing.box.lengths,
                        np.zeros(packing.dim))
         return cls(packing.positions.copy(), packing.positions_lo.copy(), packing.box.lengths, packing.lengths_lo.copy())
-
-    def copy(self) -> _State:
-        return _State(self.xh.copy(), self.xl.copy(), self.lh.copy(), self.ll.copy())
 
     def moved(self, dx) -> _State:
         return _State(*dd.dd_add(self.xh, self.xl, dx, 0.0 * dx), self.lh, self.ll)
