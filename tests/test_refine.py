@@ -165,3 +165,15 @@ def test_cli_refine_refuses_a_target_below_the_floor(onset32, tmp_path, capsys):
     path = save_packing(tmp_path / "onset.h5", onset32)
     assert main(["refine", str(path), "--pressure", "1e-25", "--out", str(tmp_path / "x.h5")]) == 2
     assert "below what double-double resolves" in capsys.readouterr().err
+
+
+def test_compression_through_contact_changes():
+    """Up to p = 1e-3 (p N^2 ~ 4) the network rearranges: a contact in tension without which another
+    overlaps makes the network solves cycle; the float64 FIRE fallback finds the new network and
+    the double-double Newton balances it."""
+    onset = jamflow.jam(n=64, seed=1, engine="numba").packing
+    r = refine(onset, 1e-3)
+    opened, closed = r.contact_changes()
+    assert opened and closed
+    assert abs(r.pressure / 1e-3 - 1) < 1e-4 and r.force_balance < 1e-12
+    assert r.n_contacts >= r.isostatic_contacts and r.checks().passed

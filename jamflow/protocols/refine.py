@@ -16,8 +16,12 @@ backbone, is solved with its Hessian (``mechanics.hessian.sphere_contact_hessian
 contacts found in double-double) in float64 with one particle pinned (the d translations), the
 right-hand side being the double-double residual rounded to float64; each Newton step is one
 round of iterative refinement, and the step is accepted when it lowers the residual or the
-energy (else halved). The network is found again at every step, so contacts that open or close
-are taken up as they happen; the opened and closed contacts relative to the start are reported.
+energy (else halved). Newton runs on a fixed network (its pairs as bilateral springs, so that an
+affine dilation that pulls a pair apart does not cut the network); after each solve the contacts
+are found again, and while they differ from the network Newton runs again on the new one. The
+opened and closed contacts relative to the start are reported.
+A network that comes back in that loop is a rearrangement: one float64 FIRE minimisation at the same
+box finds the new network (where float64 resolves the pressure), and Newton resumes from it.
 Converged: the largest net force on a backbone particle below ``force_tol`` times the mean
 contact force, with no floater in contact.
 
@@ -45,17 +49,19 @@ from dataclasses import dataclass, replace
 import numpy as np
 import scipy.sparse.linalg as spla
 
+from jamflow.engines.choose import open_engine
 from jamflow.engines.compiled.ddkernel import spring_dd
 from jamflow.mechanics.checks import PackingChecks
 from jamflow.mechanics.contacts import find_floaters
 from jamflow.mechanics.hessian import sphere_contact_hessian
+from jamflow.minimize.rules import minimize
 from jamflow.minimize.settings import MinimizerSettings
 from jamflow.model import ddouble as dd
 from jamflow.model.box import Box
 from jamflow.model.packing import Packing
 from jamflow.model.pairs import candidate_pairs
 from jamflow.protocols.outcome import JammingFailed
-from jamflow.protocols.pressure import _check_pressure, pressure_sequence
+from jamflow.protocols.pressure import _check_pressure, pressure_floor, pressure_sequence
 from jamflow.support import hooks
 
 PAIR_SKIN = 0.05  # candidate pairs within the largest diameter + this (diameters)
@@ -302,21 +308,43 @@ def _network(net: Network) -> tuple:
 def balance(packing: Packing, st: _State, settings: RefineSettings, network: tuple | None = None):
     """Force balance at a fixed box: Newton on the contact network ``network`` (i, j, floater; by
     default the contacts of ``st``), then the contacts found again in double-double; while they
-    differ (a contact opened or closed, a floater touches) Newton again on the new network.
-    (state, network evaluated unilaterally, Newton steps)."""
+    differ (a contact opened or closed, a floater touches) Newton again on the new network. A
+    network that comes back (a contact in tension without which another overlaps: a rearrangement
+    that no network solve finds) falls back once on FIRE in float64 at the same box
+    (``_float64_relax``), where float64 resolves the state. (state, network evaluated
+    unilaterally, Newton steps)."""
     if network is None:
         st, net = _relieve_floaters(packing, st, evaluate(packing, st))
         network = _network(net)
-    total = 0
+    total, seen, relaxed = 0, set(), False
     for _ in range(settings.max_network_updates):
         st, steps = _newton(packing, st, network, settings)
         total += steps
         st, net = _relieve_floaters(packing, st, evaluate(packing, st))
-        if _pairs(net) == set(zip(network[0].tolist(), network[1].tolist())) and np.array_equal(
-                net.floater, network[2]):
+        key = frozenset(zip(network[0].tolist(), network[1].tolist()))
+        if _pairs(net) == key and np.array_equal(net.floater, network[2]):
             return st, net, total
+        if key in seen and not relaxed:
+            st, relaxed = _float64_relax(packing, st, net.pressure), True
+            st, net = _relieve_floaters(packing, st, evaluate(packing, st))
+        seen.add(key)
         network = _network(net)
     raise RuntimeError(f"the contact network kept changing over {settings.max_network_updates} Newton solves")
+
+
+def _float64_relax(packing: Packing, st: _State, pressure: float) -> _State:
+    """FIRE at the fixed box in float64 (the compiled engine) from the high parts: the contact
+    changes of a rearrangement, found where float64 resolves the forces (``pressure_floor``)."""
+    box = Box(np.diag(st.lh))
+    start = Packing(st.xh, packing.diameters, box, packing.potential)
+    floor = pressure_floor(start, MinimizerSettings())
+    if pressure < floor:
+        raise RuntimeError(f"the contact network rearranges at p = {pressure:.2e}, below what float64 resolves "
+                           f"({floor:.1e}), and there is no double-double minimiser for that yet")
+    with open_engine(start, "fire", "numba") as sim:
+        minimize(sim, MinimizerSettings())
+        x = box.wrap(sim.packing().positions)
+    return _State(x, np.zeros_like(x), st.lh, st.ll)
 
 
 def _length_change(st: _State, ref: _State) -> float:
