@@ -80,6 +80,9 @@ BENCHMARKS: dict[str, Benchmark] = {
     "protocol_bias": Benchmark(
         "accuracy", "does a protocol shortcut bias phi_J? variants against the exact protocol, same seeds",
         ["--n", "32", "--seeds", "1", "--variants", "seed", "fast", "--out", "{tmp}/protocol-bias.csv"]),
+    "refine_cost": Benchmark(
+        "speed", "double-double refinement to p = 1e-14 against the float64 onset (N = 64, 256; docs/guide/precision.md)",
+        ["--n", "64", "--seeds", "1", "--out", "{tmp}/refine-cost.csv"]),
     "vtol_resolution": Benchmark(
         "accuracy", "where V_tol stops being resolvable in float64 (docs/notes/vtol-resolution.csv; minutes)"),
     "spring_exponents": Benchmark(

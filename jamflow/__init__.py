@@ -37,6 +37,9 @@ _EXPORTS = {
     "save_result": "jamflow.io.packing_file",
     "load_packing": "jamflow.io.packing_file",
     "run_ensemble": "jamflow.ensemble",
+    "refine": "jamflow.protocols.refine",
+    "RefineSettings": "jamflow.protocols.refine",
+    "RefineResult": "jamflow.protocols.refine",
 }
 
 __all__ = sorted(_EXPORTS)
@@ -57,6 +60,14 @@ def _save_result(result, path, checks=None, force=False):
 
 
 hooks.register("save_result", _save_result)
+
+
+def _save_refined(result, path, force=False):
+    """``RefineResult.save``: the io writer, provided here as ``_save_result`` is."""
+    return import_module("jamflow.io.packing_file").save_refined(result, path, force=force)
+
+
+hooks.register("save_refined", _save_refined)
 
 
 def __getattr__(name):

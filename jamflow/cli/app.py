@@ -26,6 +26,7 @@ from jamflow import __version__
 
 SUBCOMMANDS = {
     "jam": ("jamflow.cli.commands.jam", "jam particles at onset by isotropic compression"),
+    "refine": ("jamflow.cli.commands.refine", "refine a jammed disk/sphere packing in double-double down to a target pressure"),
     "anneal": ("jamflow.cli.commands.anneal", "particle-shape annealing: grow the aspect ratio of a jammed packing step by step"),
     "modes": ("jamflow.cli.commands.modes", "contacts, floaters, normal modes, D(omega) and stability class of packing files"),
     "analyze": ("jamflow.cli.commands.analyze", "structure: g(r), S(k), Q6, G, correlation lengths"),

@@ -10,7 +10,7 @@ from jamflow.model.box import STRESS_MODES
 from jamflow.model.shapes.contact_distance import METHODS as METHODS_CONTACT
 from jamflow.model.walls import WALL_TYPES
 from jamflow.protocols.settings import DEFAULT_PROTOCOL, PROTOCOL_NAMES, PROTOCOLS
-from jamflow.protocols.spec import JamSpec
+from jamflow.protocols.spec import PRECISIONS, JamSpec
 
 
 def add_spec_arguments(p, skip=()) -> None:
@@ -87,6 +87,9 @@ def add_spec_arguments(p, skip=()) -> None:
              "0 too: the box tilts)")
     add("--gamma", type=float, default=None,
         help="jam at this fixed Lees-Edwards shear strain (any finite value; chapter section 2.2)")
+    add("--precision", choices=PRECISIONS, default="double",
+        help="double-double (with --pressure P, disks/spheres, spring): the float64 onset refined to P by Newton steps "
+             "in double-double (jamflow refine; P down to ~2e-18 at N ~ 300; docs/guide/precision.md)")
 
 def add_md_damping_argument(p) -> None:
     p.add_argument("--md-damping", choices=MD_DAMPINGS, default="viscous",

@@ -52,6 +52,9 @@ def jam_parameters(**options) -> dict:
     if options.get("above") is not None:
         raise ValueError("above is not an ensemble option (the store keeps onset packings); run `jamflow jam --above` "
                          "or jamflow.compress_above on them")
+    if options.get("precision", "double") != "double":
+        raise ValueError("precision double-double is not an ensemble option (the store keeps float64 onset packings); "
+                         "refine its packings with `jamflow refine PACKING.h5 --pressure P --out OUT.h5`")
     spec = JamSpec.from_options(**{k: v for k, v in options.items() if k not in TASK_KEYS})
     return {k: v for k, v in spec.as_dict().items() if k not in TASK_KEYS}
 

@@ -21,6 +21,11 @@ epsilon, pressures in epsilon / diameter^d)::
                                    pressure, NaN where none is known: one pressure, or a
                                    packing saved without one)
     /positions  (N, d)      float64, Cartesian, wrapped into the cell
+    /positions_lo (N, d)    float64, double-double packings only (root attribute precision =
+                            "double-double", else "double"; ``jamflow refine``): the true
+                            position is positions + positions_lo, wrapped in double-double
+    /box_lo     (d,)        float64, with positions_lo: the low parts of the box side lengths
+                            (orthogonal box; true side = diagonal of box + box_lo)
     /diameters  (N,)        float64, each particle's size scale (jamflow.model.packing)
     /box        (d, d)      float64, upper-triangular, columns = cell vectors (LAMMPS tilt)
     /pressure_tensor (d, d) float64, virial part (athermal), if known
@@ -66,7 +71,7 @@ import numpy as np
 
 from jamflow import __version__
 from jamflow.model.box import Box
-from jamflow.model.packing import Packing
+from jamflow.model.packing import Packing, warn_float64_only
 from jamflow.model.potentials import potential_from_attrs
 from jamflow.model.shapes.shape import shape_from_attrs
 from jamflow.model.walls import face_pressures, parse_walls, wall_type
@@ -127,7 +132,13 @@ def save_packing(path, packing: Packing, *, energy_per_particle=None, pressure_t
     attrs["pressure"] = math.nan if ptensor is None else float(np.trace(ptensor) / packing.dim)
     with hdf5_output(path) as f:
         f.attrs.update(attrs)
-        f["positions"] = packing.box.wrap(packing.positions)
+        f.attrs["precision"] = packing.precision
+        if packing.extended is None:
+            f["positions"] = packing.box.wrap(packing.positions)
+        else:  # hi + lo as they are (wrapped in double-double by the refinement): wrapping hi alone would break the sum
+            f["positions"] = packing.positions
+            f["positions_lo"] = packing.positions_lo
+            f["box_lo"] = packing.lengths_lo
         f["diameters"] = packing.diameters
         f["box"] = packing.box.h
         for name, data in shape_datasets(packing.with_positions(packing.box.wrap(packing.positions))).items():
@@ -191,6 +202,25 @@ def save_result(result, path, checks=None, *, force: bool = False) -> Path:
                             f"{path}; a packing that fails its checks is not written as jammed")
     return save_jam_result(path, result, checks, target_pressure=None if pressures is None else pressures[-1],
                            stress=getattr(settings, "stress", None), force=force)
+
+
+def save_refined(result, path, *, force: bool = False) -> Path:
+    """Write a ``jamflow.refine`` result (``RefineResult``): hi + lo positions and box, precision =
+    "double-double", its settings, history and double-double checks. One that fails its checks is
+    refused (``JammingFailed``, nothing written)."""
+    from jamflow.protocols.outcome import JammingFailed
+
+    check_writable(path, force)
+    checks = result.checks()
+    if not checks.passed:
+        raise JammingFailed(f"the refined packing failed its checks: {'; '.join(checks.problems())}. Nothing was "
+                            f"written to {path}")
+    with replacing([path] if force else []):
+        return save_packing(path, result.packing, energy_per_particle=result.energy_per_particle,
+                            pressure_tensor=result.pressure_tensor,
+                            protocol={**result.settings.as_dict(), "engine": "numba", "seconds": result.seconds},
+                            history=result.history, target_pressure=result.settings.pressure, stress="iso",
+                            checks=checks)
 
 
 @contextlib.contextmanager
@@ -263,8 +293,11 @@ def load_packing(path) -> Packing:
         try:
             walls = parse_walls(_text(f.attrs.get("walls", "")), len(h))
             box = Box(h, tuple(a not in walls for a in range(len(h))))
-            return Packing(f["positions"][...], f["diameters"][...], box, pot, meta, shape, orientations, fixed,
-                           float(f.attrs.get("gravity", 0.0)))
+            packing = Packing(f["positions"][...], f["diameters"][...], box, pot, meta, shape, orientations, fixed,
+                              float(f.attrs.get("gravity", 0.0)))
+            if "positions_lo" in f:
+                packing = packing.with_low_parts(f["positions_lo"][...], f["box_lo"][...] if "box_lo" in f else None)
+            return packing
         except ValueError as err:
             raise ValueError(f"{path} holds an invalid packing: {err}") from None
 
@@ -349,6 +382,7 @@ def write_lammps_data(path, packing: Packing) -> Path:
       ``RigidBody.site_masses[s]`` of the body's mass 1, so the mass-weighted site centre (LAMMPS's
       rigid-body centre) is the union's centre of mass; image flags keep each body whole.
     Densities use LAMMPS's 3D volumes (also in 2D), so the masses come out as stated."""
+    warn_float64_only(packing, "a LAMMPS data file")
     values, types = packing.species()
     if packing.shape.kind == "rigid":
         site_d = packing.diameters[:, None] * packing.shape.site_diameters[None, :]
@@ -416,6 +450,7 @@ def to_universe(packing: Packing):
     import MDAnalysis as mda
     from MDAnalysis.lib.mdamath import triclinic_box
 
+    warn_float64_only(packing, "an MDAnalysis Universe")
     u = mda.Universe.empty(packing.n, trajectory=True)
     _, types = packing.species()
     u.add_TopologyAttr("types", [str(t + 1) for t in types])

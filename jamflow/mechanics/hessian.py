@@ -156,9 +156,14 @@ def law_derivatives(potential, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def pair_terms(packing: Packing) -> PairTerms:
     """Gradient and Hessian blocks of every contact: V' ds and V'' ds ds^T + V' d2s."""
     red = reduced_distances(packing)
-    v1, v2 = law_derivatives(packing.potential, red.s)
-    hess = v2[:, None, None] * red.ds[:, :, None] * red.ds[:, None, :] + v1[:, None, None] * red.d2s
+    v1, hess = energy_second_derivatives(packing.potential, red.s, red.ds, red.d2s)
     return PairTerms(red.i, red.j, v1[:, None] * red.ds, hess)
+
+
+def energy_second_derivatives(potential, s, ds, d2s):
+    """(V', blocks): dV/ds and the pair blocks V'' ds ds^T + V' d2s of each contact."""
+    v1, v2 = law_derivatives(potential, s)
+    return v1, v2[:, None, None] * ds[:, :, None] * ds[:, None, :] + v1[:, None, None] * d2s
 
 
 def hessian(packing: Packing) -> sp.csr_matrix:
@@ -203,10 +208,23 @@ def _sphere_reduced(packing: Packing, coords: Coordinates, skin: float = 0.0):
     """s = r / sigma: ds = (n, -n) / sigma, d2s = (I - n n) / (r sigma) in [[+, -], [-, +]]
     (with V(s) this is K = V'' n n^T + V'/r (I - n n^T) per block, ``pair_stiffness``)."""
     i, j, dr, r, sigma = overlapping_pairs(packing, skin)
+    return i, j, r / sigma, *_sphere_derivatives(dr, r, sigma)
+
+
+def _sphere_derivatives(dr, r, sigma):
+    """ds (P, 2d) and d2s (P, 2d, 2d) of s = r / sigma for disk/sphere pairs."""
     n = dr / r[:, None]
-    q = (np.eye(packing.dim)[None] - n[:, :, None] * n[:, None, :]) / (r * sigma)[:, None, None]
+    q = (np.eye(dr.shape[1])[None] - n[:, :, None] * n[:, None, :]) / (r * sigma)[:, None, None]
     ds = np.concatenate([n, -n], 1) / sigma[:, None]
-    return i, j, r / sigma, ds, np.concatenate([np.concatenate([q, -q], 2), np.concatenate([-q, q], 2)], 1)
+    return ds, np.concatenate([np.concatenate([q, -q], 2), np.concatenate([-q, q], 2)], 1)
+
+
+def sphere_contact_hessian(packing: Packing, i, j, dr, r, sigma, s) -> sp.csr_matrix:
+    """The Hessian over contacts the caller found (disks/spheres: pairs i, j with separations dr,
+    distances r, contact distances sigma and reduced distances s < 1, which may be known more
+    precisely than r / sigma: the double-double refinement, ``jamflow.protocols.refine``)."""
+    _, blocks = energy_second_derivatives(packing.potential, s, *_sphere_derivatives(dr, r, sigma))
+    return _assemble(Coordinates.of(packing), i, j, blocks)
 
 
 # --- shapes that turn: vectors are handled in 3D (2D vectors get z = 0) ---------------------

@@ -19,6 +19,7 @@ onto the floor x_(d-1) = 0, which must be a wall.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -28,6 +29,43 @@ from jamflow.model.potentials import Potential, Spring
 from jamflow.model.shapes.rotations import check_orientations, directors, random_orientations
 from jamflow.model.shapes.shape import SPHERE
 from jamflow.model.sizes import SizeSpec
+
+
+@dataclass(frozen=True)
+class Extended:
+    """Double-double coordinates of a packing (issue 28, ``jamflow.model.ddouble``): the true
+    positions are ``Packing.positions + positions_lo`` and the true side lengths of the orthogonal
+    periodic box ``Packing.box.lengths + lengths_lo``. ``positions_hi`` and ``lengths_hi`` record the
+    float64 parts they were made with: a Packing whose positions or box differ (any operation that
+    moves the particles in float64) drops them, so a stale low part never survives a move."""
+
+    positions_hi: np.ndarray  # (N, d)
+    positions_lo: np.ndarray  # (N, d)
+    lengths_hi: np.ndarray  # (d,)
+    lengths_lo: np.ndarray  # (d,)
+
+    def matches(self, positions: np.ndarray, box: Box) -> bool:
+        return (self.positions_hi.shape == positions.shape and bool(np.array_equal(self.positions_hi, positions))
+                and not box.is_triclinic and bool(np.array_equal(self.lengths_hi, box.lengths)))
+
+
+def check_low_part(name: str, lo, shape: tuple) -> np.ndarray:
+    """``lo`` as a float64 array of ``shape`` with finite values; a one-line ValueError naming it otherwise."""
+    arr = np.asarray(lo, dtype=float)
+    if arr.shape != shape:
+        raise ValueError(f"{name} must have shape {shape}, got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite")
+    return arr
+
+
+def warn_float64_only(packing: Packing, what: str) -> None:
+    """Warn that ``what`` reads only the float64 part of a double-double packing (issue 28)."""
+    if packing.extended is not None:
+        source = packing.metadata.get("source", "the packing")
+        warnings.warn(f"{source} carries extended precision (positions_lo, precision = double-double); {what} uses "
+                      "the float64 positions only", stacklevel=3)
+
 
 # Densest packings of equal disks (hexagonal) and spheres (FCC): pi/(2 sqrt 3), pi/(3 sqrt 2).
 DENSEST_PHI = {2: math.pi / (2 * math.sqrt(3)), 3: math.pi / (3 * math.sqrt(2))}
@@ -51,6 +89,7 @@ class Packing:
     orientations: np.ndarray | None = None
     fixed: np.ndarray | None = None  # (N,) bool: held in place (rough-wall particles); None: none
     gravity: float = 0.0  # g: force per (unit-mass) mobile particle along -e_(d-1), eps/diameter
+    extended: Extended | None = None  # double-double low parts (``Extended``); None: float64 exactly
 
     def __post_init__(self):
         pos = np.array(self.positions, dtype=float)
@@ -79,6 +118,8 @@ class Packing:
                              "the box width for a unique minimum image; use more particles")
         pos.setflags(write=False)
         dia.setflags(write=False)
+        if self.extended is not None and not self.extended.matches(pos, self.box):
+            object.__setattr__(self, "extended", None)
         object.__setattr__(self, "positions", pos)
         object.__setattr__(self, "diameters", dia)
 
@@ -110,6 +151,30 @@ class Packing:
             floor = "yz"[self.box.dim - 2]
             raise ValueError(f"gravity without a floor: gravity pulls along -{floor}, but {floor} is periodic; "
                              f"add walls on {floor} (--walls {floor})")
+
+    @property
+    def precision(self) -> str:
+        """"double-double" when the packing carries low parts (``extended``), else "double"."""
+        return "double" if self.extended is None else "double-double"
+
+    @property
+    def positions_lo(self) -> np.ndarray:
+        """(N, d) low parts of the positions: true position = positions + positions_lo (zeros in float64)."""
+        return np.zeros_like(self.positions) if self.extended is None else self.extended.positions_lo
+
+    @property
+    def lengths_lo(self) -> np.ndarray:
+        """(d,) low parts of the box side lengths (zeros in float64)."""
+        return np.zeros(self.dim) if self.extended is None else self.extended.lengths_lo
+
+    def with_low_parts(self, positions_lo, lengths_lo=None) -> "Packing":
+        """This packing with double-double low parts (orthogonal periodic boxes); refused with a
+        one-line ValueError for a wrong shape or non-finite values."""
+        if self.box.is_triclinic or self.box.walls:
+            raise ValueError("double-double coordinates are written for orthogonal periodic boxes")
+        lo = check_low_part("positions_lo", positions_lo, self.positions.shape)
+        llo = check_low_part("box_lo", np.zeros(self.dim) if lengths_lo is None else lengths_lo, (self.dim,))
+        return replace(self, extended=Extended(self.positions, lo, self.box.lengths, llo))
 
     @property
     def n(self) -> int:

@@ -36,10 +36,13 @@ class SpringParams(NamedTuple):
 
 
 def spring_energy_force(s, p: SpringParams):
-    """V = eps/alpha (1 - s)^alpha and dV/ds = -eps (1 - s)^(alpha - 1) (chapter eq. 2.1)."""
-    x = 1.0 - s
+    """V = eps/alpha (1 - s)^alpha and dV/ds = -eps (1 - s)^(alpha - 1) (chapter eq. 2.1). The linear
+    spring is written with integer constants, so that exact rational s (``fractions.Fraction``) stays
+    exact: the reference of the double-double kernel (tests/test_ddouble.py); for floats the bits are
+    those of 0.5 eps x x (halving is exact)."""
+    x = 1 - s
     if p.alpha == 2.0:
-        return 0.5 * p.epsilon * x * x, -p.epsilon * x
+        return p.epsilon * x * x / 2, -p.epsilon * x
     return p.epsilon / p.alpha * x**p.alpha, -p.epsilon * x ** (p.alpha - 1.0)
 
 

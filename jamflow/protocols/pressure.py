@@ -104,7 +104,7 @@ def check_pressure_start(packing: Packing, settings: PressureSettings) -> None:
         raise ValueError(f"target pressure {min(settings.pressures):g} is below what float64 resolves at N = "
                          f"{packing.n} (box side {packing.box.lengths.max():.3g}): contact forces ~ P a^(d-1) must "
                          f"stay {FLOOR_MARGIN:g}x above the force round-off floor {ftol:.1e}, so P >= {floor:.1e}; "
-                         "choose a larger target pressure")
+                         "choose a larger target pressure, or --precision double-double (jamflow refine) to go below")
 
 
 def extrapolate_phi_j(pressures, phis, onset_exponent: float) -> float:

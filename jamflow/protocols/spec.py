@@ -33,6 +33,9 @@ from jamflow.protocols.outcome import JammingFailed
 from jamflow.protocols.settings import DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, protocol_name
 
 
+PRECISIONS = ("double", "double-double")  # --precision: float64, or a float64 onset refined by jamflow.refine
+
+
 @dataclass(frozen=True)
 class JamSpec:
     """One packing to jam: the options of ``jamflow jam`` (same names, same defaults), without
@@ -62,6 +65,7 @@ class JamSpec:
     pressure: float | None = None  # target pressure: the box relaxes (eps / diameter^d)
     stress: str = "iso"  # with pressure: iso | aniso | tri
     gamma: float | None = None  # fixed Lees-Edwards shear strain
+    precision: str = "double"  # double | double-double (with pressure: float64 onset, then jamflow.refine)
 
     @classmethod
     def from_options(cls, **options) -> "JamSpec":
@@ -108,8 +112,9 @@ def _check_choice(option: str, value, choices) -> None:
 
 
 def check_boundaries(spec: JamSpec) -> None:
-    """Refuse bad --gravity / --pressure / --above / --gamma combinations before any work."""
+    """Refuse bad --gravity / --pressure / --above / --gamma / --precision combinations before any work."""
     _check_choice("engine", spec.engine, ENGINES)
+    check_precision(spec)
     _check_choice("wall-type", spec.wall_type, WALL_TYPES)
     _check_choice("stress", spec.stress, STRESS_MODES)
     _check_choice("contact", spec.contact, CONTACT_METHODS)
@@ -140,6 +145,22 @@ PARTNERS = {
     "dphi0": (lambda s: s.pressure is None and not s.gravity, "a compression run",
               "the first step of phi; --pressure and --gravity runs do not compress"),
 }
+
+
+def check_precision(spec: JamSpec) -> None:
+    """--precision double-double: a float64 onset refined to --pressure by ``jamflow.refine`` (the
+    compiled engine's double-double kernel), periodic boxes only."""
+    _check_choice("precision", spec.precision, PRECISIONS)
+    if spec.precision == "double":
+        return
+    if spec.pressure is None:
+        raise ValueError("--precision double-double refines the onset to a target pressure: give --pressure P")
+    if spec.engine == "lammps":
+        raise ValueError("--precision double-double needs the numba engine (--engine numba or auto): LAMMPS computes "
+                         "in float64 only")
+    if spec.walls or spec.gravity or spec.gamma is not None or spec.above is not None or spec.stress != "iso":
+        raise ValueError("--precision double-double refines in a periodic, unsheared box at isotropic pressure: it "
+                         "does not combine with --walls, --gravity, --gamma, --above or --stress aniso/tri")
 
 
 def check_partners(spec: JamSpec) -> None:
@@ -183,6 +204,13 @@ def prepare(spec: JamSpec):
                             spec.wall_type, spec.gravity, spec.contact)
     if spec.gamma is not None:
         start = at_shear_strain(start, spec.gamma)  # refuses a strain that is not finite, or walls with a shear
+    if spec.precision == "double-double":
+        from jamflow.protocols.refine import RefineSettings, check_refine
+
+        engine_name(start, spec.minimizer, spec.engine)
+        check_resolution(start, settings)
+        check_refine(start, RefineSettings(spec.pressure))  # the double-double floor, before the onset is made
+        return settings, start
     if spec.pressure is not None:
         from jamflow.protocols.pressure import PressureSettings, check_pressure_start, pressure_sequence
 
@@ -205,6 +233,18 @@ def run_jam(spec: JamSpec, observers=(), engine_options=None, prepared=None, des
     ``prepare(spec)`` returned, if the caller already has it; ``destination``: the file the caller
     would write, named in the failure message."""
     settings, start = prepared or prepare(spec)
+    if spec.precision == "double-double":
+        from jamflow.protocols.refine import refine
+
+        onset = jam(start=start, settings=settings, observers=observers, engine=spec.engine,
+                    engine_options=engine_options)
+        checked(onset, settings.minimizer, settings.v_tol, destination)
+        refined = refine(onset.packing, spec.pressure, onset=onset)
+        checks = refined.checks()
+        if not checks.passed:
+            raise JammingFailed(f"the refined packing failed its checks: {'; '.join(checks.problems())}"
+                                f"{f'. Nothing was written to {destination}' if destination else ''}")
+        return refined, checks
     if spec.pressure is not None:
         from jamflow.protocols.pressure import jam_at_pressure
 

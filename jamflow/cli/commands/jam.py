@@ -5,7 +5,9 @@ particles settle on the floor instead; with --pressure the box relaxes to a targ
 (chapter section 2.3; see the docs, guide/boundaries); with --gamma the
 periodic cell is sheared to that fixed Lees-Edwards strain (section 2.2, docs/notes/shear.md). With --above
 DPHI the onset packing is compressed affinely by DPHI and minimised again, and that packing is
-written (attribute dphi_above; the state jamflow moduli measures, chapter section 4.5)."""
+written (attribute dphi_above; the state jamflow moduli measures, chapter section 4.5). With --precision
+double-double --pressure P the float64 onset is refined to P in double-double (jamflow refine,
+jamflow/protocols/refine.py) and written with positions_lo."""
 
 from __future__ import annotations
 
@@ -64,6 +66,12 @@ def run(args) -> int:
         result, checks = run_jam(spec, observers=[progress], prepared=prepared, destination=args.out)
     if spec.above is not None:
         return save_above(args, result, t0)
+    if spec.precision == "double-double":
+        from jamflow.io.packing_file import save_refined  # h5py: not loaded for --help
+
+        save_refined(result, args.out, force=args.force)
+        print(f"{result.summary()}  -> {args.out} ({time.perf_counter() - t0:.2f} s)")
+        return 0
     from jamflow.io.packing_file import save_jam_result  # h5py: not loaded for --help
 
     save_jam_result(args.out, result, checks, target_pressure=spec.pressure, stress=spec.stress, force=args.force)

@@ -33,6 +33,7 @@ from functools import lru_cache
 from pathlib import Path
 
 _SOURCES = [*sorted(Path(__file__).parent.glob("*.py")), Path(__file__).parents[2] / "model" / "potentials.py",
+            Path(__file__).parents[2] / "model" / "ddouble.py",
             Path(__file__).parents[2] / "model" / "shapes" / "contact_distance.py"]
 _DEFERRED: list = []  # every Deferred made before numba started
 _REGISTRATIONS: list = []  # callables to run once numba has started

@@ -1,0 +1,534 @@
+"""Double-double refinement of a jammed packing of disks or spheres (issue 28).
+
+float64 resolves a contact force only down to its round-off floor (``pressure.pressure_floor``:
+P >= 8.3e-12 for 2D bidisperse disks at N <= 300); near p ~ 1e-14 the overlaps (~1e-14
+diameters) fall below one ulp of a coordinate in a box of side ~10. Here the positions and the
+box sides are double-double numbers hi + lo (``jamflow.model.ddouble``; ``Packing.extended``) and
+the residual forces, overlaps, energy and virial are evaluated in double-double by a compiled
+kernel (``jamflow.engines.compiled.ddkernel``; the linear spring, chapter eq. 2.1 at alpha = 2).
+
+Force balance at a fixed box: Newton steps on the contact network. A contact is a pair with
+double-double overlap sigma - r > 0. Floaters (fewer than d + 1 contacts, or not spanning,
+removed iteratively: ``mechanics.contacts.find_floaters``) are left out of the linear system; an
+overlap they still have is relieved by moving them along their net force by F / k (k the sum of
+their contacts' stiffnesses, eps / sigma^2), which closes one contact exactly. The rest, the
+backbone, is solved with its Hessian (``mechanics.hessian.sphere_contact_hessian``, built on the
+contacts found in double-double) in float64 with one particle pinned (the d translations), the
+right-hand side being the double-double residual rounded to float64; each Newton step is one
+round of iterative refinement, and the step is accepted when it lowers the residual or the
+energy (else halved). Newton runs on a fixed network (its pairs as bilateral springs, so that an
+affine dilation that pulls a pair apart does not cut the network); after each solve the contacts
+are found again, and while they differ from the network Newton runs again on the new one. The
+opened and closed contacts relative to the start are reported.
+A network that comes back in that loop is a rearrangement: one float64 FIRE minimisation at the same
+box finds the new network (where float64 resolves the pressure), and Newton resumes from it.
+Converged: the largest net force on a backbone particle below ``force_tol`` times the mean
+contact force, with no floater in contact.
+
+Pressure walk: the box and all positions are scaled by 1 + mu (in double-double) and the state
+balanced again; mu is chosen by the secant on p(L) (linear in L for the spring near onset),
+one decade of pressure at a time from the start pressure down (or up) to the target.
+
+Resolution (``dd_pressure_floor``): float64 refuses targets below ``pressure.pressure_floor``,
+FLOOR_MARGIN = 1000 times the force round-off floor f_64 (the minimiser's base force tolerance,
+1e-14 max(1, L/20) eps/diameter for disks) over a^(d-1): there force balance is resolved to
+1/FLOOR_MARGIN = 1e-3 of a contact force. In double-double the round-off of a position, hence of
+an overlap and a force, is eps_dd / eps_64 = 2^-104 / 2^-52 = 2^-52 times smaller, f_dd = 2^-52 f_64,
+and the refinement asks for a balance of ``force_tol`` (1e-12) of the mean contact force, so the
+margin is 1 / force_tol: P >= f_dd / (force_tol a^(d-1)), 1.9e-18 for 2D bidisperse disks up to
+N ~ 300 at the default tolerance (measured: ``jamflow refine`` of an N = 64 onset converges at
+1e-18 with max|F|/<f> = 1.3e-13 and fails at 1e-20). A target below it is refused before any work.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+import scipy.sparse.linalg as spla
+
+from jamflow.engines.choose import open_engine
+from jamflow.engines.compiled.ddkernel import spring_dd
+from jamflow.mechanics.checks import PackingChecks
+from jamflow.mechanics.contacts import find_floaters
+from jamflow.mechanics.hessian import sphere_contact_hessian
+from jamflow.minimize.rules import minimize
+from jamflow.minimize.settings import MinimizerSettings
+from jamflow.model import ddouble as dd
+from jamflow.model.box import Box
+from jamflow.model.packing import Packing
+from jamflow.model.pairs import candidate_pairs
+from jamflow.protocols.outcome import JammingFailed
+from jamflow.protocols.pressure import _check_pressure, pressure_floor, pressure_sequence
+from jamflow.support import hooks
+
+PAIR_SKIN = 0.05  # candidate pairs within the largest diameter + this (diameters)
+STEP_HALVINGS = 12
+
+
+@dataclass(frozen=True)
+class RefineSettings:
+    """Target pressure (eps / diameter^d) and the tolerances of the refinement."""
+
+    pressure: float
+    force_tol: float = 1e-12  # largest backbone net force / mean contact force
+    pressure_tol: float = 1e-4  # |p / target - 1| at the target
+    max_newton: int = 60  # Newton steps per balanced state
+    max_secant: int = 30  # box rescalings per decade of pressure
+    max_network_updates: int = 10  # Newton solves with a new contact network per balanced state
+
+    def __post_init__(self):
+        _check_pressure(self.pressure)
+        for name in ("force_tol", "pressure_tol"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and 0 < value < 1):
+                raise ValueError(f"{name} must be a number in (0, 1), got {value!r}")
+
+    def as_dict(self) -> dict:
+        return {"precision": "double-double", "target_pressure": self.pressure, "force_tol": self.force_tol,
+                "pressure_tol": self.pressure_tol}
+
+
+def dd_force_floor(packing: Packing) -> float:
+    """Round-off floor of a double-double force: the float64 floor (the minimiser's base force
+    tolerance) times eps_dd / eps_64 = 2^-52, eps / diameter."""
+    return MinimizerSettings().force_tol_for(packing) * dd.EPS_DD / dd.EPS_DOUBLE
+
+
+def dd_pressure_floor(packing: Packing, force_tol: float = 1e-12) -> float:
+    """Lowest target pressure double-double resolves for this packing to a force balance of
+    ``force_tol`` of the mean contact force (module docstring)."""
+    return dd_force_floor(packing) / (force_tol * float(np.mean(packing.diameters)) ** (packing.dim - 1))
+
+
+def check_refine(packing: Packing, settings: RefineSettings) -> None:
+    """Refuse, before any work, what the refinement cannot do."""
+    if packing.shape.kind != "sphere":
+        raise ValueError(f"double-double refinement is written for disks and spheres, not "
+                         f"{packing.shape.name(packing.dim)} particles")
+    pot = packing.potential
+    if pot.name != "spring" or getattr(pot, "alpha", None) != 2.0:
+        raise ValueError(f"double-double refinement is written for the linear spring (spring), not {pot.spec!r}")
+    if packing.box.walls or packing.box.is_triclinic or packing.fixed is not None or packing.gravity > 0:
+        raise ValueError("double-double refinement needs an orthogonal periodic box without walls, gravity or fixed "
+                         "particles")
+    floor = dd_pressure_floor(packing, settings.force_tol)
+    if settings.pressure < floor:
+        raise ValueError(f"target pressure {settings.pressure:g} is below what double-double resolves at N = "
+                         f"{packing.n} (box side {packing.box.lengths.max():.3g}): contact forces ~ P a^(d-1) must "
+                         f"stay 1/force_tol = {1 / settings.force_tol:.0e} times above the double-double force "
+                         f"round-off {dd_force_floor(packing):.1e}, so P >= {floor:.1e}; choose a larger target pressure")
+
+
+class _State:
+    """Positions xh + xl (N, d) and box sides lh + ll (d,) in double-double."""
+
+    def __init__(self, xh, xl, lh, ll):
+        self.xh, self.xl, self.lh, self.ll = xh, xl, lh, ll
+
+    @classmethod
+    def of(cls, packing: Packing) -> _State:
+        if packing.extended is None:
+            return cls(packing.box.wrap(packing.positions), np.zeros_like(packing.positions), packing.box.lengths,
+                       np.zeros(packing.dim))
+        return cls(packing.positions.copy(), packing.positions_lo.copy(), packing.box.lengths, packing.lengths_lo.copy())
+
+    def moved(self, dx) -> _State:
+        return _State(*dd.dd_add(self.xh, self.xl, dx, 0.0 * dx), self.lh, self.ll)
+
+    def scaled(self, mu: float) -> _State:
+        """Box and positions times 1 + mu (affine), in double-double."""
+        xs = dd.dd_add(self.xh, self.xl, *dd.dd_mul_d(self.xh, self.xl, mu))
+        ls = dd.dd_add(self.lh, self.ll, *dd.dd_mul_d(self.lh, self.ll, mu))
+        return _State(*xs, *ls)
+
+    def volume(self):
+        vh, vl = self.lh[0], self.ll[0]
+        for a in range(1, len(self.lh)):
+            vh, vl = dd.dd_mul(vh, vl, self.lh[a], self.ll[a])
+        return vh, vl
+
+    def wrapped(self) -> _State:
+        """Every coordinate folded into [0, L) in double-double."""
+        xh, xl = self.xh.copy(), self.xl.copy()
+        for a in range(xh.shape[1]):
+            k = np.floor(xh[:, a] / self.lh[a])
+            sh, sl = dd.dd_mul_d(self.lh[a], self.ll[a], k)
+            xh[:, a], xl[:, a] = dd.dd_sub(xh[:, a], xl[:, a], sh, sl)
+        return _State(xh, xl, self.lh, self.ll)
+
+    def packing(self, template: Packing) -> Packing:
+        box = Box(np.diag(self.lh), template.box.periodic)
+        return replace(template, positions=self.xh, box=box, extended=None).with_low_parts(self.xl, self.ll)
+
+
+@dataclass(frozen=True)
+class Network:
+    """The double-double evaluation of a state and its contact network."""
+
+    i: np.ndarray  # (C,) contacts (overlap > 0 in double-double)
+    j: np.ndarray
+    overlap: np.ndarray  # (C,) sigma - r (float64 value of the double-double overlap)
+    floater: np.ndarray  # (N,) bool
+    forces: np.ndarray  # (N, d) net forces, hi + lo rounded to float64
+    energy: tuple  # (hi, lo)
+    pressure: float
+    pressure_tensor: np.ndarray  # (d, d)
+
+    @property
+    def backbone(self) -> np.ndarray:
+        """(C,) bool: contacts between two non-floaters."""
+        return ~self.floater[self.i] & ~self.floater[self.j]
+
+    @property
+    def n_contacts(self) -> int:
+        return int(self.backbone.sum())
+
+    def contact_forces(self, diameters, epsilon) -> np.ndarray:
+        """|f| of the backbone contacts: eps (sigma - r) / sigma^2."""
+        sigma = 0.5 * (diameters[self.i] + diameters[self.j])
+        return (epsilon * self.overlap / sigma**2)[self.backbone]
+
+    def residual(self, diameters, epsilon) -> float:
+        """Largest net force on a backbone particle over the mean contact force (inf without contacts)."""
+        fc = self.contact_forces(diameters, epsilon)
+        if not len(fc):
+            return math.inf
+        live = ~self.floater
+        return float(np.linalg.norm(self.forces[live], axis=1).max() / np.abs(fc).mean())  # bilateral: tensions too
+
+    @property
+    def floater_overlaps(self) -> bool:
+        return bool(len(self.i) and (~self.backbone).any())
+
+
+def evaluate(packing: Packing, st: _State, network: tuple | None = None) -> Network:
+    """Overlaps, forces, energy and pressure of ``st`` in double-double; its contacts and floaters.
+    ``network`` (i, j, floater): evaluate that fixed contact network as bilateral springs instead."""
+    hi = Packing(st.xh, packing.diameters, Box(np.diag(st.lh)), packing.potential)
+    if network is None:
+        i, j = candidate_pairs(hi, float(packing.diameters.max()) + PAIR_SKIN)
+    else:
+        i, j, floater = network
+    out = spring_dd(st.xh, st.xl, st.lh, st.ll, packing.diameters, i, j, packing.potential.epsilon,
+                    bilateral=network is not None)
+    oh, ol = out.overlap
+    touch = (oh > 0) | ((oh == 0) & (ol > 0)) if network is None else np.ones(len(i), bool)
+    ci, cj = i[touch], j[touch]
+    if network is None:
+        dr = hi.box.minimum_image(st.xh[ci] - st.xh[cj])
+        floater = find_floaters(packing.n, ci, cj, dr / np.linalg.norm(dr, axis=1)[:, None], packing.dim + 1)
+    vh, vl = st.volume()
+    d = packing.dim
+    tensor = np.array([[dd.dd_div(out.virial[0][a, b], out.virial[1][a, b], vh, vl)[0] for b in range(d)]
+                       for a in range(d)])
+    th, tl = 0.0, 0.0
+    for a in range(d):
+        th, tl = dd.dd_add(th, tl, out.virial[0][a, a], out.virial[1][a, a])
+    p = dd.dd_div(th, tl, *dd.dd_mul_d(vh, vl, float(d)))[0]
+    return Network(ci, cj, (oh + ol)[touch], floater, out.forces[0] + out.forces[1], out.energy, p, tensor)
+
+
+def _relieve_floaters(packing: Packing, st: _State, net: Network, sweeps: int = 200):
+    """Move floaters in contact along their net force by F / k until none touches."""
+    eps = packing.potential.epsilon
+    for _ in range(sweeps):
+        if not net.floater_overlaps:
+            return st, net
+        off = ~net.backbone
+        i, j = net.i[off], net.j[off]
+        k = np.zeros(packing.n)
+        stiff = eps / (0.5 * (packing.diameters[i] + packing.diameters[j])) ** 2
+        np.add.at(k, i, stiff)
+        np.add.at(k, j, stiff)
+        move = net.floater & (k > 0)
+        dx = np.zeros_like(st.xh)
+        dx[move] = net.forces[move] / k[move, None] * (1.0 + 1e-9)  # a hair beyond contact
+        st = st.moved(dx)
+        net = evaluate(packing, st)
+    raise RuntimeError(f"floaters still overlap after {sweeps} relief sweeps")
+
+
+def _newton_step(packing: Packing, st: _State, net: Network) -> np.ndarray:
+    """Displacement solving H dx = F on the backbone (one particle pinned), with one refinement."""
+    b = net.backbone
+    i, j = net.i[b], net.j[b]
+    box = Box(np.diag(st.lh))
+    dr = box.minimum_image(st.xh[i] - st.xh[j])
+    r = np.linalg.norm(dr, axis=1)
+    sigma = 0.5 * (packing.diameters[i] + packing.diameters[j])
+    s = 1.0 - net.overlap[b] / sigma
+    h = sphere_contact_hessian(packing, i, j, dr, r, sigma, s).tocsc()
+    d = packing.dim
+    live = np.flatnonzero(~net.floater)
+    rows = (live[1:, None] * d + np.arange(d)).ravel()  # live[0] pinned: the d translations
+    rhs = net.forces.ravel()[rows]
+    reduced = h[rows][:, rows].tocsc()
+    try:
+        lu = spla.splu(reduced)
+    except RuntimeError as err:  # singular: the network lost its rigidity
+        raise RuntimeError(f"the contact network ({len(i)} contacts) is not rigid: {err}") from None
+    x = lu.solve(rhs)
+    x += lu.solve(rhs - reduced @ x)
+    dx = np.zeros(packing.n * d)
+    dx[rows] = x
+    return dx.reshape(packing.n, d)
+
+
+def _newton(packing: Packing, st: _State, network: tuple, settings: RefineSettings):
+    """Newton steps on a fixed contact network (bilateral springs) to ``settings.force_tol``;
+    (state, steps)."""
+    dia, eps = packing.diameters, packing.potential.epsilon
+    net = evaluate(packing, st, network)
+    for step in range(settings.max_newton + 1):
+        res = net.residual(dia, eps)
+        if res <= settings.force_tol:
+            return st, step
+        if step == settings.max_newton or not math.isfinite(res):
+            break
+        dx = _newton_step(packing, st, net)
+        for _ in range(STEP_HALVINGS):
+            trial = st.moved(dx)
+            new = evaluate(packing, trial, network)
+            if new.residual(dia, eps) < res or dd.dd_sub(*new.energy, *net.energy)[0] < 0:
+                break
+            dx = 0.5 * dx
+        st, net = trial, new
+    raise RuntimeError(f"double-double force balance not reached in {settings.max_newton} Newton steps (largest "
+                       f"net force {net.residual(dia, eps):.1e} of the mean contact force, {net.n_contacts} contacts)")
+
+
+def _network(net: Network) -> tuple:
+    b = net.backbone
+    return net.i[b], net.j[b], net.floater
+
+
+def balance(packing: Packing, st: _State, settings: RefineSettings, network: tuple | None = None):
+    """Force balance at a fixed box: Newton on the contact network ``network`` (i, j, floater; by
+    default the contacts of ``st``), then the contacts found again in double-double; while they
+    differ (a contact opened or closed, a floater touches) Newton again on the new network. A
+    network that comes back (a contact in tension without which another overlaps: a rearrangement
+    that no network solve finds) falls back once on FIRE in float64 at the same box
+    (``_float64_relax``), where float64 resolves the state. (state, network evaluated
+    unilaterally, Newton steps)."""
+    if network is None:
+        st, net = _relieve_floaters(packing, st, evaluate(packing, st))
+        network = _network(net)
+    total, seen, relaxed = 0, set(), False
+    for _ in range(settings.max_network_updates):
+        st, steps = _newton(packing, st, network, settings)
+        total += steps
+        st, net = _relieve_floaters(packing, st, evaluate(packing, st))
+        key = frozenset(zip(network[0].tolist(), network[1].tolist()))
+        if _pairs(net) == key and np.array_equal(net.floater, network[2]):
+            return st, net, total
+        if key in seen and not relaxed:
+            st, relaxed = _float64_relax(packing, st, net.pressure), True
+            st, net = _relieve_floaters(packing, st, evaluate(packing, st))
+        seen.add(key)
+        network = _network(net)
+    raise RuntimeError(f"the contact network kept changing over {settings.max_network_updates} Newton solves")
+
+
+def _float64_relax(packing: Packing, st: _State, pressure: float) -> _State:
+    """FIRE at the fixed box in float64 (the compiled engine) from the high parts: the contact
+    changes of a rearrangement, found where float64 resolves the forces (``pressure_floor``)."""
+    box = Box(np.diag(st.lh))
+    start = Packing(st.xh, packing.diameters, box, packing.potential)
+    floor = pressure_floor(start, MinimizerSettings())
+    if pressure < floor:
+        raise RuntimeError(f"the contact network rearranges at p = {pressure:.2e}, below what float64 resolves "
+                           f"({floor:.1e}), and there is no double-double minimiser for that yet")
+    with open_engine(start, "fire", "numba") as sim:
+        minimize(sim, MinimizerSettings())
+        x = box.wrap(sim.packing().positions)
+    return _State(x, np.zeros_like(x), st.lh, st.ll)
+
+
+def _length_change(st: _State, ref: _State) -> float:
+    """u = (L - L_ref) / L_ref along x, from the double-double difference."""
+    return dd.dd_sub(st.lh[0], st.ll[0], ref.lh[0], ref.ll[0])[0] / ref.lh[0]
+
+
+def _affine_slope(packing: Packing, st: _State, net: Network) -> float:
+    """dp/du of an affine dilation by 1 + u at fixed network (u > 0 lowers p): -sum r^2 k / (d V)."""
+    b = net.backbone
+    sigma = 0.5 * (packing.diameters[net.i[b]] + packing.diameters[net.j[b]])
+    r = sigma - net.overlap[b]
+    return -float(np.sum(packing.potential.epsilon * r**2 / sigma**2) / (packing.dim * st.volume()[0]))
+
+
+@dataclass(frozen=True)
+class RefineResult:
+    """A packing balanced in double-double at the target pressure, and how it got there."""
+
+    packing: Packing  # with ``extended`` (positions_lo, box_lo)
+    network: Network
+    settings: RefineSettings
+    history: dict  # per balanced state: target_pressure, pressure, phi, contacts, floaters, newton_steps
+    start_contacts: set
+    seconds: float
+    onset: object = None  # the float64 JamResult refined (``jamflow jam --precision double-double``), if any
+
+    @property
+    def pressure(self) -> float:
+        return self.network.pressure
+
+    @property
+    def pressure_tensor(self) -> np.ndarray:
+        return self.network.pressure_tensor
+
+    @property
+    def n_contacts(self) -> int:
+        """Contacts between non-floaters, counted with double-double overlaps > 0."""
+        return self.network.n_contacts
+
+    @property
+    def n_floaters(self) -> int:
+        return int(self.network.floater.sum())
+
+    @property
+    def isostatic_contacts(self) -> int:
+        """N' d - d + 1: the contacts of an isostatic periodic packing of N' non-floaters."""
+        d = self.packing.dim
+        return (self.packing.n - self.n_floaters) * d - d + 1
+
+    @property
+    def force_balance(self) -> float:
+        """Largest net force on a non-floater over the mean contact force (double-double forces)."""
+        return self.network.residual(self.packing.diameters, self.packing.potential.epsilon)
+
+    @property
+    def energy_per_particle(self) -> float:
+        return float(self.network.energy[0] / self.packing.n)
+
+    def checks(self) -> PackingChecks:
+        """The packing checks, from the double-double forces and contacts (no energy window: the
+        state is fixed by its pressure). Force balance here is the refinement's own criterion,
+        ``settings.force_tol``, far below the float64 checks' ``BALANCE_RTOL``."""
+        net, p = self.network, self.packing
+        fc = net.contact_forces(p.diameters, p.potential.epsilon)
+        live = ~net.floater
+        fmax = float(np.linalg.norm(net.forces[live], axis=1).max()) if live.any() else 0.0
+        kept = int(live.sum())
+        return PackingChecks(
+            energy_per_particle=self.energy_per_particle, v_tol=None, in_window=None, max_force=fmax,
+            force_tol=self.settings.force_tol * float(fc.mean()) if len(fc) else None,
+            mean_contact_force=float(fc.mean()) if len(fc) else math.nan, force_ratio=self.force_balance,
+            force_balanced=bool(self.force_balance <= self.settings.force_tol), n_contacts=self.n_contacts,
+            isostatic_count=self.isostatic_contacts, excess_contacts=self.n_contacts - self.isostatic_contacts,
+            n_floaters=self.n_floaters, n_kept=kept, mean_z=2.0 * self.n_contacts / kept if kept else math.nan,
+            jammed=bool(kept and self.n_contacts >= self.isostatic_contacts))
+
+    def save(self, path, force: bool = False):
+        """Write the refined packing (positions_lo, precision = "double-double") with its checks;
+        a packing that fails them is not written (``jamflow.io.packing_file.save_refined``)."""
+        return hooks.call("save_refined", self, path, force=force)
+
+    def contact_changes(self) -> tuple[set, set]:
+        """(opened, closed): backbone contacts (i, j) of the start no longer present, and new ones."""
+        now = _pairs(self.network)
+        return self.start_contacts - now, now - self.start_contacts
+
+    def summary(self) -> str:
+        opened, closed = self.contact_changes()
+        target = self.settings.pressure
+        onset = "" if self.onset is None else f"float64 onset {self.onset.summary()}\n"
+        return onset + (f"double-double: P_target = {target:.3e}  P = {self.pressure:.6e} (rel. {self.pressure / target - 1:+.1e})  "
+                f"phi = {self.packing.phi:.15f}  N_c = {self.n_contacts} (isostatic {self.isostatic_contacts}, "
+                f"{self.n_floaters} floaters; {len(opened)} opened, {len(closed)} closed)  max|F|/<f> = "
+                f"{self.force_balance:.1e}  {len(self.history['pressure'])} states, "
+                f"{int(np.sum(self.history['newton_steps']))} Newton steps (double-double), {self.seconds:.2f} s")
+
+
+def _pairs(net: Network) -> set:
+    b = net.backbone
+    return set(zip(net.i[b].tolist(), net.j[b].tolist()))
+
+
+def refine(packing: Packing, pressure: float, *, settings: RefineSettings | None = None, observers=(),
+           onset=None) -> RefineResult:
+    """Balance ``packing`` (disks/spheres, linear spring, periodic orthogonal box; its ``extended``
+    low parts if it has them) in double-double and walk it to the target ``pressure``
+    (eps / diameter^d) by affine dilation and Newton correction (module docstring).
+    ``observers``: callables given {"target", "pressure", "contacts"} after each balanced state;
+    ``onset``: the float64 result ``packing`` came from, kept for the record. Raises
+    ``JammingFailed`` where the refinement does not converge."""
+    settings = settings or RefineSettings(pressure)
+    if settings.pressure != pressure:
+        settings = replace(settings, pressure=pressure)
+    check_refine(packing, settings)
+    t0 = time.perf_counter()
+    rows = {c: [] for c in ("target_pressure", "pressure", "phi", "contacts", "floaters", "newton_steps")}
+
+    def record(target, st, net, steps):
+        rows["target_pressure"].append(target)
+        rows["pressure"].append(net.pressure)
+        rows["phi"].append(packing.volumes.sum() / st.volume()[0])
+        rows["contacts"].append(net.n_contacts)
+        rows["floaters"].append(int(net.floater.sum()))
+        rows["newton_steps"].append(steps)
+        for observe in observers:
+            observe({"target": target, "pressure": net.pressure, "contacts": net.n_contacts})
+
+    try:
+        st, net, steps = balance(packing, _State.of(packing), settings)
+        start_contacts = _pairs(net)
+        record(math.nan, st, net, steps)
+        if net.pressure <= 0 or not net.n_contacts:
+            raise RuntimeError("the packing carries no pressure (no contacts between non-floaters): refine a jammed "
+                               "packing")
+        slope = 0.7 * _affine_slope(packing, st, net)  # non-affine relaxation softens the affine response (~0.7, 2D)
+        for target in _targets(net.pressure, pressure):
+            tol = settings.pressure_tol if target == pressure else 1e-2
+            st, net, slope = _walk(packing, st, net, target, tol, settings, record, slope)
+    except RuntimeError as err:
+        raise JammingFailed(f"double-double refinement failed: {err}") from None
+    return RefineResult(st.wrapped().packing(packing), net, settings, {k: np.array(v) for k, v in rows.items()},
+                        start_contacts, time.perf_counter() - t0, onset)
+
+
+def _targets(start: float, target: float) -> tuple:
+    """Decades from ``start`` to ``target`` (either direction), ending at ``target``."""
+    if target <= start:
+        return pressure_sequence(target, start / 10.0) if target < start / 10.0 else (target,)
+    seq = []
+    p = start * 10.0
+    while p < target:
+        seq.append(p)
+        p *= 10.0
+    return tuple(seq) + (target,)
+
+
+def _walk(packing: Packing, st: _State, net: Network, target: float, tol: float, settings: RefineSettings, record,
+          slope: float):
+    """Secant in the box length until |p / target - 1| <= tol, from the guess ``slope`` = dp/du;
+    (state, network, the last secant slope)."""
+    ref = st
+    points = [(0.0, net.pressure)]
+    for _ in range(settings.max_secant):
+        u0, p0 = points[-1]
+        if len(points) > 1:
+            (ua, pa), (ub, pb) = points[-2], points[-1]
+            slope = (pb - pa) / (ub - ua) if ub != ua and pb != pa else slope
+        u_next = u0 + (target - p0) / slope
+        for _ in range(STEP_HALVINGS):  # from the last balanced state, keeping its non-affine relaxation
+            try:
+                trial, new, steps = balance(packing, st.scaled((u_next - u0) / (1.0 + u0)), settings,
+                                            _network(net))
+                if new.pressure > 0 and new.n_contacts:
+                    break
+            except RuntimeError:  # past the onset or too far for Newton: back off halfway
+                pass
+            u_next = 0.5 * (u0 + u_next)
+        else:
+            raise RuntimeError(f"no balanced state between p = {p0:.3e} and the target {target:.3e}")
+        st, net = trial, new
+        points.append((_length_change(st, ref), net.pressure))
+        record(target, st, net, steps)
+        if abs(net.pressure / target - 1.0) <= tol:
+            return st, net, slope
+    raise RuntimeError(f"pressure {target:g} not reached in {settings.max_secant} box rescalings (at "
+                       f"{net.pressure:.3e})")

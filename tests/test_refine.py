@@ -1,0 +1,179 @@
+"""Double-double refinement of jammed disk packings (issue 28): force balance, pressure and the
+isostatic contact count at p = 1e-14, where float64 cannot resolve the overlaps; agreement with the
+float64 constant-pressure minimisation where float64 suffices; the packing file's low parts."""
+
+import math
+import warnings
+from dataclasses import replace
+from fractions import Fraction
+
+import h5py
+import numpy as np
+import pytest
+from test_ddouble import exact, exact_spring
+
+import jamflow
+from jamflow.io.packing_file import load_packing, save_packing
+from jamflow.mechanics.checks import check_packing
+from jamflow.protocols.pressure import PressureSettings, jam_at_pressure, pressure_floor
+from jamflow.protocols.refine import RefineSettings, check_refine, dd_pressure_floor, refine
+
+
+@pytest.fixture(scope="module")
+def onset32():
+    return jamflow.jam(n=32, seed=1, engine="numba").packing
+
+
+@pytest.fixture(scope="module")
+def refined32(onset32):
+    return refine(onset32, 1e-14)
+
+
+def test_refined_packing_at_1e_14_is_balanced_isostatic_and_at_its_pressure(refined32):
+    r = refined32
+    assert r.packing.precision == "double-double" and np.abs(r.packing.positions_lo).max() > 0
+    assert abs(r.pressure / 1e-14 - 1) < 1e-2
+    assert r.force_balance < 1e-10
+    assert r.n_contacts == r.isostatic_contacts == (32 - r.n_floaters) * 2 - 1
+    opened, closed = r.contact_changes()
+    assert not opened and not closed  # no contact lost to round-off on the way down from the onset
+    assert r.checks().passed
+
+
+def test_force_balance_of_the_refined_packing_in_exact_arithmetic(refined32):
+    """The pure-Python reference (Fractions, the law of potentials.spring_energy_force) on hi + lo."""
+    p = refined32.packing
+    _, forces, virial, overlaps = exact_spring(p.positions, p.positions_lo, p.box.lengths, p.lengths_lo,
+                                                    p.diameters)
+    floater = refined32.network.floater
+    contact = {k: o for k, o in overlaps.items() if o > 0}
+    assert len(contact) == refined32.n_contacts  # floaters touch nothing
+    mean_f = sum(contact.values()) / len(contact) / Fraction(1.2) ** 2  # ~ eps delta / sigma^2
+    worst = max(math.hypot(*(float(v) for v in forces[k])) for k in range(p.n) if not floater[k])
+    assert worst / float(mean_f) < 1e-10
+    volume = exact(p.box.lengths[0], p.lengths_lo[0]) * exact(p.box.lengths[1], p.lengths_lo[1])
+    pressure = (virial[0][0] + virial[1][1]) / (2 * volume)
+    assert abs(float(pressure) / 1e-14 - 1) < 1e-2
+    assert abs(float(pressure) / refined32.pressure - 1) < 1e-12
+
+
+def test_float64_cannot_resolve_the_refined_packing(refined32):
+    """The same state in float64 (hi only): overlaps below an ulp, so the float64 force balance is lost."""
+    p = refined32.packing
+    assert p.with_positions(p.positions + 1e-3).extended is None  # a float64 move drops the low parts
+    hi = replace(p, extended=None)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        checks = check_packing(hi)
+    assert checks.force_ratio > 1e-3 or checks.n_contacts != refined32.n_contacts
+
+
+def test_refine_reproduces_the_float64_minimum_at_1e_6(onset32):
+    """Where float64 suffices the double-double walk lands on the float64 enthalpy minimum."""
+    r = refine(onset32, 1e-6)
+    f64 = jam_at_pressure(onset32, PressureSettings(pressures=(1e-6,)), engine="numba")
+    assert abs(f64.pressure / 1e-6 - 1) < 1e-6 and abs(r.pressure / 1e-6 - 1) < 1e-4
+    assert abs(r.packing.phi - f64.phi) < 1e-10  # measured 4.4e-16
+    dr = r.packing.box.minimum_image(r.packing.positions - f64.packing.box.wrap(f64.packing.positions)
+                                     * (r.packing.box.lengths / f64.packing.box.lengths))
+    live = ~r.network.floater
+    dr = dr[live] - dr[live].mean(axis=0)  # FIRE may drift the whole packing: compare up to a translation
+    assert np.abs(dr).max() < 1e-9  # measured 9e-13
+    assert r.n_contacts == check_packing(f64.packing).n_contacts
+
+
+def test_n64_at_1e_14():
+    onset = jamflow.jam(n=64, seed=2, engine="numba").packing
+    r = refine(onset, 1e-14)
+    assert abs(r.pressure / 1e-14 - 1) < 1e-2 and r.force_balance < 1e-10
+    assert r.n_contacts == r.isostatic_contacts
+
+
+def test_targets_below_the_double_double_floor_are_refused_with_the_floor(onset32):
+    floor = dd_pressure_floor(onset32)
+    # float64: 1000 x the round-off floor; double-double: 2^-52 of it, and 1 / force_tol = 1e12 x
+    assert floor == pytest.approx(pressure_floor(onset32, jamflow.MinimizerSettings()) / 1000 * 2.0**-52 * 1e12)
+    assert 1e-18 < floor < 3e-18  # 1.9e-18 for 2D bidisperse disks at N = 32
+    assert dd_pressure_floor(onset32, 1e-6) == pytest.approx(floor * 1e-6)
+    with pytest.raises(ValueError, match=f"P >= {floor:.1e}"):
+        refine(onset32, floor / 2)
+    with pytest.raises(ValueError, match="linear spring"):
+        check_refine(jamflow.Packing(onset32.positions, onset32.diameters, onset32.box, jamflow.Spring(2.5)),
+                     RefineSettings(1e-10))
+
+
+def test_packing_file_round_trip_keeps_the_low_parts(refined32, tmp_path):
+    path = refined32.save(tmp_path / "dd.h5")
+    with h5py.File(path) as f:
+        assert f.attrs["precision"] == "double-double"
+        assert f["positions_lo"].shape == (32, 2)
+    back = load_packing(path)
+    assert np.array_equal(back.positions, refined32.packing.positions)
+    assert np.array_equal(back.positions_lo, refined32.packing.positions_lo)
+    assert np.array_equal(back.lengths_lo, refined32.packing.lengths_lo)
+    again = refine(back, 1e-14)  # already balanced: no rescaling, Newton finds it converged
+    assert again.history["newton_steps"][0] == 0
+    with pytest.warns(UserWarning, match="extended precision"):
+        check_packing(back)
+
+
+@pytest.mark.parametrize("bad, message", [(np.zeros((31, 2)), r"positions_lo must have shape \(32, 2\)"),
+                                          (np.full((32, 2), np.nan), "positions_lo must be finite")])
+def test_files_with_bad_low_parts_are_refused_with_their_name(onset32, tmp_path, bad, message):
+    path = save_packing(tmp_path / "bad.h5", onset32)
+    with h5py.File(path, "a") as f:
+        f["positions_lo"] = bad
+    with pytest.raises(ValueError, match=f"{path}.*{message}"):
+        load_packing(path)
+
+
+def test_cli_jam_double_double_and_refine(tmp_path, capsys):
+    from jamflow.cli.app import main
+
+    out = tmp_path / "dd.h5"
+    assert main(["jam", "--n", "32", "--seed", "1", "--precision", "double-double", "--pressure", "1e-14",
+                 "--out", str(out), "--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert "float64 onset phi_J" in text and "N_c = 61 (isostatic 61" in text
+    p = load_packing(out)
+    assert p.precision == "double-double"
+    again = tmp_path / "again.h5"
+    assert main(["refine", str(out), "--pressure", "1e-12", "--out", str(again)]) == 0
+    with h5py.File(again) as f:
+        assert f.attrs["precision"] == "double-double" and abs(f.attrs["pressure"] / 1e-12 - 1) < 1e-2
+        assert f["checks"].attrs["passed"] and f["checks"].attrs["n_contacts"] == 61
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["jam", "--precision", "double-double", "--pressure", "1e-14", "--engine", "lammps"], "needs the numba engine"),
+    (["jam", "--precision", "double-double"], "give --pressure P"),
+    (["jam", "--precision", "double-double", "--pressure", "1e-30"], "P >= 1.9e-18"),
+    (["jam", "--pressure", "1e-14"], "or --precision double-double"),
+])
+def test_cli_refusals_before_work(tmp_path, capsys, argv, message):
+    from jamflow.cli.app import main
+
+    out = tmp_path / "x.h5"
+    assert main([*argv, "--out", str(out)]) == 2
+    assert message in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_cli_refine_refuses_a_target_below_the_floor(onset32, tmp_path, capsys):
+    from jamflow.cli.app import main
+
+    path = save_packing(tmp_path / "onset.h5", onset32)
+    assert main(["refine", str(path), "--pressure", "1e-25", "--out", str(tmp_path / "x.h5")]) == 2
+    assert "below what double-double resolves" in capsys.readouterr().err
+
+
+def test_compression_through_contact_changes():
+    """Up to p = 1e-3 (p N^2 ~ 4) the network rearranges: a contact in tension without which another
+    overlaps makes the network solves cycle; the float64 FIRE fallback finds the new network and
+    the double-double Newton balances it."""
+    onset = jamflow.jam(n=64, seed=1, engine="numba").packing
+    r = refine(onset, 1e-3)
+    opened, closed = r.contact_changes()
+    assert opened and closed
+    assert abs(r.pressure / 1e-3 - 1) < 1e-4 and r.force_balance < 1e-12
+    assert r.n_contacts >= r.isostatic_contacts and r.checks().passed
