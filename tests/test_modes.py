@@ -215,11 +215,11 @@ def test_cli_writes_results_and_figure(jammed, tmp_path, capsys):
     assert "isostatic 1/2" in out and "exactly d zero modes (none negative) 2/2" in out
     from jamflow.io.modes_file import read_modes
 
-    res = read_modes(tmp_path / "p0.modes.hdf5")
+    res = read_modes(tmp_path / "p0.modes.h5")
     assert res["classification"] == STABLE and res["n_zero"] == 2
     assert res["n_contacts"] == res["isostatic_count"] and len(res["contacts"]) == res["n_contacts"]
     assert np.allclose(res["eigenvalues"], Spectrum().compute(jammed).eigenvalues, atol=1e-14)
-    png = tmp_path / "modes.png"
+    png = tmp_path / f"{tmp_path.name}.modes.png"
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert not list(tmp_path.glob(".*tmp"))  # atomic writes leave no temporaries
     with h5py.File(files[0], "r") as f:  # the packing file itself is untouched
@@ -233,7 +233,7 @@ def test_cli_rejects_bad_input_before_work(tmp_path):
     modes, args = _modes_args([str(good), str(tmp_path / "missing.h5")])
     with pytest.raises(FileNotFoundError, match="missing.h5"):
         modes.run(args)
-    assert not (tmp_path / "good.modes.hdf5").exists()
+    assert not (tmp_path / "good.modes.h5").exists()
     modes, args = _modes_args([str(good), "--e-min", "-1"])
     with pytest.raises(ValueError, match="e_min"):
         modes.run(args)
@@ -255,6 +255,6 @@ def test_cli_reads_lammps_files(fmt, tmp_path, capsys):
         warnings.simplefilter("ignore")  # float32 coordinates may not pass jamflow's force balance test
         assert modes.run(args) == 0
     assert f"{src}: N' = 36" in capsys.readouterr().out
-    res = read_modes(tmp_path / "p.modes.hdf5")
+    res = read_modes(tmp_path / "p.modes.h5")
     assert res["n_zero"] == 2 and res["n_contacts"] == 108
     assert np.allclose(res["eigenvalues"], Spectrum().compute(lattice).eigenvalues, atol=1e-5)

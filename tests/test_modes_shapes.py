@@ -244,7 +244,7 @@ def test_cli_stores_mode_character_and_profiles(tmp_path, capsys):
     out = capsys.readouterr().out
     from jamflow.io.modes_file import read_modes
 
-    res = read_modes(tmp_path / (target.stem + ".modes.hdf5"))
+    res = read_modes(tmp_path / (target.stem + ".modes.h5"))
     missing = res["missing_contacts"]
     assert f"quartic modes {missing}, one-particle flat 0 (missing contacts {missing})" in out
     assert "extra zero modes = missing contacts 1/1, quartic modes = missing contacts 1/1" in out

@@ -236,6 +236,12 @@ class DensityOfStatesResult:
     def centers(self) -> np.ndarray:
         return 0.5 * (self.edges[1:] + self.edges[:-1])
 
+    @property
+    def normalized(self) -> np.ndarray:
+        """(bins,) D(omega) as a probability density over omega: ``density`` / (modes per packing),
+        so that sum(normalized * bin widths) = 1 (nan without modes)."""
+        return self.density * self.n_packings / self.n_modes if self.n_modes else np.full(len(self.density), np.nan)
+
 
 class DensityOfStates:
     """Histogram D(omega) of the nonzero frequencies of complete spectra, averaged.
@@ -267,6 +273,17 @@ class DensityOfStates:
 
 
 # --- stability along the lowest nontrivial modes ---------------------------------------------
+
+def pooled_contacts(contacts) -> tuple[float, float]:
+    """(<z>, floater fraction) pooled over packings (``ContactsResult`` objects): the sum of z over all
+    non-floaters / their number (the chapter's <z> = 2 N_c / N' of the whole ensemble), and
+    sum N_f / sum N."""
+    contacts = list(contacts)
+    kept = sum(c.n_kept for c in contacts)
+    z = sum(float(c.z[c.kept].sum()) for c in contacts) / kept if kept else float("nan")
+    total = sum(len(c.floater) for c in contacts)
+    return z, (sum(c.n_floaters for c in contacts) / total if total else float("nan"))
+
 
 STABLE, LOCALLY_STABLE, UNSTABLE = "mechanically stable", "locally stable", "unstable"
 QUARTIC_STABLE = "stable at quartic order"

@@ -9,6 +9,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from jamflow.io.names import packing_files
 from jamflow.support.files import check_distinct
 from jamflow.support.progress import PlainProgress, is_terminal
 
@@ -22,14 +23,16 @@ def progress(iterable=None, **kwargs):
 
 
 def expand_inputs(paths) -> list[str]:
-    """Files as given; a directory (an ensemble store) stands for its ``*.h5`` packing files.
-    A file named twice is refused (``check_distinct``)."""
+    """Files as given; a directory (an ensemble store) stands for its ``*.h5`` packing files,
+    without the result files derived from them (``jamflow.io.names``: ``NAME.modes.h5``,
+    ``NAME.moduli.h5``, ...). A file named twice is refused (``check_distinct``)."""
     out = []
     for path in map(Path, paths):
         if path.is_dir():
-            files = sorted(path.glob("*.h5"))
+            files = packing_files(path)
             if not files:
-                raise FileNotFoundError(f"directory {path} holds no *.h5 packing files")
+                raise FileNotFoundError(f"directory {path} holds no *.h5 packing files (result files such as "
+                                        "NAME.modes.h5 do not count)")
             out += [str(f) for f in files]
         else:
             out.append(str(path))

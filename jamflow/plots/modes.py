@@ -2,8 +2,9 @@
 atomically: (a) sorted frequencies omega_i vs i / (d N') (chapter Figure 2.16a); for particles
 that turn, every nontrivial mode sqrt(|e_i| / M) on a log scale coloured by its translational
 fraction, with the zero threshold, so the branches and their character show (Figure 2.17);
-(b) D(omega) averaged over packings (Figure 2.16b; for shapes also its translational part),
-(c) distribution of z_i (Figure 2.20), (d) the energy change along the profiled nontrivial
+(b) D(omega) pooled over packings and normalised to integral 1 over omega (Figure 2.16b; for
+shapes also its translational part), omega = sqrt(e / M) in units of sqrt(eps / (m sigma^2)),
+(c) distribution of z_i (Figure 2.20) with the pooled <z> and floater fraction, (d) the energy change along the profiled nontrivial
 modes, |Delta V(delta)| (Figure 2.15c, log-log), coloured by behaviour."""
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from jamflow.analysis.modes import pooled_contacts
 from jamflow.plots.figure import save_figure
 
 
@@ -23,7 +25,7 @@ def modes_figure(path, spectra, dos=None, contacts=(), stabilities=()) -> Path:
     FigureCanvasAgg(fig)
     axes = fig.subplots(2, 2)
     _sorted_frequencies(axes[0, 0], spectra)
-    _density_of_states(axes[0, 1], dos)
+    _density_of_states(axes[0, 1], dos, omega_label(spectra))
     _z_distribution(axes[1, 0], contacts)
     _energy_profiles(axes[1, 1], stabilities)
     fig.suptitle(f"{len(spectra)} packing(s), e_min = {spectra[0].e_min:g}" if spectra else "")
@@ -37,7 +39,7 @@ def _sorted_frequencies(ax, spectra):
     for s in spectra:
         omega = s.frequencies
         ax.plot(np.arange(1, len(omega) + 1) / s.n_dof, omega, lw=0.8, alpha=0.6)
-    ax.set(xlabel="i / (d N')", ylabel=r"$\omega_i$", title="(a) sorted frequencies")
+    ax.set(xlabel="i / (d N')", ylabel=omega_label(spectra, r"\omega_i"), title="(a) sorted frequencies")
 
 
 def sorted_modes_with_character(ax, spectra):
@@ -57,20 +59,31 @@ def sorted_modes_with_character(ax, spectra):
                    label=r"$\sqrt{e_{\min}/M}$ (zero threshold)")
         ax.legend(loc="lower right", fontsize=8)
         ax.figure.colorbar(points, ax=ax, label="translational fraction (0: rotation)")
-    ax.set(yscale="log", xlabel=r"$i / (d_f N')$", ylabel=r"$\sqrt{|e_i| / M}$",
+    ax.set(yscale="log", xlabel=r"$i / (d_f N')$", ylabel=r"$\sqrt{|e_i| / M}$  [$\sqrt{\epsilon/(m\sigma^2)}$]",
            title="(a) sorted modes and their character")
 
 
-def _density_of_states(ax, dos):
-    ax.set(xlabel=r"$\omega$", ylabel=r"$D(\omega)$ per packing", title="(b) density of states")
+def omega_label(spectra, symbol=r"\omega") -> str:
+    """Axis label of omega = sqrt(e / M) with M (N m, the chapter's, or the --mass given) and the
+    unit sqrt(eps / (m sigma^2)), sigma the small diameter."""
+    nominal = all(s.mass == s.dynamical.n_total for s in spectra)
+    masses = {float(s.mass) for s in spectra}
+    mass = "M = N m" if nominal or not masses else (f"M = {masses.pop():g} m" if len(masses) == 1 else "M varies")
+    return rf"${symbol} = \sqrt{{e/M}}$, {mass}  [$\sqrt{{\epsilon/(m\sigma^2)}}$]"
+
+
+def _density_of_states(ax, dos, xlabel=r"$\omega$"):
+    """D(omega) normalised to integral 1 (``DensityOfStatesResult.normalized``), and its translational part."""
+    ax.set(xlabel=xlabel, ylabel=r"$D(\omega)$, normalised: $\int D\,d\omega = 1$", title="(b) density of states")
     if dos is None:
         ax.text(0.5, 0.5, "needs complete spectra", ha="center", transform=ax.transAxes)
         return
-    ax.stairs(dos.density, dos.edges, fill=True, alpha=0.5, label="all modes")
+    ax.stairs(dos.normalized, dos.edges, fill=True, alpha=0.5, label="all modes")
     if dos.translational is not None and np.any(dos.rotational > 1e-12 * dos.density.max()):
-        ax.stairs(dos.translational, dos.edges, color="C3", label="translational part")
+        ax.stairs(dos.translational * dos.n_packings / dos.n_modes, dos.edges, color="C3", label="translational part")
         ax.legend(loc="upper left", fontsize=8)
-    ax.text(0.98, 0.95, f"{dos.n_packings} packing(s)", ha="right", va="top", transform=ax.transAxes)
+    ax.text(0.98, 0.95, f"{dos.n_packings} packing(s), {dos.n_modes} modes", ha="right", va="top",
+            transform=ax.transAxes)
 
 
 def _z_distribution(ax, contacts):
@@ -80,8 +93,9 @@ def _z_distribution(ax, contacts):
     width = max(len(c.z_distribution()[1]) for c in contacts)
     frac = np.mean([np.pad(c.z_distribution()[1], (0, width - len(c.z_distribution()[1]))) for c in contacts], 0)
     ax.bar(np.arange(width), frac)
-    mean_z = np.mean([c.mean_z for c in contacts])
-    ax.text(0.98, 0.95, rf"$\langle z\rangle$ = {mean_z:.4f}", ha="right", va="top", transform=ax.transAxes)
+    mean_z, floaters = pooled_contacts(contacts)
+    ax.text(0.98, 0.95, rf"$\langle z\rangle$ = {mean_z:.4f}, floaters {100 * floaters:.2f}%", ha="right", va="top",
+            transform=ax.transAxes)
 
 
 _BEHAVIOUR_COLOURS = {"quadratic": "C0", "quartic": "C3", "flat": "0.5"}

@@ -16,6 +16,7 @@ import numpy as np
 from jamflow.cli.options import add_engine_argument, add_force_argument, add_quiet_argument
 from jamflow.cli.progress import progress_bar
 from jamflow.io.moduli_file import save_moduli
+from jamflow.io.names import derived_path
 from jamflow.io.packing_file import load_packing, read_attrs
 from jamflow.mechanics.strains import STRAINS
 from jamflow.minimize.settings import MinimizerSettings
@@ -44,13 +45,11 @@ def add_arguments(p) -> None:
 
 
 def results_path(packing_path) -> Path:
-    path = Path(packing_path)
-    return path.with_name(path.stem + ".moduli.h5")
+    return derived_path(packing_path, "moduli")
 
 
 def figure_path(packing_path) -> Path:
-    path = Path(packing_path)
-    return path.with_name(path.stem + ".moduli.png")
+    return derived_path(packing_path, "moduli", ".png")
 
 
 def settings_from_args(args) -> SweepSettings:

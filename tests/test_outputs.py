@@ -1,0 +1,236 @@
+"""Outputs that compose (issue 26): one naming rule for derived files (``jamflow.io.names``),
+directories read without their result files."""
+
+import csv
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from jamflow.analysis.modes import Spectrum
+from jamflow.cli.app import main
+from jamflow.io.packing_file import load_packing
+from jamflow.mechanics.contacts import Contacts
+from jamflow.io.names import derived_path, is_derived, packing_files
+
+
+@pytest.fixture(scope="module")
+def above(tmp_path_factory):
+    """A packing 1e-3 above its onset (moduli needs one), alone in its directory."""
+    out = tmp_path_factory.mktemp("above") / "p.h5"
+    assert main(["jam", "--n", "16", "--seed", "2", "--above", "1e-3", "--out", str(out), "--quiet"]) == 0
+    return out
+
+
+def test_derived_names_follow_one_rule(tmp_path):
+    assert derived_path("a/p.h5", "modes") == Path("a/p.modes.h5")
+    assert derived_path(Path("a/final.data"), "structure", ".png") == Path("a/final.structure.png")
+    assert derived_path(["a/p.h5", "a/q.h5"], "modes", ".png") == Path("a/a.modes.png")
+    assert derived_path(tmp_path, "structure") == tmp_path / f"{tmp_path.name}.structure.h5"
+    (tmp_path / "x").mkdir()
+    assert derived_path([tmp_path / "x" / "p.h5", tmp_path / "q.h5"], "modes") == tmp_path / f"{tmp_path.name}.modes.h5"
+    with pytest.raises(ValueError, match="unknown derived file kind"):
+        derived_path("p.h5", "pictures")
+    assert [is_derived(n) for n in ("p.modes.h5", "p.moduli.h5", "p.structure.h5", "p.shear.h5", "p.modes.hdf5",
+                                    "p.h5", "modes.h5", "p.data", "n64_seed000001.h5")] == [True] * 5 + [False] * 4
+    for name in ("b.h5", "a.h5", "a.moduli.h5", "a.modes.h5", "a.modes.png", "notes.txt"):
+        (tmp_path / name).write_bytes(b"")
+    assert [p.name for p in packing_files(tmp_path)] == ["a.h5", "b.h5"]
+
+
+def test_moduli_then_modes_and_analyze_of_the_directory(above, capsys):
+    """Was: `jamflow moduli p.h5` wrote p.moduli.h5 beside it, after which `jamflow modes DIR`
+    aborted on it ("not a jamflow packing file"); `modes` wrote p.modes.hdf5 and `analyze`
+    structure.h5 in the working directory."""
+    folder = above.parent
+    assert main(["moduli", str(above), "--min-amplitude", "1e-8", "--max-amplitude", "1e-6", "--no-figure",
+                 "--quiet"]) == 0
+    assert main(["modes", str(folder), "--no-figure"]) == 0
+    assert main(["analyze", str(folder), "--r-min", "1.4"]) == 0
+    assert main(["modes", str(folder), "--no-figure"]) == 0  # again, with the modes and structure files there
+    out = capsys.readouterr().out
+    assert out.count("1 packing(s)") == 3
+    made = sorted(p.name for p in folder.iterdir() if p.suffix == ".h5")
+    assert made == sorted(["p.h5", "p.moduli.h5", "p.modes.h5", f"{folder.name}.structure.h5"])
+    assert main(["analyze", str(above), "--r-min", "1.4"]) == 0 and (folder / "p.structure.h5").is_file()
+    assert (folder / "p.structure-rdf.png").is_file()
+
+
+def test_an_explicit_out_is_kept(above, tmp_path):
+    assert main(["analyze", str(above), "--r-min", "1.4", "--out", str(tmp_path / "structure.h5")]) == 0
+    assert (tmp_path / "structure.h5").is_file() and (tmp_path / "structure-rdf.png").is_file()
+
+
+# --- pooled results of `jamflow modes` as data beside the figure ------------------------------
+
+
+@pytest.fixture(scope="module")
+def two_jammed(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("store")
+    for seed in (1, 2):
+        assert main(["jam", "--n", "32", "--seed", str(seed), "--out", str(folder / f"p{seed}.h5"), "--quiet"]) == 0
+    return folder
+
+
+def _read_csv(path):
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def test_modes_writes_pooled_dos_z_and_floaters_as_data(two_jammed, monkeypatch):
+    """Was: pooled D(omega), <z> and floater fraction only as a picture, y axis "per packing"
+    unnormalised, omega's M and unit not on the axis. The CSVs hold what the figure draws; checked
+    against the contacts counted directly (2 N_c / N', the chapter's <z>) and the mode counts."""
+    import jamflow.plots.modes as plots_modes
+
+    drawn = {}
+    save = plots_modes.save_figure
+    monkeypatch.setattr(plots_modes, "save_figure", lambda fig, path: drawn.setdefault("fig", fig) and save(fig, path))
+    assert main(["modes", str(two_jammed), "--bins", "12"]) == 0
+    stem = two_jammed / f"{two_jammed.name}.modes"
+    dos = _read_csv(f"{stem}-dos.csv")
+    table = _read_csv(f"{stem}-packings.csv")
+    low, high = (np.array([float(r[k]) for r in dos]) for k in ("omega_low", "omega_high"))
+    d, per_packing = (np.array([float(r[k]) for r in dos]) for k in ("D", "D_per_packing"))
+    packings = [load_packing(two_jammed / f"p{s}.h5") for s in (1, 2)]
+    contacts = [Contacts().compute(p) for p in packings]
+    modes = sum(len(Spectrum().compute(p).frequencies) for p in packings)
+    assert len(dos) == 12 and np.sum(d * (high - low)) == pytest.approx(1.0, rel=1e-12)
+    assert np.sum(per_packing * (high - low)) == pytest.approx(modes / 2, rel=1e-12)
+    pooled = table[-1]
+    assert [r["file"] for r in table] == [str(two_jammed / "p1.h5"), str(two_jammed / "p2.h5"), "pooled"]
+    kept = sum(c.n_kept for c in contacts)
+    assert float(pooled["mean_z"]) == pytest.approx(2 * sum(c.n_contacts for c in contacts) / kept, rel=1e-12)
+    assert float(pooled["floater_fraction"]) == pytest.approx(sum(c.n_floaters for c in contacts) / 64, abs=0)
+    assert int(pooled["n"]) == 64 and float(table[0]["mass"]) == 32.0
+    ax_dos = drawn["fig"].axes[1]
+    values, edges = ax_dos.patches[0].get_data()[:2]
+    assert np.allclose(values, d) and np.allclose(edges[:-1], low)
+    assert "M = N m" in ax_dos.get_xlabel() and r"\sqrt{\epsilon/(m\sigma^2)}" in ax_dos.get_xlabel()
+    assert r"\int D\,d\omega = 1" in ax_dos.get_ylabel()
+    assert f"{float(pooled['mean_z']):.4f}" in drawn["fig"].axes[2].texts[0].get_text()
+
+
+def test_modes_mass_goes_on_the_axis(two_jammed, tmp_path, monkeypatch):
+    import jamflow.plots.modes as plots_modes
+
+    drawn = {}
+    save = plots_modes.save_figure
+    monkeypatch.setattr(plots_modes, "save_figure", lambda fig, path: drawn.setdefault("fig", fig) and save(fig, path))
+    assert main(["modes", str(two_jammed / "p1.h5"), "--mass", "1", "--figure", str(tmp_path / "m.png")]) == 0
+    assert "M = 1 m" in drawn["fig"].axes[1].get_xlabel()
+    assert (tmp_path / "m-dos.csv").is_file() and (tmp_path / "m-packings.csv").is_file()
+
+
+def test_store_summary_skips_results_written_into_the_store(tmp_path):
+    """Was: `jamflow modes STORE` wrote n8_seed000000.modes.hdf5 (now .modes.h5) into the store and
+    Store.rebuild_summary took every *.h5 for a packing ("not a store file name")."""
+    import json
+
+    from jamflow.ensemble import Store
+
+    store = tmp_path / "store"
+    store.mkdir()
+    (store / "ensemble.json").write_text(json.dumps({"schema": "jamflow.ensemble", "schema_version": 1,
+                                                     "axes": ["n"], "parameters": {}}))
+    assert main(["jam", "--n", "8", "--seed", "0", "--out", str(store / "n8_seed000000.h5"), "--quiet"]) == 0
+    assert main(["modes", str(store), "--no-figure"]) == 0 and (store / "n8_seed000000.modes.h5").is_file()
+    rows = _read_csv(Store(store).rebuild_summary())
+    assert [(r["n"], r["seed"], r["status"]) for r in rows] == [("8", "0", "ok")]
+
+
+# --- HOOMD GSD export, read back with gsd.hoomd and freud ----------------------------------------
+
+
+def _gsd_frame(path):
+    import gsd.hoomd
+
+    with gsd.hoomd.open(str(path), "r") as f:
+        assert len(f) == 1
+        return f[0]
+
+
+@pytest.mark.parametrize("gamma", [0.0, 0.3, 1.3])
+def test_gsd_export_of_a_sheared_packing_reads_back(tmp_path, capsys, gamma):
+    """Box with HOOMD's tilt factor xy = gamma (accumulated, not folded), origin-centred positions;
+    freud (a second reader of HOOMD's convention) gives the file's fractional coordinates."""
+    import freud
+
+    from conftest import random_config, tilted
+    from jamflow.io.packing_file import save_packing
+
+    p = tilted(random_config(24, 2, 0.8, seed=3, diameters=np.repeat([1.0, 1.4], 12)), gamma)
+    src = save_packing(tmp_path / "p.h5", p)
+    assert main(["export", str(src), "--format", "gsd"]) == 0
+    assert "p.gsd (gsd)" in capsys.readouterr().out
+    frame = _gsd_frame(tmp_path / "p.gsd")
+    q = load_packing(src)
+    lx, ly, lz, xy, xz, yz = frame.configuration.box
+    assert frame.configuration.dimensions == 2 and lz == 0 and xz == yz == 0
+    assert (lx, ly, xy) == pytest.approx((q.box.h[0, 0], q.box.h[1, 1], gamma), rel=1e-7, abs=1e-7)
+    fractional = freud.box.Box.from_box(frame.configuration.box, dimensions=2).make_fractional(frame.particles.position)
+    expected = q.box.to_fractional(q.positions) % 1.0
+    assert np.all(fractional[:, :2] >= 0) and np.all(fractional[:, :2] < 1)
+    diff = fractional[:, :2] - expected
+    assert np.abs(diff - np.round(diff)).max() < 1e-6  # float32 positions
+    assert np.allclose(frame.particles.diameter, q.diameters, rtol=1e-7)
+    assert frame.particles.types == ["A", "B"] and np.array_equal(frame.particles.typeid, (q.diameters > 1).astype(int))
+    assert np.array_equal(frame.particles.body, np.full(24, -1))
+
+
+@pytest.mark.parametrize("spec,dim", [("ellipse:1.5", 2), ("spheroid:0.5", 3)])
+def test_gsd_export_orientations_and_shapes(tmp_path, spec, dim):
+    """Quaternions (w, x, y, z) turn body x onto each director; Ellipsoid semi-axes per type."""
+    from jamflow.io.export import export_packing
+    from jamflow.model.box import Box
+    from jamflow.model.packing import Packing
+    from jamflow.model.shapes import parse_shape
+    from jamflow.model.shapes.rotations import directors, quaternion_matrices, random_orientations
+
+    rng = np.random.default_rng(1)
+    p = Packing(rng.uniform(0, 12.0, (6, dim)), np.array([1.0, 1.4, 1.0, 1.4, 1.4, 1.0]), Box(12.0 * np.eye(dim)),
+                shape=parse_shape(spec, dim), orientations=random_orientations(6, dim, rng))
+    frame = _gsd_frame(export_packing(p, tmp_path / "e.gsd", "gsd"))
+    q = frame.particles.orientation.astype(float)
+    assert np.allclose(quaternion_matrices(q / np.linalg.norm(q, axis=1)[:, None])[:, :dim, 0],
+                       directors(p.orientations, dim), atol=1e-6)
+    a, b = p.shape.axes(p.diameters).T
+    shapes = frame.particles.type_shapes
+    assert [s["type"] for s in shapes] == ["Ellipsoid"] * 2
+    assert [shapes[0]["a"], shapes[0]["b"], shapes[1]["a"], shapes[1]["c"]] == pytest.approx(
+        [a[0] / 2, b[0] / 2, a[1] / 2, b[1] / 2])
+
+
+def test_gsd_export_rigid_bodies_as_centres_and_sites(tmp_path):
+    from jamflow.io.export import export_packing
+    from jamflow.model.box import Box
+    from jamflow.model.packing import Packing
+    from jamflow.model.shapes import RigidBody
+    from jamflow.model.shapes.rotations import random_orientations
+
+    rng = np.random.default_rng(2)
+    p = Packing(rng.uniform(0, 10.0, (5, 2)), np.ones(5), Box(10.0 * np.eye(2)), shape=RigidBody([[0, 0], [0.5, 0]],
+                [1.0, 0.7]), orientations=random_orientations(5, 2, rng))
+    frame = _gsd_frame(export_packing(p, tmp_path / "b.gsd", "gsd"))
+    body = frame.particles.body
+    assert frame.particles.N == 15 and np.array_equal(body, np.concatenate([np.arange(5), np.repeat(np.arange(5), 2)]))
+    assert frame.particles.types == ["A", "site"] and np.array_equal(frame.particles.typeid, [0] * 5 + [1] * 10)
+    pos = frame.particles.position.astype(float)[:, :2]
+    world = p.shape.world_sites(p.positions, p.orientations, p.diameters) - p.positions[:, None, :]
+    assert np.allclose(pos[5:] - pos[body[5:]], world.reshape(-1, 2), atol=1e-5)
+    assert np.allclose(frame.particles.diameter[5:], np.tile([1.0, 0.7], 5))
+
+
+def test_gsd_export_without_the_package_names_the_extra(tmp_path, capsys, monkeypatch):
+    import sys
+
+    from jamflow.io.packing_file import save_packing
+    from test_contacts import triangular_lattice
+
+    src = save_packing(tmp_path / "p.h5", triangular_lattice(4, 4, 0.97))
+    monkeypatch.setitem(sys.modules, "gsd", None)
+    monkeypatch.setitem(sys.modules, "gsd.hoomd", None)
+    assert main(["export", str(src), "--format", "gsd"]) == 2
+    err = capsys.readouterr().err
+    assert "jamflow[gsd]" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "p.gsd").exists()
