@@ -11,6 +11,7 @@ from jamflow.analysis.modes import Spectrum
 from jamflow.cli.app import main
 from jamflow.io.packing_file import load_packing
 from jamflow.mechanics.contacts import Contacts
+from test_python_api import _one_short_line
 from jamflow.io.names import derived_path, is_derived, packing_files
 
 
@@ -234,3 +235,77 @@ def test_gsd_export_without_the_package_names_the_extra(tmp_path, capsys, monkey
     err = capsys.readouterr().err
     assert "jamflow[gsd]" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "p.gsd").exists()
+
+
+# --- one-line reprs of the remaining result types ---------------------------------------------
+
+
+def test_result_reprs_are_one_short_line():
+    """Was (N = 256, /tmp measurement in the report): ShearPath 79383 characters, ShearStep 26262,
+    RDFResult 35522, ReferenceResult 19755, BondOrderResult 9692, ModuliResult 2765, AboveResult
+    583, CompressionSettings 504, ..."""
+    from jamflow.analysis.correlations import BondCorrelation
+    from jamflow.analysis.order import BondOrder
+    from jamflow.analysis.structure import RDF, StructureFactor
+    from jamflow.mechanics.elastic import HessianModuli
+    from jamflow.mechanics.reference import energy_forces_pressure
+    from jamflow.protocols.above import compress_above
+    from jamflow.protocols.compression import jam
+    from jamflow.protocols.moduli import Moduli
+    from jamflow.protocols.shear import shear
+    from jamflow.protocols.sweeps import SweepSettings
+
+    start = jam(n=16, dim=2, sizes="bi:1.4:0.5", seed=2)
+    above = compress_above(start.packing, 1e-3)
+    _one_short_line(above, "AboveResult(N=16", "dim=2", f"phi={above.packing.phi:.10f}", "dphi=0.001",
+                    f"P={above.pressure:.3e}")
+    path = shear(above.packing, 1e-4, 2e-4)
+    _one_short_line(path, "ShearPath(N=16", "steps=2", f"changes={path.n_changes}")
+    step = path.steps[-1]
+    _one_short_line(step, "ShearStep(gamma=0.0002", "N=16", f"phi_j={step.phi_j:.10f}",
+                    f"contacts={len(step.network.i)}", f"removed={len(step.removed)}")
+    _one_short_line(step.network, f"Network(contacts={len(step.network.i)}, floaters={step.network.n_floaters})")
+    p = start.packing
+    rdf = RDF().compute(p)
+    _one_short_line(rdf, f"RDFResult(bins={len(rdf.g)}", "n_packings=1", f"peak_g={rdf.g.max():.4g}")
+    _one_short_line(StructureFactor(k_max=8).compute(p), "StructureFactorResult(shells=", "n_packings=1")
+    order = BondOrder(r_min=1.4).compute(p)
+    _one_short_line(order, "BondOrderResult(l=6", f"global_order={order.global_order:.4f}", "N=16")
+    corr = BondCorrelation(r_min=1.4).compute(p)
+    _one_short_line(corr, "BondCorrelationResult(l=6", "n_packings=1")
+    _one_short_line(corr.fit, "ExponentialFit(xi=")
+    ref = energy_forces_pressure(p)
+    _one_short_line(ref, "ReferenceResult(N=16", "dim=2", f"P={ref.pressure:.4e}")
+    _one_short_line(HessianModuli().compute(above.packing), "HessianModuliResult(G=")
+    moduli = Moduli(SweepSettings(amplitudes=(1e-8, 1e-7))).compute(above.packing)
+    _one_short_line(moduli, "ModuliResult(N=16", f"G={moduli.G:.6e}", f"B_hessian={moduli.B_hessian:.6e}")
+    _one_short_line(moduli.shear, "SweepResult(strain='shear'", f"modulus={moduli.shear.modulus:.6e}")
+
+
+def test_settings_reprs_name_what_differs_and_rebuild():
+    from jamflow.minimize.settings import MinimizerSettings
+    from jamflow.protocols.pressure import PressureSettings
+    from jamflow.protocols.settings import CompressionSettings
+    from jamflow.protocols.sweeps import SweepSettings
+
+    assert repr(CompressionSettings()) == "CompressionSettings()"
+    custom = CompressionSettings(v_tol=1e-14, minimizer=MinimizerSettings(force_tol=1e-13))
+    text = _one_short_line(custom, "v_tol=1e-14", "minimizer=MinimizerSettings(force_tol=1e-13)")
+    assert eval(text, {"CompressionSettings": CompressionSettings, "MinimizerSettings": MinimizerSettings}) == custom
+    assert repr(PressureSettings(pressures=(1e-4, 1e-5))) == "PressureSettings(pressures=(0.0001, 1e-05))"
+    assert repr(SweepSettings()) == "SweepSettings()"
+
+
+def test_anneal_nematic_and_onset_reprs():
+    from jamflow.ensemble.onsets import onset_statistics
+    from jamflow.model.nematic import Nematic
+    from jamflow.protocols.anneal import anneal
+    from jamflow.protocols.compression import jam
+
+    start = jam(n=12, dim=2, sizes="bi:1.4:0.5", seed=1, shape="ellipse:1.0")
+    res = anneal(start.packing, 1.05, 0.05)
+    _one_short_line(res, "AnnealResult(N=12", "shape='ellipse:1.05'", "steps=1", f"phi_j={res.final.phi_j:.10f}")
+    _one_short_line(Nematic().compute(np.zeros(10)), "NematicResult(p2=1.0000, director=[1.0, 0.0])")
+    rows = [dict(n=str(n), seed=str(s), status="ok", phi_j=str(0.84 - 0.1 / n + 0.01 * np.sin(s * n)), mean_z="4.0",
+                 dim="2", floaters="0", n_contacts=str(2 * n - 1)) for n in (16, 32, 64) for s in range(10)]
+    _one_short_line(onset_statistics(rows, n_bootstrap=20), "OnsetResult(dim=2, n=[16, 32, 64]", "n_bootstrap=20")
