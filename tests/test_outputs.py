@@ -309,3 +309,109 @@ def test_anneal_nematic_and_onset_reprs():
     rows = [dict(n=str(n), seed=str(s), status="ok", phi_j=str(0.84 - 0.1 / n + 0.01 * np.sin(s * n)), mean_z="4.0",
                  dim="2", floaters="0", n_contacts=str(2 * n - 1)) for n in (16, 32, 64) for s in range(10)]
     _one_short_line(onset_statistics(rows, n_bootstrap=20), "OnsetResult(dim=2, n=[16, 32, 64]", "n_bootstrap=20")
+
+
+# --- figures: checked on their data, not their pixels ----------------------------------------
+
+
+@pytest.fixture
+def drawn(monkeypatch):
+    """The matplotlib figures the structure plots save (``plots.figure.save_figure`` wrapped)."""
+    import jamflow.plots.structure as plots_structure
+
+    figures = []
+    save = plots_structure.save_figure
+    monkeypatch.setattr(plots_structure, "save_figure", lambda fig, path, **kw: figures.append(fig) or save(fig, path, **kw))
+    return figures
+
+
+@pytest.fixture(scope="module")
+def bidisperse():
+    from jamflow.protocols.compression import jam
+
+    return jam(n=64, dim=2, sizes="bi:1.4:0.5", seed=4).packing
+
+
+def test_rdf_figure_shows_every_peak_and_the_total_on_top(bidisperse, drawn, tmp_path):
+    """Was: ylim at 1.05 x the total's first peak (16 here) cut the partials' higher peaks, and the
+    total was drawn under them."""
+    from jamflow.analysis.structure import RDF
+    from jamflow.plots.structure import plot_rdf
+
+    rdf = RDF(partial=True).compute(bidisperse)
+    plot_rdf(rdf, tmp_path / "rdf.png", r_min=1.4)
+    ax = drawn[0].axes[0]
+    curves = [line for line in ax.get_lines() if len(line.get_xdata()) == len(rdf.r)]
+    assert len(curves) == 4  # three partials and the total
+    highest = max(np.nanmax(line.get_ydata()) for line in curves)
+    assert highest > rdf.g.max() and ax.get_ylim()[1] >= highest
+    total = next(line for line in curves if np.array_equal(line.get_ydata(), rdf.g))
+    assert all(total.get_zorder() > line.get_zorder() for line in curves if line is not total)
+
+
+def test_q6_map_has_a_colour_key_matching_its_colours(bidisperse, drawn, tmp_path):
+    """Was: disks coloured by the phase of psi_6 without a key."""
+    from jamflow.analysis.order import BondOrder
+    from jamflow.plots.structure import plot_bond_order_map
+
+    order = BondOrder(r_min=1.4).compute(bidisperse)
+    plot_bond_order_map(bidisperse, order, tmp_path / "q6.png")
+    fig = drawn[0]
+    assert len(fig.axes) == 2  # the map and its colour bar
+    bar_ax = fig.axes[1]
+    assert "arg psi_6" in bar_ax.get_ylabel()
+    disks = fig.axes[0].collections[0]
+    key = next(c for c in bar_ax.collections if c.norm.vmin is not None)  # the bar's colours: norm and map
+    assert key.norm.vmin == -180 and key.norm.vmax == 180 and key.cmap.name == "hsv"
+    psi = order.particle_order[:, 0]
+    has = order.n_neighbours > 0
+    assert np.allclose(disks.get_facecolor()[has, :3], key.to_rgba(np.degrees(np.angle(psi)))[has, :3])
+
+
+def test_order_figure_has_one_bar_per_parameter(drawn, tmp_path):
+    """Was: three dots against one file name; now one bar per order parameter at its mean."""
+    from jamflow.plots.structure import plot_order
+
+    values = {"Q6_global": np.array([0.1, 0.3]), "Q6_local": np.array([0.5, 0.7]), "G": np.array([0.02, 0.04])}
+    plot_order(["a.h5", "b.h5"], values, tmp_path / "order.png")
+    ax = drawn[0].axes[0]
+    assert [t.get_text() for t in ax.get_xticklabels()] == list(values)
+    assert [patch.get_height() for patch in ax.patches] == pytest.approx([0.2, 0.6, 0.03])
+
+
+def test_bodies_are_joined_in_the_picture():
+    """Was: dimers drawn as loose disks, nothing showing which two form a body."""
+    from matplotlib.figure import Figure
+
+    from jamflow.plots.drawing import _View, draw_into
+    from jamflow.protocols.compression import jam
+
+    dimers = jam(n=16, dim=2, sizes="bi:1.4:0.5", shape="nmer:2:1.5", seed=1).packing
+    view = _View(dimers, 0.5)
+    bonds = view.body_lines()
+    offsets = dimers.shape.world_sites(dimers.positions, dimers.orientations, dimers.diameters)
+    length = np.linalg.norm(offsets[:, 1] - offsets[:, 0], axis=1)
+    assert len(bonds) == 2 * dimers.n
+    assert np.allclose(np.linalg.norm(bonds[:, 1] - bonds[:, 0], axis=1), np.tile(length, 2))
+    ax = Figure().subplots()
+    draw_into(ax, dimers, color_by="orientation")
+    assert [c.get_label() for c in ax.collections if c.get_label() == "bodies"] == ["bodies"]
+
+
+def test_slice_contact_lines_stay_in_their_cross_sections():
+    """Was: in a 3D slice each contact line ran centre to centre across the gap between two
+    cross-sections (the contact point lies off the plane): 23 of 23 at this packing."""
+    from jamflow.plots.drawing import _View
+    from jamflow.protocols.compression import jam
+
+    spheres = jam(n=64, dim=3, sizes="mono", seed=1).packing
+    view = _View(spheres, 0.5)
+    lines, widths, _ = view.contact_lines()
+    assert len(lines) > 10
+    radius = np.zeros(spheres.n)
+    radius[view.index] = 0.5 * view.sizes
+    ends = lines[:, 1] - lines[:, 0]
+    starts = lines[:, 0]
+    owner = np.array([np.argmin(np.linalg.norm(view.xy - s, axis=1)) for s in starts])
+    assert np.allclose(view.xy[owner], starts)
+    assert np.all(np.linalg.norm(ends, axis=1) <= radius[owner] + 1e-12)  # inside its own cross-section
