@@ -1,11 +1,11 @@
-"""Spectrum, density of states and stability class (seed chapter section 3).
+"""Spectrum, density of states and stability class (chapter section 3).
 
 Closed forms: the phonon spectrum of a compressed triangular lattice, a two-particle system,
-a honeycomb network with an extra zero mode per cell (locally stable, seed Figure 2.15b).
+a honeycomb network with an extra zero mode per cell (locally stable, chapter Figure 2.15b).
 Second implementations: the energy change along a displacement against the all-pairs numpy
 energy difference and against the quadratic form u^T M u / 2; dense against sparse solver.
 Published facts: jammed frictionless disks are isostatic after floater removal with exactly d
-zero modes (seed section 4.1; O'Hern et al., Phys. Rev. E 68, 011306 (2003))."""
+zero modes (chapter section 4.1; O'Hern et al., Phys. Rev. E 68, 011306 (2003))."""
 
 import argparse
 from itertools import product
@@ -103,7 +103,7 @@ def test_honeycomb_is_only_locally_stable_with_flat_zero_mode():
     assert spec.n_negative == 0 and spec.n_zero == 25 and spec.n_extra_zero == 23
     st = Stability().compute(p, spec)
     assert st.label == LOCALLY_STABLE and st.flat and st.behaviour == "flat"
-    # moving far along the mode costs nothing: contacts open (seed Fig. 2.15c, dashed line)
+    # moving far along the mode costs nothing: contacts open (chapter Fig. 2.15c, dashed line)
     far = Stability(deltas=[1e-3, 1e-2, 1e-1]).compute(p, spec)
     assert far.flat and np.all(far.delta_v <= 0)
 
@@ -131,8 +131,8 @@ def test_energy_change_matches_direct_difference_and_quadratic_form(pot):
 def test_jammed_packing_is_isostatic_and_mechanically_stable(jammed):
     spec = Spectrum().compute(jammed)
     c = spec.dynamical.contacts
-    assert c.is_isostatic  # N_c = N' d - d + 1 (seed section 4.1)
-    # <z>_iso = 2 N_c,iso / N' = 2d - 2(d - 1)/N' (the seed's text prints (d - 1)/N', without the 2)
+    assert c.is_isostatic  # N_c = N' d - d + 1 (chapter section 4.1)
+    # <z>_iso = 2 N_c,iso / N' = 2d - 2(d - 1)/N' (the chapter's text prints (d - 1)/N', without the 2)
     assert c.mean_z == pytest.approx(4 - 2 / c.n_kept, rel=1e-14)
     assert spec.n_zero == 2 and spec.n_negative == 0
     assert spec.translation_residual < 1e-14
