@@ -57,6 +57,20 @@ def test_moduli_then_modes_and_analyze_of_the_directory(above, capsys):
     assert (folder / "p.structure-rdf.png").is_file()
 
 
+def test_result_files_matched_by_a_shell_glob_are_skipped(above, capsys):
+    """`jamflow modes runs/*.h5` a second time also lists runs/p.modes.h5: it is skipped with a
+    warning, not refused as "not a jamflow packing file"; results alone are refused in one line."""
+    folder = above.parent
+    assert main(["modes", str(above), "--no-figure"]) == 0
+    capsys.readouterr()
+    assert main(["modes", *sorted(str(p) for p in folder.glob("*.h5")), "--no-figure"]) == 0
+    out, err = capsys.readouterr()
+    assert "1 packing(s)" in out and "warning: skipped" in err and "result file(s)" in err
+    assert main(["modes", str(folder / "p.modes.h5")]) == 2
+    err = capsys.readouterr().err
+    assert "is a result file" in err and len(err.strip().splitlines()) == 1
+
+
 def test_an_explicit_out_is_kept(above, tmp_path):
     assert main(["analyze", str(above), "--r-min", "1.4", "--out", str(tmp_path / "structure.h5")]) == 0
     assert (tmp_path / "structure.h5").is_file() and (tmp_path / "structure-rdf.png").is_file()

@@ -36,6 +36,13 @@ def is_derived(path) -> bool:
     return name.suffix.lower() in (".h5", ".hdf5") and Path(name.stem).suffix[1:] in DERIVED_KINDS
 
 
+def without_derived(paths) -> tuple[list, list]:
+    """(inputs, skipped): the paths given, without those named as derived files (a shell glob
+    ``runs/*.h5`` after ``jamflow modes`` also matches ``runs/p.modes.h5``)."""
+    paths = list(paths)
+    return [p for p in paths if not is_derived(p)], [p for p in paths if is_derived(p)]
+
+
 def packing_files(directory) -> list[Path]:
     """The packing files of a directory: its ``*.h5`` files but the derived ones, sorted."""
     return sorted(p for p in Path(directory).glob("*.h5") if not is_derived(p))

@@ -15,6 +15,7 @@ import numpy as np
 
 from jamflow.cli.options import add_engine_argument, add_force_argument, add_quiet_argument
 from jamflow.cli.progress import progress_bar
+from jamflow.ensemble.parallel import skip_derived
 from jamflow.io.moduli_file import save_moduli
 from jamflow.io.names import derived_path
 from jamflow.io.packing_file import load_packing, read_attrs
@@ -66,7 +67,7 @@ def settings_from_args(args) -> SweepSettings:
 
 def run(args) -> int:
     moduli = Moduli(settings_from_args(args), engine=args.engine)
-    args.files = check_distinct(args.files)  # the same file twice would be swept twice onto one output
+    args.files = check_distinct(skip_derived(args.files))  # the same file twice: swept twice onto one output
     packings = [load_packing(f) for f in args.files]  # every input is read before any work
     outputs = [results_path(f) for f in args.files]
     written = outputs + ([] if args.no_figure else [figure_path(f) for f in args.files])
