@@ -74,7 +74,7 @@ BENCHMARKS: dict[str, Benchmark] = {
         ["run", "--n", "32", "--seeds", "0", "--variants", "seed", "dphi0=1e-3", "--limit", "60", "--strict",
          "--out", "{tmp}/speed-accuracy.csv"]),
     "shortcut_bias": Benchmark(
-        "accuracy", "bias of mean phi_J for each protocol shortcut (paired against the seed protocol)",
+        "accuracy", "bias of mean phi_J for each protocol shortcut (paired against the chapter protocol)",
         ["run", "--n", "32", "--seeds", "0", "--variants", "seed", "fast (all)", "--limit", "60", "--strict",
          "--out", "{tmp}/shortcut-bias.csv"]),
     "protocol_bias": Benchmark(
@@ -97,9 +97,9 @@ BENCHMARKS: dict[str, Benchmark] = {
     "ellipse_ensembles": Benchmark("study", "jammed 2D bidisperse ellipses at several aspect ratios, checked"),
     "ellipse_ensemble_modes": Benchmark("study", "checks and spectra of the kept ellipse packings"),
     "ellipse_routes": Benchmark("study", "compiled FIRE against LAMMPS damped dynamics for ellipses, same starts"),
-    "ellipse_spectra": Benchmark("study", "sorted normal-mode frequencies of ellipse packings (seed Fig. 2.17)"),
-    "ellipse_moduli": Benchmark("study", "shear modulus of ellipse packings against phi - phi_J (seed Fig. 2.33)"),
-    "anneal_vs_compression": Benchmark("study", "particle-shape annealing against compression (seed Fig. 2.18)"),
+    "ellipse_spectra": Benchmark("study", "sorted normal-mode frequencies of ellipse packings (chapter Fig. 2.17)"),
+    "ellipse_moduli": Benchmark("study", "shear modulus of ellipse packings against phi - phi_J (chapter Fig. 2.33)"),
+    "anneal_vs_compression": Benchmark("study", "particle-shape annealing against compression (chapter Fig. 2.18)"),
     "nematic_protocols": Benchmark("study", "nematic order of ellipse packings: annealing against compression"),
     "contact_methods": Benchmark("study", "CPU per packing against phi_J / <z> bias of the contact methods"),
     "nmer_ensembles": Benchmark("study", "n-mer (dimer, trimer) ensembles, checked (issue 14)"),

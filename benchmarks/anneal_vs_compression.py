@@ -1,4 +1,4 @@
-"""Particle-shape annealing against isotropic compression (seed section 2.3.3, Figure 2.18):
+"""Particle-shape annealing against isotropic compression (chapter section 2.3.3, Figure 2.18):
 2D bidisperse ellipses (2:1 mixture, major-axis ratio 1.4), <phi_J> and <z> against alpha.
 
     python benchmarks/anneal_vs_compression.py --n 64 --seeds 10 --to 2.0 --dalpha 0.05 --out docs/notes/anneal.csv
@@ -179,7 +179,7 @@ def chart(groups, path: Path) -> None:
         ax.set_xlabel(r"aspect ratio $\alpha$")
         ax.legend(fontsize=8)
     fig.suptitle(f"2D bidisperse ellipses, N = {', '.join(n)}: shape annealing vs isotropic compression "
-                 "(cf. seed Figure 2.18)")
+                 "(cf. chapter Figure 2.18)")
     save_figure(fig, path)
 
 

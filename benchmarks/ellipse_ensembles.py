@@ -45,7 +45,7 @@ def run(args) -> None:
 # ----- report -------------------------------------------------------------------------------------
 def recount(rows, packings: Path) -> None:
     """Contacts of the kept packings again with the current floater rules (in place): mean_z and
-    n_floaters with seed Figure 2.19's exception, mean_z_rule / n_floaters_rule with d_f + 1 only."""
+    n_floaters with chapter Figure 2.19's exception, mean_z_rule / n_floaters_rule with d_f + 1 only."""
     from jamflow.io.packing_file import load_packing
 
     for r in rows:

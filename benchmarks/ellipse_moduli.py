@@ -1,4 +1,4 @@
-"""Shear modulus G of ellipse packings against phi - phi_J (seed Figure 2.33: G ~ dphi for ellipses
+"""Shear modulus G of ellipse packings against phi - phi_J (chapter Figure 2.33: G ~ dphi for ellipses
 at small dphi, G ~ dphi^(1/2) for disks): 2D 2:1 bidisperse ellipses (major-axis ratio 1.4), each
 seed at onset (``jam``, or the kept packings of ``ellipse_ensembles.py --keep`` with ``--from``),
 compressed by each DPHI (``compress_above``) and measured by ``jamflow.protocols.moduli.Moduli``
@@ -163,7 +163,7 @@ def chart(rows, path: Path) -> None:
     for ax in axes:
         ax.legend(fontsize=7)
     n = sorted({r["n"] for r in rows})
-    fig.suptitle(f"2D bidisperse ellipses, N = {', '.join(n)}: moduli against phi - phi_J (cf. seed Figure 2.33)")
+    fig.suptitle(f"2D bidisperse ellipses, N = {', '.join(n)}: moduli against phi - phi_J (cf. chapter Figure 2.33)")
     save_figure(fig, path)
 
 

@@ -1,4 +1,4 @@
-"""The sorted normal-mode frequencies of ellipse packings at several aspect ratios (seed Figure
+"""The sorted normal-mode frequencies of ellipse packings at several aspect ratios (chapter Figure
 2.17): 2D bidisperse ellipses (2:1, major-axis ratio 1.4), one packing per alpha at onset, the
 dynamical matrix with rotations (jamflow.mechanics.hessian), its three branches
 (jamflow.analysis.modes.branches) and each mode's translational fraction.
@@ -87,7 +87,7 @@ def chart(rows, alphas, path: Path) -> None:
         axes[0].semilogy(x, [float(r["omega"]) for r in g], ".", ms=3, color=c, label=f"alpha = {a:g}")
         axes[1].plot(x, [float(r["translational"]) for r in g], ".", ms=3, color=c)
     axes[0].set(xlabel=r"$i / (3N')$", ylabel=r"$\omega_i = \sqrt{|e_i| / M}$",
-                title="sorted frequencies (cf. seed Figure 2.17)")
+                title="sorted frequencies (cf. chapter Figure 2.17)")
     axes[1].set(xlabel=r"$i / (3N')$", ylabel="translational fraction of mode i", ylim=(-0.02, 1.02),
                 title="mode character (branches 1, 2 rotational; 3 translational)")
     axes[1].axhline(0.5, ls=":", color="k", lw=0.8)

@@ -1,9 +1,9 @@
 """Ensemble for the stability measurements of docs/notes/modes.md (not a test).
 
 Jams ``--count`` 2D 50:50 bidisperse (ratio 1.4) packings of N disks with
-``jamflow.jam(seed=s)`` (seed chapter section 2.1), caches them in ``--out`` as
+``jamflow.jam(seed=s)`` (chapter section 2.1), caches them in ``--out`` as
 onset_n{N}_s{s}.h5, and writes copies compressed affinely to phi_J + ``--dphi`` and
-re-minimised with LAMMPS (FIRE, the seed's stopping rules) as above_n{N}_s{s}.h5; it prints the
+re-minimised with LAMMPS (FIRE, the chapter's stopping rules) as above_n{N}_s{s}.h5; it prints the
 time of each step. Then analyse them with
 
     jamflow modes DIR/onset_n256_s*.h5 --figure docs/notes/modes-onset.png

@@ -122,7 +122,7 @@ def chart(groups, keep, path: Path) -> None:
         ax.set_title(f"{k[0]}, seed {r['seed']}: $P_2$ = {float(r['p2']):.2f}", fontsize=9)
         ax.set_xticks([])
         ax.set_yticks([])
-    fig.suptitle(f"monodisperse ellipses, alpha = {float(r['alpha']) if drawn else 3:g}, N = {n} (cf. seed Figure 2.23(c, d))")
+    fig.suptitle(f"monodisperse ellipses, alpha = {float(r['alpha']) if drawn else 3:g}, N = {n} (cf. chapter Figure 2.23(c, d))")
     save_figure(fig, path)
 
 

@@ -1,5 +1,5 @@
 """Does a protocol shortcut bias phi_J? Every variant is run on the same seeds (same random
-start) as the seed chapter's exact protocol; mean phi_J +- standard error per variant, and the
+start) as the chapter's exact protocol; mean phi_J +- standard error per variant, and the
 paired difference to the exact protocol, as CSV and a PNG chart.
 
     python benchmarks/protocol_bias.py --n 256 --seeds 20 --out docs/notes/protocol-bias-n256.csv

@@ -1,5 +1,5 @@
 """Small 2D packings jammed on the numpy reference energy, for shapes no compiled engine runs yet
-(ellipses): the seed's compression/decompression bisection on phi (section 2.1, stop when
+(ellipses): the chapter's compression/decompression bisection on phi (section 2.1, stop when
 V_tol < V/N < 2 V_tol) with every minimisation done by scipy's trust-region Newton method
 (``trust-exact``) on V(xi), xi = (centres, d_k theta), gradient from the reference forces and
 torques, Hessian from ``jamflow.mechanics.hessian``. In 2D theta is a global coordinate, so V(xi) is

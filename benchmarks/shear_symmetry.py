@@ -5,7 +5,7 @@ same start) and, mirrored x -> -x, at 1 - gamma; the three packings are compared
 displacement of a non-floater after removing the mean (a global translation is free), phi_J,
 V and the contact network among non-floaters (a floater may touch a neighbour at round-off). Two strain pairs: 0.25 / 1.25 / 0.75 (exactly one apart and exact
 mirrors as doubles) and 0.2 / 1.2 / 0.8 (1.2 - 1 = 0.19999999999999996 is 5.6e-17 away from
-0.2), with the default (fast) and the seed protocol, compiled engine.
+0.2), with the default (fast) and the chapter protocol, compiled engine.
 
     python benchmarks/shear_symmetry.py --seeds 20 --out docs/notes/shear-symmetry.csv
 """

@@ -1,6 +1,6 @@
 """Bias of mean phi_J for each protocol shortcut, so the defaults are chosen from the chart.
 
-Every variant runs on the same seeds (same random start) as the seed chapter's protocol;
+Every variant runs on the same seeds (same random start) as the chapter's protocol;
 the bias is the paired difference phi_J(variant) - phi_J(seed) averaged over seeds, with
 its standard error (s.d. of the differences / sqrt(k)). 2D bidisperse disks (50:50, 1:1.4).
 
@@ -104,7 +104,7 @@ def chart(args) -> None:
     for ax in (ax1, ax2):
         ax.set_xticks(range(len(names)), names, rotation=30, ha="right", fontsize=8)
         ax.legend(fontsize=8)
-    fig.suptitle("2D bidisperse disks: protocol shortcuts against the seed protocol (same starts)")
+    fig.suptitle("2D bidisperse disks: protocol shortcuts against the chapter protocol (same starts)")
     fig.tight_layout()
     save_figure(fig, args.out.with_suffix(".png"))
     print("| N | variant | mean phi_J +- s.e. | bias +- s.e. | median s | seeds | failed/timeout |")

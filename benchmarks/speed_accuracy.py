@@ -1,5 +1,5 @@
 """Speed against accuracy of the compression protocol: time per packing against the error
-in phi_J, one parameter varied at a time around the seed protocol (dphi0 = 1e-4,
+in phi_J, one parameter varied at a time around the chapter protocol (dphi0 = 1e-4,
 V_tol = 1e-16, force tolerance 1e-14 max(1, L/20), FIRE), for N = 64, 256, 1024 2D
 bidisperse disks. The error of a run is |phi_J - phi_J,ref| for the same random start,
 phi_J,ref from the reference run (dphi0 = 1e-5, V_tol = V_min = 1e-20).
@@ -79,7 +79,7 @@ def run(args) -> None:
 
 def errors(rows, against: str = "reference"):
     """{(n, variant): [(CPU seconds, |phi_J - phi_J,against|), ...]} over seeds that have the
-    ``against`` run (the reference, or the seed protocol to isolate one parameter)."""
+    ``against`` run (the reference, or the chapter protocol to isolate one parameter)."""
     ref = {(r["n"], r["seed"]): float(r["phi_j"]) for r in rows if r["variant"] == against and r["status"] == "ok"}
     out = {}
     for r in rows:
@@ -133,7 +133,7 @@ def chart(args) -> None:
         ax.set_xlabel("median CPU seconds per packing")
     axes[0][0].legend(fontsize=8)
     fig.suptitle("2D bidisperse disks, time against error in phi_J. Top: against the reference run (dphi0 = 1e-5, "
-                 "V_tol = 1e-20); bottom: against the seed protocol (dphi0 = 1e-4, V_tol = 1e-16). "
+                 "V_tol = 1e-20); bottom: against the chapter protocol (dphi0 = 1e-4, V_tol = 1e-16). "
                  f"Error 0 drawn at {FLOOR:g}.", fontsize=9)
     fig.tight_layout()
     save_figure(fig, args.out.with_suffix(".png"))

@@ -3,9 +3,9 @@ and in process, against the hand-written LAMMPS protocol (``handwritten_jam`` be
 ``speed_vs_handwritten.py``), the same seeds and starts, with iterations per phase (compress /
 approach / final) and the packing checks.
 
-Baseline: the seed's protocol written directly on the LAMMPS Python module -- harmonic/cut,
+Baseline: the chapter's protocol written directly on the LAMMPS Python module -- harmonic/cut,
 ``min_style fire`` with ``min_modify norm max``, ``minimize 0 1e-14 CAP`` after each
-``change_box ... remap``, dphi0 = 1e-4 from the seed protocol's start, halve on crossing, stop at
+``change_box ... remap``, dphi0 = 1e-4 from the chapter protocol's start, halve on crossing, stop at
 1e-16 < V < 2e-16.
 
     python benchmarks/speed_table.py --dim 2 --n 64 256 1024 --seeds 1 2 3 4 5 --handwritten 64 256 1024 --out docs/notes/speed-table.csv

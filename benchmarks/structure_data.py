@@ -9,7 +9,7 @@ Disks: 2D, sizes poly-uniform:0.1 (p = 1.1) and poly-uniform:0.4 (p = 1.4), line
 springs, jammed at onset by ``jamflow.protocols.compression.jam`` (V_tol = 1e-16).
 Spheres: 3D monodisperse, bisected to an energy window V_target < V < 2 V_target, then the
 onset of that state is found by decompression, so Delta phi = phi - phi_J is measured
-(seed Figure 2.21(b) uses phi - phi_J = 1e-2).
+(chapter Figure 2.21(b) uses phi - phi_J = 1e-2).
 Files land in /tmp/jamflow-structure-data/ (override with --dir); existing files are kept.
 """
 

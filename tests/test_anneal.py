@@ -1,4 +1,4 @@
-"""Particle-shape annealing (issue 13 item 5, seed section 2.3.3): the step sequence, the growth
+"""Particle-shape annealing (issue 13 item 5, chapter section 2.3.3): the step sequence, the growth
 step (phi kept, random directors only from a round start), `jamflow anneal` end to end (every
 step recorded, the last packing checked, by the independent brute-force energy too), bad input
 refused before any work."""

@@ -1,4 +1,4 @@
-"""The isotropic compression protocol (seed section 2.1) end to end on small systems."""
+"""The isotropic compression protocol (chapter section 2.1) end to end on small systems."""
 
 import numpy as np
 import pytest

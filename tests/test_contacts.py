@@ -1,4 +1,4 @@
-"""Contacts, floaters and the isostatic count (seed chapter section 4.1)."""
+"""Contacts, floaters and the isostatic count (chapter section 4.1)."""
 
 import numpy as np
 import pytest
@@ -30,7 +30,7 @@ def disk_in_vacancy(offset_deg, shift, diameter):
 
 @pytest.mark.parametrize("offset,shift,diameter,z,floater", [
     (0, 0.0, 1.0, 6, False),     # centred: six contacts all round
-    (60, 0.3, 0.8, 3, True),     # contacts at 0, 60, 120 deg: all on one side (seed Fig. 2.19 text)
+    (60, 0.3, 0.8, 3, True),     # contacts at 0, 60, 120 deg: all on one side (chapter Fig. 2.19 text)
     (60, 0.3, 1.4, 5, False),    # adds 180 and 300 deg: spans the plane
     (0, 0.195, 0.6, 1, True),    # one contact: fewer than d + 1 = 3
 ])

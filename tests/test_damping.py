@@ -1,4 +1,4 @@
-"""Pairwise damping of damped MD (seed eq. 2.3), ``fix jamflow/damping`` in jamflow's plugin.
+"""Pairwise damping of damped MD (chapter eq. 2.3), ``fix jamflow/damping`` in jamflow's plugin.
 
 Checked against (1) the closed form for two particles: a head-on relative velocity gives
 -b v_rel along rhat, a tangential one nothing, a pair beyond contact nothing, and the

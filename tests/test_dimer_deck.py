@@ -29,7 +29,7 @@ def run_lmp(workdir, padding: int = 0, **variables):
 
 
 def test_dimer_deck_jams_rigid_dimers(tmp_path):
-    """2D, random start, damped fix rigid, the seed's bisection: in the window, every force
+    """2D, random start, damped fix rigid, the chapter's bisection: in the window, every force
     and generalized torque below 1e-13 by the reference, dimers rigid (the reader checks every
     site distance to 1e-9), phi and P as the deck reports them, the last minimisation stopped by
     force. Any deck failure fails this test. (3D runs too, but near onset damped dynamics creeps

@@ -24,7 +24,7 @@ ENGINES = {"lammps": LammpsEngine, "numba": CompiledEngine}
 
 
 def dimer(dim, alpha=1.5, s=1.0):
-    """A dimer of site diameters 1 and s, total length alpha (seed Figure 2.9)."""
+    """A dimer of site diameters 1 and s, total length alpha (chapter Figure 2.9)."""
     return RigidBody([[0.0] * dim, [alpha - 0.5 - 0.5 * s] + [0.0] * (dim - 1)], [1.0, s], f"dimer:{alpha}:{s}")
 
 

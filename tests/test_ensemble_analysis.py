@@ -79,6 +79,7 @@ def test_analyze_over_a_store_on_dask_equals_the_serial_pooling(store, tmp_path)
 def test_modes_over_a_store_on_dask(store):
     done = subprocess.run(JAMFLOW + ["modes", str(store), "--workers", "1"], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
-    assert "18 packing(s)" in done.stdout and (store / "modes.png").exists()
-    assert len(list(store.glob("*.modes.hdf5"))) == 18
-    assert len(list(store.glob("*.h5"))) == 18  # results files are not taken for packings
+    assert "18 packing(s)" in done.stdout and (store / f"{store.name}.modes.png").exists()
+    assert len(list(store.glob("*.modes.h5"))) == 18
+    again = subprocess.run(JAMFLOW + ["modes", str(store), "--no-figure"], capture_output=True, text=True)
+    assert again.returncode == 0 and "18 packing(s)" in again.stdout  # the results files are not taken for packings

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
-SMALL = {"jam_and_draw.py": ["--n", "32"], "ensemble_phi_j.py": ["--n", "16", "--seeds", "3"],
+SMALL = {"jam_and_draw.py": ["--n", "32"], "ensemble_phi_j.py": ["--n", "12", "16", "--seeds", "3"],
          "modes_dos.py": ["--n", "32", "--seeds", "2"], "structure_polydisperse.py": ["--n", "64", "--seeds", "1"],
          "shear_path.py": ["--n", "10", "--to", "0.02"], "ellipse_modes.py": ["--n", "32", "--seeds", "1"],
          "shapes.py": ["--n", "16"]}

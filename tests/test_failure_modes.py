@@ -16,7 +16,7 @@ from test_decks import assert_jammed
 
 @pytest.fixture(scope="module")
 def onset():
-    """16 bidisperse disks at onset (FIRE, seed protocol)."""
+    """16 bidisperse disks at onset (FIRE, chapter protocol)."""
     return jam(n=16, dim=2, seed=5)
 
 

@@ -225,7 +225,7 @@ def test_modes_warns_when_not_at_a_minimum(squeezed_file, capsys):
     assert main(["modes", str(squeezed_file), "--no-figure"]) == 0
     out, err = capsys.readouterr()
     assert "warning" in err and "not at an energy minimum" in err and "[NOT FORCE BALANCED]" in out
-    with h5py.File(squeezed_file.with_name("squeezed.modes.hdf5")) as f:
+    with h5py.File(squeezed_file.with_name("squeezed.modes.h5")) as f:
         assert not f.attrs["force_balanced"] and not f["checks"].attrs["passed"]
 
 
@@ -233,7 +233,7 @@ def test_modes_on_a_jammed_packing_does_not_warn(packing_file, capsys):
     assert main(["modes", str(packing_file), "--no-figure"]) == 0
     out, err = capsys.readouterr()
     assert "warning" not in err and "NOT FORCE BALANCED" not in out
-    with h5py.File(packing_file.with_name("p.modes.hdf5")) as f:
+    with h5py.File(packing_file.with_name("p.modes.h5")) as f:
         assert f.attrs["force_balanced"]
 
 
@@ -300,7 +300,7 @@ def test_output_into_a_closed_pipe(tmp_path, packing_file):
     err = proc.stderr.read()
     proc.wait(timeout=120)
     assert proc.returncode == 0 and "Traceback" not in err and "Broken" not in err
-    assert (tmp_path / "p.modes.hdf5").is_file() and (tmp_path / "p.modes.png").is_file()
+    assert (tmp_path / "p.modes.h5").is_file() and (tmp_path / "p.modes.png").is_file()
 
 
 # --- Python API -----------------------------------------------------------------------------

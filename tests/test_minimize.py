@@ -1,4 +1,4 @@
-"""Minimisers report why they stopped; the seed's stopping rules."""
+"""Minimisers report why they stopped; the chapter's stopping rules."""
 
 import numpy as np
 import pytest
@@ -69,7 +69,7 @@ def test_a_genuinely_unjammed_state_is_not_blown_up():
 
 
 def test_energy_steady_is_the_md_fluctuation_rule():
-    """The seed's MD rule: relative rms energy fluctuation over the window below delta; the
+    """The chapter's MD rule: relative rms energy fluctuation over the window below delta; the
     force and V_min rules come first, and it is not reported as converged by force."""
     from jamflow.minimize.settings import CONVERGED_REASONS
     from jamflow.minimize.rules import _stop_reason

@@ -1,11 +1,11 @@
-"""Spectrum, density of states and stability class (seed chapter section 3).
+"""Spectrum, density of states and stability class (chapter section 3).
 
 Closed forms: the phonon spectrum of a compressed triangular lattice, a two-particle system,
-a honeycomb network with an extra zero mode per cell (locally stable, seed Figure 2.15b).
+a honeycomb network with an extra zero mode per cell (locally stable, chapter Figure 2.15b).
 Second implementations: the energy change along a displacement against the all-pairs numpy
 energy difference and against the quadratic form u^T M u / 2; dense against sparse solver.
 Published facts: jammed frictionless disks are isostatic after floater removal with exactly d
-zero modes (seed section 4.1; O'Hern et al., Phys. Rev. E 68, 011306 (2003))."""
+zero modes (chapter section 4.1; O'Hern et al., Phys. Rev. E 68, 011306 (2003))."""
 
 import argparse
 from itertools import product
@@ -104,7 +104,7 @@ def test_honeycomb_is_only_locally_stable_with_flat_zero_mode():
     assert spec.n_negative == 0 and spec.n_zero == 25 and spec.n_extra_zero == 23
     st = Stability().compute(p, spec)
     assert st.label == LOCALLY_STABLE and st.flat and st.behaviour == "flat"
-    # moving far along the mode costs nothing: contacts open (seed Fig. 2.15c, dashed line)
+    # moving far along the mode costs nothing: contacts open (chapter Fig. 2.15c, dashed line)
     far = Stability(deltas=[1e-3, 1e-2, 1e-1]).compute(p, spec)
     assert far.flat and np.all(far.delta_v <= 0)
 
@@ -132,8 +132,8 @@ def test_energy_change_matches_direct_difference_and_quadratic_form(pot):
 def test_jammed_packing_is_isostatic_and_mechanically_stable(jammed):
     spec = Spectrum().compute(jammed)
     c = spec.dynamical.contacts
-    assert c.is_isostatic  # N_c = N' d - d + 1 (seed section 4.1)
-    # <z>_iso = 2 N_c,iso / N' = 2d - 2(d - 1)/N' (the seed's text prints (d - 1)/N', without the 2)
+    assert c.is_isostatic  # N_c = N' d - d + 1 (chapter section 4.1)
+    # <z>_iso = 2 N_c,iso / N' = 2d - 2(d - 1)/N' (the chapter's text prints (d - 1)/N', without the 2)
     assert c.mean_z == pytest.approx(4 - 2 / c.n_kept, rel=1e-14)
     assert spec.n_zero == 2 and spec.n_negative == 0
     assert spec.translation_residual < 1e-14
@@ -216,11 +216,11 @@ def test_cli_writes_results_and_figure(jammed, tmp_path, capsys):
     assert "isostatic 1/2" in out and "exactly d zero modes (none negative) 2/2" in out
     from jamflow.io.modes_file import read_modes
 
-    res = read_modes(tmp_path / "p0.modes.hdf5")
+    res = read_modes(tmp_path / "p0.modes.h5")
     assert res["classification"] == STABLE and res["n_zero"] == 2
     assert res["n_contacts"] == res["isostatic_count"] and len(res["contacts"]) == res["n_contacts"]
     assert np.allclose(res["eigenvalues"], Spectrum().compute(jammed).eigenvalues, atol=1e-14)
-    png = tmp_path / "modes.png"
+    png = tmp_path / f"{tmp_path.name}.modes.png"
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert not list(tmp_path.glob(".*tmp"))  # atomic writes leave no temporaries
     with h5py.File(files[0], "r") as f:  # the packing file itself is untouched
@@ -237,7 +237,7 @@ def test_cli_summary_prints_the_pooled_mean_z_and_floater_fraction(jammed, tmp_p
     modes, args = _modes_args([str(f) for f in files] + ["--no-figure"])
     with pytest.warns(UserWarning, match="not at an energy minimum"):  # the vacancy's neighbours are pushed inwards
         assert modes.run(args) == 0
-    summary = capsys.readouterr().out.splitlines()[-1]
+    summary = next(line for line in capsys.readouterr().out.splitlines() if line.startswith("2 packing(s)"))
     found = [Contacts().compute(q) for q in packings]
     mean_z = 2 * sum(c.n_contacts for c in found) / sum(len(c.floater) - c.n_floaters for c in found)
     floaters, n = sum(c.n_floaters for c in found), sum(q.n for q in packings)
@@ -252,7 +252,7 @@ def test_cli_rejects_bad_input_before_work(tmp_path):
     modes, args = _modes_args([str(good), str(tmp_path / "missing.h5")])
     with pytest.raises(FileNotFoundError, match="missing.h5"):
         modes.run(args)
-    assert not (tmp_path / "good.modes.hdf5").exists()
+    assert not (tmp_path / "good.modes.h5").exists()
     modes, args = _modes_args([str(good), "--e-min", "-1"])
     with pytest.raises(ValueError, match="e_min"):
         modes.run(args)
@@ -274,6 +274,6 @@ def test_cli_reads_lammps_files(fmt, tmp_path, capsys):
         warnings.simplefilter("ignore")  # float32 coordinates may not pass jamflow's force balance test
         assert modes.run(args) == 0
     assert f"{src}: N' = 36" in capsys.readouterr().out
-    res = read_modes(tmp_path / "p.modes.hdf5")
+    res = read_modes(tmp_path / "p.modes.h5")
     assert res["n_zero"] == 2 and res["n_contacts"] == 108
     assert np.allclose(res["eigenvalues"], Spectrum().compute(lattice).eigenvalues, atol=1e-5)

@@ -5,7 +5,7 @@ ellipses (alpha = 1.5, N = 16) jammed on the reference energy, and 2D dimers (al
 N = 32) jammed by the compiled engine. Published facts checked: ellipse packings at onset are
 hypostatic and their quartic modes number the missing contacts N' d_f - d + 1 - N_c (Mailman
 et al., Phys. Rev. Lett. 102, 255501 (2009)); the modes of the lowest branch are mostly
-rotational (seed section 3, Figure 2.17); site-site contacts are point-point distances, so
+rotational (chapter section 3, Figure 2.17); site-site contacts are point-point distances, so
 dimer packings obey Maxwell's count (isostatic; VanderWerf et al., Phys. Rev. E 97, 012909
 (2018)). Second implementations: the pair-by-pair energy change against the difference of two
 reference energies and against the quadratic form of the dynamical matrix."""
@@ -105,7 +105,7 @@ def test_stored_ellipse_packings_are_at_onset(ellipses):
     assert len(ellipses) == 3
     for p in ellipses:
         ref = energy_forces_pressure(p)
-        assert 1e-16 < ref.energy / p.n < 2e-16  # the seed's window, V_tol = 1e-16
+        assert 1e-16 < ref.energy / p.n < 2e-16  # the chapter's window, V_tol = 1e-16
         assert np.abs(ref.forces).max() < 1e-13 and np.abs(ref.torques).max() < 1e-13
 
 
@@ -218,7 +218,7 @@ def test_stability_profiles_the_requested_modes(dimers):
 
 def test_three_branches_partition_the_nontrivial_modes(ellipses):
     """Branch 1 = the extra zero modes, 2 and 3 split the nonzero ones by character at 1/2
-    (seed Figure 2.17); disks have no branches."""
+    (chapter Figure 2.17); disks have no branches."""
     from jamflow.analysis.modes import Spectrum, branches
 
     spec = Spectrum().compute(ellipses[0])
@@ -244,7 +244,7 @@ def test_cli_stores_mode_character_and_profiles(tmp_path, capsys):
     out = capsys.readouterr().out
     from jamflow.io.modes_file import read_modes
 
-    res = read_modes(tmp_path / (target.stem + ".modes.hdf5"))
+    res = read_modes(tmp_path / (target.stem + ".modes.h5"))
     missing = res["missing_contacts"]
     assert f"quartic modes {missing}, one-particle flat 0 (missing contacts {missing})" in out
     assert "extra zero modes = missing contacts 1/1, quartic modes = missing contacts 1/1" in out
@@ -328,8 +328,8 @@ def test_cli_figure_colours_the_three_branches_by_default(tmp_path, monkeypatch)
     profiles = {line.get_label(): to_hex(line.get_color()) for line in d.get_lines()}
     assert colours[1] == profiles["quartic"] and profiles["quadratic"] not in colours.values()
     assert len(set(colours.values())) == 3 and to_hex("red") != colours[2]
-    units = r"($\sqrt{\epsilon/m}\,/\,\sigma$, M = N m)"
-    assert a.get_ylabel().endswith(units) and b.get_xlabel() == r"$\omega$ " + units
+    units = r", M = N m  [$\sqrt{\epsilon/(m\sigma^2)}$]"
+    assert a.get_ylabel().endswith(units) and b.get_xlabel() == r"$\omega$" + units
     assert r"\Delta V(-\delta)" in d.get_ylabel()  # the symmetric part, spelled out
 
 

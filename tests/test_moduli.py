@@ -1,4 +1,4 @@
-"""Bulk and shear moduli (seed section 4.5): closed forms on the triangular lattice, finite
+"""Bulk and shear moduli (chapter section 4.5): closed forms on the triangular lattice, finite
 differences of the numpy reference energy, strain sweeps against the Hessian route on jammed
 packings (orthogonal and tilted cells, both engines), the fit and yield logic on synthetic sweeps,
 jam --above, the results file and bad input."""

@@ -1,5 +1,5 @@
 """jamflow's LAMMPS plugin pair styles (jamflow/spring, jamflow/rlj) and the lepton/sphere
-fallback, checked against (1) the closed forms of seed eqs. 2.1 and 2.2 evaluated in 40-digit
+fallback, checked against (1) the closed forms of chapter eqs. 2.1 and 2.2 evaluated in 40-digit
 decimal arithmetic for two particles, and (2) the independent all-pairs numpy reference
 ``jamflow.mechanics.reference`` for random polydisperse packings, in orthogonal and tilted
 boxes, 2D and 3D, newton on and off. LAMMPS systems are built by hand here so that the
@@ -79,7 +79,7 @@ def rel(a, b):
 
 # closed form in 40-digit decimal arithmetic -----------------------------------------------------
 def exact_pair(potential, dr, sigma):
-    """(V, -dV/dr) of seed eq. 2.1 / 2.2 for the float64 separation ``dr``, 40 digits."""
+    """(V, -dV/dr) of chapter eq. 2.1 / 2.2 for the float64 separation ``dr``, 40 digits."""
     with decimal.localcontext() as ctx:
         ctx.prec = 40
         r = sum(Decimal(float(c)) ** 2 for c in dr).sqrt()

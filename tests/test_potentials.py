@@ -1,4 +1,4 @@
-"""Closed-form checks of the potentials (seed eqs. 2.1, 2.2) and their derivatives."""
+"""Closed-form checks of the potentials (chapter eqs. 2.1, 2.2) and their derivatives."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""Jamming at fixed shear strain and quasistatic shear at zero pressure (seed section 2.2):
+"""Jamming at fixed shear strain and quasistatic shear at zero pressure (chapter section 2.2):
 unit period and mirror symmetry on real jammed packings, continuous families and breaks,
 reversibility, the two engines, files, the command line and bad input."""
 
@@ -66,7 +66,7 @@ def test_gamma_and_gamma_plus_one_same_packing():
 
 def test_gamma_and_one_minus_gamma_are_related_by_the_inversion():
     """Figure 2.4(c): a start mirrored x -> -x jams at 1 - gamma to the mirror image of the
-    packing jammed at gamma (seed protocol: identical decisions). Exact strains (0.25, 0.75 ->
+    packing jammed at gamma (chapter protocol: identical decisions). Exact strains (0.25, 0.75 ->
     reduced -0.25) make the two cells exact mirror images."""
     a = compress(start_at(0.25), seed_protocol())
     m = compress(start_at(0.75, mirror=True), seed_protocol())

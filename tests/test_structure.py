@@ -125,7 +125,7 @@ def test_structure_factor_matches_literal_double_sum(dim, gamma):
 
 
 def test_structure_factor_matches_freud_in_a_cubic_box():
-    """freud's direct S(k) samples only the octant n_x, n_y, n_z >= 0 (the seed's literal
+    """freud's direct S(k) samples only the octant n_x, n_y, n_z >= 0 (the chapter's literal
     wording); restricted to those vectors and freud's bins, the two agree at float32 level."""
     p = gas(300, 3, 0.3, 2)
     fbox = p.box.to_freud()

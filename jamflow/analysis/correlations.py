@@ -46,6 +46,11 @@ class ExponentialFit:
     y_points: np.ndarray
     reason: str = ""
 
+    def __repr__(self) -> str:
+        """One line: xi, its error, amplitude, points, the reason (if any)."""
+        return (f"ExponentialFit(xi={self.xi:.4g}, xi_stderr={self.xi_stderr:.2g}, amplitude={self.amplitude:.4g}, "
+                f"points={len(self.r_points)}" + (f", reason={self.reason!r})" if self.reason else ")"))
+
 
 def fit_exponential(r, y) -> ExponentialFit:
     """Least-squares line through (r, log y); y > 0 required; xi = -1/slope."""
@@ -111,6 +116,12 @@ class BondCorrelationResult:
     l: int
     n_packings: int
     fit: ExponentialFit  # xi from the local maxima of C(r)
+
+    def __repr__(self) -> str:
+        """One line: l, bins, r range, packings, baseline, the fitted length."""
+        return (f"BondCorrelationResult(l={self.l}, bins={len(self.counts)}, r=[{self.edges[0]:.4g}, "
+                f"{self.edges[-1]:.4g}], n_packings={self.n_packings}, baseline={self.baseline:.4g}, "
+                f"xi={self.fit.xi:.4g})")
 
     @property
     def r(self) -> np.ndarray:

@@ -236,6 +236,12 @@ class DensityOfStatesResult:
     def centers(self) -> np.ndarray:
         return 0.5 * (self.edges[1:] + self.edges[:-1])
 
+    @property
+    def normalized(self) -> np.ndarray:
+        """(bins,) D(omega) as a probability density over omega: ``density`` / (modes per packing),
+        so that sum(normalized * bin widths) = 1 (nan without modes)."""
+        return self.density * self.n_packings / self.n_modes if self.n_modes else np.full(len(self.density), np.nan)
+
 
 class DensityOfStates:
     """Histogram D(omega) of the nonzero frequencies of complete spectra, averaged.

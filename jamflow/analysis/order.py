@@ -162,6 +162,12 @@ class BondOrderResult:
     particle_order: np.ndarray  # (N, 1) or (N, 2l+1) complex Q_i (zero rows: isolated)
     n_neighbours: np.ndarray  # (N,)
 
+    def __repr__(self) -> str:
+        """One line: l, dim, Q_l global and local, r_min, N, isolated particles."""
+        return (f"BondOrderResult(l={self.l}, dim={self.dim}, global_order={self.global_order:.4f}, "
+                f"local_order={self.local_order:.4f}, r_min={self.r_min:.4g}, N={len(self.n_neighbours)}, "
+                f"n_isolated={int(np.sum(self.n_neighbours == 0))})")
+
     @property
     def n_isolated(self) -> int:
         """Particles with no neighbour within r_min (left out of the averages)."""

@@ -132,6 +132,13 @@ class RDFResult:
     scales: np.ndarray  # <sigma^2>^(1/2) of each packing (diameters)
     n_packings: int
 
+    def __repr__(self) -> str:
+        """One line: bins, r range, packings, species with partials, the first peak."""
+        peak = int(np.nanargmax(self.g)) if len(self.g) else 0
+        return (f"RDFResult(bins={len(self.g)}, r=[{self.edges[0]:.4g}, {self.edges[-1]:.4g}], "
+                f"n_packings={self.n_packings}, partial_species={len(self.species)}, "
+                f"peak_g={self.g[peak] if len(self.g) else float('nan'):.4g}, peak_r={self.r[peak] if len(self.g) else float('nan'):.4g})")
+
     @property
     def r(self) -> np.ndarray:
         """Bin centres, units of <sigma^2>^(1/2)."""
@@ -291,6 +298,13 @@ class StructureFactorResult:
     n_vectors: np.ndarray  # vectors per shell (one of each +-k pair), summed over packings
     dk: float
     n_packings: int
+
+    def __repr__(self) -> str:
+        """One line: shells, k range, dk, packings, the largest S(k) and where."""
+        top = int(np.argmax(self.s)) if len(self.s) else 0
+        return (f"StructureFactorResult(shells={len(self.k)}, k=[{self.k.min():.4g}, {self.k.max():.4g}], "
+                f"dk={self.dk:.4g}, n_packings={self.n_packings}, s_max={self.s[top]:.4g}, k_at_max={self.k[top]:.4g})"
+                if len(self.k) else f"StructureFactorResult(shells=0, dk={self.dk:.4g}, n_packings={self.n_packings})")
 
     @property
     def stderr(self) -> np.ndarray:

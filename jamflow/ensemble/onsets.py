@@ -66,6 +66,11 @@ class OnsetResult:
     shift: float  # a in <phi_J>(N) = phi_inf - a N^-nu
     n_bootstrap: int
 
+    def __repr__(self) -> str:
+        """One line: dim, the sizes N, nu and phi_inf with their errors, bootstrap replicates."""
+        return (f"OnsetResult(dim={self.dim}, n={[s.n for s in self.sizes]}, nu={self.nu.value:.3f}+-{self.nu.err:.3f}, "
+                f"phi_inf={self.phi_inf.value:.5f}+-{self.phi_inf.err:.5f}, n_bootstrap={self.n_bootstrap})")
+
     def table(self) -> list[dict]:
         return [dict(n=s.n, packings=s.count, failed=s.failed, mean_phi_j=s.mean_phi, mean_phi_j_err=s.mean_phi_err,
                      width=s.width, width_err=s.width_err, mean_z=float(np.mean(s.z)),

@@ -5,10 +5,12 @@ per file runs on a local cluster or an existing scheduler."""
 from __future__ import annotations
 
 import contextlib
+import warnings
 from pathlib import Path
 
 from tqdm import tqdm
 
+from jamflow.io.names import packing_files, without_derived
 from jamflow.support.files import check_distinct
 from jamflow.support.progress import PlainProgress, is_terminal
 
@@ -21,15 +23,31 @@ def progress(iterable=None, **kwargs):
     return PlainProgress(iterable, status=kwargs.get("bar_format") == "{desc}", **kwargs)
 
 
+def skip_derived(paths) -> list:
+    """The paths but result files named ``NAME.KIND.h5`` (``jamflow.io.names``), with a warning
+    naming what was left out; a ValueError if nothing is left."""
+    kept, skipped = without_derived(paths)
+    if skipped and not kept:
+        raise ValueError(f"{skipped[0]} is a result file (NAME.KIND.h5, jamflow.io.names), not a packing; "
+                         "give the packing files")
+    if skipped:
+        warnings.warn(f"skipped {len(skipped)} result file(s) named NAME.KIND.h5 (e.g. {skipped[0]}): not packings",
+                      stacklevel=2)
+    return kept
+
+
 def expand_inputs(paths) -> list[str]:
-    """Files as given; a directory (an ensemble store) stands for its ``*.h5`` packing files.
+    """Files as given; a directory (an ensemble store) stands for its ``*.h5`` packing files,
+    without the result files derived from them (``jamflow.io.names``: ``NAME.modes.h5``,
+    ``NAME.moduli.h5``, ...); so are such files given by name, with a warning (``skip_derived``).
     A file named twice is refused (``check_distinct``)."""
     out = []
-    for path in map(Path, paths):
+    for path in map(Path, skip_derived(paths)):
         if path.is_dir():
-            files = sorted(path.glob("*.h5"))
+            files = packing_files(path)
             if not files:
-                raise FileNotFoundError(f"directory {path} holds no *.h5 packing files")
+                raise FileNotFoundError(f"directory {path} holds no *.h5 packing files (result files such as "
+                                        "NAME.modes.h5 do not count)")
             out += [str(f) for f in files]
         else:
             out.append(str(path))

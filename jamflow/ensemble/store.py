@@ -21,6 +21,7 @@ from pathlib import Path
 
 from jamflow import __version__
 from jamflow.ensemble.checks import packing_row
+from jamflow.io.names import packing_files
 from jamflow.support.files import DirectoryLocked, atomic_path, lock_directory, read_json
 
 MANIFEST, SUMMARY, FAILED, CORRUPT = "ensemble.json", "summary.csv", "failed", "corrupt"
@@ -106,7 +107,7 @@ class Store:
         path = self.dir / MANIFEST
         wanted = {"schema": SCHEMA, "schema_version": 1, "axes": list(axes), "parameters": fixed}
         if not path.exists():
-            if any(self.dir.glob("*.h5")):
+            if packing_files(self.dir):
                 raise ValueError(f"{self.dir} holds .h5 files but no {MANIFEST}: it is not a jamflow ensemble "
                                  "store; use another --out")
             with atomic_path(path) as tmp:
@@ -218,7 +219,7 @@ class Store:
         """summary.csv from the packing and failure files alone (no cached rows)."""
         manifest = read_json(self.dir / MANIFEST, "jamflow ensemble manifest")
         rows = []
-        for path in sorted(self.dir.glob("*.h5")) + sorted((self.dir / FAILED).glob("*.json")):
+        for path in packing_files(self.dir) + sorted((self.dir / FAILED).glob("*.json")):
             task = task_from_name(path.stem, manifest["axes"])
             read = packing_row if path.suffix == ".h5" else failure_row
             rows.append(read(path, task, manifest["parameters"]))

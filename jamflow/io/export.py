@@ -9,6 +9,7 @@ shapes and orientations; and the LAMMPS data file a simulation starts from.
   radius:R:1...``, ``pbc``.
 - LAMMPS data file (``lammps-data``): ``jamflow.io.packing_file.write_lammps_data`` (atom_style
   sphere, ellipsoid, or hybrid sphere molecular for rigid bodies).
+- HOOMD-blue GSD (``gsd``): ``jamflow.io.gsd_file.write_gsd`` (needs the ``gsd`` package).
 
 Ellipses/spheroids add their axes and quaternions (``_rows``); rigid bodies are written one row
 per site with the body as molecule id. Measured with OVITO 3.17.2 (``ovito.io.import_file``):
@@ -28,12 +29,13 @@ from pathlib import Path
 
 import numpy as np
 
+from jamflow.io.gsd_file import write_gsd
 from jamflow.io.packing_file import write_lammps_data
 from jamflow.model.packing import Packing
 from jamflow.support.files import atomic_path
 
-FORMATS = ("lammps-dump", "xyz", "lammps-data")
-SUFFIXES = {"lammps-dump": ".dump", "xyz": ".xyz", "lammps-data": ".data"}
+FORMATS = ("lammps-dump", "xyz", "lammps-data", "gsd")
+SUFFIXES = {"lammps-dump": ".dump", "xyz": ".xyz", "lammps-data": ".data", "gsd": ".gsd"}
 MAX_TYPES = 8
 
 
@@ -43,6 +45,8 @@ def export_packing(packing: Packing, path, fmt: str) -> Path:
         raise ValueError(f"unknown export format {fmt!r}; use one of {', '.join(FORMATS)}")
     if fmt == "lammps-data":
         return write_lammps_data(path, packing)
+    if fmt == "gsd":
+        return write_gsd(path, packing)
     text = (_lammps_dump if fmt == "lammps-dump" else _extended_xyz)(packing)
     with atomic_path(path) as tmp:
         tmp.write_text(text)

@@ -9,6 +9,8 @@ import numpy as np
 
 from jamflow import __version__
 from jamflow.io.packing_file import hdf5_output, open_hdf5
+from jamflow.mechanics.contacts import pooled_contacts
+from jamflow.support.files import write_csv
 
 SCHEMA, SCHEMA_VERSION = "jamflow.modes", 2  # v2 adds the shape, mode character and per-mode profiles
 
@@ -82,3 +84,41 @@ def read_modes(path) -> dict:
         out = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
         f.visititems(lambda name, obj: out.__setitem__(name, _dataset(obj)) if isinstance(obj, h5py.Dataset) else None)
     return out
+
+
+# --- data pooled over the packings of one `jamflow modes` run, beside its figure ----------------
+
+DOS_COLUMNS = ("omega_low", "omega_high", "D", "D_per_packing", "D_translational_per_packing")
+PACKING_COLUMNS = ("file", "n", "n_kept", "n_floaters", "floater_fraction", "n_contacts", "isostatic_count",
+                   "mean_z", "n_zero", "n_negative", "lowest_nonzero", "mass")
+
+
+def save_pooled_dos(path, dos) -> Path:
+    """D(omega) of a ``DensityOfStatesResult`` as CSV, one row per bin (columns ``DOS_COLUMNS``):
+    omega = sqrt(e / M) in units of sqrt(eps / (m diameter^2)), M the spectra's ``mass`` (N m by
+    default, the chapter's); ``D`` normalised to integral 1 over omega; ``D_per_packing`` modes per unit omega per packing (the chapter's
+    D(omega), section 3); its translational part (empty without eigenvectors)."""
+    translational = dos.translational if dos.translational is not None else [""] * len(dos.density)
+    rows = [dict(zip(DOS_COLUMNS, values)) for values in
+            zip(dos.edges[:-1], dos.edges[1:], dos.normalized, dos.density, translational)]
+    return write_csv(path, rows, DOS_COLUMNS)
+
+
+def save_packing_table(path, labels, spectra) -> Path:
+    """One CSV row per packing (columns ``PACKING_COLUMNS``: contacts, floaters, <z>, zero modes)
+    and a last row ``file = pooled``: sums of the counts, <z> and floater fraction pooled
+    (``jamflow.mechanics.contacts.pooled_contacts``), lowest_nonzero the smallest."""
+    rows = []
+    for label, s in zip(labels, spectra):
+        c = s.dynamical.contacts
+        rows.append(dict(file=label, n=len(c.floater), n_kept=c.n_kept, n_floaters=c.n_floaters,
+                         floater_fraction=c.n_floaters / len(c.floater), n_contacts=c.n_contacts,
+                         isostatic_count=c.isostatic_count, mean_z=c.mean_z, n_zero=s.n_zero,
+                         n_negative=s.n_negative, lowest_nonzero=s.lowest_nonzero, mass=s.mass))
+    pooled_z = pooled_contacts(s.dynamical.contacts for s in spectra)
+    pooled = {k: sum(r[k] for r in rows) for k in ("n", "n_kept", "n_floaters", "n_contacts", "isostatic_count",
+                                                   "n_zero", "n_negative")}
+    lowest = [r["lowest_nonzero"] for r in rows if np.isfinite(r["lowest_nonzero"])]
+    rows.append(dict(file="pooled", **pooled, floater_fraction=pooled_z.floater_fraction, mean_z=pooled_z.mean_z,
+                     lowest_nonzero=min(lowest, default=float("nan")), mass=""))
+    return write_csv(path, rows, PACKING_COLUMNS)

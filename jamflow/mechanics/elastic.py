@@ -101,6 +101,12 @@ class HessianModuliResult:
     lowest_eigenvalue: float  # smallest non-trivial eigenvalue
     zero_tol: float
 
+    def __repr__(self) -> str:
+        """One line: G, B (and affine parts), kept particles, contacts, extra zero and negative modes."""
+        return (f"HessianModuliResult(G={self.G:.6e}, B={self.B:.6e}, G_affine={self.G_affine:.4e}, "
+                f"B_affine={self.B_affine:.4e}, kept={self.n_kept}, N_c={self.n_contacts}, "
+                f"n_extra_zero={self.n_extra_zero}, n_negative={self.n_negative})")
+
     def modulus(self, strain: Strain) -> float:
         return self.G if strain.modulus == "G" else self.B
 

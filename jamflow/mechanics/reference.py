@@ -38,6 +38,14 @@ class ReferenceResult:
     wall_forces: np.ndarray | None = None  # (d, 2, d): force of the particles on each face (walled axes)
     contact_forces: np.ndarray | None = None  # |f| of every overlapping pair (of sites, for rigid bodies)
 
+    def __repr__(self) -> str:
+        """One line: N, dim, energy, P, max|F|, which optional arrays are there."""
+        n, d = self.forces.shape
+        extra = "".join(f", {name}=yes" for name in ("torques", "wall_forces", "contact_forces")
+                        if getattr(self, name) is not None)
+        return (f"ReferenceResult(N={n}, dim={d}, energy={self.energy:.6e}, P={self.pressure:.4e}, "
+                f"max_force={np.abs(self.forces).max(initial=0.0):.2e}{extra})")
+
     @property
     def pressure(self) -> float:
         return float(np.trace(self.pressure_tensor) / len(self.pressure_tensor))

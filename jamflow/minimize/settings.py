@@ -7,6 +7,7 @@ from dataclasses import asdict, dataclass
 
 from jamflow.mechanics.force_floor import FORCE_TOL_BASE, force_floor
 from jamflow.model.box import STRESS_MODES
+from jamflow.support.reprs import changed_fields_repr
 
 METHODS = ("fire", "cg", "md")
 
@@ -50,6 +51,8 @@ class MinimizerSettings:
     # otherwise
     creep: str = "auto"
     creep_after: int | None = None  # iterations before the first attempt; None: the method's measured value
+
+    __repr__ = changed_fields_repr  # only the fields that differ from their defaults
 
     def __post_init__(self):
         if self.method not in METHODS:

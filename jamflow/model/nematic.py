@@ -18,6 +18,10 @@ class NematicResult:
     director: np.ndarray
     tensor: np.ndarray
 
+    def __repr__(self) -> str:
+        """One line: P2 and the director."""
+        return f"NematicResult(p2={self.p2:.4f}, director={np.round(self.director, 4).tolist()})"
+
 
 class Nematic:
     """Nematic order P2 (chapter section 4.3) of particle axes in 2D or 3D.

@@ -6,11 +6,12 @@ width is proportional to the contact force |dV/dr|; floaters (``jamflow.mechanic
 hatched grey; the others coloured by contact number z or by local bond order |Q6|
 (``jamflow.analysis.order``). Spheres are drawn as a *slice*: the cross-sections of the
 spheres cut by the plane at fractional height ``slice_at`` of the cell, with the contacts
-between cut spheres projected onto it.
+between cut spheres projected onto it (each half-line stopping at its own cross-section's edge,
+since the contact point lies off the plane).
 
 Rigid bodies (n-mers, ``jamflow.model.shapes.nmers``) are drawn site by site: every site is a disk
-(a sphere in 3D, cut by the slice), its contacts are the overlapping site pairs of different
-bodies, and ``color_by="orientation"`` colours each body by its director angle mod pi on a
+(a sphere in 3D, cut by the slice) and a black line joins the sites of one body; its contacts are
+the overlapping site pairs of different bodies, and ``color_by="orientation"`` colours each body by its director angle mod pi on a
 cyclic map (nematic domains show as patches of one colour, like the chapter's Figure 2.26).
 
 Ellipses are drawn with their full axes a, b along and across the director; 3D spheroids have
@@ -125,9 +126,12 @@ def draw_into(ax, packing: Packing, *, color_by: str = "z", slice_at: float = 0.
                       linewidths=0.3, hatch="////")
     artists = [body, ghost]
     fmax = 0.0
+    bonds = view.body_lines()
+    if len(bonds):  # which sites form a body
+        artists.append(LineCollection(bonds, linewidths=1.2, colors="k", label="bodies"))
     if contacts:
         lines, widths, fmax = view.contact_lines()
-        artists.append(LineCollection(lines, linewidths=widths, colors="crimson", capstyle="round"))
+        artists.append(LineCollection(lines, linewidths=widths, colors="crimson", capstyle="round", label="contacts"))
     for artist in artists:
         ax.add_collection(artist)
         artist.set_clip_path(cell)
@@ -177,6 +181,7 @@ class _View:
             self.index = np.flatnonzero(np.abs(dz) < radius)
             self.sizes = 2.0 * np.sqrt(radius[self.index] ** 2 - dz[self.index] ** 2)
             xy = pos[:, :2] - h[:2, 2] * (pos[:, 2:3] / h[2, 2])  # move along the third cell vector into the plane
+        self.diameters = disks.diameters
         self.h2 = h[:2, :2]
         frac = np.linalg.solve(self.h2, xy.T).T % 1.0
         self.xy = frac @ self.h2.T  # every disk wrapped into the 2D cell
@@ -205,17 +210,52 @@ class _View:
         owner = np.concatenate(owners)
         return np.concatenate(centres), sizes[owner], owner
 
+    def _cut(self) -> np.ndarray:
+        """Whether each disk is drawn (cut by the slice in 3D)."""
+        cut = np.zeros(len(self.owner), bool)
+        cut[self.index] = True
+        return cut
+
+    def _radii(self) -> np.ndarray:
+        """Drawn radius of each disk (its cross-section in 3D; 0 where not drawn)."""
+        radius = np.zeros(len(self.owner))
+        radius[self.index] = 0.5 * self.sizes
+        return radius
+
     def contact_lines(self):
-        """Segments (both periodic ends), line widths and the largest force drawn."""
+        """Segments (both periodic ends), line widths and the largest force drawn. In 2D a
+        contact joins the two centres; in a 3D slice the contact point is out of the plane, so each
+        half-line, from a centre towards the contact point, stops at the edge of its own
+        cross-section and no line crosses empty space."""
         i, j, dr, r, sigma = self.pairs()
         if self.packing.dim == 3:
-            cut = np.zeros(len(self.owner), bool)
-            cut[self.index] = True
-            keep = cut[i] & cut[j]
+            keep = self._cut()[i] & self._cut()[j]
             i, j, dr, r, sigma = i[keep], j[keep], dr[keep], r[keep], sigma[keep]
         force = np.abs(self.packing.potential.dv_dr(r, sigma))
         fmax = float(force.max()) if len(force) else 0.0
         widths = MAX_LINE_WIDTH * force / fmax if fmax > 0 else np.zeros(0)
-        start_i, start_j, step = self.xy[i], self.xy[j], dr[:, :2]
-        lines = np.concatenate([np.stack([start_i, start_i - step], 1), np.stack([start_j, start_j + step], 1)])
+        start_i, start_j, step_i, step_j = self.xy[i], self.xy[j], dr[:, :2], dr[:, :2]
+        if self.packing.dim == 3:
+            length = np.linalg.norm(step_i, axis=1)
+            unit = step_i / np.where(length > 0, length, 1.0)[:, None]
+            share = self.diameters[i] / (self.diameters[i] + self.diameters[j])  # contact point along r_i - r_j
+            radius = self._radii()
+            step_i = unit * np.minimum(share * length, radius[i])[:, None]
+            step_j = unit * np.minimum((1 - share) * length, radius[j])[:, None]
+        lines = np.concatenate([np.stack([start_i, start_i - step_i], 1), np.stack([start_j, start_j + step_j], 1)])
         return lines, np.concatenate([widths, widths]), fmax
+
+    def body_lines(self) -> np.ndarray:
+        """Rigid bodies: segments joining the consecutive sites of each body (both periodic
+        ends; in 3D only sites cut by the slice), so that the picture shows which disks form a
+        body. Empty for other shapes."""
+        p = self.packing
+        if p.shape.kind != "rigid" or p.shape.n_sites < 2:
+            return np.zeros((0, 2, 2))
+        offsets = p.shape.world_sites(p.positions, p.orientations, p.diameters) - p.positions[:, None, :]
+        n_sites = p.shape.n_sites
+        first = (np.arange(p.n)[:, None] * n_sites + np.arange(n_sites - 1)[None, :]).ravel()
+        step = np.diff(offsets, axis=1).reshape(-1, p.dim)[:, :2]  # site k -> k + 1 of each body
+        keep = self._cut()[first] & self._cut()[first + 1]
+        a, b, step = self.xy[first[keep]], self.xy[first[keep] + 1], step[keep]
+        return np.concatenate([np.stack([a, a + step], 1), np.stack([b, b - step], 1)])

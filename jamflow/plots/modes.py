@@ -2,8 +2,9 @@
 atomically: (a) sorted frequencies omega_i vs i / (d N') (chapter Figure 2.16a); for particles
 that turn, every nontrivial mode sqrt(|e_i| / M) on a log scale, coloured by its branch (the
 chapter's three branches of Figure 2.17: 1 zero/quartic, 2 rotational, 3 translational) or by
-its translational fraction, with the zero threshold; (b) D(omega) averaged over packings
-(Figure 2.16b; for shapes also its translational part), (c) distribution of z_i (Figure 2.20),
+its translational fraction, with the zero threshold; (b) D(omega) pooled over packings and
+normalised to integral 1 over omega (Figure 2.16b; for shapes also its translational part),
+(c) distribution of z_i (Figure 2.20) with the pooled <z> and floater fraction,
 (d) the energy change along the profiled nontrivial modes, |Delta V(delta)| (Figure 2.15c,
 log-log), coloured by behaviour. One meaning per colour across the panels: red = zero/quartic
 (branch 1 in (a), quartic profiles in (d)), orange = rotational, green = translational, blue =
@@ -26,7 +27,7 @@ BRANCH_COLOURS = {1: "C3", 2: "C1", 3: "C2"}  # zero/quartic red, rotational ora
 BRANCH_LEGEND = {1: BRANCH_NAMES[0] + " (quartic)", 2: BRANCH_NAMES[1], 3: BRANCH_NAMES[2]}
 NEUTRAL = "0.7"  # data without a character: D(omega) of all modes, the z_i bars
 FRACTION_CMAP = "viridis"  # 0 (rotation) dark purple .. 1 (translation) yellow: neither red nor blue
-OMEGA_UNITS = r"$\sqrt{\epsilon/m}\,/\,\sigma$"
+OMEGA_UNITS = r"[$\sqrt{\epsilon/(m\sigma^2)}$]"  # sigma: the small diameter
 
 
 def modes_figure(path, spectra, dos=None, contacts=(), stabilities=(), colour: str = "branches") -> Path:
@@ -53,9 +54,9 @@ def modes_figure(path, spectra, dos=None, contacts=(), stabilities=(), colour: s
 def omega_label(spectra, symbol=r"\omega") -> str:
     """An axis label for frequencies: ``symbol`` with its units and the M it is normalised by."""
     masses = {s.mass for s in spectra}
-    default = all(s.mass == s.dynamical.packing.n for s in spectra)
-    m = "M = N m" if default or not masses else f"M = {masses.pop():g}" if len(masses) == 1 else "M per packing"
-    return rf"${symbol}$ ({OMEGA_UNITS}, {m})"
+    default = all(s.mass == s.dynamical.n_total for s in spectra)
+    m = "M = N m" if default or not masses else f"M = {masses.pop():g} m" if len(masses) == 1 else "M per packing"
+    return rf"${symbol}$, {m}  {OMEGA_UNITS}"
 
 
 def _sorted_frequencies(ax, spectra, colour="branches"):
@@ -123,16 +124,19 @@ def sorted_modes_by_branch(ax, spectra):
 
 
 def _density_of_states(ax, dos, spectra=()):
-    ax.set(xlabel=omega_label(spectra), ylabel=r"$D(\omega)$ per packing (modes per unit $\omega$)",
+    """D(omega) normalised to integral 1 (``DensityOfStatesResult.normalized``), and its translational part."""
+    ax.set(xlabel=omega_label(spectra), ylabel=r"$D(\omega)$, normalised: $\int D\,d\omega = 1$",
            title="(b) density of states")
     if dos is None:
         ax.text(0.5, 0.5, "needs complete spectra", ha="center", transform=ax.transAxes)
         return
-    ax.stairs(dos.density, dos.edges, fill=True, color=NEUTRAL, label="all modes")
+    ax.stairs(dos.normalized, dos.edges, fill=True, color=NEUTRAL, label="all modes")
     if dos.translational is not None and np.any(dos.rotational > 1e-12 * dos.density.max()):
-        ax.stairs(dos.translational, dos.edges, color=BRANCH_COLOURS[3], label="translational part")
+        ax.stairs(dos.translational * dos.n_packings / dos.n_modes, dos.edges, color=BRANCH_COLOURS[3],
+                  label="translational part")
         ax.legend(loc="upper left", fontsize=8)
-    ax.text(0.98, 0.95, f"{dos.n_packings} packing(s)", ha="right", va="top", transform=ax.transAxes)
+    ax.text(0.98, 0.95, f"{dos.n_packings} packing(s), {dos.n_modes} modes", ha="right", va="top",
+            transform=ax.transAxes)
 
 
 def _z_distribution(ax, contacts):

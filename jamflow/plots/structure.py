@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Sequence
 
 import numpy as np
+from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 from matplotlib.ticker import NullFormatter
 
@@ -46,18 +47,23 @@ def _envelope(ax, fit: ExponentialFit, label: str) -> None:
 
 def plot_rdf(rdf: RDFResult, path, *, r_min: float | None = None, fit: ExponentialFit | None = None,
              title: str = "") -> Path:
-    """g(r) (and partials) with the first minimum; right panel: envelope of g - 1 and its fit."""
+    """g(r) (and partials) with the first minimum; right panel: envelope of g - 1 and its fit.
+    The y axis reaches above the highest peak of every curve drawn; the total g(r) is drawn on top
+    of the partials."""
     fig = Figure(figsize=(10, 4) if fit is not None else (5.5, 4))
     ax, env = fig.subplots(1, 2) if fit is not None else (fig.subplots(), None)
-    ax.plot(rdf.r, rdf.g, lw=1, color="k", label="g(r)")
+    curves = [rdf.g]
     for a in range(len(rdf.species)):
         for b in range(a, len(rdf.species)):
-            ax.plot(rdf.r, rdf.partial[a, b], lw=0.7, label=f"g {rdf.species[a]:g}-{rdf.species[b]:g}")
+            ax.plot(rdf.r, rdf.partial[a, b], lw=0.7, alpha=0.8, label=f"g {rdf.species[a]:g}-{rdf.species[b]:g}")
+            curves.append(rdf.partial[a, b])
+    ax.plot(rdf.r, rdf.g, lw=1.4, color="k", label="g(r), all pairs", zorder=5)
     ax.axhline(1.0, color="0.6", lw=0.5)
     if r_min is not None:
         ax.axvline(r_min, color="tab:red", ls=":", label=f"r_min = {r_min:.2f}")
     r_peak, g_peak = rdf.first_peak(r_min)
-    ax.set_ylim(0, 1.05 * max(g_peak, 1.0))
+    top = max(float(np.nanmax(c, initial=0.0)) for c in curves)
+    ax.set_ylim(0, 1.05 * max(top, 1.0))
     ax.set(xlabel="r / <sigma^2>^1/2", ylabel="g(r)",
            title=f"{title} first peak {g_peak:.3g} at {r_peak:.3f} (dr = {rdf.dr:g})")
     _legend(ax)
@@ -96,15 +102,23 @@ def plot_bond_correlations(corr: BondCorrelationResult, path, *, title: str = ""
 
 
 def plot_order(labels: Sequence[str], values: dict, path, *, title: str = "") -> Path:
-    """Per-packing order parameters (``values``: name -> array over packings)."""
-    fig = Figure(figsize=(max(5.0, 0.35 * len(labels) + 2), 4))
+    """The order parameters (``values``: name -> array over the packings ``labels``): one bar
+    per parameter at its mean over packings, each packing a dot on it, the spread (s.d.) as an
+    error bar."""
+    fig = Figure(figsize=(max(4.5, 1.2 * len(values) + 2), 4))
     ax = fig.subplots()
-    x = np.arange(len(labels))
-    for name, column in values.items():
-        ax.plot(x, column, "o", label=f"{name}: mean {np.nanmean(column):.3f}")
-    ax.set_xticks(x, [str(s) for s in labels], rotation=60, ha="right", fontsize=6)
-    ax.set(ylabel="order parameter", ylim=(-0.02, 1.02), title=title)
-    _legend(ax)
+    x = np.arange(len(values))
+    for k, column in enumerate(values.values()):
+        column = np.asarray(column, float)
+        mean = np.nanmean(column)
+        spread = np.nanstd(column, ddof=1) if np.sum(np.isfinite(column)) > 1 else 0.0
+        ax.bar(k, mean, width=0.6, color=f"C{k}", alpha=0.4, yerr=spread, capsize=4)
+        jitter = np.linspace(-0.2, 0.2, len(column)) if len(column) > 1 else np.zeros(1)
+        ax.plot(k + jitter, column, "o", color=f"C{k}", ms=4)
+        ax.text(k, 1.0, f"{mean:.3f}", ha="center", va="bottom", fontsize=8)
+    ax.set_xticks(x, list(values))
+    ax.set(ylabel="order parameter", ylim=(-0.02, 1.1),
+           title=f"{title}  {len(labels)} packing(s)" + (f": {labels[0]}" if len(labels) == 1 else ""))
     return save_figure(fig, path, tight=True)
 
 
@@ -117,10 +131,10 @@ def plot_bond_order_map(packing, order, path, *, title: str = "") -> Path:
         raise ValueError("the bond-order map is drawn for 2D packings only")
     pos = packing.box.wrap(packing.positions)
     psi = order.particle_order[:, 0]
-    hue = (np.angle(psi) / (2 * np.pi)) % 1.0
     import matplotlib.cm as cm
 
-    colors = cm.hsv(hue)
+    phase = Normalize(-180.0, 180.0)  # arg psi_6 in degrees -> hue, the colour key's norm
+    colors = cm.hsv(phase(np.degrees(np.angle(psi))))
     colors[:, 3] = np.clip(np.abs(psi), 0.15, 1.0)
     colors[order.n_neighbours == 0] = (0.6, 0.6, 0.6, 1.0)
     fig = Figure(figsize=(6, 6 * packing.box.lengths[1] / packing.box.lengths[0] + 0.3))
@@ -135,4 +149,7 @@ def plot_bond_order_map(packing, order, path, *, title: str = "") -> Path:
     ax.autoscale_view()
     ax.set_axis_off()
     ax.set_title(f"{title} Q6 global {order.global_order:.2f}, local {order.local_order:.2f}", fontsize=9)
+    key = cm.ScalarMappable(norm=phase, cmap="hsv")
+    bar = fig.colorbar(key, ax=ax, shrink=0.7, label="arg psi_6 (degrees; hue); opacity |psi_6|; grey: no neighbours")
+    bar.set_ticks([-180, -90, 0, 90, 180])
     return save_figure(fig, path, tight=True)

@@ -42,6 +42,13 @@ class AboveResult:
     seconds: float
     kernels: str = ""  # the engine's ``kernels`` (summary line only)
 
+    def __repr__(self) -> str:
+        """One line: N, dim, shape, phi, dphi, V, P, max|F|, the stop, engine."""
+        p, m = self.packing, self.minimization
+        return (f"AboveResult(N={p.n}, dim={p.dim}, shape={p.shape.spec(p.dim)!r}, phi={p.phi:.10f}, "
+                f"dphi={self.dphi:g}, V={self.energy_per_particle:.3e}, P={self.pressure:.3e}, "
+                f"max_force={m.max_force:.1e}, reason={m.reason!r}, engine={self.engine!r})")
+
     @property
     def pressure(self) -> float:
         return float(np.trace(self.pressure_tensor) / self.packing.dim)

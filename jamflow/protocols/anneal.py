@@ -39,6 +39,13 @@ class AnnealResult:
     checks: object
     steps: dict
 
+    def __repr__(self) -> str:
+        """One line: N, shape, the aspect ratios walked, phi_J, checks; ``steps`` holds the table."""
+        p, alpha = self.packing, self.steps["alpha"]
+        return (f"AnnealResult(N={p.n}, dim={p.dim}, shape={p.shape.spec(p.dim)!r}, steps={len(alpha) - 1}, "
+                f"alpha=[{alpha[0]:.4g}, {alpha[-1]:.4g}], phi_j={self.final.phi_j:.10f}, "
+                f"checks_passed={getattr(self.checks, 'passed', None)})")
+
     @property
     def packing(self) -> Packing:
         return self.final.packing

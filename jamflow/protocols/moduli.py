@@ -47,6 +47,12 @@ class ModuliResult:
     n_contacts: int
     n_floaters: int
 
+    def __repr__(self) -> str:
+        """One line: N, phi, G and B by both routes, the yield strain, contacts, floaters."""
+        return (f"ModuliResult(N={self.shear.base.n}, phi={self.phi:.10f}, G={self.G:.6e}, G_hessian={self.G_hessian:.6e}, "
+                f"B={self.B:.6e}, B_hessian={self.B_hessian:.6e}, yield_strain={self.yield_strain:.2g}, "
+                f"N_c={self.n_contacts}, floaters={self.n_floaters})")
+
     def sweep(self, strain) -> SweepResult:
         return self.shear if strain.modulus == "G" else self.bulk
 

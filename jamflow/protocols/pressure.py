@@ -39,6 +39,7 @@ from jamflow.model.box import STRESS_MODES
 from jamflow.model.packing import Packing
 from jamflow.protocols.compression import RLJ_MIN_START_RATIO, deepest_overlap, remove_overlaps
 from jamflow.support import hooks
+from jamflow.support.reprs import changed_fields_repr
 
 FLOOR_MARGIN = 1000.0
 DEFAULT_START_PRESSURE = 1e-4  # from a random start; starting higher raises phi_J (docs/notes/walls-gravity-pressure.md)
@@ -69,6 +70,8 @@ class PressureSettings:
     pressures: tuple = (1e-4, 1e-5, 1e-6)
     stress: str = "iso"
     minimizer: MinimizerSettings = field(default_factory=MinimizerSettings)
+
+    __repr__ = changed_fields_repr  # only the fields that differ from their defaults
 
     def __post_init__(self):
         pressures = tuple(float(p) for p in self.pressures) if np.ndim(self.pressures) else (float(self.pressures),)

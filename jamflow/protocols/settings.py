@@ -7,6 +7,7 @@ from dataclasses import asdict, dataclass, field
 
 from jamflow.minimize.settings import MinimizerSettings
 from jamflow.model.shapes.parse import parse_shape
+from jamflow.support.reprs import changed_fields_repr
 
 DEFAULT_PHI0 = {2: 0.80, 3: 0.55}
 
@@ -34,6 +35,8 @@ class CompressionSettings:
     approach_force_rtol: float | None = None  # before the final approach: force tol = this x pressure (speed-up)
     coarse_force_tol: float = 1e-10  # force tolerance before the first crossing when approach_force_rtol is set
     minimizer: MinimizerSettings = field(default_factory=MinimizerSettings)
+
+    __repr__ = changed_fields_repr  # only the fields that differ from their defaults
 
     def __post_init__(self):
         for name in ("phi0", "dphi0", "v_tol"):

@@ -52,6 +52,10 @@ class Network:
     dr: np.ndarray
     n_floaters: int
 
+    def __repr__(self) -> str:
+        """One line: contacts and floaters (the arrays are the fields)."""
+        return f"Network(contacts={len(self.i)}, floaters={self.n_floaters})"
+
     @classmethod
     def of(cls, packing: Packing) -> "Network":
         c = Contacts().compute(packing)
@@ -88,6 +92,12 @@ class ShearStep:
     removed: list = field(default_factory=list)  # contacts of the previous step that are gone
     added: list = field(default_factory=list)  # contacts that were not there
 
+    def __repr__(self) -> str:
+        """One line: gamma, N, phi_J, Sigma, P, contacts and their changes; ``steps[k].jam`` holds the rest."""
+        return (f"ShearStep(gamma={self.gamma:.6g}, N={self.packing.n}, phi_j={self.phi_j:.10f}, "
+                f"shear_stress={self.shear_stress:.3e}, P={self.jam.pressure:.3e}, contacts={len(self.network.i)}, "
+                f"removed={len(self.removed)}, added={len(self.added)})")
+
     @property
     def packing(self) -> Packing:
         return self.jam.packing
@@ -116,6 +126,13 @@ class ShearPath:
     engine: str
     seconds: float
     kernels: str = ""  # the engine's ``kernels`` (summary line only)
+
+    def __repr__(self) -> str:
+        """One line: N, dim, shape, steps, the gamma range, phi_J range, contact changes, engine."""
+        p, g, phi = self.steps[0].packing, self.gamma, self.phi_j
+        return (f"ShearPath(N={p.n}, dim={p.dim}, shape={p.shape.spec(p.dim)!r}, steps={len(g) - 1}, "
+                f"gamma=[{g[0]:.6g}, {g[-1]:.6g}], dgamma={self.dgamma:.3g}, phi_j=[{phi.min():.8f}, {phi.max():.8f}], "
+                f"changes={self.n_changes}, engine={self.engine!r})")
 
     def column(self, name: str) -> np.ndarray:
         """gamma, phi_j, shear_stress or changed at every step, as an array."""

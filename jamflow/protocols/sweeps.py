@@ -40,6 +40,7 @@ from jamflow.model.pairs import overlapping_pairs, overlapping_sites
 from jamflow.mechanics.contacts import Contacts
 from jamflow.mechanics.strains import Strain
 from jamflow.minimize.rules import minimize
+from jamflow.support.reprs import changed_fields_repr
 
 DEFAULT_AMPLITUDES = tuple(float(a) for a in np.logspace(-9, -3, 13))  # two per decade, 1e-9 .. 1e-3
 LINEAR_TOL = 1e-4  # relative deviation of a central slope from M that still counts as linear
@@ -72,6 +73,8 @@ class SweepSettings:
     jump_tol: float = JUMP_TOL
     past_yield: int = PAST_YIELD
     minimizer: MinimizerSettings | None = None  # None: ``sweep_minimizer`` (FIRE to the round-off floor)
+
+    __repr__ = changed_fields_repr  # only the fields that differ from their defaults
 
     def __post_init__(self):
         amps = np.asarray(self.amplitudes, float)
@@ -116,6 +119,12 @@ class SweepResult:
     yield_strain: float  # NaN if none seen
     yield_reason: str  # "contacts", "stress" or ""
     base: Packing  # the base state: the input relaxed at zero strain by the sweep's minimiser
+
+    def __repr__(self) -> str:
+        """One line: strain, points, modulus and error, linear range, the yield."""
+        return (f"SweepResult(strain={self.strain.kind!r}, points={len(self.strains)}, modulus={self.modulus:.6e}, "
+                f"error={self.error:.1e}, linear={int(np.sum(self.linear))}/{len(self.linear)}, "
+                f"yield_strain={self.yield_strain:.2g}, yield_reason={self.yield_reason!r}, N={self.base.n})")
 
     @property
     def base_response(self) -> float:

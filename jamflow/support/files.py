@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+import csv
 import errno
 import fcntl
 import glob
@@ -57,6 +58,17 @@ def atomic_path(path, force: bool = False):
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+
+
+def write_csv(path, rows, fieldnames=None) -> Path:
+    """Write dict ``rows`` as CSV atomically, columns ``fieldnames`` (default: the first row's keys)."""
+    rows = list(rows)
+    with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
+        if rows or fieldnames:
+            writer = csv.DictWriter(fh, fieldnames=list(fieldnames or rows[0]))
+            writer.writeheader()
+            writer.writerows(rows)
+    return Path(path)
 
 
 _NO_SPACE = (errno.ENOSPC, errno.EDQUOT)

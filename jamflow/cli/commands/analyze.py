@@ -2,7 +2,7 @@
 discrete species), S(k), Q6 global/local, G, the g(r) - 1 envelope length and the q6
 correlation functions with their length. FILES are jamflow HDF5 packings or LAMMPS data /
 dump files (every dump frame counts as one packing); all of them form one ensemble.
-Results go to one HDF5 file (layout in docs/notes/structure.md) and PNG plots. Jamflow packings
+Results go to one HDF5 file (NAME.structure.h5 by default, jamflow.io.names; layout in docs/notes/structure.md) and PNG plots. Jamflow packings
 are checked for force balance first (a warning for each that is not at an energy minimum;
 order/force_balanced is 1, 0, or -1 for LAMMPS inputs, whose potential is unknown)."""
 
@@ -21,6 +21,7 @@ from jamflow.analysis.structure import MAX_SPECIES, RDF, StructureFactor, positi
 from jamflow.cli.inputs import add_input_arguments, load_inputs, parse_diameters
 from jamflow.ensemble.parallel import add_engine_arguments, expand_inputs, file_mapper
 from jamflow.ensemble.pooling import merge_rdf, merge_structure_factor, pooled_bins, structure_sums
+from jamflow.io.names import derived_path
 from jamflow.io.packing_file import load_packing
 from jamflow.io.structure_file import write_results
 from jamflow.mechanics.checks import check_packing
@@ -37,7 +38,9 @@ from jamflow.support.files import check_writable, output_directory, replacing
 
 def add_arguments(p) -> None:
     p.add_argument("files", nargs="+", help="packing files: jamflow .h5, LAMMPS data or dump; or ensemble store directories")
-    p.add_argument("--out", default="structure.h5", help="output HDF5 file")
+    p.add_argument("--out", default=None,
+                   help="output HDF5 file (default: NAME.structure.h5 beside one input NAME.h5; DIR/DIR.structure.h5 "
+                        "for a directory or several files in DIR)")
     p.add_argument("--plots", default=None,
                    help="directory for PNG plots, made if missing (its parent must exist; default: beside --out)")
     add_input_arguments(p)
@@ -142,6 +145,8 @@ def _plotted(table) -> list[str]:
 def run(args) -> int:
     _check_numbers(args)
     diameters = parse_diameters(args.diameters)
+    args.out = args.out or str(derived_path(args.files, "structure"))  # named by the inputs as given
+    args.files = expand_inputs(args.files)  # a directory (ensemble store) stands for its packing files
     check_writable(args.out, args.force)
     plots = Path(args.plots) if args.plots else Path(args.out).resolve().parent
     if plots.exists() and not plots.is_dir():
@@ -156,7 +161,6 @@ def _run(args, diameters, plots: Path) -> int:
     stem = Path(args.out).stem
     for suffix in PLOT_SUFFIXES:
         check_writable(plots / f"{stem}-{suffix}.png", args.force)
-    args.files = expand_inputs(args.files)  # a directory (ensemble store) stands for its packing files
     packings, labels = load_inputs(args.files, args.format, diameters, args.dim)
     if len({p.dim for p in packings}) != 1:
         raise ValueError("the input files mix 2D and 3D packings; analyse them separately")

@@ -8,7 +8,6 @@ families.png (phi_J(gamma) of all families, the mirror overlay, the convergence)
 
 from __future__ import annotations
 
-import csv
 from pathlib import Path
 
 from jamflow.analysis.families import convergence, join, mirror_by_sightings, mirror_check, richness
@@ -16,7 +15,7 @@ from jamflow.cli.options import add_engine_argument, add_force_argument, add_qui
 from jamflow.cli.progress import progress_bar
 from jamflow.io.families_file import load_family_points, save_family_points, save_family_table
 from jamflow.protocols.families import FamilySampling, sample
-from jamflow.support.files import atomic_path, check_writable, lock_directory, output_directory, replacing
+from jamflow.support.files import check_writable, lock_directory, output_directory, replacing, write_csv
 
 
 def add_arguments(p) -> None:
@@ -92,7 +91,7 @@ def report(plan: FamilySampling, points: dict, failures: list, out: Path) -> Non
     mirror = mirror_check(families)
     rich = richness(families)
     save_family_table(out / "families.h5", plan, families, conv, mirror, rich)
-    _write_csv(out / "families.csv", families.table())
+    write_csv(out / "families.csv", families.table())
     families_figure(out / "families.png", families, mirror if both_halves else None, conv, rich,
                     title=f"(a) N = {plan.n} {plan.sizes}: {families.count} geometric families, "
                           f"{plan.starts} starts x {len(plan.grid)} strains")
@@ -114,10 +113,3 @@ def report(plan: FamilySampling, points: dict, failures: list, out: Path) -> Non
     print(f"{len(failures)} jams or paths failed (JammingFailed; listed in {out / 'points.h5'}, attribute failures)")
     print(f"-> {out / 'families.h5'}, {out / 'families.csv'}, {out / 'families.png'}")
 
-
-def _write_csv(path: Path, rows: list[dict]) -> None:
-    with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
-        if rows:
-            writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
-            writer.writeheader()
-            writer.writerows(rows)

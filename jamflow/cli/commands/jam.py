@@ -6,8 +6,8 @@ particles settle on the floor instead; with --pressure the box relaxes to a targ
 periodic cell is sheared to that fixed Lees-Edwards strain (section 2.2, docs/notes/shear.md). With --above
 DPHI the onset packing is compressed affinely by DPHI and minimised again, and that packing is
 written (attribute dphi_above; the state jamflow moduli measures, chapter section 4.5). With --precision
-double-double --pressure P the float64 onset is refined to P in double-double (jamflow refine,
-jamflow/protocols/refine.py) and written with positions_lo."""
+double-double --pressure P the float64 onset is refined to P in double-double (jamflow refine;
+see the docs, guide/precision) and written with positions_lo."""
 
 from __future__ import annotations
 

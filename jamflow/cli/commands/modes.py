@@ -1,8 +1,9 @@
 """Mechanical stability of jammed packings (chapter sections 3 and 4.1): contacts, floaters,
 the dynamical matrix's spectrum and the stability class of each PACKING.h5, written to the
-sibling results file PACKING.modes.hdf5 (schema jamflow.modes v2; not *.h5, so that a
-glob over packing files does not pick results up); with several files, D(omega)
-and the z_i distribution are averaged and one figure is drawn. Every shape: for particles
+sibling results file PACKING.modes.h5 (schema jamflow.modes v2; names by jamflow.io.names, so
+that a directory's readers skip it); with several files, D(omega) and the z_i distribution are
+averaged and one figure is drawn, with the pooled data beside it as CSV (FIGURE-dos.csv,
+FIGURE-packings.csv). Every shape: for particles
 that turn, the modes mix translations and rotations d_k theta, each mode's translational
 fraction is stored, and the energy is profiled along every extra zero mode (quartic modes
 of hypostatic packings against the missing contacts N' d_f - d + 1 - N_c). A PACKING may also be
@@ -19,7 +20,8 @@ import numpy as np
 from jamflow.analysis.modes import DensityOfStates, Spectrum, Stability, branches
 from jamflow.cli.inputs import add_input_arguments, is_jamflow_file, load_input, parse_diameters
 from jamflow.ensemble.parallel import add_engine_arguments, expand_inputs, map_files
-from jamflow.io.modes_file import save_modes
+from jamflow.io.modes_file import save_modes, save_packing_table, save_pooled_dos
+from jamflow.io.names import derived_path
 from jamflow.io.packing_file import read_checks
 from jamflow.mechanics.checks import check_packing
 from jamflow.mechanics.contacts import pooled_contacts
@@ -40,7 +42,7 @@ def add_arguments(p) -> None:
     p.add_argument("--omega-max", type=float, default=None, help="upper edge of the D(omega) bins")
     p.add_argument("--figure", default=None,
                    help="figure to draw, PNG, SVG or PDF by its suffix (default: PACKING.modes.png for one file, "
-                        "modes.png beside the first)")
+                        "DIR/DIR.modes.png for a directory or several files in DIR)")
     p.add_argument("--colour", "--color", choices=COLOURINGS, default="branches",
                    help="panel (a) for particles that turn: each mode coloured by its branch (the chapter's Figure "
                         "2.17: 1 zero/quartic, 2 rotational, 3 translational; a legend names them) or by its "
@@ -54,25 +56,29 @@ def add_arguments(p) -> None:
 
 
 def results_path(packing_path) -> Path:
-    path = Path(packing_path)
-    return path.with_name(path.stem + ".modes.hdf5")
+    return derived_path(packing_path, "modes")
 
 
 def figure_path(args) -> Path:
-    if args.figure:
-        return Path(args.figure)
-    first = Path(args.files[0])
-    return first.with_name(first.stem + ".modes.png") if len(args.files) == 1 else first.with_name("modes.png")
+    """--figure, or NAME.modes.png beside one input; DIR/DIRNAME.modes.png for several (``derived_path``)."""
+    return Path(args.figure) if args.figure else derived_path(args.inputs, "modes", ".png")
+
+
+def data_paths(args) -> tuple[Path, Path]:
+    """The pooled data beside the figure (also with --no-figure): FIGURE-dos.csv, FIGURE-packings.csv."""
+    figure = figure_path(args)
+    return figure.with_name(f"{figure.stem}-dos.csv"), figure.with_name(f"{figure.stem}-packings.csv")
 
 
 def run(args) -> int:
-    args.files = expand_inputs(args.files)  # a directory (ensemble store) stands for its packing files
+    args.inputs, args.files = args.files, expand_inputs(args.files)  # a directory (ensemble store) stands for its packing files
     spectrum = Spectrum(e_min=args.e_min, mass=args.mass, method=args.method)
     dos = DensityOfStates(args.bins, args.omega_max)
     source = (args.format, parse_diameters(args.diameters), args.dim)
     for f in args.files:  # every input is read before any work
         load_input(f, *source)
-    written = [results_path(f) for f in args.files] + ([] if args.no_figure else [figure_path(args)])
+    written = [results_path(f) for f in args.files] + list(data_paths(args))
+    written += [] if args.no_figure else [figure_path(args)]
     if not args.no_figure:
         figure_format(figure_path(args))  # PNG, SVG or PDF by the suffix; another is refused before work
     for out in written:
@@ -82,11 +88,23 @@ def run(args) -> int:
     for line, _, _ in rows:
         print(line)
     rows = [(spec, stab) for _, spec, stab in rows]
-    print(ensemble_summary([s for s, _ in rows], [st for _, st in rows]))
-    if not args.no_figure:
-        with replacing([figure_path(args)] if args.force else []):
-            _draw(args, rows, dos)
+    spectra = [s for s, _ in rows]
+    print(ensemble_summary(spectra, [st for _, st in rows]))
+    density = dos.compute(spectra) if all(s.complete for s in spectra) else None
+    with replacing(written[len(args.files):] if args.force else []):
+        _save_pooled(args, spectra, density)
+        if not args.no_figure:
+            _draw(args, rows, density)
     return 0
+
+
+def _save_pooled(args, spectra, density) -> None:
+    """D(omega) (complete spectra only) and the per-packing table with its pooled row, as CSV."""
+    dos_csv, table_csv = data_paths(args)
+    if density is not None:
+        save_pooled_dos(dos_csv, density)
+    save_packing_table(table_csv, [str(f) for f in args.files], spectra)
+    print(f"pooled data -> {table_csv}" + (f", {dos_csv}" if density is not None else ""))
 
 
 def analyse_file(path, spectrum, save_vectors=False, force=False, source=("auto", None, None)):
@@ -118,11 +136,10 @@ def checked(path, packing, stored=True):
     return checks
 
 
-def _draw(args, rows, dos):
+def _draw(args, rows, density):
     from jamflow.plots.modes import modes_figure
 
     spectra = [s for s, _ in rows]
-    density = dos.compute(spectra) if all(s.complete for s in spectra) else None
     out = modes_figure(figure_path(args), spectra, density, [s.dynamical.contacts for s in spectra],
                        [st for _, st in rows], colour=args.colour)
     print(f"figure -> {out}")

@@ -15,7 +15,9 @@ import numpy as np
 
 from jamflow.cli.options import add_engine_argument, add_force_argument, add_quiet_argument
 from jamflow.cli.progress import progress_bar
+from jamflow.ensemble.parallel import skip_derived
 from jamflow.io.moduli_file import save_moduli
+from jamflow.io.names import derived_path
 from jamflow.io.packing_file import load_packing, read_attrs
 from jamflow.mechanics.strains import STRAINS
 from jamflow.minimize.settings import MinimizerSettings
@@ -44,13 +46,11 @@ def add_arguments(p) -> None:
 
 
 def results_path(packing_path) -> Path:
-    path = Path(packing_path)
-    return path.with_name(path.stem + ".moduli.h5")
+    return derived_path(packing_path, "moduli")
 
 
 def figure_path(packing_path) -> Path:
-    path = Path(packing_path)
-    return path.with_name(path.stem + ".moduli.png")
+    return derived_path(packing_path, "moduli", ".png")
 
 
 def settings_from_args(args) -> SweepSettings:
@@ -67,7 +67,7 @@ def settings_from_args(args) -> SweepSettings:
 
 def run(args) -> int:
     moduli = Moduli(settings_from_args(args), engine=args.engine)
-    args.files = check_distinct(args.files)  # the same file twice would be swept twice onto one output
+    args.files = check_distinct(skip_derived(args.files))  # the same file twice: swept twice onto one output
     packings = [load_packing(f) for f in args.files]  # every input is read before any work
     outputs = [results_path(f) for f in args.files]
     written = outputs + ([] if args.no_figure else [figure_path(f) for f in args.files])

@@ -4,11 +4,10 @@ extrapolated to large N (chapter section 2.4). Writes a table (CSV) and a four-p
 
 from __future__ import annotations
 
-import csv
 from pathlib import Path
 
 from jamflow.plots.figure import figure_format
-from jamflow.support.files import atomic_path, check_writable
+from jamflow.support.files import check_writable, write_csv
 
 # large-N phi_J (O'Hern, Silbert, Liu & Nagel, PRE 68, 011306, 2003; quoted by the chapter)
 PUBLISHED = {(2, "bi:1.4:0.5"): 0.842, (3, "mono"): 0.639}
@@ -52,11 +51,7 @@ def run(args) -> int:
 def write_table(path, result) -> Path:
     rows = result.table()
     fit = dict(nu=result.nu.value, nu_err=result.nu.err, phi_inf=result.phi_inf.value, phi_inf_err=result.phi_inf.err)
-    with atomic_path(path) as tmp, tmp.open("w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=list(rows[0]) + list(fit))
-        writer.writeheader()
-        writer.writerows({**r, **fit} for r in rows)
-    return Path(path)
+    return write_csv(path, [{**r, **fit} for r in rows])
 
 
 def published_value(rows, dim):

@@ -15,6 +15,7 @@ import numpy as np
 from jamflow.cli.options import add_engine_argument, add_force_argument, add_ftol_argument, add_quiet_argument, add_vtol_argument
 from jamflow.engines.choose import engine_name
 from jamflow.support.files import check_writable, output_directory, replacing
+from jamflow.io.names import derived_path
 from jamflow.io.packing_file import load_packing
 from jamflow.minimize.settings import MinimizerSettings
 from jamflow.cli.progress import ShearProgress
@@ -68,8 +69,7 @@ def output_paths(args) -> tuple[Path, Path]:
         raise ValueError(f"--out {out} is a file; give a directory")
     if not out.parent.is_dir():
         raise ValueError(f"cannot create --out {out}: directory {out.parent} does not exist")
-    stem = Path(args.packing).stem
-    return out / f"{stem}.shear.h5", out / f"{stem}.shear.png"
+    return out / derived_path(args.packing, "shear").name, out / derived_path(args.packing, "shear", ".png").name
 
 
 def run(args) -> int:

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-2.0-only -- part of jamflow's LAMMPS plugin, GPL-2.0 like the LAMMPS headers it
 // compiles against (the rest of jamflow is MIT); see NOTICE (repository root) and COPYING (the GPL-2.0 text) here.
 /* jamflow LAMMPS plugin: the contact distance sigma_ij of two ellipses (2D) or spheroids (3D)
-   and its partial derivatives (seed chapter section 2.3.2; Perram & Wertheim, J. Comput. Phys.
+   and its partial derivatives (chapter section 2.3.2; Perram & Wertheim, J. Comput. Phys.
    58, 409 (1985)).
 
    A C++ transcription of jamflow/shapes/contact_distance.py (the algebra, function by function)

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: GPL-2.0-only -- part of jamflow's LAMMPS plugin, GPL-2.0 like the LAMMPS headers it
 // compiles against (the rest of jamflow is MIT); see NOTICE (repository root) and COPYING (the GPL-2.0 text) here.
-/* jamflow LAMMPS plugin: the pairwise normal damping of damped MD (seed chapter eq. 2.3).
+/* jamflow LAMMPS plugin: the pairwise normal damping of damped MD (chapter eq. 2.3).
 
      fix ID group jamflow/damping B
 
@@ -118,7 +118,7 @@ using namespace LAMMPS_NS;
 void jamflow_register_fixes(void *lmp, void *handle, lammpsplugin_regfunc reg)
 {
   lammpsplugin_t plugin = jamflow_common::plugin_record(
-      "fix", "jamflow/damping", "jamflow pairwise normal damping -B (v_ij . rhat) rhat of contacting pairs (seed eq. 2.3)",
+      "fix", "jamflow/damping", "jamflow pairwise normal damping -B (v_ij . rhat) rhat of contacting pairs (chapter eq. 2.3)",
       handle);
   plugin.creator.v2 = (lammpsplugin_factory2 *) &create_damping;
   (*reg)(&plugin, lmp);

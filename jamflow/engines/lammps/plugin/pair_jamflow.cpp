@@ -6,8 +6,8 @@
    compiled against LAMMPS's GPL-2.0 headers and loaded into LAMMPS.
 
    The laws, written once here as functions of s = r / sigma_ij (law_of_s):
-     spring: V = eps/alpha (1 - s)^alpha   (seed eq. 2.1)
-     rlj:    V = eps (s^-12 - 2 s^-6 + 1)  (seed eq. 2.2), evaluated as eps (s^-6 - 1)^2, which
+     spring: V = eps/alpha (1 - s)^alpha   (chapter eq. 2.1)
+     rlj:    V = eps (s^-12 - 2 s^-6 + 1)  (chapter eq. 2.2), evaluated as eps (s^-6 - 1)^2, which
              avoids the cancellation of q6^2 - 2 q6 + 1 near contact
    for s < 1; alpha = 2 and 2.5 avoid pow(), other alpha use std::pow.
 

@@ -7,7 +7,7 @@
 
    V(r_ij / sigma_ij) with the jamflow laws of s = r / sigma (pair_jamflow.cpp) and sigma_ij the
    contact distance of two ellipses (2D) or spheroids (3D) by CONTACT = exact | gaussian | cleaver |
-   linear | quadratic (contact_distance.h; seed chapter section 2.3.2). Each atom's full axes are
+   linear | quadratic (contact_distance.h; chapter section 2.3.2). Each atom's full axes are
    its shape (a along the body x-axis, the director; b = c across), its director R(q) x. Forces,
    torques (atom->torque) and the virial; the non-symmetric virial sum r_ij,a f_ij,b and three
    counters are the pair's extra vector (compute pair jamflow/ellipsoid):

@@ -3,7 +3,7 @@
 /* jamflow LAMMPS plugin: what its styles share (pair_jamflow.cpp, pair_jamflow_ellipsoid.h,
    fix_jamflow_damping.cpp): checked numeric arguments, the largest diameter over all MPI ranks,
    the arrays of a neighbour list, the overlap test of two spheres (sigma_ij = radius_i + radius_j,
-   seed Fig. 2.1) and the plugin record LAMMPS registers.
+   chapter Fig. 2.1) and the plugin record LAMMPS registers.
 
    Licence: GPL-2.0, like LAMMPS, whose headers it includes (see pair_jamflow.cpp). */
 

@@ -1,0 +1,112 @@
+"""A packing as one frame of a HOOMD-blue GSD file (the ``gsd`` package, extra ``jamflow[gsd]``),
+read by HOOMD, OVITO, freud and ``gsd.hoomd``.
+
+HOOMD's conventions (gsd 5 ``gsd.hoomd.Frame``): ``configuration.box = [Lx, Ly, Lz, xy, xz, yz]``
+with dimensionless tilt factors xy = h_xy / Ly, xz = h_xz / Lz, yz = h_yz / Lz (jamflow's h holds
+LAMMPS tilt lengths; the shear strain gamma = xy, not folded), Lz = 0 in 2D; the cell is
+centred on the origin, so a position is h (s - 1/2) for fractional coordinates s in [0, 1).
+``particles.diameter`` the diameters (float32 in GSD, as every GSD particle field; the box is
+float32 too), ``orientation`` unit quaternions (w, x, y, z) as jamflow's (2D angles turn about z),
+``typeid`` the distinct sizes in increasing order (types ``A``, ``B``, ...; one type ``A`` beyond
+``MAX_TYPES`` sizes), ``type_shapes`` ``Ellipsoid`` semi-axes for ellipses/spheroids. Rigid bodies
+follow HOOMD's layout: the N body centres (``body`` = own index, diameter 0) and then their sites
+(type ``site``, ``body`` = the centre's index). Lengths in small diameters.
+"""
+
+from __future__ import annotations
+
+import string
+from pathlib import Path
+
+import numpy as np
+
+from jamflow.model.packing import Packing
+from jamflow.support.files import atomic_path
+
+MAX_TYPES = 8
+
+
+def gsd_module():
+    """``gsd.hoomd``, or a ValueError naming the extra to install."""
+    try:
+        import gsd.hoomd
+    except ImportError:
+        raise ValueError("--format gsd needs the gsd package: pip install 'jamflow[gsd]' (or pip install gsd)") from None
+    return gsd.hoomd
+
+
+def hoomd_box(packing: Packing) -> list[float]:
+    """[Lx, Ly, Lz, xy, xz, yz], HOOMD's tilt factors; Lz = 0 in 2D."""
+    h = np.zeros((3, 3))
+    h[: packing.dim, : packing.dim] = packing.box.h
+    lx, ly, lz = np.diag(h)
+    return [lx, ly, lz, h[0, 1] / ly, h[0, 2] / lz if lz else 0.0, h[1, 2] / lz if lz else 0.0]
+
+
+def hoomd_positions(packing: Packing, positions=None) -> np.ndarray:
+    """(M, 3) positions in HOOMD's origin-centred cell (``positions``: default the particles')."""
+    box = packing.box
+    s = box.to_fractional(packing.positions if positions is None else positions)
+    s = s - np.floor(s) * np.array(box.periodic, float)  # walled axes stay as they are
+    out = np.zeros((len(s), 3))
+    out[:, : packing.dim] = box.to_cartesian(s - 0.5)
+    return out
+
+
+def quaternions(packing: Packing) -> np.ndarray:
+    """(N, 4) unit quaternions (w, x, y, z); a 2D angle theta is the turn about z; ones for round particles."""
+    if packing.orientations is None:
+        return np.tile([1.0, 0.0, 0.0, 0.0], (packing.n, 1))
+    if packing.dim == 3:
+        return np.asarray(packing.orientations, float)
+    half = 0.5 * np.asarray(packing.orientations, float)
+    return np.column_stack([np.cos(half), np.zeros_like(half), np.zeros_like(half), np.sin(half)])
+
+
+def _types(packing: Packing) -> tuple[list[str], np.ndarray]:
+    values, index = packing.species()
+    if len(values) > MAX_TYPES:
+        return ["A"], np.zeros(packing.n, int)
+    return list(string.ascii_uppercase[: len(values)]), index
+
+
+def gsd_frame(packing: Packing):
+    """One ``gsd.hoomd.Frame`` of ``packing``."""
+    frame = gsd_module().Frame()
+    frame.configuration.dimensions = packing.dim
+    frame.configuration.box = hoomd_box(packing)
+    types, typeid = _types(packing)
+    position, orientation = hoomd_positions(packing), quaternions(packing)
+    diameter, body = packing.diameters.astype(float), np.full(packing.n, -1)
+    shapes = None
+    if packing.shape.kind == "ellipsoid":
+        a, b = packing.shape.axes(packing.diameters).T
+        first = [int(np.flatnonzero(typeid == t)[0]) for t in range(len(types))]
+        shapes = [{"type": "Ellipsoid", "a": 0.5 * a[k], "b": 0.5 * b[k], "c": 0.5 * b[k]} for k in first]
+    if packing.shape.kind == "rigid":
+        sites = packing.shape.world_sites(packing.positions, packing.orientations, packing.diameters)
+        n_sites = sites.shape[1]
+        offsets = np.zeros((packing.n * n_sites, 3))
+        offsets[:, : packing.dim] = (sites - packing.positions[:, None, :]).reshape(-1, packing.dim)
+        centres = np.repeat(position, n_sites, axis=0)  # sites about the wrapped centre: a body stays whole
+        site_d = (packing.diameters[:, None] * packing.shape.site_diameters[None, :]).reshape(-1)
+        position = np.concatenate([position, centres + offsets])
+        orientation = np.concatenate([orientation, np.tile([1.0, 0.0, 0.0, 0.0], (len(site_d), 1))])
+        typeid = np.concatenate([typeid, np.full(len(site_d), len(types))])
+        types = [*types, "site"]
+        diameter = np.concatenate([np.zeros(packing.n), site_d])
+        body = np.concatenate([np.arange(packing.n), np.repeat(np.arange(packing.n), n_sites)])
+    p = frame.particles
+    p.N, p.types, p.typeid = len(position), types, typeid
+    p.position, p.orientation, p.diameter, p.body = position, orientation, diameter, body
+    if shapes is not None:
+        p.type_shapes = shapes
+    return frame
+
+
+def write_gsd(path, packing: Packing) -> Path:
+    """Write ``packing`` as a one-frame GSD file, atomically."""
+    frame = gsd_frame(packing)
+    with atomic_path(path) as tmp, gsd_module().open(name=str(tmp), mode="w") as f:
+        f.append(frame)
+    return Path(path)
