@@ -30,6 +30,16 @@ def modes_figure(path, spectra, dos=None, contacts=(), stabilities=()) -> Path:
     return save_figure(fig, path)
 
 
+def sorted_modes_figure(path, spectra, title: str = "") -> Path:
+    """One panel: ``sorted_modes_with_character`` of ``spectra`` (particles that turn)."""
+    fig = Figure(figsize=(6.4, 4.6), layout="constrained")
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    sorted_modes_with_character(ax, spectra)
+    ax.set_title(title, fontsize=9)
+    return save_figure(fig, path)
+
+
 def _sorted_frequencies(ax, spectra):
     if any(s.dynamical.packing.shape.oriented for s in spectra):
         sorted_modes_with_character(ax, spectra)
