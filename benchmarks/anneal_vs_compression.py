@@ -28,9 +28,10 @@ from tqdm import tqdm
 from jamflow import jam
 from jamflow.mechanics.checks import check_packing
 from jamflow.io.packing_file import load_packing, save_packing
+from jamflow.plots.anneal import anneal_figure
 from jamflow.protocols.anneal import anneal
 
-from common import ANNEAL_COLUMNS as COLUMNS, ELLIPSE_SIZES as SIZES, anneal_row as _row, pyplot, read_rows, run_or_report, save_figure, stats, write_rows  # (benchmarks/ is the script's directory)
+from common import ANNEAL_COLUMNS as COLUMNS, ELLIPSE_SIZES as SIZES, anneal_row as _row, read_rows, run_or_report, stats, write_rows  # (benchmarks/ is the script's directory)
 
 
 
@@ -160,27 +161,15 @@ def paired(rows) -> None:
 
 
 def chart(groups, path: Path) -> None:
-    plt = pyplot()
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
-    styles = {"compression": dict(ls="--", marker="o"), "anneal 0.05": dict(ls="-", marker=None),
-              "anneal 0.005": dict(ls="none", marker="D", ms=4)}
     n = sorted({r["n"] for g in groups.values() for r in g})
+    series = {}
     for label in sorted({lab for lab, _ in groups}):
         alphas = sorted(a for lab, a in groups if lab == label)
-        for ax, column in zip(axes, ("mean_z", "phi_j")):
-            m = [stats(r[column] for r in groups[label, a]) for a in alphas]
-            style = styles.get(label, dict(ls=":", marker="s"))
-            ax.errorbar(alphas, [x[0] for x in m], yerr=[x[1] for x in m], capsize=2, label=label, **style)
-    axes[0].set_ylabel(r"$\langle z \rangle$ (non-floaters)")
-    axes[0].axhline(4, ls=":", color="k", lw=0.8)
-    axes[0].axhline(6, ls=":", color="k", lw=0.8)
-    axes[1].set_ylabel(r"$\phi_J$")
-    for ax in axes:
-        ax.set_xlabel(r"aspect ratio $\alpha$")
-        ax.legend(fontsize=8)
-    fig.suptitle(f"2D bidisperse ellipses, N = {', '.join(n)}: shape annealing vs isotropic compression "
-                 "(cf. chapter Figure 2.18)")
-    save_figure(fig, path)
+        z = [stats(r["mean_z"] for r in groups[label, a]) for a in alphas]
+        phi = [stats(r["phi_j"] for r in groups[label, a]) for a in alphas]
+        series[label] = (alphas, [m[0] for m in z], [m[1] for m in z], [m[0] for m in phi], [m[1] for m in phi])
+    anneal_figure(path, series, title=f"2D bidisperse ellipses, N = {', '.join(n)}: shape annealing vs isotropic "
+                                      "compression (cf. chapter Figure 2.18)")
 
 
 def add_arguments(ap) -> None:

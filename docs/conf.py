@@ -21,16 +21,16 @@ release = jamflow.__version__
 version = release
 
 extensions = [
-    "myst_parser",
+    "myst_nb",  # MyST Markdown (myst_parser) and notebooks: docs/tutorial.ipynb, shown as stored (not executed)
     "sphinx.ext.autodoc",
     "sphinx.ext.napoleon",
     "sphinx.ext.mathjax",
     "jamflow_cli",
 ]
 
-source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
-root_doc = "index"
-exclude_patterns = ["_build", "Thumbs.db", ".DS_Store"]
+root_doc = "index"  # myst_nb registers .md and .ipynb; Sphinx adds .rst
+exclude_patterns = ["_build", "Thumbs.db", ".DS_Store", "**/.ipynb_checkpoints", "tutorial-output"]
+nb_execution_mode = "off"  # the tutorial is executed by tests/test_tutorial.py, not by the site build
 
 myst_enable_extensions = ["colon_fence", "deflist", "dollarmath"]
 myst_heading_anchors = 3
@@ -80,5 +80,23 @@ def _plain_text_docstring(app, what, name, obj, options, lines):
     lines[:] = out
 
 
+# The gallery's pictures (docs/gallery.md) are made by docs/gallery/make_gallery.py, not committed:
+# stop the build with a message saying so when one is missing, before any page is read.
+GALLERY_IMAGE = re.compile(r"gallery/images/[A-Za-z0-9_.-]+\.png")
+
+
+def _check_gallery(app):
+    from sphinx.errors import ConfigError
+
+    wanted = sorted(set(GALLERY_IMAGE.findall((HERE / "gallery.md").read_text())))
+    missing = [name for name in wanted if not (HERE / name).is_file()]
+    if missing:
+        message = (f"{len(missing)} of the gallery's {len(wanted)} pictures are missing ({', '.join(missing)}): make "
+                   "them first with `python docs/gallery/make_gallery.py` (about a minute on 2 cores)")
+        print(f"\njamflow docs: {message}\n", file=sys.stderr)  # first, above Sphinx's error report
+        raise ConfigError(message)
+
+
 def setup(app):
     app.connect("autodoc-process-docstring", _plain_text_docstring)
+    app.connect("builder-inited", _check_gallery)

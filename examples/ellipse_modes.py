@@ -8,13 +8,10 @@ the extra zero (quartic) modes match the missing contacts of these hypostatic pa
 
 import argparse
 
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.figure import Figure
-
 import jamflow
 from jamflow.mechanics.contacts import Contacts
 from jamflow.analysis.modes import Spectrum
-from jamflow.plots.modes import sorted_modes_with_character
+from jamflow.plots.modes import sorted_modes_figure
 
 parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
 parser.add_argument("--n", type=int, default=64, help="ellipses per packing")
@@ -34,10 +31,5 @@ for seed in range(args.seeds):
     print(f"seed {seed}: phi_J = {result.phi_j:.6f}, <z> = {contacts.mean_z:.3f}, N_c = {contacts.n_contacts} "
           f"(isostatic {contacts.isostatic_count}: {missing} missing), {s.n_extra_zero} extra zero modes")
 
-fig = Figure(figsize=(6.4, 4.6), layout="constrained")
-FigureCanvasAgg(fig)
-ax = fig.add_subplot()
-sorted_modes_with_character(ax, spectra)
-ax.set_title(f"{args.seeds} packings of N = {args.n} ellipses, alpha = {args.alpha}", fontsize=9)
-fig.savefig(args.out, dpi=120)
-print("figure ->", args.out)
+title = f"{args.seeds} packings of N = {args.n} ellipses, alpha = {args.alpha}"
+print("figure ->", sorted_modes_figure(args.out, spectra, title))

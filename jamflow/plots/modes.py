@@ -59,6 +59,20 @@ def omega_label(spectra, symbol=r"\omega") -> str:
     return rf"${symbol}$, {m}  {OMEGA_UNITS}"
 
 
+def sorted_modes_figure(path, spectra, title: str = "", colour: str = "branches") -> Path:
+    """One panel: panel (a) of ``modes_figure`` alone (for particles that turn, each mode coloured
+    by its branch or by its translational ``colour``-ing, as there)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg  # here, as in modes_figure
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(6.4, 4.6), layout="constrained")
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    _sorted_frequencies(ax, spectra, colour)
+    ax.set_title(title, fontsize=9)
+    return save_figure(fig, path)
+
+
 def _sorted_frequencies(ax, spectra, colour="branches"):
     if any(s.dynamical.packing.shape.oriented for s in spectra):
         by_branch = colour == "branches" and all(branch_labels(s) is not None for s in spectra)
