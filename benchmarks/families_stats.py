@@ -17,8 +17,18 @@ from pathlib import Path
 
 import numpy as np
 
-from jamflow.analysis.families import (TOL_FABRIC, TOL_MU, TOL_PHI, _text, convergence, join, mirror_by_sightings, mirror_check,
-                                      richness, symmetric_strain)
+from jamflow.analysis.families import (
+    TOL_FABRIC,
+    TOL_MU,
+    TOL_PHI,
+    _text,
+    convergence,
+    join,
+    mirror_by_sightings,
+    mirror_check,
+    richness,
+    symmetric_strain,
+)
 from jamflow.io.families_file import load_family_points
 
 

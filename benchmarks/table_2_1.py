@@ -70,7 +70,8 @@ def ratios_for_chapter(half_width=0.05):
     out = {}
     for k in METHODS:
         c = CHAPTER["gaussian" if k == "cleaver" else k][0]
-        out[k] = tuple(brentq(lambda r: log_err(r, k) - (c + d), 1.1, 2.0) for d in (-half_width, half_width))
+        out[k] = tuple(brentq(lambda r, k=k, target=c + d: log_err(r, k) - target, 1.1, 2.0)
+                       for d in (-half_width, half_width))
     return out
 
 
@@ -268,9 +269,9 @@ def alpha_one_section(m):
         "",
         "## alpha = 1 and 1.2: what the chapter's entries would need",
         "",
-        "At alpha = 1 every orientation has the same error (closed forms in `tests/test_contact_distance.py::"
-        "test_table_2_1_at_alpha_1_is_closed_form`). Size ratio a_j/a_i for which our error rounds to the "
-        "chapter's entry (log10 +- 0.05):",
+        ("At alpha = 1 every orientation has the same error (closed forms in `tests/test_contact_distance.py::"
+         "test_table_2_1_at_alpha_1_is_closed_form`). Size ratio a_j/a_i for which our error rounds to the "
+         "chapter's entry (log10 +- 0.05):"),
         "",
         "| method | chapter | size ratio giving it |",
         "|---|---|---|",
@@ -284,8 +285,8 @@ def alpha_one_section(m):
         + ", ".join(f"alpha = {a:g}: {np.log10(e):.2f}" for a, e in bp.items())
         + " (exact at alpha = 1; its largest error, side to end, is sqrt(2 (alpha^2 + 1)) / (alpha + 1) - 1).",
         "",
-        "Mixtures: fraction f of unlike pairs (the rest identical, same orientation average) for which "
-        "f e_unlike + (1 - f) e_identical rounds to each chapter entry:",
+        ("Mixtures: fraction f of unlike pairs (the rest identical, same orientation average) for which "
+         "f e_unlike + (1 - f) e_identical rounds to each chapter entry:"),
         "",
         "| alpha | identical pairs: log10 mean error G / L / Q | f for G | f for L | f for Q | f for all three |",
         "|---|---|---|---|---|---|",

@@ -230,7 +230,7 @@ def test_berne_pechukas_largest_error_is_side_to_end():
     reaches Table 2.1's Gaussian entry -2.0 (1 %) at alpha = 1.2; the column is the unequal pair's eq. 2.6."""
     t = np.arange(180) * np.pi / 90  # 2-degree grid, side to end (0, pi/2) included
     ti, tj = (g.ravel() for g in np.meshgrid(t, t))
-    u = lambda x: np.stack([np.cos(x), np.sin(x)], -1)  # noqa: E731
+    u = lambda x: np.stack([np.cos(x), np.sin(x)], -1)
     for alpha in (1.2, 2.0, 5.0):
         args = (1.0, 1 / alpha, 1.0, 1 / alpha, u(0 * ti), u(ti), u(tj))
         err = contact_distance(*args, method="gaussian") / contact_distance(*args) - 1
