@@ -4,7 +4,8 @@ Reads DIR/points.h5 and prints: how far apart packings of one family lie at one 
 Sigma/P, fabric) and how close distinct families with one signature come; the families by the
 number of sampled paths that met them and, per half, how many of them have their mirror image
 gamma -> 1 - gamma in the sample; family extents; the count against the number of starts with
-its growth exponent.
+its growth exponent; the Chao1 estimate with its standard error; the count against the
+joining tolerances on phi_J and Sigma/P (issue 30).
 
     python benchmarks/families_stats.py fam-n10
 """
@@ -16,7 +17,18 @@ from pathlib import Path
 
 import numpy as np
 
-from jamflow.analysis.families import _text, convergence, join, mirror_by_sightings, mirror_check, symmetric_strain
+from jamflow.analysis.families import (
+    TOL_FABRIC,
+    TOL_MU,
+    TOL_PHI,
+    _text,
+    convergence,
+    join,
+    mirror_by_sightings,
+    mirror_check,
+    richness,
+    symmetric_strain,
+)
 from jamflow.io.families_file import load_family_points
 
 
@@ -74,6 +86,19 @@ def main(argv=None) -> None:
     if np.sum(k >= 4) >= 2:
         slope = np.polyfit(np.log(k[k >= 4]), np.log(total[k >= 4]), 1)[0]
         print(f"growth exponent of the total for K >= 4: {slope:.2f} (1: every start adds as many new families)")
+    rich = richness(fam)
+    print(f"Chao1 {rich['chao1']:.1f} +- {rich['chao1_se']:.1f} ({100 * rich['chao1_se'] / rich['chao1']:.1f} %); "
+          f"observed {rich['observed']} of {rich['sampled']} sampled packings, f1 = {rich['singletons']}, "
+          f"f2 = {rich['doubletons']}")
+    print(f"families (all) against the joining tolerances (defaults tol_phi {TOL_PHI:g}, tol_mu {TOL_MU:g}, "
+          f"tol_fabric {TOL_FABRIC:g}; one varied at a time, then all three):")
+    g0 = float(plan["gamma_min"])
+    for name, values in (("tol_phi", (1e-10, 1e-9, 1e-7, 1e-6, 1e-5, 1e-4)), ("tol_mu", (1e-6, 1e-5, 1e-3, 1e-2, 1e-1)),
+                         ("tol_fabric", (1e-5, 1e-4, 1e-2, 1e-1, 1.0))):
+        print(f"  {name}: " + ", ".join(f"{v:g}: {join(pts, step, g0, **{name: v}).count}" for v in values))
+    for scale in (0.1, 10.0, 100.0, 1000.0):
+        count = join(pts, step, g0, tol_phi=TOL_PHI * scale, tol_mu=TOL_MU * scale, tol_fabric=TOL_FABRIC * scale).count
+        print(f"  all three x {scale:g}: {count}")
 
 
 if __name__ == "__main__":

@@ -1,4 +1,4 @@
-"""Nematic order P2 of jammed monodisperse ellipses at alpha = 3 made by two protocols (seed
+"""Nematic order P2 of jammed monodisperse ellipses at alpha = 3 made by several protocols (the chapter's
 section 4.3, Figure 2.23(c, d): "two different packing-generation methods", one giving roughly
 aligned ellipses with P2 = 0.64, the other randomly oriented ones with P2 = 0.11, N = 256).
 
@@ -8,13 +8,17 @@ aligned ellipses with P2 = 0.64, the other randomly oriented ones with P2 = 0.11
         --protocol anneal --dalpha 0.1 --out docs/notes/nematic-protocols.csv --keep /tmp/nematic
     python benchmarks/nematic_protocols.py --report docs/notes/nematic-protocols.csv --keep /tmp/nematic
 
+``--orientations aligned`` (issue 30): every director along x at the start (compression) or at
+the first annealing step; ``--phi0``: the compression's start packing fraction. Both go into
+the protocol label (e.g. "compression aligned phi0=0.5").
+
 ``compression``: ``jam(shape="ellipse:ALPHA", sizes="mono", seed=s)``, isotropic compression from a
 random start with orientations uniform on the circle. ``anneal``: seed s jams monodisperse disks,
 then ``jamflow.protocols.anneal.anneal`` grows alpha to ALPHA in steps of DALPHA (random
 major-axis directions at the first step, re-jammed at each step). Default protocol, compiled FIRE,
 exact contact distance. One row per final packing (``anneal_vs_compression``'s columns; CPU
 seconds of the whole protocol), written as it finishes; a done (protocol, dalpha, seed) is
-skipped. ``--keep``: the final packings as HDF5 (``--report`` draws the most and least ordered).
+skipped. ``--keep``: the final packings as HDF5 (``--report`` draws, per protocol, the packing nearest its median P2).
 """
 
 from __future__ import annotations
@@ -29,27 +33,37 @@ from jamflow import jam
 from jamflow.mechanics.checks import check_packing
 from jamflow.io.packing_file import load_packing, save_packing
 from jamflow.protocols.anneal import anneal
+from jamflow.protocols.settings import DEFAULT_PROTOCOL, PROTOCOLS
 
 from common import ANNEAL_COLUMNS as COLUMNS, anneal_row as _row, pyplot, read_rows, save_figure, stats, write_rows  # (benchmarks/ is the script's directory)
 
 SIZES = "mono"
 
 
-def one(protocol: str, n: int, alpha: float, seed: int, dalpha: float):
+def label(protocol: str, orientations: str = "random", phi0: float | None = None) -> str:
+    """The protocol column: the protocol, then its start if not the default."""
+    return " ".join([protocol] + ([orientations] if orientations != "random" else [])
+                    + ([f"phi0={phi0:g}"] if phi0 is not None else []))
+
+
+def one(protocol: str, n: int, alpha: float, seed: int, dalpha: float, orientations: str = "random",
+        phi0: float | None = None):
     """(row, final packing) of one protocol run."""
     t = time.process_time()
     if protocol == "compression":
-        packing = jam(n=n, sizes=SIZES, seed=seed, shape=f"ellipse:{alpha:g}").packing
+        settings = PROTOCOLS[DEFAULT_PROTOCOL](phi0=phi0)
+        packing = jam(n=n, sizes=SIZES, seed=seed, shape=f"ellipse:{alpha:g}", settings=settings,
+                      orientations=orientations).packing
     else:
         disks = jam(n=n, sizes=SIZES, seed=seed)
-        packing = anneal(disks.packing, alpha, dalpha, seed=seed).packing
+        packing = anneal(disks.packing, alpha, dalpha, seed=seed, orientations=orientations).packing
     cpu = time.process_time() - t
-    return _row(protocol, dalpha if protocol == "anneal" else 0.0, seed, n, alpha, packing, check_packing(packing),
-                cpu), packing
+    return _row(label(protocol, orientations, phi0), dalpha if protocol == "anneal" else 0.0, seed, n, alpha, packing,
+                check_packing(packing), cpu), packing
 
 
 def name(protocol, dalpha, seed) -> str:
-    return f"{protocol}-d{dalpha:g}-seed{seed}.h5"
+    return f"{protocol.replace(' ', '-')}-d{dalpha:g}-seed{seed}.h5"
 
 
 def run(args) -> None:
@@ -58,12 +72,15 @@ def run(args) -> None:
         keep.mkdir(parents=True, exist_ok=True)
     rows = read_rows(out)
     dalpha = args.dalpha if args.protocol == "anneal" else 0.0
+    if args.phi0 is not None and args.protocol == "anneal":
+        raise SystemExit("--phi0 is the compression's start; annealing starts from a jammed disk packing")
+    protocol = label(args.protocol, args.orientations, args.phi0)
     done = {(r["protocol"], float(r["dalpha"]), int(r["seed"])) for r in rows}
-    todo = [s for s in range(args.seeds) if (args.protocol, dalpha, s) not in done]
-    for seed in tqdm(todo, desc=f"{args.protocol} alpha {args.alpha:g}", unit="packing"):
-        row, packing = one(args.protocol, args.n, args.alpha, seed, dalpha)
+    todo = [s for s in range(args.seeds) if (protocol, dalpha, s) not in done]
+    for seed in tqdm(todo, desc=f"{protocol} alpha {args.alpha:g}", unit="packing"):
+        row, packing = one(args.protocol, args.n, args.alpha, seed, dalpha, args.orientations, args.phi0)
         if keep:
-            save_packing(keep / name(args.protocol, dalpha, seed), packing)
+            save_packing(keep / name(protocol, dalpha, seed), packing)
         rows.append(row)
         write_rows(out, rows, COLUMNS)
 
@@ -80,8 +97,8 @@ def report(path: Path, keep: Path | None) -> None:
         p2, p2_se, k = stats(r["p2"] for r in g)
         phi, phi_se, _ = stats(r["phi_j"] for r in g)
         z, z_se, _ = stats(r["mean_z"] for r in g)
-        label = protocol if protocol == "compression" else f"anneal (dalpha = {dalpha:g})"
-        print(f"| {label} | {g[0]['n']} | {float(g[0]['alpha']):g} | {k} | {p2:.3f} +- {p2_se:.3f} | "
+        text = protocol if not protocol.startswith("anneal") else f"{protocol} (dalpha = {dalpha:g})"
+        print(f"| {text} | {g[0]['n']} | {float(g[0]['alpha']):g} | {k} | {p2:.3f} +- {p2_se:.3f} | "
               f"{min(float(r['p2']) for r in g):.3f} .. {max(float(r['p2']) for r in g):.3f} | {phi:.4f} +- {phi_se:.4f} | "
               f"{z:.3f} +- {z_se:.3f} | {sum(r['checks_passed'] == 'True' for r in g)}/{k} | "
               f"{np.median([float(r['cpu_seconds']) for r in g]):.0f} |")
@@ -93,12 +110,19 @@ def report(path: Path, keep: Path | None) -> None:
     chart(groups, keep, path.with_suffix(".png"))
 
 
+def _median_row(rows):
+    """The packing whose P2 is nearest the group's median (the one drawn)."""
+    median = np.median([float(r["p2"]) for r in rows])
+    return min(rows, key=lambda r: abs(float(r["p2"]) - median))
+
+
 def chart(groups, keep, path: Path) -> None:
     from jamflow.plots.drawing import draw_into
 
     plt = pyplot()
     keys = sorted(groups)
-    drawn = [(k, max(groups[k], key=lambda r: float(r["p2"]))) for k in keys] if keep else []
+    typical = [(k, _median_row(groups[k])) for k in keys] if keep else []
+    drawn = [(k, r) for k, r in typical if (keep / name(k[0], k[1], int(r["seed"]))).exists()]  # the kept ones
     fig, axes = plt.subplots(1, 1 + len(drawn), figsize=(4.2 * (1 + len(drawn)), 4.2))
     axes = np.atleast_1d(axes)
     for x, k in enumerate(keys):
@@ -111,7 +135,8 @@ def chart(groups, keep, path: Path) -> None:
     for value, text in ((0.64, "Fig. 2.23(c)"), (0.11, "Fig. 2.23(d)")):
         axes[0].axhline(value, ls="--", color="tab:red", lw=0.8)
         axes[0].text(len(keys) - 0.6, value + 0.01, text, color="tab:red", fontsize=7)
-    axes[0].set_xticks(range(len(keys)), [k[0] if k[0] == "compression" else f"anneal {k[1]:g}" for k in keys])
+    axes[0].set_xticks(range(len(keys)), [k[0].replace(" ", "\n") + (f"\ndalpha {k[1]:g}" if k[1] else "") for k in keys],
+                       fontsize=7)
     axes[0].set_xlim(-0.5, len(keys) - 0.3)
     axes[0].set_ylim(0, 1)
     axes[0].set_ylabel("nematic order $P_2$")
@@ -135,6 +160,9 @@ def main(argv=None) -> None:
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--protocol", choices=("compression", "anneal"), default="compression")
     ap.add_argument("--dalpha", type=float, default=0.1)
+    ap.add_argument("--orientations", choices=("random", "aligned"), default="random",
+                    help="directors at the start (compression) or the first annealing step")
+    ap.add_argument("--phi0", type=float, default=None, help="compression: start packing fraction (default 0.8)")
     ap.add_argument("--out", default="docs/notes/nematic-protocols.csv")
     ap.add_argument("--keep", default=None, help="directory of the final packings (HDF5)")
     ap.add_argument("--report", default=None, metavar="CSV")

@@ -40,8 +40,55 @@ def orientations(m: int):
     return vec(np.zeros_like(ti)), vec(ti), vec(tj)
 
 
-def pair(alpha, m):
-    return (1.0, 1.0 / alpha, RATIO, RATIO / alpha) + orientations(m)
+def pair(alpha, m, ratio=RATIO):
+    return (1.0, 1.0 / alpha, ratio, ratio / alpha) + orientations(m)
+
+
+METHODS = ("cleaver", "linear", "quadratic")  # the columns: Gaussian (eq. 2.6), linear, quadratic
+LABELS = {"cleaver": "Gaussian (eq. 2.6)", "linear": "Linear", "quadratic": "Quadratic"}
+
+
+def relative_errors(args, exact):
+    """{method: relative errors |sigma / sigma_exact - 1|} of the three columns."""
+    return {k: np.abs(contact_distance(*args, method=k) / exact - 1) for k in METHODS}
+
+
+def mean_errors(alpha, m, ratio=RATIO):
+    """{method: mean relative error} over the orientation grid for particles a_j/a_i = ratio."""
+    args = pair(alpha, m, ratio)
+    return {k: float(np.mean(e)) for k, e in relative_errors(args, contact_distance(*args)).items()}
+
+
+def ratios_for_chapter(half_width=0.05):
+    """At alpha = 1 (circles) every orientation has the same error, a function of the size ratio
+    alone: the ratio interval whose error rounds to each chapter entry (log10 +- half_width)."""
+    from scipy.optimize import brentq
+
+    def log_err(ratio, method):
+        return np.log10(mean_errors(1.0, 1, ratio)[method])
+
+    out = {}
+    for k in METHODS:
+        c = CHAPTER["gaussian" if k == "cleaver" else k][0]
+        out[k] = tuple(brentq(lambda r, k=k, target=c + d: log_err(r, k) - target, 1.1, 2.0)
+                       for d in (-half_width, half_width))
+    return out
+
+
+def unlike_fractions(m, half_width=0.05):
+    """Per alpha and method: the fraction f of unlike (a_j/a_i = 1.4) pairs, the rest identical,
+    for which f e_unlike + (1 - f) e_identical rounds to the chapter's entry; and the common range."""
+    rows = []
+    for i, alpha in enumerate(ALPHAS):
+        unlike, same = mean_errors(alpha, m), mean_errors(alpha, m, 1.0)
+        ranges = []
+        for k in METHODS:
+            c = CHAPTER["gaussian" if k == "cleaver" else k][i]
+            f = sorted((10 ** (c + d) - same[k]) / (unlike[k] - same[k]) for d in (-half_width, half_width))
+            ranges.append(tuple(f))
+        common = (max(r[0] for r in ranges), min(r[1] for r in ranges))
+        rows.append((alpha, same, ranges, common))
+    return rows
 
 
 def truncated_y(q, order, printed=False):
@@ -57,7 +104,7 @@ def errors(alpha, m):
     """Relative errors of the library methods plus raw-truncation diagnostics."""
     args = pair(alpha, m)
     exact = contact_distance(*args)
-    err = {k: np.abs(contact_distance(*args, method=k) / exact - 1) for k in ("cleaver", "linear", "quadratic")}
+    err = relative_errors(args, exact)
     p = cdm._validate(*args)
     q = cdm._chapter_coefficients(p)
     diag = {}
@@ -131,7 +178,7 @@ def main(argv=None):
     ap.add_argument("--grid", type=int, default=512, help="M: orientations per angle (M^2 pairs)")
     args = ap.parse_args(argv)
     m = args.grid
-    rows = {k: [] for k in ("cleaver", "linear", "quadratic")}
+    rows = {k: [] for k in METHODS}
     alt = {k: [] for k in ("mean_log", "median", "max")}
     conv, diag_rows = [], []
     for alpha in ALPHAS:
@@ -159,7 +206,7 @@ def main(argv=None):
         "| method | " + " | ".join(f"alpha = {a:g}" for a in ALPHAS) + " |",
         "|---|" + "---|" * len(ALPHAS),
     ]
-    for k, label in (("cleaver", "Gaussian (eq. 2.6)"), ("linear", "Linear"), ("quadratic", "Quadratic")):
+    for k, label in LABELS.items():
         ch = CHAPTER["gaussian" if k == "cleaver" else k]
         out.append(f"| {label} | " + " | ".join(f"{fmt(v)} ({c:.1f})" for v, c in zip(rows[k], ch)) + " |")
     out += [
@@ -187,6 +234,7 @@ def main(argv=None):
     ]
     for alpha, ml, md, mx in zip(ALPHAS, alt["mean_log"], alt["median"], alt["max"]):
         out.append(f"| {alpha:g} | " + " | ".join(" / ".join(fmt(v) for v in trip) for trip in (ml, md, mx)) + " |")
+    out += alpha_one_section(m)
     out += [
         "",
         "## Figure 2.12 (alpha = 2, Gaussian contact distance vs exact)",
@@ -211,6 +259,44 @@ def main(argv=None):
     out += [f"| {k} | {v:.1e} |" for k, v in coeff.items()]
     (DOCS / "table-2-1.md").write_text("\n".join(out) + "\n")
     print("\n".join(out))
+
+
+def alpha_one_section(m):
+    """Report lines: what the chapter's alpha = 1 and 1.2 entries would need (issue 30 item 4)."""
+    ratios = ratios_for_chapter()
+    bp = {a: mean_errors(a, m, 1.0)["cleaver"] for a in (1.2, 1.5, 2.0)}
+    out = [
+        "",
+        "## alpha = 1 and 1.2: what the chapter's entries would need",
+        "",
+        ("At alpha = 1 every orientation has the same error (closed forms in `tests/test_contact_distance.py::"
+         "test_table_2_1_at_alpha_1_is_closed_form`). Size ratio a_j/a_i for which our error rounds to the "
+         "chapter's entry (log10 +- 0.05):"),
+        "",
+        "| method | chapter | size ratio giving it |",
+        "|---|---|---|",
+    ]
+    for k in METHODS:
+        c = CHAPTER["gaussian" if k == "cleaver" else k][0]
+        out.append(f"| {LABELS[k]} | {c:.1f} | {ratios[k][0]:.3f} .. {ratios[k][1]:.3f} |")
+    out += [
+        "",
+        "Berne-Pechukas (eq. 2.5) on identical ellipses, log10 of the mean error: "
+        + ", ".join(f"alpha = {a:g}: {np.log10(e):.2f}" for a, e in bp.items())
+        + " (exact at alpha = 1; its largest error, side to end, is sqrt(2 (alpha^2 + 1)) / (alpha + 1) - 1).",
+        "",
+        ("Mixtures: fraction f of unlike pairs (the rest identical, same orientation average) for which "
+         "f e_unlike + (1 - f) e_identical rounds to each chapter entry:"),
+        "",
+        "| alpha | identical pairs: log10 mean error G / L / Q | f for G | f for L | f for Q | f for all three |",
+        "|---|---|---|---|---|---|",
+    ]
+    for alpha, same, ranges, common in unlike_fractions(m):
+        rng = " | ".join(f"{lo:.2f} .. {hi:.2f}" for lo, hi in ranges)
+        both = f"{common[0]:.2f} .. {common[1]:.2f}" if common[0] <= common[1] else "none"
+        out.append(f"| {alpha:g} | " + " / ".join(fmt(np.log10(same[k])) if same[k] > 0 else "exact" for k in METHODS)
+                   + f" | {rng} | {both} |")
+    return out
 
 
 def cdm_panels():

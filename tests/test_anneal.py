@@ -10,7 +10,7 @@ from jamflow.mechanics.contacts import Contacts
 from jamflow.analysis.independent import independent_check
 from jamflow.cli.app import main
 from jamflow.io.packing_file import load_packing, read_protocol, read_table
-from jamflow.protocols.anneal import STEP_COLUMNS, _grown, anneal_alphas
+from jamflow.protocols.anneal import STEP_COLUMNS, _grown, anneal_alphas, check_anneal
 from jamflow.model.shapes import Ellipsoid
 
 
@@ -41,6 +41,25 @@ def test_growth_keeps_phi_and_draws_directors_only_from_round_particles(disks):
     assert np.ptp(grown.orientations) > 1.0  # directions drawn at random, not one for all
     again = _grown(grown, 1.1, "exact", rng)
     np.testing.assert_array_equal(again.orientations, grown.orientations)  # later steps keep them
+
+
+def test_an_aligned_first_step_turns_every_director_along_x(disks, tmp_path, capsys):
+    """--orientations aligned (issue 30, Figure 2.23(c)): the first step's directors all along x
+    (P2 = 1), recorded in the file; an input that already has directions is refused."""
+    start = load_packing(disks)
+    grown = _grown(start, 1.05, "exact", np.random.default_rng(0), "aligned")
+    np.testing.assert_array_equal(grown.orientations, np.zeros(start.n))
+    assert grown.metadata["orientations"] == "aligned"
+    out = tmp_path / "aligned.h5"
+    assert main(["anneal", str(disks), "--to", "1.1", "--dalpha", "0.05", "--orientations", "aligned", "--quiet",
+                 "--out", str(out)]) == 0
+    assert read_table(out, "anneal")["checks_passed"].all() and read_protocol(out)["anneal_orientations"] == "aligned"
+    assert load_packing(out).metadata["orientations"] == "aligned"
+    assert main(["anneal", str(out), "--to", "1.2", "--dalpha", "0.05", "--orientations", "aligned", "--quiet",
+                 "--out", str(tmp_path / "again.h5")]) == 2
+    assert "keep their own: leave --orientations out" in capsys.readouterr().err
+    with pytest.raises(ValueError, match="--orientations 'sideways' is not one of random, aligned"):
+        check_anneal(start, 1.5, 0.05, None, "sideways")
 
 
 def test_cli_anneal_records_every_step_and_writes_a_checked_packing(disks, tmp_path, capsys):

@@ -199,6 +199,47 @@ def test_unequal_end_to_side_and_gaussian_side_to_end(dim):
     assert side_end / 0.75 - 1 == pytest.approx(0.054, abs=5e-4)  # "5%" in Figure 2.12(b)
 
 
+@pytest.mark.parametrize("ratio", [1.4, 1.2, 1.6])
+def test_table_2_1_at_alpha_1_is_closed_form(ratio):
+    """Table 2.1 at alpha = 1 (issue 30): circles of diameters 1 and r. Exact sigma = (1 + r)/2;
+    sigma(lambda) = sqrt(1/lambda + r^2/(1 - lambda)) / 2 (sigma_0(lambda), chi = 0); Cleaver (eq. 2.6)
+    is lambda = 1/2; J = r^2 - 1, K = r^4 - 1, L = 2 r^2 - 2 in eqs 2.8-2.15 give q0 = -(r^2-1)(r^2+1)^2/16,
+    q1 = -(r^4+1)(r^2+1)/2, q2 = -(r^2-1)(3 r^4 + 4 r^2 + 3)/2, the truncated roots y = lambda - 1/2 of
+    eq. 2.26. The same error for every orientation: log10 -1.86, -3.69, -6.16 at r = 1.4 (chapter:
+    -2.0, -3.9, -6.3; docs/notes/contact-distance.md). Berne-Pechukas (eq. 2.5) is exact for equal circles."""
+    r2 = ratio * ratio
+    q0, q1, q2 = -(r2 - 1) * (r2 + 1) ** 2 / 16, -(r2 * r2 + 1) * (r2 + 1) / 2, -(r2 - 1) * (3 * r2 * r2 + 4 * r2 + 3) / 2
+    y = {"cleaver": 0.0, "linear": -q0 / q1, "quadratic": -2 * q0 / (q1 - np.sqrt(q1 * q1 - 4 * q0 * q2))}
+    rng = np.random.default_rng(3)
+    vecs = [unit(rng, 20, 2) for _ in range(3)]
+    exact = contact_distance(1.0, 1.0, ratio, ratio, *vecs)
+    np.testing.assert_allclose(exact, (1 + ratio) / 2, rtol=1e-14)
+    for method, y_m in y.items():
+        lam = 0.5 + y_m
+        closed = np.sqrt(1 / lam + r2 / (1 - lam)) / 2
+        np.testing.assert_allclose(contact_distance(1.0, 1.0, ratio, ratio, *vecs, method=method), closed, rtol=1e-14)
+    if ratio == 1.4:
+        logs = [np.log10(np.sqrt(1 / (0.5 + y_m) + r2 / (0.5 - y_m)) / 2 / 1.2 - 1) for y_m in y.values()]
+        np.testing.assert_allclose(logs, [-1.860, -3.692, -6.160], atol=5e-4)
+    np.testing.assert_allclose(contact_distance(1.0, 1.0, 1.0, 1.0, *vecs, method="gaussian"), 1.0, rtol=1e-15)
+
+
+def test_berne_pechukas_largest_error_is_side_to_end():
+    """Eq. 2.5 on identical ellipses: the largest relative error over all orientations is the side-to-end
+    one, sqrt(2 (alpha^2 + 1)) / (alpha + 1) - 1 (0.41 % at alpha = 1.2): so no average of eq. 2.5 errors
+    reaches Table 2.1's Gaussian entry -2.0 (1 %) at alpha = 1.2; the column is the unequal pair's eq. 2.6."""
+    t = np.arange(180) * np.pi / 90  # 2-degree grid, side to end (0, pi/2) included
+    ti, tj = (g.ravel() for g in np.meshgrid(t, t))
+    u = lambda x: np.stack([np.cos(x), np.sin(x)], -1)
+    for alpha in (1.2, 2.0, 5.0):
+        args = (1.0, 1 / alpha, 1.0, 1 / alpha, u(0 * ti), u(ti), u(tj))
+        err = contact_distance(*args, method="gaussian") / contact_distance(*args) - 1
+        bound = np.sqrt(2 * (alpha**2 + 1)) / (alpha + 1) - 1
+        assert err.max() == pytest.approx(bound, rel=1e-12), alpha
+        assert err.min() > -1e-14  # eq. 2.5 never under-estimates
+    assert np.log10(np.sqrt(2 * 2.44) / 2.2 - 1) < -2.3
+
+
 def test_figure_2_12_relative_errors():
     _, errors = figure_2_12(None)
     np.testing.assert_allclose(errors, [0.0, 0.0541, 0.0138, 0.1065], atol=5e-4)

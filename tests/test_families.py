@@ -63,6 +63,7 @@ def test_a_reflected_twin_with_the_same_phi_and_stress_is_another_family():
     assert fam.count == 2 and fam.family[0] == fam.family[1] != fam.family[2]
     m = mirrored(p, 0.001)
     assert list(m["fabric_b"]) == [-0.05] * 3 and list(m["fabric_a"]) == [0.12, 0.12, -0.12]
+    assert join(p, 0.001, tol_fabric=0.3).count == 1  # a looser fabric tolerance merges the twin (issue 30)
 
 
 def test_no_joining_at_symmetric_strains():
@@ -91,6 +92,8 @@ def test_richness_is_chao1_of_the_sampled_packings():
     # families 0 (found by starts 0 and 5) and the one at strain 60 (starts 6, 7) twice, four once
     assert (r["observed"], r["singletons"], r["doubletons"]) == (6, 4, 2)
     assert r["chao1"] == pytest.approx(6 + 4 * 3 / (2 * 3))
+    # standard error (Chao 2005, bias-corrected): 4*3/6 + 4*7^2/(4*3^2) + 4^2*2*3^2/(4*3^4) = 2 + 49/9 + 8/9
+    assert r["chao1_se"] == pytest.approx(np.sqrt(2 + 49 / 9 + 8 / 9), rel=1e-12)
 
 
 def test_signature_ignores_labels():

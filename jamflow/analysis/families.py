@@ -65,17 +65,18 @@ def symmetric_strain(gamma) -> np.ndarray:
     return np.abs(twice - np.round(twice)) < 1e-9
 
 
-def same_fabric(a: dict, b: dict, p: int, q: int) -> bool:
-    """Fabric anisotropies within TOL_FABRIC (True for points sampled without them)."""
+def same_fabric(a: dict, b: dict, p: int, q: int, tol: float = TOL_FABRIC) -> bool:
+    """Fabric anisotropies within ``tol`` (True for points sampled without them)."""
     if "fabric_a" not in a or "fabric_a" not in b:
         return True
-    return abs(a["fabric_a"][p] - b["fabric_a"][q]) <= TOL_FABRIC and abs(a["fabric_b"][p] - b["fabric_b"][q]) <= TOL_FABRIC
+    return abs(a["fabric_a"][p] - b["fabric_a"][q]) <= tol and abs(a["fabric_b"][p] - b["fabric_b"][q]) <= tol
 
 
-def matching_pairs(a: dict, b: dict, tol_phi: float = TOL_PHI, tol_mu: float = TOL_MU):
+def matching_pairs(a: dict, b: dict, tol_phi: float = TOL_PHI, tol_mu: float = TOL_MU,
+                   tol_fabric: float = TOL_FABRIC):
     """Index pairs (p, q) of points of ``a`` and ``b`` at the same strain index with the same
-    signature, |phi_J difference| <= tol_phi and |mu difference| <= tol_mu, away from the
-    symmetric strains (``symmetric_strain``)."""
+    signature, |phi_J difference| <= tol_phi, |mu difference| <= tol_mu and fabric anisotropies
+    within tol_fabric, away from the symmetric strains (``symmetric_strain``)."""
     sig_a, sig_b = _text(a["signature"]), _text(b["signature"])
     key_a = np.char.add(np.char.add(a["strain_index"].astype(str), "|"), sig_a)
     key_b = np.char.add(np.char.add(b["strain_index"].astype(str), "|"), sig_b)
@@ -87,7 +88,7 @@ def matching_pairs(a: dict, b: dict, tol_phi: float = TOL_PHI, tol_mu: float = T
     for p in np.flatnonzero(~symmetric_strain(a["gamma"])):
         for q in groups.get(key_a[p], ()):
             if abs(a["phi_j"][p] - b["phi_j"][q]) <= tol_phi and abs(a["mu"][p] - b["mu"][q]) <= tol_mu \
-                    and same_fabric(a, b, p, q):
+                    and same_fabric(a, b, p, q, tol_fabric):
                 out.append((int(p), int(q)))
     return out
 
@@ -149,14 +150,15 @@ class Families:
 
 
 def join(points: dict, step: float, gamma_min: float = 0.0, tol_phi: float = TOL_PHI, tol_mu: float = TOL_MU,
-         starts: int | None = None) -> Families:
-    """Families of ``points`` (only starts < ``starts`` if given)."""
+         starts: int | None = None, tol_fabric: float = TOL_FABRIC) -> Families:
+    """Families of ``points`` (only starts < ``starts`` if given); the joining tolerances as in
+    ``matching_pairs``."""
     if starts is not None:
         keep = points["start"] < starts
         points = {k: v[keep] for k, v in points.items()}
     segments = points["segment"]
     uf = _UnionFind(np.unique(segments).tolist())
-    for p, q in matching_pairs(points, points, tol_phi, tol_mu):
+    for p, q in matching_pairs(points, points, tol_phi, tol_mu, tol_fabric):
         if p < q:
             uf.union(int(segments[p]), int(segments[q]))
     roots = np.array([uf.find(int(s)) for s in segments], dtype=np.int64)
@@ -248,10 +250,15 @@ def richness(families: Families) -> dict:
     (f2), and the bias-corrected Chao1 estimate of the families a sampler of this kind would
     find with unlimited starts, S_obs + f1 (f1 - 1) / (2 (f2 + 1)) (Chao, Biometrics 43, 783
     (1987)); it assumes every family has a fixed chance per start, which strains and basin
-    sizes make only roughly true."""
+    sizes make only roughly true. ``chao1_se``: its standard error from the variance of the
+    bias-corrected form, f1 (f1 - 1) / (2 (f2 + 1)) + f1 (2 f1 - 1)^2 / (4 (f2 + 1)^2)
+    + f1^2 f2 (f1 - 1)^2 / (4 (f2 + 1)^4) (Chao, in Encyclopedia of Statistical Sciences, 2nd ed.,
+    Wiley (2005); the form EstimateS uses)."""
     sampled = families.points["step"] == 0
     counts = np.bincount(families.family[sampled])
     counts = counts[counts > 0]
     f1, f2 = int(np.sum(counts == 1)), int(np.sum(counts == 2))
+    g = f2 + 1.0
+    variance = f1 * (f1 - 1) / (2 * g) + f1 * (2 * f1 - 1) ** 2 / (4 * g**2) + f1**2 * f2 * (f1 - 1) ** 2 / (4 * g**4)
     return dict(sampled=int(sampled.sum()), observed=len(counts), singletons=f1, doubletons=f2,
-                chao1=float(len(counts) + f1 * (f1 - 1) / (2 * (f2 + 1))))
+                chao1=float(len(counts) + f1 * (f1 - 1) / (2 * g)), chao1_se=float(np.sqrt(variance)))

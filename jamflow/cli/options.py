@@ -7,6 +7,7 @@ from __future__ import annotations
 from jamflow.engines.choose import ENGINES
 from jamflow.minimize.settings import CREEP_METHODS, MD_DAMPINGS, METHODS, MinimizerSettings
 from jamflow.model.box import STRESS_MODES
+from jamflow.model.shapes.rotations import START_ORIENTATIONS
 from jamflow.model.shapes.contact_distance import METHODS as METHODS_CONTACT
 from jamflow.model.walls import WALL_TYPES
 from jamflow.protocols.settings import DEFAULT_PROTOCOL, PROTOCOL_NAMES, PROTOCOLS
@@ -90,6 +91,9 @@ def add_spec_arguments(p, skip=()) -> None:
     add("--precision", choices=PRECISIONS, default="double",
         help="double-double (with --pressure P, disks/spheres, spring): the float64 onset refined to P by Newton steps "
              "in double-double (jamflow refine; P down to ~2e-18 at N ~ 300; docs/guide/precision.md)")
+    add("--orientations", choices=START_ORIENTATIONS, default="random",
+        help="start orientations of particles with an axis: random (uniform, chapter step 1) or aligned "
+             "(every director along x: a nematic start, P2 = 1; Figure 2.23(c), docs/validation.md)")
 
 def add_md_damping_argument(p) -> None:
     p.add_argument("--md-damping", choices=MD_DAMPINGS, default="viscous",

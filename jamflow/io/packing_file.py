@@ -19,7 +19,10 @@ epsilon, pressures in epsilon / diameter^d)::
                                    ``jamflow jam`` reports: phi_J of a compression, the
                                    pile's fraction under gravity, phi_J(P->0) at constant
                                    pressure, NaN where none is known: one pressure, or a
-                                   packing saved without one)
+                                   packing saved without one), start_orientations
+                                   (how the start's orientations were drawn: "random" or
+                                   "aligned", ``jamflow jam --orientations``; "" unknown
+                                   or round particles)
     /positions  (N, d)      float64, Cartesian, wrapped into the cell
     /positions_lo (N, d)    float64, double-double packings only (root attribute precision =
                             "double-double", else "double"; ``jamflow refine``): the true
@@ -126,7 +129,7 @@ def save_packing(path, packing: Packing, *, energy_per_particle=None, pressure_t
         gamma=packing.box.shear_strain,
         walls=packing.box.wall_spec, wall_type=wall_type(packing), gravity=float(packing.gravity),
         target_pressure=_num(target_pressure), stress=str(stress or ""), dphi_above=_num(dphi_above),
-        phi_j=_num(phi_j),
+        phi_j=_num(phi_j), start_orientations=str(packing.metadata.get("orientations", "")),
     )
     ptensor = None if pressure_tensor is None else np.asarray(pressure_tensor, float)
     attrs["pressure"] = math.nan if ptensor is None else float(np.trace(ptensor) / packing.dim)
@@ -288,6 +291,8 @@ def load_packing(path) -> Packing:
         shape = shape_from_attrs(json.loads(_text(f.attrs.get("shape", '{"kind": "sphere"}'))))
         orientations = f["orientations"][...] if "orientations" in f else None
         meta = {"seed": int(f.attrs["seed"]), "sizes": str(f.attrs["sizes"]), "source": str(path)}
+        if _text(f.attrs.get("start_orientations", "")):
+            meta["orientations"] = _text(f.attrs["start_orientations"])
         h = f["box"][...]
         fixed = f["fixed"][...].astype(bool) if "fixed" in f else None
         try:

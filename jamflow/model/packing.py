@@ -26,7 +26,7 @@ import numpy as np
 
 from jamflow.model.box import Box
 from jamflow.model.potentials import Potential, Spring
-from jamflow.model.shapes.rotations import check_orientations, directors, random_orientations
+from jamflow.model.shapes.rotations import check_orientations, directors, start_orientations
 from jamflow.model.shapes.shape import SPHERE
 from jamflow.model.sizes import SizeSpec
 
@@ -250,9 +250,11 @@ class Packing:
 
 
 def random_packing(n: int, dim: int, sizes: SizeSpec, phi: float, seed: int,
-                   potential: Potential | None = None, shape=SPHERE, separated: bool = False) -> Packing:
+                   potential: Potential | None = None, shape=SPHERE, separated: bool = False,
+                   orientations: str = "random") -> Packing:
     """Uniformly random positions in a square/cubic box at packing fraction ``phi`` and, for
-    shapes that are not round, uniformly random orientations (chapter step 1). Diameters are
+    shapes that are not round, uniformly random orientations (chapter step 1), or all aligned
+    along x with ``orientations="aligned"`` (``rotations.start_orientations``). Diameters are
     drawn first, then positions, then orientations, from one generator. ``separated`` (rigid
     bodies): orientations first, then positions by random sequential addition, so that no two
     bodies overlap (``separated_positions``)."""
@@ -261,13 +263,14 @@ def random_packing(n: int, dim: int, sizes: SizeSpec, phi: float, seed: int,
     length = (shape.volumes(diameters, dim).sum() / phi) ** (1.0 / dim)
     box = Box.cube(length, dim)
     if separated:
-        orientations = random_orientations(n, dim, rng)
-        positions = separated_positions(shape, diameters, orientations, box, rng)
+        turns = start_orientations(orientations, n, dim, rng)
+        positions = separated_positions(shape, diameters, turns, box, rng)
     else:
         positions = rng.random((n, dim)) * length
-        orientations = random_orientations(n, dim, rng) if shape.oriented else None
-    return Packing(positions, diameters, box, potential or Spring(),
-                   metadata={"seed": seed, "sizes": sizes.spec}, shape=shape, orientations=orientations)
+        turns = start_orientations(orientations, n, dim, rng) if shape.oriented else None
+    metadata = {"seed": seed, "sizes": sizes.spec, **({"orientations": orientations} if shape.oriented else {})}
+    return Packing(positions, diameters, box, potential or Spring(), metadata=metadata, shape=shape,
+                   orientations=turns)
 
 
 SEPARATION_TRIES = 10_000  # random positions tried per body before random sequential addition gives up

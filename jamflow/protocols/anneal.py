@@ -1,5 +1,6 @@
 """Particle-shape annealing (chapter section 2.3.3): from a jammed packing of disks/spheres, grow
-the aspect ratio in steps of dalpha (random major-axis directions at the first step), re-jamming
+the aspect ratio in steps of dalpha (random, or all aligned, major-axis directions at the first
+step), re-jamming
 with the compression protocol of section 2.1 at every step.
 
 Each step replaces the shape (a particle's size stays its b, a = ALPHA b), rescales the box
@@ -20,7 +21,7 @@ import numpy as np
 from jamflow.model.nematic import Nematic
 from jamflow.mechanics.checks import check_packing
 from jamflow.model.packing import Packing
-from jamflow.model.shapes.rotations import random_orientations
+from jamflow.model.shapes.rotations import START_ORIENTATIONS, start_orientations
 from jamflow.model.shapes.shape import SPHERE, Ellipsoid
 from jamflow.protocols.settings import DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings
 from jamflow.protocols.outcome import JammingFailed, JamResult
@@ -61,8 +62,10 @@ def anneal_alphas(alpha0: float, target: float, dalpha: float) -> np.ndarray:
     return np.round(steps, 12)
 
 
-def check_anneal(start: Packing, target: float, dalpha: float, contact: str | None = None) -> float:
-    """Refuse, before any work, what cannot be annealed; returns the start's aspect ratio."""
+def check_anneal(start: Packing, target: float, dalpha: float, contact: str | None = None,
+                 orientations: str = "random") -> float:
+    """Refuse, before any work, what cannot be annealed; returns the start's aspect ratio.
+    ``orientations``: the first step's major-axis directions, "random" or "aligned" (round starts)."""
     for name, value in (("--to", target), ("--dalpha", dalpha)):
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
             raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
@@ -73,6 +76,11 @@ def check_anneal(start: Packing, target: float, dalpha: float, contact: str | No
     if start.box.walls or start.fixed is not None or start.gravity:
         raise ValueError("shape annealing runs in a periodic box: the input has walls, fixed particles or gravity")
     alpha0 = 1.0 if kind == "sphere" else float(start.shape.alpha)
+    if orientations not in START_ORIENTATIONS:
+        raise ValueError(f"--orientations {orientations!r} is not one of {', '.join(START_ORIENTATIONS)}")
+    if orientations != "random" and kind != "sphere":
+        raise ValueError(f"--orientations {orientations} sets the first step's directions of a round start; the input "
+                         f"{start.shape.name(start.dim)}s keep their own: leave --orientations out")
     if target == alpha0:
         raise ValueError(f"the input is already at aspect ratio {alpha0:g}; give --to another ALPHA")
     if (target - 1.0) * (alpha0 - 1.0) < 0:
@@ -90,31 +98,33 @@ def check_anneal(start: Packing, target: float, dalpha: float, contact: str | No
     return alpha0
 
 
-def _grown(packing: Packing, alpha: float, contact: str, rng: np.random.Generator) -> Packing:
-    """``packing`` with aspect ratio ``alpha`` (random directors if it was round), box and positions
-    rescaled so that phi stays what it was."""
-    orientations = packing.orientations
+def _grown(packing: Packing, alpha: float, contact: str, rng: np.random.Generator, start: str = "random") -> Packing:
+    """``packing`` with aspect ratio ``alpha`` (directors ``start``, random or aligned, if it was
+    round), box and positions rescaled so that phi stays what it was."""
+    orientations, metadata = packing.orientations, {**packing.metadata, "anneal": True}
     if orientations is None:
-        orientations = random_orientations(packing.n, packing.dim, rng)
+        orientations, metadata["orientations"] = start_orientations(start, packing.n, packing.dim, rng), start
     shape = SPHERE if alpha == 1.0 else Ellipsoid(float(alpha), contact)
-    grown = replace(packing, shape=shape, orientations=orientations, metadata={**packing.metadata, "anneal": True})
+    grown = replace(packing, shape=shape, orientations=orientations, metadata=metadata)
     return grown.scaled_to_phi(packing.phi)
 
 
 def anneal(start: Packing, target: float, dalpha: float, settings: CompressionSettings | None = None, *,
-           seed: int = 0, contact: str | None = None, engine: str = "auto", observers=()) -> AnnealResult:
+           seed: int = 0, contact: str | None = None, engine: str = "auto", observers=(),
+           orientations: str = "random") -> AnnealResult:
     """Anneal the shape of the jammed ``start`` to aspect ratio ``target`` in steps of ``dalpha``.
 
-    ``seed``: the random major-axis directions of the first step (a round start only).
+    ``seed``: the random major-axis directions of the first step (a round start only);
+    ``orientations`` "aligned": all of them along x instead (a nematic start, Figure 2.23(c)).
     ``observers``: callables ``f(row: dict)`` after each step (progress bars). JammingFailed
     if a step's protocol fails, or the last step's packing fails its checks.
     """
     settings = settings or PROTOCOLS[DEFAULT_PROTOCOL]()
-    alpha0 = check_anneal(start, target, dalpha, contact)
+    alpha0 = check_anneal(start, target, dalpha, contact, orientations)
     contact = contact or getattr(start.shape, "contact", "exact")
     rng = np.random.default_rng(seed)
     alphas = anneal_alphas(alpha0, float(target), float(dalpha))
-    packing = _grown(start, alphas[0], contact, rng)
+    packing = _grown(start, alphas[0], contact, rng, orientations)
     check_resolution(packing, settings)
     rows = {c: [] for c in STEP_COLUMNS}
     _append(rows, alpha0, start, check_packing(start), None, 0.0)

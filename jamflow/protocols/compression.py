@@ -25,6 +25,7 @@ from jamflow.minimize.settings import MinimizerSettings
 from jamflow.model.packing import DENSEST_PHI, Packing, SeparationFailed, random_packing
 from jamflow.model.potentials import POTENTIALS, Potential, Spring, parse_potential
 from jamflow.model.shapes.parse import parse_shape
+from jamflow.model.shapes.rotations import START_ORIENTATIONS
 from jamflow.model.sizes import SizeSpec, parse_sizes
 from jamflow.model.walls import parse_walls, wall_loads, with_walls
 from jamflow.protocols.outcome import HISTORY_COLUMNS, JammingFailed, JamResult, record_minimization
@@ -54,7 +55,7 @@ def jam(n: int = 64, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | P
         seed: int = 0, settings: CompressionSettings | None = None, *, start: Packing | None = None,
         observers=(), engine: str = "auto", engine_options: dict | None = None, shape="disk",
         walls=None, wall_type: str = "smooth", gravity: float = 0.0, contact: str = "exact",
-        gamma: float | None = None) -> JamResult:
+        gamma: float | None = None, orientations: str = "random") -> JamResult:
     """Jam N particles by isotropic compression; ``start`` overrides the random start.
 
     The defaults are those of ``jamflow jam`` and ``JamSpec`` (N = 64, 2D, 50:50 bidisperse 1 : 1.4
@@ -63,6 +64,8 @@ def jam(n: int = 64, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | P
     ``shape``: a ``--shape`` spec or shape object (``jamflow.model.shapes``; default disks/spheres);
     ``sizes`` scale whole particles (an ellipse's b; a = ALPHA b). ``contact``: the contact-distance
     method of ellipses/spheroids (exact, gaussian, cleaver, linear, quadratic).
+    ``orientations``: the start's orientations of particles with an axis, "random" (uniform) or
+    "aligned" (every director along x, a nematic start; ``rotations.start_orientations``).
     ``walls``: walled axes (``"y"``, ``"x,y"``, ...; ``jamflow.model.walls``) of ``wall_type``
     smooth or rough. ``gravity`` g > 0 settles the packing on the floor instead of
     compressing it (``jamflow.protocols.gravity``; needs walls on the last axis).
@@ -89,7 +92,7 @@ def jam(n: int = 64, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | P
     random_start = start is None
     if random_start:
         start = initial_packing(n, dim, sizes, potential, seed, settings.start_phi(dim, gravity, shape), shape, walls,
-                                wall_type, gravity, contact)
+                                wall_type, gravity, contact, orientations)
         if gamma is not None:
             start = at_shear_strain(start, gamma)
     elif not isinstance(start, Packing):
@@ -134,10 +137,20 @@ BYTES_PER_PARTICLE = 4096  # peak memory of a jam run: measured 1.1-2.2 kB per p
 MAX_SEED = 2**63 - 1  # seeds are stored as int64 in the packing file
 
 
+def check_start_orientations(orientations, particle, dim: int) -> None:
+    """Refuse an unknown start of the orientations, and "aligned" for round particles (no axis)."""
+    if orientations not in START_ORIENTATIONS:
+        raise ValueError(f"--orientations {orientations!r} is not one of {', '.join(START_ORIENTATIONS)}")
+    if orientations != "random" and not particle.oriented:
+        raise ValueError(f"--orientations {orientations} applies to particles with an axis (ellipses, spheroids, "
+                         f"rigid bodies), not to {particle.name(dim)}s: leave --orientations out")
+
+
 def initial_packing(n, dim, sizes, potential, seed, phi0, shape="disk", walls=None, wall_type="smooth",
-                    gravity=0.0, contact="exact") -> Packing:
+                    gravity=0.0, contact="exact", orientations="random") -> Packing:
     """Validated random start (chapter step 1), with walls and gravity if given; errors before any
-    engine work. ``contact``: the contact-distance method of ellipses/spheroids."""
+    engine work. ``contact``: the contact-distance method of ellipses/spheroids; ``orientations``:
+    "random" or "aligned" (``rotations.start_orientations``; particles with an axis only)."""
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
         raise ValueError(f"n must be an integer >= 2, got {n!r}")
     if isinstance(dim, bool) or not isinstance(dim, (int, np.integer)) or dim not in (2, 3):
@@ -153,10 +166,11 @@ def initial_packing(n, dim, sizes, potential, seed, phi0, shape="disk", walls=No
     if not isinstance(size_spec, SizeSpec):
         raise TypeError(f"sizes must be a spec string such as 'bi:1.4:0.5' or a SizeSpec, got {sizes!r}")
     particle = parse_shape(shape, int(dim), contact)
+    check_start_orientations(orientations, particle, int(dim))
     axes = parse_walls(walls, int(dim))
     try:
         start = random_packing(int(n), int(dim), size_spec, phi0, int(seed), pot, particle,
-                               separated=particle.kind == "rigid")  # bodies: no overlaps (separated_positions)
+                               separated=particle.kind == "rigid", orientations=orientations)  # bodies: no overlaps (separated_positions)
     except SeparationFailed:
         raise
     except ValueError as err:

@@ -66,6 +66,7 @@ class JamSpec:
     stress: str = "iso"  # with pressure: iso | aniso | tri
     gamma: float | None = None  # fixed Lees-Edwards shear strain
     precision: str = "double"  # double | double-double (with pressure: float64 onset, then jamflow.refine)
+    orientations: str = "random"  # start orientations of particles with an axis: random | aligned
 
     @classmethod
     def from_options(cls, **options) -> "JamSpec":
@@ -201,7 +202,7 @@ def prepare(spec: JamSpec):
     settings = compression_settings(spec)
     start = initial_packing(spec.n, spec.dim, spec.sizes, spec.potential, spec.seed,
                             settings.start_phi(spec.dim, spec.gravity, spec.shape), spec.shape, spec.walls,
-                            spec.wall_type, spec.gravity, spec.contact)
+                            spec.wall_type, spec.gravity, spec.contact, spec.orientations)
     if spec.gamma is not None:
         start = at_shear_strain(start, spec.gamma)  # refuses a strain that is not finite, or walls with a shear
     if spec.precision == "double-double":

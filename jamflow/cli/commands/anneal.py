@@ -1,6 +1,6 @@
 """Particle-shape annealing (chapter section 2.3.3, Figure 2.18): grow the aspect ratio of the
 particles of a jammed disk/sphere packing IN.h5 to ALPHA in steps of D, re-jamming at every
-step (random major-axis directions at the first one). The last packing is written to --out
+step (random major-axis directions at the first one, or all along x with --orientations aligned). The last packing is written to --out
 (checked like jamflow jam's), with one row per step (phi_J, <z>, floaters, ...) in its
 ``anneal`` group; docs/notes/ellipses.md compares the result with compression."""
 
@@ -18,6 +18,7 @@ from jamflow.protocols.anneal import anneal, anneal_alphas, check_anneal
 from jamflow.protocols.settings import DEFAULT_PROTOCOL, PROTOCOL_NAMES, PROTOCOLS, protocol_settings
 from jamflow.protocols.compression import MAX_SEED
 from jamflow.model.shapes.contact_distance import METHODS as METHODS_CONTACT
+from jamflow.model.shapes.rotations import START_ORIENTATIONS
 
 
 def add_arguments(p) -> None:
@@ -29,6 +30,9 @@ def add_arguments(p) -> None:
     p.add_argument("--contact", choices=METHODS_CONTACT, default=None,
                    help="contact distance (default: the input's, exact for disks/spheres)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the first step's major-axis directions")
+    p.add_argument("--orientations", choices=START_ORIENTATIONS, default="random",
+                   help="the first step's major-axis directions: random (uniform) or aligned (all along x: a "
+                        "nematic start, Figure 2.23(c), docs/validation.md)")
     p.add_argument("--protocol", choices=PROTOCOL_NAMES, default=DEFAULT_PROTOCOL,
                    metavar="{" + ",".join(sorted(PROTOCOLS)) + "}",
                    help="compression protocol of each re-jam (jamflow jam --protocol; 'seed' is accepted as the old "
@@ -47,7 +51,7 @@ def run(args) -> int:
     if not (args.vtol > 0 and args.vtol < 1):
         raise ValueError(f"--vtol must be a positive number below 1, got {args.vtol}")
     start = load_packing(args.input)
-    alpha0 = check_anneal(start, args.to, args.dalpha, args.contact)
+    alpha0 = check_anneal(start, args.to, args.dalpha, args.contact, args.orientations)
     settings = protocol_settings(args.protocol, v_tol=args.vtol, minimizer=MinimizerSettings(v_min=args.vtol))
     steps = len(anneal_alphas(alpha0, args.to, args.dalpha))
     t0 = time.perf_counter()
@@ -58,10 +62,11 @@ def run(args) -> int:
             bar.update(1)
 
         result = anneal(start, args.to, args.dalpha, settings, seed=args.seed, contact=args.contact,
-                        engine=args.engine, observers=[progress])
+                        engine=args.engine, observers=[progress], orientations=args.orientations)
     final = result.final
     protocol = {**final.settings.as_dict(), "engine": final.engine, "anneal_input": str(args.input),
-                "anneal_to": float(args.to), "anneal_dalpha": float(args.dalpha), "anneal_seed": int(args.seed)}
+                "anneal_to": float(args.to), "anneal_dalpha": float(args.dalpha), "anneal_seed": int(args.seed),
+                "anneal_orientations": args.orientations}
     with replacing([args.out] if args.force else []):
         save_packing(args.out, final.packing, energy_per_particle=final.energy_per_particle,
                      pressure_tensor=final.pressure_tensor, protocol=protocol, history=final.history,

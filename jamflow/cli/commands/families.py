@@ -97,7 +97,8 @@ def report(plan: FamilySampling, points: dict, failures: list, out: Path) -> Non
                           f"{plan.starts} starts x {len(plan.grid)} strains")
     print(f"{families.count} families ({families.count_in(0.0, 0.5)} met in [0, 1/2], "
           f"{families.count_in(0.0, 0.5, min_strains=2)} of them over >= 2 strains) from {rich['sampled']} sampled "
-          f"packings; Chao1 estimate {rich['chao1']:.0f} ({rich['singletons']} found once, {rich['doubletons']} twice)")
+          f"packings; Chao1 estimate {rich['chao1']:.0f} +- {rich['chao1_se']:.0f} ({rich['singletons']} found once, "
+          f"{rich['doubletons']} twice)")
     print("families (met in [0, 1/2] / anywhere) against starts per grid point: "
           + ", ".join(f"{k}: {c}/{a}" for k, c, a in conv))
     if both_halves:

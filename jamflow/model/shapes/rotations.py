@@ -87,6 +87,20 @@ def random_orientations(n: int, dim: int, rng: np.random.Generator) -> np.ndarra
                             b * np.sin(2 * np.pi * u3), b * np.cos(2 * np.pi * u3)])
 
 
+START_ORIENTATIONS = ("random", "aligned")  # the starts of ``start_orientations``
+
+
+def start_orientations(kind: str, n: int, dim: int, rng: np.random.Generator) -> np.ndarray:
+    """Orientations of a start: "random" (``random_orientations``, chapter step 1) or "aligned"
+    (every director along x: theta = 0 in 2D, the unit quaternion in 3D; a nematic start,
+    P2 = 1, for Figure 2.23(c)). "aligned" draws nothing from ``rng``."""
+    if kind == "random":
+        return random_orientations(n, dim, rng)
+    if kind == "aligned":
+        return np.zeros(n) if dim == 2 else np.tile([1.0, 0.0, 0.0, 0.0], (n, 1))
+    raise ValueError(f"start orientations {kind!r} is not one of {', '.join(START_ORIENTATIONS)}")
+
+
 def quaternion_from_director(u: np.ndarray) -> np.ndarray:
     """(N, 4) unit quaternions that rotate the body x-axis onto the unit vectors u (N, 3)
     (the shortest rotation; for u = -x a half turn about z)."""
