@@ -43,7 +43,7 @@ from jamflow.model.pairs import overlapping_pairs
 from jamflow.protocols.pressure import PressureSettings, jam_at_pressure
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from common import DOCS  # noqa: E402
+from common import DOCS
 
 warnings.filterwarnings("ignore", message=".*carries extended precision.*")
 
@@ -70,12 +70,12 @@ def state_row(dim, n, seed, target, route, r, g64_max_dof, t64, trf) -> dict:
     nc = r.n_contacts
     z, z_iso = 2.0 * nc / nprime, 2.0 * d * (nprime - 1) / nprime
     m = r.moduli()
-    row = dict(dim=dim, n=n, seed=seed, target=f"{target:.3e}", route=route, status="ok", p=f"{r.pressure:.12e}",
-               phi=repr(r.phi[0]), phi_lo=repr(r.phi[1]), n_contacts=nc, n_prime=nprime,
-               excess=nc - (d * (nprime - 1) + 1), z=f"{z:.10f}", z_iso=f"{z_iso:.10f}", delta_z=f"{z - z_iso:.10e}",
-               force_balance=f"{r.force_balance:.2e}", G=f"{m.G:.10e}", B=f"{m.B:.10e}", G_float64="",
-               float64_same_network="", contacts_hash=hash(frozenset(_contacts(r))) & 0xFFFFFFFF,
-               float64_seconds=f"{t64:.3f}", refine_seconds=f"{trf:.3f}", error="")
+    row = {"dim": dim, "n": n, "seed": seed, "target": f"{target:.3e}", "route": route, "status": "ok", "p": f"{r.pressure:.12e}",
+               "phi": repr(r.phi[0]), "phi_lo": repr(r.phi[1]), "n_contacts": nc, "n_prime": nprime,
+               "excess": nc - (d * (nprime - 1) + 1), "z": f"{z:.10f}", "z_iso": f"{z_iso:.10f}", "delta_z": f"{z - z_iso:.10e}",
+               "force_balance": f"{r.force_balance:.2e}", "G": f"{m.G:.10e}", "B": f"{m.B:.10e}", "G_float64": "",
+               "float64_same_network": "", "contacts_hash": hash(frozenset(_contacts(r))) & 0xFFFFFFFF,
+               "float64_seconds": f"{t64:.3f}", "refine_seconds": f"{trf:.3f}", "error": ""}
     hi = replace(r.packing, extended=None)
     i, j = overlapping_pairs(hi)[:2]
     live = ~r.network.floater
@@ -123,8 +123,8 @@ def run_packing(dim, n, seed, pressures, switch, g64_max_dof, sizes) -> list[dic
             r = jamflow.refine(start, target)
             trf = time.perf_counter() - t0
         except Exception as err:  # noqa: BLE001 - a failed state is recorded with its error
-            rows.append(dict(dim=dim, n=n, seed=seed, target=f"{target:.3e}", route=route, status="failed",
-                             float64_seconds=f"{t64:.3f}", error=f"{type(err).__name__}: {err}".replace("\n", " ")))
+            rows.append({"dim": dim, "n": n, "seed": seed, "target": f"{target:.3e}", "route": route, "status": "failed",
+                             "float64_seconds": f"{t64:.3f}", "error": f"{type(err).__name__}: {err}".replace("\n", " ")})
             print(f"FAILED d={dim} N={n} seed={seed} p={target:.1e}: {rows[-1]['error']}", flush=True)
             dd_packing = None
             if route == "dd":
@@ -152,7 +152,7 @@ def _slope(x, y):
     """Least-squares slope of log y on log x and its standard error."""
     lx, ly = np.log(x), np.log(y)
     a = np.vstack([lx, np.ones_like(lx)]).T
-    coef, res, *_ = np.linalg.lstsq(a, ly, rcond=None)
+    coef, *_ = np.linalg.lstsq(a, ly, rcond=None)
     dof = len(lx) - 2
     s2 = float(np.sum((ly - a @ coef) ** 2) / dof) if dof > 0 else math.nan
     cov = s2 * np.linalg.inv(a.T @ a)
@@ -220,8 +220,8 @@ def fits(rows, min_pn2: float, boot: int = 400, seed: int = 0):
             draws = [_collapse_slope(sub, key, min_pn2, {k: list(rng.choice(v, len(v))) for k, v in full.items()})[0]
                      for _ in range(boot)]
             draws = np.array(draws)[np.isfinite(draws)]
-            out[(name[0], name[1], key)] = dict(slope=slope, err=float(np.std(draws, ddof=1)),
-                                                packings=sum(len(v) for v in full.values()), points=points)
+            out[(name[0], name[1], key)] = {"slope": slope, "err": float(np.std(draws, ddof=1)),
+                                                "packings": sum(len(v) for v in full.values()), "points": points}
     return out
 
 
@@ -246,9 +246,9 @@ def phi_j_fits(rows, p_max: float = 1.01e-10):
         s2 = float(np.sum(resid**2) / (len(p) - 2))
         cov = s2 * np.linalg.inv(a.T @ a)
         hashes = {s["contacts_hash"] for s in low}
-        out.append(dict(dim=key[0], n=key[1], seed=key[2], states=len(low), phi_j=ref_hi + (ref_lo + coef[1]),
-                        phi_j_err=math.sqrt(cov[1, 1]), slope=coef[0], max_resid=float(np.abs(resid).max()),
-                        same_network=len(hashes) == 1))
+        out.append({"dim": key[0], "n": key[1], "seed": key[2], "states": len(low), "phi_j": ref_hi + (ref_lo + coef[1]),
+                        "phi_j_err": math.sqrt(cov[1, 1]), "slope": coef[0], "max_resid": float(np.abs(resid).max()),
+                        "same_network": len(hashes) == 1})
     return out
 
 
