@@ -83,6 +83,9 @@ BENCHMARKS: dict[str, Benchmark] = {
     "refine_cost": Benchmark(
         "speed", "double-double refinement to p = 1e-14 against the float64 onset (N = 64, 256; docs/guide/precision.md)",
         ["--n", "64", "--seeds", "1", "--out", "{tmp}/refine-cost.csv"]),
+    "pressure_ladder": Benchmark(
+        "study", "pressure ladder 1e-2 .. 1e-14 in double-double: Delta z and G against p N^2, phi_J (issue 28)",
+        ["--quick", "--out", "{tmp}/pressure-ladder.csv"]),
     "vtol_resolution": Benchmark(
         "accuracy", "where V_tol stops being resolvable in float64 (docs/notes/vtol-resolution.csv; minutes)"),
     "spring_exponents": Benchmark(

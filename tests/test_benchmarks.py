@@ -67,3 +67,25 @@ def test_quick_mode_of_every_benchmark_runs():
     out = benchmarks("--quick", timeout=600)
     assert out.returncode == 0, out.stdout[-4000:] + out.stderr[-4000:]
     assert "FAILED" not in out.stdout
+
+
+def test_pressure_ladder_quick_mode_records_every_state(tmp_path):
+    """The ladder's quick mode (N = 16, p = 1e-3 .. 1e-4): one row per state, balanced in
+    double-double, at its pressure, with N_c >= d (N' - 1) + 1 and Delta z = 2 (N_c / N' - d + d / N')."""
+    import csv
+
+    out = tmp_path / "ladder.csv"
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    run = subprocess.run([sys.executable, str(BENCH / "pressure_ladder.py"), "--quick", "--out", str(out)], cwd=ROOT,
+                         check=False, capture_output=True, text=True, timeout=300, env=env)
+    assert run.returncode == 0, run.stderr[-3000:]
+    rows = list(csv.DictReader(out.open()))
+    assert [r["target"] for r in rows] == ["1.000e-03", "3.162e-04", "1.000e-04"]
+    for r in rows:
+        assert r["status"] == "ok", r["error"]
+        assert abs(float(r["p"]) / float(r["target"]) - 1) < 1e-3 and float(r["force_balance"]) < 1e-10
+        nc, nprime = int(r["n_contacts"]), int(r["n_prime"])
+        assert int(r["excess"]) == nc - (2 * (nprime - 1) + 1) >= 0
+        assert abs(float(r["delta_z"]) - (2 * nc / nprime - 4 * (nprime - 1) / nprime)) < 1e-9
+        assert float(r["G"]) > 0
+    assert (tmp_path / "ladder.png").stat().st_size > 0

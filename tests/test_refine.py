@@ -177,3 +177,58 @@ def test_compression_through_contact_changes():
     assert opened and closed
     assert abs(r.pressure / 1e-3 - 1) < 1e-4 and r.force_balance < 1e-12
     assert r.n_contacts >= r.isostatic_contacts and r.checks().passed
+
+
+def test_phi_of_the_history_comes_from_the_double_double_box(refined32):
+    """phi = hi + lo from the double-double box sides, checked in exact rational arithmetic (it was
+    the float64 quotient by the high part of the volume: no phi_lo, phi - phi_J unresolved at 1e-14)."""
+    p = refined32.packing
+    hi, lo = refined32.phi
+    assert (hi, lo) == (refined32.history["phi"][-1], refined32.history["phi_lo"][-1])
+    volume = exact(p.box.lengths[0], p.lengths_lo[0]) * exact(p.box.lengths[1], p.lengths_lo[1])
+    phi = Fraction(float(p.volumes.sum())) / volume
+    assert abs(float(Fraction(hi) + Fraction(lo) - phi)) < 1e-29
+    assert lo != 0.0 and abs(lo) <= 0.5 * np.spacing(hi)
+
+
+def test_hessian_moduli_on_the_double_double_network(onset32, refined32):
+    """Where float64 resolves the contacts (p = 1e-6) the Hessian route on the double-double network
+    gives HessianModuli's G and B of the float64 positions; at 1e-14 it stays positive (rigid)."""
+    from jamflow.mechanics.elastic import HessianModuli
+
+    r = refine(onset32, 1e-6)
+    m = r.moduli()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        h = HessianModuli().compute(replace(r.packing, extended=None))
+    assert m.n_contacts == h.n_contacts == r.n_contacts
+    assert abs(m.G / h.G - 1) < 1e-6 and abs(m.B / h.B - 1) < 1e-6
+    low = refined32.moduli()
+    assert low.G > 0 and low.n_contacts == refined32.n_contacts
+    assert abs(np.trace(low.pressure_tensor) / 2 / refined32.pressure - 1) < 1e-6
+
+
+def test_a_floater_wedged_at_the_float64_round_off_is_freed():
+    """N = 64, seed 7, its float64 enthalpy minimum at p = 1e-8 (from 1e-2, two pressures a decade):
+    floater 28 touches particles 1 and 14 with overlaps ~1.4e-14 (float64 round-off) along nearly
+    opposite normals, its net force ~0; moving it by F / k never closed them ("floaters still
+    overlap after 200 relief sweeps", failed before); it now escapes along its contact normals."""
+    pk = jamflow.jam(n=64, seed=7, engine="numba").packing
+    for k in range(4, 17):
+        pk = jam_at_pressure(pk, PressureSettings((10 ** (-k / 2),)), engine="numba").packing
+    r = refine(pk, 1e-8)
+    assert abs(r.pressure / 1e-8 - 1) < 1e-3 and r.force_balance < 1e-10
+    assert not r.network.floater_overlaps and r.n_contacts >= r.isostatic_contacts
+
+
+def test_a_3d_floater_held_by_three_contacts_around_it_is_freed():
+    """3D N = 128, seed 2, its float64 enthalpy minimum at p = 1e-5 (from 1e-2): floater 15 has three
+    contacts (overlaps ~1e-9) with no direction opening all three along their summed normals; the
+    least-norm move n_c . dx = overlap_c frees it (before: "floaters still overlap after 200 relief
+    sweeps")."""
+    pk = jamflow.jam(n=128, dim=3, seed=2, engine="numba").packing
+    for k in range(4, 11):
+        pk = jam_at_pressure(pk, PressureSettings((10 ** (-k / 2),)), engine="numba").packing
+    r = refine(pk, 1e-5)
+    assert abs(r.pressure / 1e-5 - 1) < 1e-3 and r.force_balance < 1e-10
+    assert not r.network.floater_overlaps and r.n_contacts >= r.isostatic_contacts

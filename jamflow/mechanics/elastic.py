@@ -22,6 +22,7 @@ the net force on each particle). Units: eps / diameter^d.
 
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import dataclass
 
@@ -156,3 +157,68 @@ def _check_zero_modes(coeff, live, dim, strain) -> None:
         warnings.warn(f"the {strain.kind} strain excites a zero mode beyond the {dim} translations "
                       f"(|Xi . e| = {np.max(zero) / scale:.1e} |Xi|): its relaxation is not linear and the "
                       "Hessian modulus leaves it out", stacklevel=3)
+
+
+@dataclass(frozen=True)
+class ContactModuli:
+    """G and B of disks/spheres by the Hessian route over a contact network the caller found."""
+
+    G: float  # eps / diameter^d
+    B: float
+    G_affine: float
+    B_affine: float
+    pressure_tensor: np.ndarray  # (d, d) from the same contacts
+    n_kept: int
+    n_contacts: int
+
+
+def contact_moduli(packing: Packing, i, j, dr, sigma, overlap, kept) -> ContactModuli:
+    """The formula of ``HessianModuli`` (A - Xi^T H^+ Xi) for disks/spheres with the spring law
+    (V = eps/alpha (1 - s)^alpha) on given contacts: pairs i, j among the ``kept`` particles (N,)
+    bool (floaters removed), separations dr, contact distances sigma and overlaps sigma - r, which
+    may be known more precisely than sigma - |dr| (the double-double refinement:
+    ``protocols.refine.RefineResult.moduli``; at p ~ 1e-14 an overlap ~1e-14 is a few ulps of a
+    coordinate, and s = r / sigma itself keeps only 2 of its digits, so V'(s) is evaluated from
+    delta = overlap / sigma: V' = -eps delta^(alpha-1), V'' = eps (alpha-1) delta^(alpha-2)). The
+    stiffness term uses the directions dr / |dr|, the stress term V'; H^+ Xi is a sparse solve with
+    one kept particle pinned (the d translations, which Xi does not excite). A network that is not
+    rigid (a singular H) raises RuntimeError."""
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+
+    from jamflow.mechanics.hessian import _sphere_derivatives
+
+    pot = packing.potential
+    if not math.isfinite(getattr(pot, "alpha", math.nan)):
+        raise ValueError(f"contact_moduli is written for the spring law, not {pot.spec!r}")
+    i, j = np.asarray(i), np.asarray(j)
+    dr, sigma = np.asarray(dr, float), np.asarray(sigma, float)
+    delta = np.asarray(overlap, float) / sigma
+    ds, d2s = _sphere_derivatives(dr, sigma * (1.0 - delta), sigma)
+    v1 = -pot.epsilon * delta ** (pot.alpha - 1.0)
+    v2 = pot.epsilon * (pot.alpha - 1.0) * delta ** (pot.alpha - 2.0)
+    blocks = v2[:, None, None] * ds[:, :, None] * ds[:, None, :] + v1[:, None, None] * d2s
+    coords = Coordinates.of(packing)
+    if coords.n_rot:
+        raise ValueError("contact_moduli is written for disks and spheres")
+    terms = StrainTerms(_local_index(coords, i, j), v1[:, None] * ds, blocks, dr, coords.size)
+    volume = packing.box.volume
+    ptensor = terms.pressure_tensor(volume)
+    shape = (coords.size, coords.size)
+    rows = np.broadcast_to(terms.rows[:, :, None], blocks.shape).ravel()
+    cols = np.broadcast_to(terms.rows[:, None, :], blocks.shape).ravel()
+    h = sp.coo_matrix((blocks.ravel(), (rows, cols)), shape).tocsc()
+    d = packing.dim
+    live = np.flatnonzero(np.asarray(kept, bool))
+    free = (live[1:, None] * d + np.arange(d)).ravel()
+    try:
+        lu = spla.splu(h[free][:, free].tocsc())
+    except RuntimeError as err:
+        raise RuntimeError(f"the contact network ({len(i)} contacts) is not rigid: {err}") from None
+    values = {}
+    for strain in (SHEAR, BULK):
+        affine, xi = affine_terms(terms, strain)
+        relaxation = float(xi[free] @ lu.solve(xi[free]))
+        values[strain.modulus] = (strain.modulus_from_curvature(affine - relaxation, volume, ptensor),
+                                  strain.modulus_from_curvature(affine, volume, ptensor))
+    return ContactModuli(values["G"][0], values["B"][0], values["G"][1], values["B"][1], ptensor, len(live), len(i))

@@ -53,6 +53,7 @@ from jamflow.engines.choose import open_engine
 from jamflow.engines.compiled.ddkernel import spring_dd
 from jamflow.mechanics.checks import PackingChecks
 from jamflow.mechanics.contacts import find_floaters
+from jamflow.mechanics.elastic import ContactModuli, contact_moduli
 from jamflow.mechanics.hessian import sphere_contact_hessian
 from jamflow.minimize.rules import minimize
 from jamflow.minimize.settings import MinimizerSettings
@@ -66,6 +67,8 @@ from jamflow.support import hooks
 
 PAIR_SKIN = 0.05  # candidate pairs within the largest diameter + this (diameters)
 STEP_HALVINGS = 12
+WEDGE_SWEEPS = 20  # F / k relief sweeps before a wedged floater escapes along its contact normals
+WEDGE_GAP = 1e-8  # neighbours this near (diameters) bound the escape of a wedged floater
 
 
 @dataclass(frozen=True)
@@ -232,9 +235,14 @@ def evaluate(packing: Packing, st: _State, network: tuple | None = None) -> Netw
 
 
 def _relieve_floaters(packing: Packing, st: _State, net: Network, sweeps: int = 200):
-    """Move floaters in contact along their net force by F / k until none touches."""
+    """Move floaters in contact along their net force by F / k until none touches. A floater wedged
+    between nearly opposite contacts (its net force ~0 however deep the overlaps: a rattler left
+    touching at the float64 round-off, e.g. overlaps ~1e-14 with two neighbours) does not get out
+    that way, nor one moved off one side of the wedge into the other; after ``WEDGE_SWEEPS`` sweeps it
+    moves instead along u, the sum of the normals of its contacts and near neighbours, far enough
+    that every overlap closes to first order (``_escape``)."""
     eps = packing.potential.epsilon
-    for _ in range(sweeps):
+    for sweep in range(sweeps):
         if not net.floater_overlaps:
             return st, net
         off = ~net.backbone
@@ -245,10 +253,53 @@ def _relieve_floaters(packing: Packing, st: _State, net: Network, sweeps: int = 
         np.add.at(k, j, stiff)
         move = net.floater & (k > 0)
         dx = np.zeros_like(st.xh)
-        dx[move] = net.forces[move] / k[move, None] * (1.0 + 1e-9)  # a hair beyond contact
+        if sweep < WEDGE_SWEEPS:
+            dx[move] = net.forces[move] / k[move, None] * (1.0 + 1e-9)  # a hair beyond contact
+        else:
+            dx = _escape(packing, st, i, j, net.overlap[off], net.floater)
         st = st.moved(dx)
         net = evaluate(packing, st)
     raise RuntimeError(f"floaters still overlap after {sweeps} relief sweeps")
+
+
+def _escape(packing: Packing, st: _State, i, j, overlap, floater) -> np.ndarray:
+    """Per floater in contact: t u, u the normalised sum of the unit normals n_c (from each neighbour
+    to the floater) of its contacts and of its near neighbours (gap below ``WEDGE_GAP`` diameters:
+    the other side of the wedge, which a move off one contact alone runs into), t = max_c
+    overlap_c / (u . n_c) (1 + 1e-6) over its contacts. Where some u . n_c <= 0 (a 3D floater
+    held by three contacts around it), the least-norm dx with n_c . dx = overlap_c (1 + 1e-6) on
+    the contacts and >= 0 on the near gaps, if it exists; else zero."""
+    box = Box(np.diag(st.lh))
+    dx = np.zeros_like(st.xh)
+    for a in np.flatnonzero(floater):
+        mine = (i == a) | (j == a)
+        if not mine.any():
+            continue
+        others = np.where(i[mine] == a, j[mine], i[mine])
+        dr = box.minimum_image(st.xh[a] - st.xh)
+        r = np.linalg.norm(dr, axis=1)
+        r[a] = np.inf
+        gap = r - 0.5 * (packing.diameters[a] + packing.diameters)
+        near = np.flatnonzero(gap < WEDGE_GAP)
+        normals = dr[near] / r[near, None]
+        u = normals.sum(axis=0)
+        if np.linalg.norm(u) == 0.0:
+            continue
+        u /= np.linalg.norm(u)
+        proj = normals @ u
+        ends = dr[others] / r[others, None] @ u
+        if proj.min() > 0 and ends.min() > 0:
+            dx[a] = u * float(np.max(overlap[mine] / ends)) * (1.0 + 1e-6)
+            continue
+        # no common direction (e.g. three contacts of a 3D floater around it): the least-norm move
+        # that opens each contact and near gap to first order, n_c . dx = max(-gap_c, 0)
+        target = np.maximum(-gap[near], 0.0)
+        for c, b in enumerate(others):
+            target[near == b] = overlap[mine][c]
+        move = np.linalg.lstsq(normals, target * (1.0 + 1e-6), rcond=None)[0]
+        if np.all(normals @ move >= target - 1e-9 * target.max()):
+            dx[a] = move
+    return dx
 
 
 def _newton_step(packing: Packing, st: _State, net: Network) -> np.ndarray:
@@ -367,7 +418,7 @@ class RefineResult:
     packing: Packing  # with ``extended`` (positions_lo, box_lo)
     network: Network
     settings: RefineSettings
-    history: dict  # per balanced state: target_pressure, pressure, phi, contacts, floaters, newton_steps
+    history: dict  # per balanced state: target_pressure, pressure, phi + phi_lo, contacts, floaters, newton_steps
     start_contacts: set
     seconds: float
     onset: object = None  # the float64 JamResult refined (``jamflow jam --precision double-double``), if any
@@ -384,6 +435,25 @@ class RefineResult:
     def n_contacts(self) -> int:
         """Contacts between non-floaters, counted with double-double overlaps > 0."""
         return self.network.n_contacts
+
+    @property
+    def phi(self) -> tuple[float, float]:
+        """(hi, lo): the packing fraction from the double-double box, phi = hi + lo (``packing.phi``
+        is the float64 value from the high parts of the box sides)."""
+        return float(self.history["phi"][-1]), float(self.history["phi_lo"][-1])
+
+    def moduli(self) -> ContactModuli:
+        """G and B by the Hessian route (``mechanics.elastic.contact_moduli``) on the double-double
+        contact network: the stiffness term from the contact geometry (float64 directions), the
+        stress term from the double-double overlaps. Where the overlaps are below an ulp of a
+        coordinate (p ~ 1e-14) float64 positions can lose or gain a contact, and
+        ``HessianModuli`` of ``packing`` (which reads float64 positions) is then wrong."""
+        net, p = self.network, self.packing
+        b = net.backbone
+        i, j = net.i[b], net.j[b]
+        dr = p.box.minimum_image(p.positions[i] - p.positions[j])
+        sigma = 0.5 * (p.diameters[i] + p.diameters[j])
+        return contact_moduli(p, i, j, dr, sigma, net.overlap[b], ~net.floater)
 
     @property
     def n_floaters(self) -> int:
@@ -437,7 +507,7 @@ class RefineResult:
         target = self.settings.pressure
         onset = "" if self.onset is None else f"float64 onset {self.onset.summary()}\n"
         return onset + (f"double-double: P_target = {target:.3e}  P = {self.pressure:.6e} (rel. {self.pressure / target - 1:+.1e})  "
-                f"phi = {self.packing.phi:.15f}  N_c = {self.n_contacts} (isostatic {self.isostatic_contacts}, "
+                f"phi = {self.phi[0]:.15f}  N_c = {self.n_contacts} (isostatic {self.isostatic_contacts}, "
                 f"{self.n_floaters} floaters; {len(opened)} opened, {len(closed)} closed)  max|F|/<f> = "
                 f"{self.force_balance:.1e}  {len(self.history['pressure'])} states, "
                 f"{int(np.sum(self.history['newton_steps']))} Newton steps (double-double), {self.seconds:.2f} s")
@@ -461,12 +531,15 @@ def refine(packing: Packing, pressure: float, *, settings: RefineSettings | None
         settings = replace(settings, pressure=pressure)
     check_refine(packing, settings)
     t0 = time.perf_counter()
-    rows = {c: [] for c in ("target_pressure", "pressure", "phi", "contacts", "floaters", "newton_steps")}
+    rows = {c: [] for c in ("target_pressure", "pressure", "phi", "phi_lo", "contacts", "floaters", "newton_steps")}
+    solids = float(packing.volumes.sum())
 
     def record(target, st, net, steps):
         rows["target_pressure"].append(target)
         rows["pressure"].append(net.pressure)
-        rows["phi"].append(packing.volumes.sum() / st.volume()[0])
+        phi, phi_lo = dd.dd_div(solids, 0.0, *st.volume())  # the double-double box: phi - phi_J to ~1e-30
+        rows["phi"].append(phi)
+        rows["phi_lo"].append(phi_lo)
         rows["contacts"].append(net.n_contacts)
         rows["floaters"].append(int(net.floater.sum()))
         rows["newton_steps"].append(steps)
