@@ -24,7 +24,7 @@ from jamflow.model.packing import Packing, random_packing
 from jamflow.model.potentials import RepulsiveLJ, Spring
 from jamflow.protocols.compression import compress, initial_packing
 from jamflow.protocols.settings import fast_protocol
-from jamflow.model.shapes import Ellipsoid, contact_distance
+from jamflow.model.shapes import SPHERE, Ellipsoid, contact_distance
 from jamflow.model.sizes import parse_sizes
 from jamflow.minimize.rules import minimize
 from test_engines import assert_energy_derivatives, rel, tilted
@@ -182,6 +182,46 @@ def test_compiled_fire_balances_forces_and_torques(dim, method):
     ref = energy_forces_pressure(end)
     assert r.reason == "force" and 0 < ref.energy < start.energy
     assert np.abs(ref.forces).max() < 1e-11 and np.abs(ref.torques).max() < 1e-11
+
+
+HALF_TURN_Z = [np.sqrt(0.5), 0.0, 0.0, np.sqrt(0.5)]  # quaternion: the director (body x) along world y
+
+
+@pytest.mark.parametrize("alpha,orientation", [(None, None), (0.6, [1.0, 0, 0, 0]), (0.4, [1.0, 0, 0, 0]),
+                                               (1.5, HALF_TURN_Z), (3.0, HALF_TURN_Z)])
+def test_fire_steps_in_units_of_the_stiffest_contact(alpha, orientation):
+    """Two unit-mass particles at their smallest contact distance l, 5 % overlapped (oblate spheroids
+    face to face, prolate ones side by side, spheres): the stiffest mode of V = (1 - r/l)^2 / 2 is the
+    relative coordinate's, lambda_max = 2 / l^2 (closed form). FIRE's time unit is l (``time_unit``), so
+    lambda_max x time_unit^2 = 2 for every shape: its largest step dt0 tmax is equally far from the
+    stability limit 2 / sqrt(lambda_max). (Before, the unit was 1: an oblate 0.6 ran at 1/0.6 of the
+    spheres' stability number, at the edge of stability: issue 27 item 4.)"""
+    from jamflow.engines.compiled.fire import time_unit
+    from jamflow.mechanics.hessian import hessian
+
+    shape = SPHERE if alpha is None else Ellipsoid(alpha)
+    unit = time_unit(shape)
+    assert unit == pytest.approx(1.0 if alpha is None else min(alpha, 1.0), rel=1e-15)
+    r = 0.95 * unit
+    p = Packing([[5.0, 5.0, 5.0], [5.0 + r, 5.0, 5.0]], [1.0, 1.0], Box.cube(12.0, 3), Spring(), shape=shape,
+                orientations=None if alpha is None else [orientation, orientation])
+    lam_max = np.linalg.eigvalsh(hessian(p).toarray()).max()
+    assert lam_max == pytest.approx(2.0 / unit**2, rel=1e-12)
+
+
+def test_oblate_spheroids_relax_at_the_prolate_rate():
+    """Three random starts of 24 oblate spheroids (0.6) at phi = 0.68, just below onset, minimised to
+    V/N < 1e-12: 2 313 FIRE iterations in all (483, 450, 1 380); with the time step in units of the
+    sphere diameter (before issue 27 item 4) 7 684 (3 285, 1 005, 3 394), FIRE resetting on P < 0
+    every few steps. Counts, not times (deterministic on one machine)."""
+    total = 0
+    for seed in range(3):
+        p = initial_packing(24, 3, "mono", "spring", seed, 0.68, "spheroid:0.6")
+        with CompiledEngine(p) as eng:
+            r = minimize(eng, MinimizerSettings(v_min=1e-12, force_tol=1e-10))
+        assert r.reason == "energy-below-vmin"
+        total += r.iterations
+    assert total < 4000
 
 
 @pytest.mark.parametrize("dim", [2, 3])

@@ -30,7 +30,10 @@ class MinimizerSettings:
     v_min: float = 1e-16  # the chapter's V_min (per particle)
     max_iterations: int = 500_000
     window: int = 10000  # iterations per LAMMPS call between rule checks
-    timestep: float = 0.05  # FIRE initial step (0.1 diverges: docs/notes/failure-modes.md), in sqrt(m diameter^2 / eps)
+    # FIRE initial step (0.1 diverges: docs/notes/failure-modes.md), in sqrt(m diameter^2 / eps); the compiled
+    # FIRE takes it in units of sqrt(m l^2 / eps), l the shape's smallest unit-scale contact distance
+    # (``engines.compiled.fire.time_unit``: 1 but for oblate spheroids and dimers of unequal sites)
+    timestep: float = 0.05
     md_timestep: float = 0.1  # damped-MD step
     damping: float = 0.3  # md only: damping coefficient b, in sqrt(m eps) / diameter
     md_damping: str = "viscous"  # md only: "viscous" (-b v on every particle) or "pairwise" (chapter eq. 2.3)

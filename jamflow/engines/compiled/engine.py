@@ -63,6 +63,7 @@ class CompiledEngine:
         reach = np.asarray(packing.shape.reach(packing.diameters), float)
         self._reach = reach if TURNING_MOVES_SITES[packing.shape.kind] else np.zeros_like(reach)  # rebuild rule
         self._virial = np.zeros((d, d))
+        self._time_unit = fire.time_unit(packing.shape)
         self._field = make_field(packing)
         self._gb = np.zeros(0)  # box-coordinate forces (constant stress only)
         self._energy = None
@@ -173,8 +174,8 @@ class CompiledEngine:
     @contextmanager
     def minimizer_session(self, settings, ftol: float):
         """Yield ``window(steps) -> (iterations, objective, max force component, max generalized
-        torque or box force component)``; each window restarts FIRE (v = 0, dt = timestep) like
-        one LAMMPS ``minimize`` command. The objective is the total energy, or at a target
+        torque or box force component)``; each window restarts FIRE (v = 0, dt = timestep in the
+        shape's time unit, ``fire.time_unit``) like one LAMMPS ``minimize`` command. The objective is the total energy, or at a target
         pressure the enthalpy U + P V with the box as coordinates (``compiled.field``)."""
         if settings.method != "fire":
             raise ValueError(f"the compiled engine runs FIRE only, not {settings.method}; use engine lammps")
@@ -188,7 +189,7 @@ class CompiledEngine:
             self._energy = None
 
         def window(steps: int):
-            state = fire.fire_state(settings.timestep)
+            state = fire.fire_state(settings.timestep * self._time_unit)
             v, w, u = np.zeros_like(self._x), np.zeros_like(self._g), np.zeros_like(self._gb)
             done = 0
             while True:

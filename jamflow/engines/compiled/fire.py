@@ -10,7 +10,14 @@ tau_a / d_k, its velocity w = d_k omega. FIRE sees one flat vector of coordinate
 moves centres by dt v and turns each particle by the body-frame rotation dt w / d_k
 (``rotation.rotate``). For disks and spheres there are no rotational coordinates and the
 floating-point operations are those of the translational FIRE. Units: eps, diameter, unit
-mass (rotational inertia m d_k^2).
+mass (rotational inertia m d_k^2); time in units of sqrt(m l^2 / eps) (``time_unit``).
+
+The time step: the stiffest contact of a unit-mass particle has the curvature k / l^2, l the
+smallest contact distance, so the largest stable step scales with l. The defaults (dt0 0.05, tmax
+10: up to 0.5) were measured on disks and spheres (l = 1); an oblate spheroid of aspect ratio 0.6
+touches face to face at l = 0.6, its stiffest modes (2.5x those of the prolate 1.5, measured)
+made FIRE run at the edge of stability at dt = 0.5, reset on P < 0 every ~4 steps, and creep
+(issue 27 item 4, docs/notes/ellipses.md): so the step is taken in units of l.
 
 The force/torque kernel comes from the pair list's type (``kernels.evaluate``); beside it
 FIRE calls the external field (``field.external``: walls, gravity, fixed particles). At
@@ -38,6 +45,13 @@ DELAYSTEP, DTGROW, DTSHRINK, ALPHA0, ALPHASHRINK, TMAX, TMIN, DMAX = 20, 1.1, 0.
 DT, ALPHA, LAST_NEGATIVE, STEP, FLAG_V0, DT0 = range(6)
 # why ``fire`` returned
 CAP, FORCE, ENERGY_BELOW, REBUILD = 0, 1, 2, 3
+
+
+def time_unit(shape) -> float:
+    """sqrt(m l^2 / eps) in units of sqrt(m diameter^2 / eps): l, the smallest contact distance of
+    two unit-scale particles of ``shape`` (1 for disks, spheres, ellipses, prolate spheroids and
+    bodies of unit sites; ALPHA for oblate spheroids, S for dimer:ALPHA:S)."""
+    return float(shape.smallest_contact(1.0))
 
 
 def fire_state(dt0: float) -> np.ndarray:
