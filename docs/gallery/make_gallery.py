@@ -26,8 +26,10 @@ from jamflow.analysis.order import BondOrder, first_minimum
 from jamflow.analysis.structure import RDF, StructureFactor, triangular_packing
 from jamflow.mechanics.contacts import Contacts
 from jamflow.mechanics.elastic import HessianModuli
+from jamflow.model.nematic import Nematic
 from jamflow.plots.anneal import anneal_figure
 from jamflow.plots.compression import compression_figure
+from jamflow.plots.drawing import draw_packing
 from jamflow.plots.modes import modes_figure, sorted_modes_figure
 from jamflow.plots.moduli import family_figure, scaling_figure
 from jamflow.plots.shear import families_figure
@@ -145,11 +147,17 @@ def _polydisperse(width, seeds, n=256):
 
 @chapter_figure("2.23")
 def figure_2_23(out: Path) -> None:
-    """Bond-orientational order maps of N = 256 disks at polydispersity p = 1.1 and 1.4, seed 0."""
+    """(a, b) Bond-orientational order maps of N = 256 disks at polydispersity p = 1.1 and 1.4, seed 0;
+    (c, d) N = 64 ellipses at alpha = 3 jammed from aligned and from random orientations, seed 1."""
     for width, panel in ((0.1, "a"), (0.4, "b")):
         packing = _polydisperse(width, [0])[0]
         plot_bond_order_map(packing, BondOrder().compute(packing), out / f"fig-2-23{panel}.png",
                             title=f"({panel}) p = {1 + width:g}, N = 256:")
+    for start, panel in (("aligned", "c"), ("random", "d")):
+        packing = jamflow.jam(n=64, shape="ellipse:3", sizes="mono", seed=1, orientations=start).packing
+        p2 = Nematic().compute(packing).p2
+        draw_packing(packing, out / f"fig-2-23{panel}.png", color_by="orientation",
+                     title=f"({panel}) N = 64 ellipses, alpha = 3, {start} start: P2 = {p2:.2f}")
 
 
 @chapter_figure("2.24")
