@@ -342,6 +342,23 @@ def test_anneal_refuses_before_work(tmp_path, capsys, monkeypatch, packing_file)
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("command", ["anneal", "refine"])
+def test_an_output_that_is_the_input_is_refused_before_work(command, tmp_path, capsys, monkeypatch, packing_file):
+    """Was: ``jamflow refine p.h5 --out p.h5`` (and ``anneal``) replaced the float64 onset it started
+    from with the refined packing; now one line, exit 2, the input byte for byte as it was."""
+    work = {"anneal": "jamflow.cli.commands.anneal.anneal", "refine": "jamflow.protocols.refine.refine"}[command]
+    monkeypatch.setattr(work, lambda *a, **k: pytest.fail("work started"))
+    source = tmp_path / "p.h5"
+    source.write_bytes(packing_file.read_bytes())
+    link = tmp_path / "link.h5"
+    link.symlink_to(source)
+    options = {"anneal": ["--to", "1.1", "--dalpha", "0.05", "--quiet"], "refine": ["--pressure", "1e-12"]}[command]
+    for out in (source, link):
+        assert main([command, str(source), *options, "--out", str(out), "--force"]) == 2
+        assert f"is the input {source}" in capsys.readouterr().err
+    assert source.read_bytes() == packing_file.read_bytes()
+
+
 @pytest.mark.parametrize("command", ["shear-refused", "shear-interrupted", "families-refused", "families-interrupted"])
 def test_a_failed_run_leaves_no_empty_out_directory(tmp_path, capsys, monkeypatch, packing_file, command):
     # was: shear --vtol 1e-30, families --n 1 / --seed -1 / --sizes x and Ctrl-C left an empty --out DIR

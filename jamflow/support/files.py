@@ -210,6 +210,15 @@ def check_writable(path, force: bool = False) -> None:
                          "choose another name, or --force to replace it")
 
 
+def check_not_input(path, inputs) -> None:
+    """Raise a clear ValueError before any work starts if the output ``path`` is one of the input
+    files (by path, symlink or hard link): writing it would replace the packing the run starts from."""
+    for source in inputs:
+        if os.path.exists(path) and os.path.exists(source) and os.path.samefile(path, source):
+            raise ValueError(f"--out {path} is the input {source}: writing it would replace the packing this run "
+                             "starts from; choose another name")
+
+
 def read_json(path, what: str):
     """The JSON document in the file ``path`` (a ``what``); a one-line ValueError naming the file
     if it is not valid JSON (damaged, truncated), so that it reads as bad input, not a bug."""

@@ -10,7 +10,7 @@ import time
 
 
 from jamflow.cli.options import add_engine_argument, add_force_argument, add_quiet_argument, add_vtol_argument
-from jamflow.support.files import check_writable, replacing
+from jamflow.support.files import check_not_input, check_writable, replacing
 from jamflow.io.packing_file import load_packing, save_packing
 from jamflow.minimize.settings import MinimizerSettings
 from jamflow.cli.progress import progress_bar
@@ -46,6 +46,7 @@ def add_arguments(p) -> None:
 
 def run(args) -> int:
     check_writable(args.out, args.force)
+    check_not_input(args.out, [args.input])
     if not 0 <= args.seed <= MAX_SEED:
         raise ValueError(f"--seed must be a non-negative integer below 2^63 (it is stored as int64), got {args.seed}")
     if not (args.vtol > 0 and args.vtol < 1):

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import time
 
-from jamflow.support.files import check_writable
+from jamflow.support.files import check_not_input, check_writable
 
 
 def add_arguments(p) -> None:
@@ -30,6 +30,7 @@ def run(args) -> int:
     from jamflow.protocols.refine import RefineSettings, check_refine, refine
 
     check_writable(args.out, args.force)
+    check_not_input(args.out, [args.packing])
     settings = RefineSettings(args.pressure, force_tol=args.force_tol)
     packing = load_packing(args.packing)
     check_refine(packing, settings)
