@@ -31,7 +31,7 @@ SUBCOMMANDS = {
     "modes": ("jamflow.cli.commands.modes", "contacts, floaters, normal modes, D(omega) and stability class of packing files"),
     "analyze": ("jamflow.cli.commands.analyze", "structure: g(r), S(k), Q6, G, correlation lengths"),
     "draw": ("jamflow.cli.commands.draw", "draw a packing: particles to scale, contacts, floaters (PNG)"),
-    "export": ("jamflow.cli.commands.export", "write a packing for OVITO and other viewers (LAMMPS dump, extended XYZ)"),
+    "export": ("jamflow.cli.commands.export", "write a packing for OVITO, LAMMPS, HOOMD-blue (LAMMPS dump or data file, extended XYZ, GSD)"),
     "shear": ("jamflow.cli.commands.shear", "quasistatic shear of a packing at zero pressure (chapter section 2.2)"),
     "families": ("jamflow.cli.commands.families", "geometric families of small disk packings under shear (Figure 2.7)"),
     "moduli": ("jamflow.cli.commands.moduli", "bulk and shear moduli: strain sweeps and the Hessian route"),

@@ -95,6 +95,7 @@ def add_spec_arguments(p, skip=()) -> None:
         help="start orientations of particles with an axis: random (uniform, chapter step 1) or aligned "
              "(every director along x: a nematic start, P2 = 1; Figure 2.23(c), docs/validation.md)")
 
+
 def add_md_damping_argument(p) -> None:
     p.add_argument("--md-damping", choices=MD_DAMPINGS, default="viscous",
                    help="--minimizer md only: viscous (drag -b v on every particle) or pairwise (chapter eq. 2.3: "

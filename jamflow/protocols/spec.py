@@ -206,7 +206,7 @@ def prepare(spec: JamSpec):
     if spec.gamma is not None:
         start = at_shear_strain(start, spec.gamma)  # refuses a strain that is not finite, or walls with a shear
     if spec.precision == "double-double":
-        from jamflow.protocols.refine import RefineSettings, check_refine
+        from jamflow.protocols.refine import RefineSettings, check_refine  # here: refine loads scipy (~0.3 s)
 
         engine_name(start, spec.minimizer, spec.engine)
         check_resolution(start, settings)
