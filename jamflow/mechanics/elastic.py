@@ -31,7 +31,7 @@ import scipy.linalg
 
 from jamflow.model.packing import Packing
 from jamflow.model.pairs import overlapping_pairs, overlapping_sites
-from jamflow.mechanics.hessian import Coordinates, _local_index, pair_terms
+from jamflow.mechanics.hessian import Coordinates, _local_index, _sphere_derivatives, pair_blocks, pair_terms
 from jamflow.mechanics.dynamical_matrix import DynamicalMatrix
 from jamflow.mechanics.strains import BULK, SHEAR, Strain
 
@@ -186,8 +186,6 @@ def contact_moduli(packing: Packing, i, j, dr, sigma, overlap, kept) -> ContactM
     import scipy.sparse as sp
     import scipy.sparse.linalg as spla
 
-    from jamflow.mechanics.hessian import _sphere_derivatives
-
     pot = packing.potential
     if not math.isfinite(getattr(pot, "alpha", math.nan)):
         raise ValueError(f"contact_moduli is written for the spring law, not {pot.spec!r}")
@@ -197,7 +195,7 @@ def contact_moduli(packing: Packing, i, j, dr, sigma, overlap, kept) -> ContactM
     ds, d2s = _sphere_derivatives(dr, sigma * (1.0 - delta), sigma)
     v1 = -pot.epsilon * delta ** (pot.alpha - 1.0)
     v2 = pot.epsilon * (pot.alpha - 1.0) * delta ** (pot.alpha - 2.0)
-    blocks = v2[:, None, None] * ds[:, :, None] * ds[:, None, :] + v1[:, None, None] * d2s
+    blocks = pair_blocks(v1, v2, ds, d2s)
     coords = Coordinates.of(packing)
     if coords.n_rot:
         raise ValueError("contact_moduli is written for disks and spheres")

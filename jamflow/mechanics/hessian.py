@@ -163,7 +163,12 @@ def pair_terms(packing: Packing) -> PairTerms:
 def energy_second_derivatives(potential, s, ds, d2s):
     """(V', blocks): dV/ds and the pair blocks V'' ds ds^T + V' d2s of each contact."""
     v1, v2 = law_derivatives(potential, s)
-    return v1, v2[:, None, None] * ds[:, :, None] * ds[:, None, :] + v1[:, None, None] * d2s
+    return v1, pair_blocks(v1, v2, ds, d2s)
+
+
+def pair_blocks(v1, v2, ds, d2s):
+    """The Hessian blocks V'' ds ds^T + V' d2s of each contact from dV/ds and d2V/ds2."""
+    return v2[:, None, None] * ds[:, :, None] * ds[:, None, :] + v1[:, None, None] * d2s
 
 
 def hessian(packing: Packing) -> sp.csr_matrix:
@@ -221,8 +226,11 @@ def _sphere_derivatives(dr, r, sigma):
 
 def sphere_contact_hessian(packing: Packing, i, j, dr, r, sigma, s) -> sp.csr_matrix:
     """The Hessian over contacts the caller found (disks/spheres: pairs i, j with separations dr,
-    distances r, contact distances sigma and reduced distances s < 1, which may be known more
-    precisely than r / sigma: the double-double refinement, ``jamflow.protocols.refine``)."""
+    distances r, contact distances sigma and reduced distances s < 1). The double-double
+    refinement (``jamflow.protocols.refine``) passes s = 1 - overlap / sigma from its double-double
+    overlaps; as a float64, s keeps only a few digits of an overlap near 1e-14, so the V' (stress)
+    term of this Jacobian is approximate there -- Newton's residual, evaluated in double-double,
+    still decides convergence (``contact_moduli`` evaluates V' from the overlap itself)."""
     _, blocks = energy_second_derivatives(packing.potential, s, *_sphere_derivatives(dr, r, sigma))
     return _assemble(Coordinates.of(packing), i, j, blocks)
 

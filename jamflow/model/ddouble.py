@@ -62,10 +62,6 @@ def dd_add(ah, al, bh, bl):
     return fast_two_sum(s, e)
 
 
-def dd_neg(ah, al):
-    return -ah, -al
-
-
 def dd_sub(ah, al, bh, bl):
     """(a - b) in double-double."""
     return dd_add(ah, al, -bh, -bl)

@@ -482,12 +482,12 @@ class RefineResult:
         fc = net.contact_forces(p.diameters, p.potential.epsilon)
         live = ~net.floater
         fmax = float(np.linalg.norm(net.forces[live], axis=1).max()) if live.any() else 0.0
-        kept = int(live.sum())
+        kept, ratio = int(live.sum()), self.force_balance
         return PackingChecks(
             energy_per_particle=self.energy_per_particle, v_tol=None, in_window=None, max_force=fmax,
             force_tol=self.settings.force_tol * float(fc.mean()) if len(fc) else None,
-            mean_contact_force=float(fc.mean()) if len(fc) else math.nan, force_ratio=self.force_balance,
-            force_balanced=bool(self.force_balance <= self.settings.force_tol), n_contacts=self.n_contacts,
+            mean_contact_force=float(fc.mean()) if len(fc) else math.nan, force_ratio=ratio,
+            force_balanced=bool(ratio <= self.settings.force_tol), n_contacts=self.n_contacts,
             isostatic_count=self.isostatic_contacts, excess_contacts=self.n_contacts - self.isostatic_contacts,
             n_floaters=self.n_floaters, n_kept=kept, mean_z=2.0 * self.n_contacts / kept if kept else math.nan,
             jammed=bool(kept and self.n_contacts >= self.isostatic_contacts))
@@ -537,7 +537,7 @@ def refine(packing: Packing, pressure: float, *, settings: RefineSettings | None
     def record(target, st, net, steps):
         rows["target_pressure"].append(target)
         rows["pressure"].append(net.pressure)
-        phi, phi_lo = dd.dd_div(solids, 0.0, *st.volume())  # the double-double box: phi - phi_J to ~1e-30
+        phi, phi_lo = dd.dd_div(solids, 0.0, *st.volume())  # the double-double box; solids is float64, so phi is good to ~1e-16 relative, its changes to ~1e-30
         rows["phi"].append(phi)
         rows["phi_lo"].append(phi_lo)
         rows["contacts"].append(net.n_contacts)

@@ -27,13 +27,12 @@ def add_arguments(p) -> None:
 
 def run(args) -> int:
     from jamflow.io.packing_file import load_packing, save_refined
-    from jamflow.protocols.refine import RefineSettings, check_refine, refine
+    from jamflow.protocols.refine import RefineSettings, refine
 
     check_writable(args.out, args.force)
     check_not_input(args.out, [args.packing])
     settings = RefineSettings(args.pressure, force_tol=args.force_tol)
     packing = load_packing(args.packing)
-    check_refine(packing, settings)
     t0 = time.perf_counter()
     result = refine(packing, args.pressure, settings=settings)
     save_refined(result, args.out, force=args.force)
