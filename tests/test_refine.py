@@ -232,3 +232,31 @@ def test_a_3d_floater_held_by_three_contacts_around_it_is_freed():
     r = refine(pk, 1e-5)
     assert abs(r.pressure / 1e-5 - 1) < 1e-3 and r.force_balance < 1e-10
     assert not r.network.floater_overlaps and r.n_contacts >= r.isostatic_contacts
+
+
+def test_least_move_closed_forms():
+    """The shortest dx with normals @ dx >= lower: three normals 120 degrees apart (a caged floater)."""
+    from jamflow.protocols.refine import _least_move
+
+    normals = np.array([[1.0, 0.0], [-0.5, math.sqrt(3) / 2], [-0.5, -math.sqrt(3) / 2]])
+    # open the first contact by 1, approach the others by up to 1: dx = (1, 0), one constraint active
+    np.testing.assert_allclose(_least_move(normals, np.array([1.0, -1.0, -1.0])), [1.0, 0.0], atol=1e-15)
+    # approach the second by at most 0.2: the first two active, dx solves both equalities
+    move = _least_move(normals, np.array([1.0, -0.2, -1.0]))
+    np.testing.assert_allclose(normals[:2] @ move, [1.0, -0.2], atol=1e-12)
+    assert normals[2] @ move >= -1.0
+    assert _least_move(normals, np.array([1.0, 0.0, 0.0])) is None  # caged tight: no move opens one
+
+
+def test_a_floater_caged_at_the_float64_round_off_is_freed():
+    """2D N = 1024, seed 1, at its float64 onset: floater 458 touches 991 (overlap ~1e-15, the float64
+    round-off) inside a cage of 176, 638 and 991 whose normals surround it, so no move keeps clear of
+    all three; moving it by F / k shrank the overlap to 4e-18 and stalled there ("floaters still
+    overlap after 200 relief sweeps", failed before); the least move that opens the contact and
+    approaches the others by at most half their gaps frees it."""
+    from jamflow.protocols.refine import _relieve_floaters, _State, evaluate
+
+    pk = jamflow.jam(n=1024, seed=1, engine="numba").packing
+    st = _State.of(pk)
+    _, net = _relieve_floaters(pk, st, evaluate(pk, st))
+    assert not net.floater_overlaps

@@ -42,6 +42,7 @@ N ~ 300 at the default tolerance (measured: ``jamflow refine`` of an N = 64 onse
 
 from __future__ import annotations
 
+import itertools
 import math
 import time
 from dataclasses import dataclass, replace
@@ -268,7 +269,9 @@ def _escape(packing: Packing, st: _State, i, j, overlap, floater) -> np.ndarray:
     the other side of the wedge, which a move off one contact alone runs into), t = max_c
     overlap_c / (u . n_c) (1 + 1e-6) over its contacts. Where some u . n_c <= 0 (a 3D floater
     held by three contacts around it), the least-norm dx with n_c . dx = overlap_c (1 + 1e-6) on
-    the contacts and >= 0 on the near gaps, if it exists; else zero."""
+    the contacts and >= 0 on the near gaps, if it exists; else (a floater caged by its near
+    neighbours) the shortest dx that opens the contacts and closes no near gap by more than half
+    (``_least_move``); else zero."""
     box = Box(np.diag(st.lh))
     dx = np.zeros_like(st.xh)
     for a in np.flatnonzero(floater):
@@ -299,7 +302,29 @@ def _escape(packing: Packing, st: _State, i, j, overlap, floater) -> np.ndarray:
         move = np.linalg.lstsq(normals, target * (1.0 + 1e-6), rcond=None)[0]
         if np.all(normals @ move >= target - 1e-9 * target.max()):
             dx[a] = move
+            continue
+        # caged (the near normals surround it, so no move keeps off every neighbour): the least move
+        # that opens the contacts and approaches each near neighbour by at most half its gap
+        lower = np.where(target > 0, target * (1.0 + 1e-6), -0.5 * np.maximum(gap[near], 0.0))
+        move = _least_move(normals, lower)
+        if move is not None:
+            dx[a] = move
     return dx
+
+
+def _least_move(normals: np.ndarray, lower: np.ndarray) -> np.ndarray | None:
+    """The shortest dx with normals @ dx >= lower (a few constraints in d <= 3 dimensions): the
+    least-norm solution with at most d of them active (a minimum-norm point of a polyhedron has d
+    or fewer independent active constraints), the shortest that satisfies all; None if none does."""
+    tol = 1e-9 * float(np.abs(lower).max())
+    best = None
+    for k in range(1, normals.shape[1] + 1):
+        for active in itertools.combinations(range(len(lower)), k):
+            rows = list(active)
+            move = np.linalg.lstsq(normals[rows], lower[rows], rcond=None)[0]
+            if np.all(normals @ move >= lower - tol) and (best is None or move @ move < best @ best):
+                best = move
+    return best
 
 
 def _newton_step(packing: Packing, st: _State, net: Network) -> np.ndarray:
