@@ -31,6 +31,9 @@ BENCHMARKS: dict[str, Benchmark] = {
     "aot_startup": Benchmark(
         "speed", "whole `jam --n 64` processes with the AOT kernels against numba's, bytecode removed / cached",
         ["--repeats", "1", "--bytecode", "asis", "--out", "{tmp}/aot-startup.csv"]),
+    "abc_fire": Benchmark(
+        "speed", "ABC-FIRE against FIRE 2.0: iterations of whole jams and of single minimisations, same seeds",
+        ["--n", "64", "--seeds", "1", "--states", "--out", "{tmp}/abc-fire.csv"]),
     "kernel": Benchmark(
         "speed", "compiled FIRE iteration against its bare force-loop floor; Morton order; skins",
         ["--sizes", "256", "--skins", "0.3", "--repeats", "1", "--out", "{tmp}/kernel.csv"]),

@@ -42,7 +42,7 @@ from jamflow.engines.compiled.rotation import generalized_torques, rotate
 DELAYSTEP, DTGROW, DTSHRINK, ALPHA0, ALPHASHRINK, TMAX, TMIN, DMAX = 20, 1.1, 0.5, 0.25, 0.99, 10.0, 0.02, 0.1
 
 # FIRE state carried between calls (a neighbour-list rebuild interrupts a window):
-DT, ALPHA, LAST_NEGATIVE, STEP, FLAG_V0, DT0 = range(6)
+DT, ALPHA, LAST_NEGATIVE, STEP, FLAG_V0, DT0, ABC = range(7)
 # why ``fire`` returned
 CAP, FORCE, ENERGY_BELOW, REBUILD = 0, 1, 2, 3
 
@@ -54,9 +54,11 @@ def time_unit(shape) -> float:
     return float(shape.smallest_contact(1.0))
 
 
-def fire_state(dt0: float) -> np.ndarray:
-    """A fresh FIRE state, as LAMMPS's ``minimize`` starts: v = 0, dt = timestep."""
-    return np.array([dt0, ALPHA0, 0.0, 0.0, 1.0, dt0])
+def fire_state(dt0: float, abc: bool = False) -> np.ndarray:
+    """A fresh FIRE state, as LAMMPS's ``minimize`` starts: v = 0, dt = timestep; ``abc``: the
+    bias-corrected mixing of ABC-FIRE (Echeverri Restrepo and Andric, Comput. Mater. Sci. 218,
+    111978 (2023))."""
+    return np.array([dt0, ALPHA0, 0.0, 0.0, 1.0, dt0, 1.0 if abc else 0.0])
 
 
 @jit
@@ -128,6 +130,10 @@ def fire(model, fld, x, v, f, o, w, tau, g, dk, mask, virial, ub, gb, state, x_b
         if vdotf > 0.0:
             scale1 = 1.0 - fire_alpha
             scale2 = 0.0 if fdotf <= 1e-20 else fire_alpha * math.sqrt(vdotv / fdotf)
+            if state[ABC] > 0.0:  # ABC-FIRE: undo the mixing's bias towards the (zeroed) start velocity
+                bias = 1.0 / (1.0 - (1.0 - max(fire_alpha, 1e-10)) ** (step - state[LAST_NEGATIVE] + 1.0))
+                scale1 *= bias
+                scale2 *= bias
             if step - state[LAST_NEGATIVE] > DELAYSTEP:
                 dt = min(dt * DTGROW, dtmax)
                 fire_alpha *= ALPHASHRINK
@@ -159,15 +165,16 @@ def fire(model, fld, x, v, f, o, w, tau, g, dk, mask, virial, ub, gb, state, x_b
                 vmax = max(vmax, abs(dt * gb[k]))
         dtv = dt if dt * vmax <= DMAX else DMAX / vmax
         keep = 0.0 if restart else 1.0
+        vcap = DMAX / dtv if state[ABC] > 0.0 else math.inf  # ABC-FIRE limits each component's step
         if vdotf > 0.0:
             for k in range(m):
-                vk = scale1 * (dtv * fs[k] + keep * vs[k]) + scale2 * fs[k]
+                vk = min(max(scale1 * (dtv * fs[k] + keep * vs[k]) + scale2 * fs[k], -vcap), vcap)
                 vs[k] = vk
                 xs[k] += dtv * vk
             for k in range(mr):
-                ws[k] = scale1 * (dtv * gs[k] + keep * ws[k]) + scale2 * gs[k]
+                ws[k] = min(max(scale1 * (dtv * gs[k] + keep * ws[k]) + scale2 * gs[k], -vcap), vcap)
             for k in range(mb):
-                ub[k] = scale1 * (dtv * gb[k] + keep * ub[k]) + scale2 * gb[k]
+                ub[k] = min(max(scale1 * (dtv * gb[k] + keep * ub[k]) + scale2 * gb[k], -vcap), vcap)
         else:
             for k in range(m):
                 vk = dtv * fs[k] + keep * vs[k]
