@@ -71,7 +71,7 @@ LOOSE_OVERSHOOT = 0.0  # --loose-overshoot R: the first jammed state minimised t
 GAUSS_NEWTON_FIRST = False  # --gauss-newton: a fallback tries minimize.polish before FIRE
 MAX_STEP = 0.05  # a Newton step moving a particle further (diameters): the network is not rigid
 COLUMNS = ["protocol", "n", "seed", "phi_j", "v", "max_force", "checks", "fire_iterations", "overshoot_iterations",
-           "newton_steps", "factorisations", "fallbacks", "polish_steps", "polish_factorisations", "states", "top", "loose_overshoot", "gauss_newton", "cpu_seconds", "cpu_overshoot", "cpu_polish",
+           "newton_steps", "factorisations", "fallbacks", "polish_steps", "polish_factorisations", "states", "top", "ratio", "loose_overshoot", "gauss_newton", "cpu_seconds", "cpu_overshoot", "cpu_polish",
            "cpu_fire_fallback", "cpu_newton_and_rest", "load", "error"]
 
 
@@ -344,7 +344,7 @@ def run_ladder(n, seed, top, ratio, rounds):
             "max_force": f"{fmax:.2e}", "checks": checks.passed, "fire_iterations": counts.fire,
             "overshoot_iterations": counts.overshoot, "newton_steps": counts.newton, "factorisations": counts.lu,
             "fallbacks": counts.fallbacks, "polish_steps": counts.polish,
-            "polish_factorisations": counts.polish_lu, "states": counts.states, "top": top, "loose_overshoot": LOOSE_OVERSHOOT, "gauss_newton": GAUSS_NEWTON_FIRST, "cpu_seconds": f"{cpu:.2f}",
+            "polish_factorisations": counts.polish_lu, "states": counts.states, "top": top, "ratio": f"{ratio:.4g}", "loose_overshoot": LOOSE_OVERSHOOT, "gauss_newton": GAUSS_NEWTON_FIRST, "cpu_seconds": f"{cpu:.2f}",
             "cpu_overshoot": f"{counts.cpu['overshoot']:.2f}", "cpu_polish": f"{counts.cpu['polish']:.2f}",
             "cpu_fire_fallback": f"{counts.cpu['fire']:.2f}",
             "cpu_newton_and_rest": f"{cpu - sum(counts.cpu.values()):.2f}", "error": ""}
@@ -363,7 +363,7 @@ def run_fast(n, seed):
 def variant(row) -> str:
     if row["protocol"] == "fast":
         return "fast"
-    return (f"ladder top={float(row['top']):g}" + (f" loose={float(row['loose_overshoot']):g}" if float(row.get("loose_overshoot") or 0)
+    return (f"ladder top={float(row['top']):g}" + (f" ratio={float(row['ratio']):g}" if row.get("ratio") != "0.3162" else "") + (f" loose={float(row['loose_overshoot']):g}" if float(row.get("loose_overshoot") or 0)
             else "") + (" gauss-newton" if row["gauss_newton"] == "True" else " fire"))
 
 
