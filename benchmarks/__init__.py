@@ -83,6 +83,9 @@ BENCHMARKS: dict[str, Benchmark] = {
     "refine_cost": Benchmark(
         "speed", "double-double refinement to p = 1e-14 against the float64 onset (N = 64, 256; docs/guide/precision.md)",
         ["--n", "64", "--seeds", "1", "--out", "{tmp}/refine-cost.csv"]),
+    "jammed_side": Benchmark(
+        "speed", "jammed-side protocol (overshoot, pressure ladder, Newton on the contact network) against `fast` (issue 27)",
+        ["--n", "64", "--seeds", "1", "1", "--top", "0", "--gauss-newton", "--out", "{tmp}/jammed-side.csv"]),
     "pressure_ladder": Benchmark(
         "study", "pressure ladder 1e-2 .. 1e-14 in double-double: Delta z and G against p N^2, phi_J (issue 28)",
         ["--quick", "--out", "{tmp}/pressure-ladder.csv"]),
