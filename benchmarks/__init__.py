@@ -117,6 +117,10 @@ BENCHMARKS: dict[str, Benchmark] = {
     "modes_shapes_data": Benchmark("study", "jammed dimer packings behind docs/notes/modes-rotations.md"),
     "reference_jam": Benchmark("study", "small 2D packings jammed on the numpy reference energy (tests/data/)"),
     "soft_modes": Benchmark("study", "where a creeping minimisation's residual force lies (docs/notes/soft-modes.md)"),
+    "creep_after": Benchmark(
+        "study", "whole jams of turning shapes against the soft-mode steps' creep_after (docs/notes/ellipses.md)",
+        ["run", "--dim", "2", "--sizes", "bi:1.4:0.5", "--shape", "ellipse:1.5", "--n", "16", "--seeds", "1",
+         "--creep-after", "10000", "--strict", "--out", "{tmp}/creep-after.csv"]),
     "moduli_ensemble": Benchmark("study", "ensemble moduli G, B, P against phi - phi_J (docs/notes/moduli.md)"),
     "shear_path": Benchmark("study", "one quasistatic shear path, drawn, and what a step costs"),
     "shear_symmetry": Benchmark("study", "unit period and mirror symmetry of jamming at fixed strain"),

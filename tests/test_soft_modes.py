@@ -108,7 +108,8 @@ def test_the_lowest_eigenpairs_repeat_bit_for_bit():
 
 
 def test_an_ellipse_jam_with_soft_mode_steps_repeats_bit_for_bit():
-    """N = 32 ellipses, seed 3: the soft-mode steps run (73 319 iterations); before the fixed start
+    """N = 32 ellipses, seed 3: the soft-mode steps run (33 384 iterations, one step; 73 319 with the steps
+    every 50 000 iterations, before issue 27 item 4); before the fixed start
     vector two runs of the same jam ended at different positions (docs/notes/soft-modes.md)."""
     from jamflow import jam
 
@@ -126,3 +127,42 @@ def test_the_soft_mode_trigger_waits_after_iterations_then_repeats():
     assert not t.due(40_000, 1e-10) and not t.due(60_000, 2e-9) and t.due(60_000, 1e-10)
     t.fired(60_000)
     assert not t.due(100_000, 1e-10) and t.due(110_000, 1e-10)
+
+
+def test_soft_mode_steps_run_every_10_000_iterations_for_ellipses_and_spheroids():
+    """The measured defaults (docs/notes/ellipses.md, issue 27 item 4): 10 000 iterations for
+    ellipses and spheroids, 50 000 for the other shapes that take soft-mode steps (rigid bodies
+    under the Hertz law); an explicit ``creep_after`` wins. Disks and spheres keep their creep
+    method (2D: the polish once at 20 000 iterations; 3D: none), so their runs do not change."""
+    import dataclasses
+
+    from jamflow.minimize.rules import _creep_method
+    from jamflow.model.potentials import parse_potential
+    from jamflow.protocols.compression import initial_packing
+
+    def creep(packing, **settings):
+        with CompiledEngine(packing) as engine:
+            return _creep_method(engine, MinimizerSettings(**settings), 1.0, 1e-14)
+
+    for shape, dim in (("ellipse:1.5", 2), ("spheroid:0.6", 3), ("spheroid:1.5", 3)):
+        c = creep(initial_packing(32, dim, "mono", "spring", 0, 0.5, shape))
+        assert type(c.strategy).__name__ == "SoftModeSteps" and (c.trigger.after, c.trigger.every) == (10_000, 10_000)
+    dimers = dataclasses.replace(load_packing(DATA / "dimer2d_a1.5_n32_s0.h5"), potential=parse_potential("hertz"))
+    assert type(creep(dimers).strategy).__name__ == "SoftModeSteps" and creep(dimers).trigger.after == 50_000
+    disks = creep(initial_packing(32, 2, "bi:1.4:0.5", "spring", 0, 0.5))
+    assert type(disks.strategy).__name__ == "PolishSteps" and (disks.trigger.after, disks.trigger.every) == (20_000, None)
+    assert creep(initial_packing(32, 3, "bi:1.4:0.5", "spring", 0, 0.5)) is None
+    explicit = creep(dimers, creep_after=7_000).trigger
+    assert (explicit.after, explicit.every) == (7_000, 7_000)
+
+
+@pytest.mark.slow
+def test_an_oblate_jam_takes_soft_mode_steps_every_10_000_iterations():
+    """24 oblate spheroids (0.6), seed 1, the default jam: 87 668 iterations with the steps every
+    10 000 iterations, 194 449 with every 50 000 (before issue 27 item 4), same phi_J
+    0.6978862503 (`python benchmarks/creep_after.py run --dim 3 --sizes mono --shape spheroid:0.6
+    --n 24 --seeds 1 --creep-after 50000 10000`). Counts, not times."""
+    from jamflow.protocols.spec import JamSpec, run_jam
+
+    result, checks = run_jam(JamSpec(n=24, dim=3, shape="spheroid:0.6", sizes="mono", seed=1))  # `jamflow jam`
+    assert checks.passed and result.iterations < 130_000

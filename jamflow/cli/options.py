@@ -51,7 +51,7 @@ def add_spec_arguments(p, skip=()) -> None:
     if "md_damping" not in skip:
         add_md_damping_argument(p)
     add("--creep", choices=CREEP_METHODS, default="auto",
-        help="what a creeping minimisation (unconverged after 20 000+ iterations near balance) does between FIRE "
+        help="what a creeping minimisation (unconverged after 10 000+ iterations near balance) does between FIRE "
              "windows: soft-modes (Newton steps along its softest modes, docs/notes/soft-modes.md), polish "
              "(Gauss-Newton active-set steps, disks/spheres and rigid bodies with the linear spring, "
              "docs/notes/speed-2.md section 8, docs/notes/nmers.md), off; auto: polish for rigid bodies and 2D disks, "

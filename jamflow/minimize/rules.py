@@ -51,7 +51,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from jamflow.minimize.creep import Creep, CreepTrigger
+from jamflow.minimize.creep import Creep
 from jamflow.minimize.settings import CONVERGED_REASONS, MinimizeResult, MinimizerSettings
 
 
@@ -104,10 +104,9 @@ def _creep_method(engine, settings: MinimizerSettings, stiffness: float, ftol: f
     if method == "auto":
         method = _auto_creep(engine, settings)
     if method == "soft-modes":
-        from jamflow.minimize.soft_modes import AFTER, SoftModeSteps  # scipy.sparse.linalg: loaded only where it runs
+        from jamflow.minimize.soft_modes import SoftModeSteps, trigger  # scipy.sparse.linalg: loaded only where it runs
 
-        after = settings.creep_after or AFTER
-        return Creep(CreepTrigger(after, every=after), SoftModeSteps(max(1.0, stiffness)))
+        return Creep(trigger(template, settings.creep_after), SoftModeSteps(max(1.0, stiffness)))
     if method == "polish":
         from jamflow.minimize.polish import AFTER, PolishSteps, polish_reason, polish_trigger
 

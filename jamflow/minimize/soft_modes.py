@@ -32,14 +32,29 @@ from jamflow.mechanics.hessian import Coordinates
 from jamflow.mechanics.dynamical_matrix import DynamicalMatrix
 from jamflow.mechanics.eigen import lowest_eigenpairs
 from jamflow.mechanics.checks import generalized_forces
+from jamflow.minimize.creep import CreepTrigger
 
-AFTER = 50_000  # MinimizerSettings.creep_after default: iterations before the first attempt, and between attempts
+# MinimizerSettings.creep_after defaults (``trigger``): iterations before the first attempt, and between attempts.
+# Ellipses and spheroids: 10 000 (was 50 000; whole jams of 3D oblate 0.6 / prolate 1.5 spheroids, N = 64, took
+# 2.4x / 1.5x fewer iterations, 2D ellipses 1.5 no more; docs/notes/ellipses.md). Other shapes (rigid bodies
+# under laws other than the spring; disks or spheres with --creep soft-modes): 50 000 (2D Hertz dimers, N = 32:
+# one seed of five took 2.6x more iterations with 10 000)
+AFTER = 50_000
+ELLIPSOID_AFTER = 10_000
 MODES = 12  # lowest eigenpairs computed (beyond the d translations)
 ZERO_MODE = 1e-10  # |lambda| below this x stiffness: a zero mode (no restoring force), left alone
 SHIFT = 1e-8  # shift-invert about -SHIFT x stiffness (the matrix is positive semi-definite at a minimum)
 STEP_FACTORS = (1.0, 0.5, 0.25, 2.0)
 DENSE_LIMIT = 64  # matrices of up to this many rows are diagonalised densely
 log = logging.getLogger(__name__)
+
+
+def trigger(packing, after: int | None = None) -> CreepTrigger:
+    """When the soft-mode steps run: every ``after`` iterations (None: the measured default,
+    ``ELLIPSOID_AFTER`` for ellipses and spheroids, ``AFTER`` otherwise) while the max force is
+    below ``CREEP_FORCE``."""
+    after = after or (ELLIPSOID_AFTER if packing.shape.kind == "ellipsoid" else AFTER)
+    return CreepTrigger(after, every=after)
 
 
 @dataclass
