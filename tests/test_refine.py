@@ -316,3 +316,14 @@ def test_a_floater_dimer_whose_cage_closed_joins_the_network():
     assert {(1, 7), (7, 14), (7, 31), (14, 22), (14, 28)} <= r.start_contacts
     assert abs(r.pressure / 1e-14 - 1) < 1e-2 and r.force_balance < 1e-10 and r.checks().passed
     assert r.n_contacts == r.isostatic_contacts
+
+
+def test_newton_refuses_a_step_that_no_halving_makes_downhill(onset32, monkeypatch):
+    """A Newton direction that raises both the residual and the energy (here: against the forces) is
+    refused after ``STEP_HALVINGS`` halvings (before: its smallest halving was accepted, uphill, and
+    the refinement ran on to the Newton-step limit)."""
+    import jamflow.protocols.refine as refine_module
+
+    monkeypatch.setattr(refine_module, "_newton_step", lambda packing, st, net: -1e-3 * net.forces)
+    with pytest.raises(jamflow.JammingFailed, match="no Newton step of 12 halvings lowers"):
+        refine(onset32, 1e-14)

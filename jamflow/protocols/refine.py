@@ -11,13 +11,16 @@ Force balance at a fixed box: Newton steps on the contact network. A contact is 
 double-double overlap sigma - r > 0. Floaters (fewer than d + 1 contacts, or not spanning,
 removed iteratively: ``mechanics.contacts.find_floaters``) are left out of the linear system; an
 overlap they still have is relieved by moving them along their net force by F / k (k the sum of
-their contacts' stiffnesses, eps / sigma^2), which closes one contact exactly. The rest, the
-backbone, is solved with its Hessian (``mechanics.hessian.sphere_contact_hessian``, built on the
-contacts found in double-double) in float64 with one particle pinned (the d translations), the
-right-hand side being the double-double residual rounded to float64; each Newton step is one
-round of iterative refinement, and the step is accepted when it lowers the residual or the
-energy (else halved). Newton runs on a fixed network (its pairs as bilateral springs, so that an
-affine dilation that pulls a pair apart does not cut the network); after each solve the contacts
+their contacts' stiffnesses, eps / sigma^2), which closes one contact exactly, else by the
+shortest move that opens their contacts (``_escape``; floaters touching or nearly touching each
+other move together, ``_cluster_move``); a cluster that no move frees, its cage closed on it,
+carries load and joins the network (``balance``). The rest, the backbone, is solved with its
+Hessian (``mechanics.hessian.sphere_contact_hessian``, built on the contacts found in
+double-double) in float64 with one particle pinned (the d translations), the right-hand side
+being the double-double residual rounded to float64; each Newton step is one round of iterative
+refinement, and the step is accepted when it lowers the residual or the energy (else halved;
+refused after ``STEP_HALVINGS`` halvings). Newton runs on a fixed network (its pairs as
+bilateral springs, so that an affine dilation that pulls a pair apart does not cut the network); after each solve the contacts
 are found again, and while they differ from the network Newton runs again on the new one. The
 opened and closed contacts relative to the start are reported.
 A network that comes back in that loop is a rearrangement: one float64 FIRE minimisation at the same
@@ -435,6 +438,9 @@ def _newton(packing: Packing, st: _State, network: tuple, settings: RefineSettin
             if new.residual(dia, eps) < res or dd.dd_sub(*new.energy, *net.energy)[0] < 0:
                 break
             dx = 0.5 * dx
+        else:  # no step lowers either: stuck (accepting the last, smallest one would go uphill)
+            raise RuntimeError(f"no Newton step of {STEP_HALVINGS} halvings lowers the largest net force ({res:.1e} of "
+                               f"the mean contact force) or the energy")
         st, net = trial, new
     raise RuntimeError(f"double-double force balance not reached in {settings.max_newton} Newton steps (largest "
                        f"net force {net.residual(dia, eps):.1e} of the mean contact force, {net.n_contacts} contacts)")
