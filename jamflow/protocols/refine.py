@@ -244,7 +244,8 @@ def _relieve_floaters(packing: Packing, st: _State, net: Network, sweeps: int = 
     touching at the float64 round-off, e.g. overlaps ~1e-14 with two neighbours) does not get out
     that way, nor one moved off one side of the wedge into the other; after ``WEDGE_SWEEPS`` sweeps it
     moves instead along u, the sum of the normals of its contacts and near neighbours, far enough
-    that every overlap closes to first order (``_escape``)."""
+    that every overlap closes to first order, or together with the floaters it touches or nearly
+    touches (``_escape``; ``_Caged`` if no move frees them)."""
     eps = packing.potential.epsilon
     for sweep in range(sweeps):
         if not net.floater_overlaps:
@@ -346,8 +347,9 @@ def _cluster_move(packing: Packing, box: Box, x: np.ndarray, cluster: list, dept
     """The shortest joint move (len(cluster), d) of a floater cluster, the rest fixed: each contact
     (dd overlap) opened by 1 + 1e-6 of its overlap, each gap below ``reach`` closed by at most half;
     a pair inside the cluster is one constraint on the difference of its two moves. ``reach``
-    starts at ``WEDGE_GAP`` and doubles past twice the largest move until no gap beyond it can
-    close. ``_Caged`` if no move exists, or only one of half a diameter or more."""
+    starts at ``WEDGE_GAP`` and grows to twice the largest possible closing (2 max|move| per
+    particle) until no gap beyond it can close. ``_Caged`` if no move exists, or if ``reach``
+    would be a diameter or more (moves of 1/4 to 1/2 diameter)."""
     d = packing.dim
     where = {a: k for k, a in enumerate(cluster)}
     reach = WEDGE_GAP
