@@ -20,9 +20,9 @@ double-double) in float64 with one particle pinned (the d translations), the rig
 being the double-double residual rounded to float64; each Newton step is one round of iterative
 refinement, and the step is accepted when it lowers the residual or the energy (else halved;
 refused after ``STEP_HALVINGS`` halvings). Newton runs on a fixed network (its pairs as
-bilateral springs, so that an affine dilation that pulls a pair apart does not cut the network); after each solve the contacts
-are found again, and while they differ from the network Newton runs again on the new one. The
-opened and closed contacts relative to the start are reported.
+bilateral springs, so that an affine dilation that pulls a pair apart does not cut the network);
+after each solve the contacts are found again, and while they differ from the network Newton
+runs again on the new one. The opened and closed contacts relative to the start are reported.
 A network that comes back in that loop is a rearrangement: one float64 FIRE minimisation at the same
 box finds the new network (where float64 resolves the pressure), and Newton resumes from it.
 Converged: the largest net force on a backbone particle below ``force_tol`` times the mean
