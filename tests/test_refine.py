@@ -303,14 +303,29 @@ def test_a_floater_dimer_is_freed_by_a_joint_move():
 
 
 def test_a_floater_dimer_whose_cage_closed_joins_the_network():
-    """Grown by 0.042 the dimer no longer fits its cage: no move frees it (``_Caged``), so it carries
-    load. FIRE in float64 at the onset's box (p ~ 1e-8, resolved) puts it in the network, with
-    contacts 1-7, 7-14, 7-31, 14-22, 14-28 (before: "floaters still overlap after 200 relief
-    sweeps"); it stays in the network down to 1e-14."""
-    pk = _grown_dimer(0.042)
-    from jamflow.protocols.refine import _State, evaluate
+    """Grown by 0.042 the dimer no longer fits its cage: no joint move opens its contacts
+    (``_Caged``), while grown by 0.035 it still fits, tightly. Refined, its overlaps (~4e-2, the
+    backbone's ~1e-8) throw the packing far out of balance, relief and Newton end with a cluster no
+    move frees, and one float64 FIRE at the onset's box (p ~ 1e-8, resolved) puts the dimer in the
+    network, with contacts 1-7, 7-14, 7-31, 14-22, 14-28 (before: "floaters still overlap after 200
+    relief sweeps"); it stays in the network down to 1e-14."""
+    from jamflow.model.box import Box
+    from jamflow.protocols.refine import _Caged, _cluster_move, _State, evaluate
 
-    assert evaluate(pk, _State.of(pk)).floater[[7, 14]].all()
+    def joint_move(pk):
+        st = _State.of(pk)
+        net = evaluate(pk, st)
+        assert net.floater[[7, 14]].all()
+        off = ~net.backbone
+        depth = {}
+        for a, b, o in zip(net.i[off].tolist(), net.j[off].tolist(), net.overlap[off].tolist()):
+            depth[(a, b)] = depth[(b, a)] = o
+        return _cluster_move(pk, Box(np.diag(st.lh)), st.xh, [7, 14], depth)
+
+    assert joint_move(_grown_dimer(0.035)).shape == (2, 2)
+    pk = _grown_dimer(0.042)
+    with pytest.raises(_Caged):
+        joint_move(pk)
     r = refine(pk, 1e-14)
     assert not r.network.floater[[7, 14]].any()
     assert {(1, 7), (7, 14), (7, 31), (14, 22), (14, 28)} <= r.start_contacts

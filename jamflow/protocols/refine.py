@@ -281,7 +281,7 @@ def _escape(packing: Packing, st: _State, i, j, overlap, floater) -> np.ndarray:
     (1 + 1e-6) on the contacts and >= 0 on the near gaps, if it exists. Else, and for a cluster of
     floaters touching or nearly touching each other (one caged by the others: 2D N = 1024 seed 1,
     floaters 176 and 458), the shortest joint move that opens every contact of the cluster and
-    closes no near gap by more than half (``_least_distance``). Raises ``_Caged`` where no such move
+    closes no near gap by more than half, else 99 % (``_least_distance``). Raises ``_Caged`` where no such move
     exists (the cage has closed on the cluster)."""
     box = Box(np.diag(st.lh))
     dx = np.zeros_like(st.xh)
@@ -344,12 +344,22 @@ def _single_escape(near: tuple, depth: dict, a: int) -> np.ndarray | None:
 
 
 def _cluster_move(packing: Packing, box: Box, x: np.ndarray, cluster: list, depth: dict) -> np.ndarray:
-    """The shortest joint move (len(cluster), d) of a floater cluster, the rest fixed: each contact
-    (dd overlap) opened by 1 + 1e-6 of its overlap, each gap below ``reach`` closed by at most half;
-    a pair inside the cluster is one constraint on the difference of its two moves. ``reach``
-    starts at ``WEDGE_GAP`` and grows to twice the largest possible closing (2 max|move| per
-    particle) until no gap beyond it can close. ``_Caged`` if no move exists, or if ``reach``
-    would be a diameter or more (moves of 1/4 to 1/2 diameter)."""
+    """The shortest joint move (len(cluster), d) of a floater cluster, the rest fixed, that opens
+    each contact by 1 + 1e-6 of its (dd) overlap and closes each other gap by at most half, else
+    by at most 99 % (a tight cage); ``_Caged`` if neither exists (``_joint_move``)."""
+    for share in (0.5, 0.99):
+        move = _joint_move(packing, box, x, cluster, depth, share)
+        if move is not None:
+            return move
+    raise _Caged(f"floaters {sorted(cluster)} are caged: no move opens their contacts (the cage has closed on them)")
+
+
+def _joint_move(packing: Packing, box: Box, x: np.ndarray, cluster: list, depth: dict, share: float):
+    """``_cluster_move`` closing gaps below ``reach`` by at most ``share`` of themselves; a pair inside
+    the cluster is one constraint on the difference of its two moves. ``reach`` starts at
+    ``WEDGE_GAP`` and grows to twice the largest possible closing (2 max|move| per particle) until
+    no gap beyond it can close. None if no move exists, or if ``reach`` would be a diameter or more
+    (moves of 1/4 to 1/2 diameter)."""
     d = packing.dim
     where = {a: k for k, a in enumerate(cluster)}
     reach = WEDGE_GAP
@@ -365,16 +375,16 @@ def _cluster_move(packing: Packing, box: Box, x: np.ndarray, cluster: list, dept
                 if b in where:
                     row[where[b] * d:(where[b] + 1) * d] = -n
                 rows.append(row)
-                lower.append(depth[(a, b)] * (1.0 + 1e-6) if (a, b) in depth else -0.5 * max(g, 0.0))
+                lower.append(depth[(a, b)] * (1.0 + 1e-6) if (a, b) in depth else -share * max(g, 0.0))
         move = _least_distance(np.array(rows), np.array(lower))
         if move is None:
-            break
+            return None
         move = move.reshape(len(cluster), d)
         largest = 2.0 * float(np.linalg.norm(move, axis=1).max())  # the most a gap can close
         if largest < reach:
             return move
         reach = 2.0 * largest
-    raise _Caged(f"floaters {sorted(cluster)} are caged: no move opens their contacts (the cage has closed on them)")
+    return None
 
 
 def _least_distance(g: np.ndarray, h: np.ndarray) -> np.ndarray | None:
