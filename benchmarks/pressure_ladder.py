@@ -22,6 +22,7 @@ error; the ladder of that packing stops there.
     python benchmarks/pressure_ladder.py --dim 2 --n 64 256 --seeds 10 --out docs/notes/pressure-ladder.csv
     python benchmarks/pressure_ladder.py --report docs/notes/pressure-ladder.csv   (fits, phi_J, figure)
     python benchmarks/pressure_ladder.py --quick --out X.csv                        (N = 16, 3 pressures)
+    python benchmarks/pressure_ladder.py --n 256 --seeds 13 13 --self-stress --out X.csv  (why N_c is one more)
 """
 
 from __future__ import annotations
@@ -94,10 +95,48 @@ def state_row(dim, n, seed, target, route, r, g64_max_dof, t64, trf) -> dict:
     return row
 
 
-def run_packing(dim, n, seed, pressures, switch, g64_max_dof, sizes) -> list[dict]:
+def self_stresses(r) -> str:
+    """Why N_c exceeds d (N' - 1) + 1: the rank of the equilibrium matrix of the backbone (a row per
+    contact, n_c . (u_i - u_j)), its self-stresses N_c - rank and floppy modes d N' - d - rank, the
+    smallest overlap over the mean, and the self-stress orthogonal to the contact forces: its
+    participation number (1 / sum w^2, w its squared unit components), its contacts and diameters."""
+    net, p = r.network, r.packing
+    b = net.backbone
+    i, j, overlap = net.i[b], net.j[b], net.overlap[b]
+    live = np.flatnonzero(~net.floater)
+    col = np.full(p.n, -1)
+    col[live] = np.arange(len(live))
+    d = p.dim
+    dr = p.box.minimum_image(p.positions[i] - p.positions[j])
+    normal = dr / np.linalg.norm(dr, axis=1)[:, None]
+    a = np.zeros((len(i), d * len(live)))
+    rows = np.arange(len(i))
+    for k in range(d):
+        a[rows, col[i] * d + k] = normal[:, k]
+        a[rows, col[j] * d + k] = -normal[:, k]
+    _, sv, vt = np.linalg.svd(a.T)
+    rank = int((sv > 1e-10 * sv[0]).sum())
+    text = (f"N_c = {len(i)}, N' = {len(live)}, rank {rank}: {len(i) - rank} self-stresses, "
+            f"{d * len(live) - d - rank} floppy modes; smallest overlap / mean {(overlap / overlap.mean()).min():.2g}")
+    force = overlap / (0.5 * (p.diameters[i] + p.diameters[j])) ** 2
+    force /= np.linalg.norm(force)
+    for stress in vt[rank:]:
+        other = stress - (stress @ force) * force
+        if np.linalg.norm(other) > 1e-6:
+            w = (other / np.linalg.norm(other)) ** 2
+            top = np.flatnonzero(w > 0.01 * w.max())
+            parts = np.unique(np.concatenate([i[top], j[top]]))
+            text += (f"; another self-stress: participation {1 / np.sum(w**2):.1f} contacts, {len(top)} carrying it, "
+                     f"on particles {parts.tolist()} of diameters {sorted(set(p.diameters[parts].tolist()))}")
+            break
+    return text
+
+
+def run_packing(dim, n, seed, pressures, switch, g64_max_dof, sizes, last=None) -> list[dict]:
     """Above ``switch``: the float64 chain (each enthalpy minimum from the previous float64 one) and
     each of its states balanced in double-double (a failure there is recorded and the chain goes
-    on). At and below: each state refined from the previous double-double one (a failure stops)."""
+    on). At and below: each state refined from the previous double-double one (a failure stops).
+    ``last``: a list given the last RefineResult."""
     rows = []
     t0 = time.perf_counter()
     onset = jamflow.jam(n=n, dim=dim, seed=seed, engine="numba", sizes=sizes)
@@ -132,6 +171,8 @@ def run_packing(dim, n, seed, pressures, switch, g64_max_dof, sizes) -> list[dic
             continue
         rows.append(state_row(dim, n, seed, target, route, r, g64_max_dof, t64, trf))
         dd_packing = r.packing
+        if last is not None:
+            last[:] = [r]
     return rows
 
 
@@ -339,6 +380,7 @@ def main(argv=None) -> int:
     ap.add_argument("--figure", default=str(DOCS / "pressure-ladder.png"))
     ap.add_argument("--min-pn2", type=float, default=10.0, help="fit over p N^2 >= this")
     ap.add_argument("--quick", action="store_true", help="N = 16, one seed, 3 pressures (seconds); --out required")
+    ap.add_argument("--self-stress", action="store_true", help="print the self-stresses of each ladder's last state")
     args = ap.parse_args(argv)
     if args.report:
         report(args.report, args.figure, args.min_pn2)
@@ -352,7 +394,10 @@ def main(argv=None) -> int:
     for n in args.n:
         for seed in seeds:
             t0 = time.perf_counter()
-            rows = run_packing(args.dim, n, seed, pressures, args.switch, args.g64_max_dof, args.sizes)
+            last = []
+            rows = run_packing(args.dim, n, seed, pressures, args.switch, args.g64_max_dof, args.sizes, last)
+            if args.self_stress and last:
+                print(f"d={args.dim} N={n} seed={seed} at p = {last[0].pressure:.3e}: {self_stresses(last[0])}", flush=True)
             write(args.out, rows, append)
             append = True
             ok = [r for r in rows if r["status"] == "ok"]

@@ -25,6 +25,11 @@ def onset32():
 
 
 @pytest.fixture(scope="module")
+def onset1024():
+    return jamflow.jam(n=1024, seed=1, engine="numba").packing
+
+
+@pytest.fixture(scope="module")
 def refined32(onset32):
     return refine(onset32, 1e-14)
 
@@ -234,21 +239,28 @@ def test_a_3d_floater_held_by_three_contacts_around_it_is_freed():
     assert not r.network.floater_overlaps and r.n_contacts >= r.isostatic_contacts
 
 
-def test_least_move_closed_forms():
-    """The shortest dx with normals @ dx >= lower: three normals 120 degrees apart (a caged floater)."""
-    from jamflow.protocols.refine import _least_move
+def test_least_distance_closed_forms():
+    """The shortest dx with normals @ dx >= lower (Lawson & Hanson's least-distance programming):
+    three normals 120 degrees apart (a caged floater); a dimer, two moves, with one constraint on
+    their difference."""
+    from jamflow.protocols.refine import _least_distance
 
     normals = np.array([[1.0, 0.0], [-0.5, math.sqrt(3) / 2], [-0.5, -math.sqrt(3) / 2]])
     # open the first contact by 1, approach the others by up to 1: dx = (1, 0), one constraint active
-    np.testing.assert_allclose(_least_move(normals, np.array([1.0, -1.0, -1.0])), [1.0, 0.0], atol=1e-15)
+    np.testing.assert_allclose(_least_distance(normals, np.array([1.0, -1.0, -1.0])), [1.0, 0.0], atol=1e-15)
     # approach the second by at most 0.2: the first two active, dx solves both equalities
-    move = _least_move(normals, np.array([1.0, -0.2, -1.0]))
+    move = _least_distance(normals, np.array([1.0, -0.2, -1.0]))
     np.testing.assert_allclose(normals[:2] @ move, [1.0, -0.2], atol=1e-12)
     assert normals[2] @ move >= -1.0
-    assert _least_move(normals, np.array([1.0, 0.0, 0.0])) is None  # caged tight: no move opens one
+    assert _least_distance(normals, np.array([1.0, 0.0, 0.0])) is None  # caged tight: no move opens one
+    # dimer a-b along x: a pushed off its left neighbour by 1, b behind it (x_b - x_a >= 0), b's right
+    # neighbour allows it 3: both move by 1; with 0.5 allowed the cage is closed
+    g = np.array([[1.0, 0.0, 0.0, 0.0], [-1.0, 0.0, 1.0, 0.0], [0.0, 0.0, -1.0, 0.0]])
+    np.testing.assert_allclose(_least_distance(g, np.array([1.0, 0.0, -3.0])), [1.0, 0.0, 1.0, 0.0], atol=1e-12)
+    assert _least_distance(g, np.array([1.0, 0.0, -0.5])) is None
 
 
-def test_a_floater_caged_at_the_float64_round_off_is_freed():
+def test_a_floater_caged_at_the_float64_round_off_is_freed(onset1024):
     """2D N = 1024, seed 1, at its float64 onset: floater 458 touches 991 (overlap ~1e-15, the float64
     round-off) inside a cage of 176, 638 and 991 whose normals surround it, so no move keeps clear of
     all three; moving it by F / k shrank the overlap to 4e-18 and stalled there ("floaters still
@@ -256,7 +268,77 @@ def test_a_floater_caged_at_the_float64_round_off_is_freed():
     approaches the others by at most half their gaps frees it."""
     from jamflow.protocols.refine import _relieve_floaters, _State, evaluate
 
-    pk = jamflow.jam(n=1024, seed=1, engine="numba").packing
-    st = _State.of(pk)
-    _, net = _relieve_floaters(pk, st, evaluate(pk, st))
+    st = _State.of(onset1024)
+    _, net = _relieve_floaters(onset1024, st, evaluate(onset1024, st))
     assert not net.floater_overlaps
+
+
+def test_n1024_seed1_refines_from_its_onset(onset1024):
+    """After the Newton step at the onset's pressure floaters 176 and 458 (nearly touching, gap
+    ~4e-15) overlap their neighbours 13, 638 and 991 by 1e-11 to 2.5e-10; neither frees alone (458 is
+    caged by 638, 991 and 176), so relief failed ("floaters still overlap after 200 relief sweeps",
+    exit 3 of ``jamflow refine``); the pair moves together (``_cluster_move``)."""
+    r = refine(onset1024, 1e-14)
+    assert abs(r.pressure / 1e-14 - 1) < 1e-2 and r.force_balance < 1e-10
+    assert r.network.floater[[176, 458]].all() and not r.network.floater_overlaps
+    assert r.n_contacts >= r.isostatic_contacts and r.checks().passed
+
+
+def _grown_dimer(grow):
+    """N = 32, seed 4 at its onset: floaters 7 and 14 (gap 2.5e-10) grown by ``grow`` diameters each."""
+    pk = jamflow.jam(n=32, seed=4, engine="numba").packing
+    d = pk.diameters.copy()
+    d[[7, 14]] += grow
+    return replace(pk, diameters=d)
+
+
+def test_a_floater_dimer_is_freed_by_a_joint_move():
+    """Grown by 0.004 the dimer overlaps itself by 4e-3 and 22 and 28 by 2e-3 and 5e-5; moving each
+    along F / k or alone never freed both ("floaters still overlap after 200 relief sweeps", failed
+    before); moving both together does, and they stay floaters."""
+    r = refine(_grown_dimer(0.004), 1e-14)
+    assert r.network.floater[[7, 14]].all() and not r.network.floater_overlaps
+    assert abs(r.pressure / 1e-14 - 1) < 1e-2 and r.force_balance < 1e-10 and r.checks().passed
+    assert r.n_contacts == r.isostatic_contacts
+
+
+def test_a_floater_dimer_whose_cage_closed_joins_the_network():
+    """Grown by 0.042 the dimer no longer fits its cage: no joint move opens its contacts
+    (``_Caged``), while grown by 0.035 it still fits, tightly. Refined, its overlaps (~4e-2, the
+    backbone's ~1e-8) throw the packing far out of balance, relief and Newton end with a cluster no
+    move frees, and one float64 FIRE at the onset's box (p ~ 1e-8, resolved) puts the dimer in the
+    network, with contacts 1-7, 7-14, 7-31, 14-22, 14-28 (before: "floaters still overlap after 200
+    relief sweeps"); it stays in the network down to 1e-14."""
+    from jamflow.model.box import Box
+    from jamflow.protocols.refine import _Caged, _cluster_move, _State, evaluate
+
+    def joint_move(pk):
+        st = _State.of(pk)
+        net = evaluate(pk, st)
+        assert net.floater[[7, 14]].all()
+        off = ~net.backbone
+        depth = {}
+        for a, b, o in zip(net.i[off].tolist(), net.j[off].tolist(), net.overlap[off].tolist()):
+            depth[(a, b)] = depth[(b, a)] = o
+        return _cluster_move(pk, Box(np.diag(st.lh)), st.xh, [7, 14], depth)
+
+    assert joint_move(_grown_dimer(0.035)).shape == (2, 2)
+    pk = _grown_dimer(0.042)
+    with pytest.raises(_Caged):
+        joint_move(pk)
+    r = refine(pk, 1e-14)
+    assert not r.network.floater[[7, 14]].any()
+    assert {(1, 7), (7, 14), (7, 31), (14, 22), (14, 28)} <= r.start_contacts
+    assert abs(r.pressure / 1e-14 - 1) < 1e-2 and r.force_balance < 1e-10 and r.checks().passed
+    assert r.n_contacts == r.isostatic_contacts
+
+
+def test_newton_refuses_a_step_that_no_halving_makes_downhill(onset32, monkeypatch):
+    """A Newton direction that raises both the residual and the energy (here: against the forces) is
+    refused after ``STEP_HALVINGS`` halvings (before: its smallest halving was accepted, uphill, and
+    the refinement ran on to the Newton-step limit)."""
+    import jamflow.protocols.refine as refine_module
+
+    monkeypatch.setattr(refine_module, "_newton_step", lambda packing, st, net: -1e-3 * net.forces)
+    with pytest.raises(jamflow.JammingFailed, match="no Newton step of 12 halvings lowers"):
+        refine(onset32, 1e-14)

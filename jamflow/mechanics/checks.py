@@ -42,7 +42,7 @@ class PackingChecks:
     energy_per_particle: float
     v_tol: float | None
     in_window: bool | None
-    max_force: float  # largest net force component, eps/diameter
+    max_force: float  # largest net force component, eps/diameter (refine: largest norm |F|)
     force_tol: float | None  # the minimiser's tolerance, for the record
     mean_contact_force: float  # mean |dV/dr| over overlapping pairs (nan without any)
     force_ratio: float  # max_force / mean_contact_force

@@ -11,15 +11,18 @@ Force balance at a fixed box: Newton steps on the contact network. A contact is 
 double-double overlap sigma - r > 0. Floaters (fewer than d + 1 contacts, or not spanning,
 removed iteratively: ``mechanics.contacts.find_floaters``) are left out of the linear system; an
 overlap they still have is relieved by moving them along their net force by F / k (k the sum of
-their contacts' stiffnesses, eps / sigma^2), which closes one contact exactly. The rest, the
-backbone, is solved with its Hessian (``mechanics.hessian.sphere_contact_hessian``, built on the
-contacts found in double-double) in float64 with one particle pinned (the d translations), the
-right-hand side being the double-double residual rounded to float64; each Newton step is one
-round of iterative refinement, and the step is accepted when it lowers the residual or the
-energy (else halved). Newton runs on a fixed network (its pairs as bilateral springs, so that an
-affine dilation that pulls a pair apart does not cut the network); after each solve the contacts
-are found again, and while they differ from the network Newton runs again on the new one. The
-opened and closed contacts relative to the start are reported.
+their contacts' stiffnesses, eps / sigma^2), which closes one contact exactly, else by the
+shortest move that opens their contacts (``_escape``; floaters touching or nearly touching each
+other move together, ``_cluster_move``); a cluster that no move frees, its cage closed on it,
+carries load and joins the network (``balance``). The rest, the backbone, is solved with its
+Hessian (``mechanics.hessian.sphere_contact_hessian``, built on the contacts found in
+double-double) in float64 with one particle pinned (the d translations), the right-hand side
+being the double-double residual rounded to float64; each Newton step is one round of iterative
+refinement, and the step is accepted when it lowers the residual or the energy (else halved;
+refused after ``STEP_HALVINGS`` halvings). Newton runs on a fixed network (its pairs as
+bilateral springs, so that an affine dilation that pulls a pair apart does not cut the network);
+after each solve the contacts are found again, and while they differ from the network Newton
+runs again on the new one. The opened and closed contacts relative to the start are reported.
 A network that comes back in that loop is a rearrangement: one float64 FIRE minimisation at the same
 box finds the new network (where float64 resolves the pressure), and Newton resumes from it.
 Converged: the largest net force on a backbone particle below ``force_tol`` times the mean
@@ -42,13 +45,13 @@ N ~ 300 at the default tolerance (measured: ``jamflow refine`` of an N = 64 onse
 
 from __future__ import annotations
 
-import itertools
 import math
 import time
 from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.sparse.linalg as spla
+from scipy.optimize import nnls
 
 from jamflow.engines.choose import open_engine
 from jamflow.engines.compiled.ddkernel import spring_dd
@@ -241,7 +244,8 @@ def _relieve_floaters(packing: Packing, st: _State, net: Network, sweeps: int = 
     touching at the float64 round-off, e.g. overlaps ~1e-14 with two neighbours) does not get out
     that way, nor one moved off one side of the wedge into the other; after ``WEDGE_SWEEPS`` sweeps it
     moves instead along u, the sum of the normals of its contacts and near neighbours, far enough
-    that every overlap closes to first order (``_escape``)."""
+    that every overlap closes to first order, or together with the floaters it touches or nearly
+    touches (``_escape``; ``_Caged`` if no move frees them)."""
     eps = packing.potential.epsilon
     for sweep in range(sweeps):
         if not net.floater_overlaps:
@@ -263,68 +267,143 @@ def _relieve_floaters(packing: Packing, st: _State, net: Network, sweeps: int = 
     raise RuntimeError(f"floaters still overlap after {sweeps} relief sweeps")
 
 
+class _Caged(RuntimeError):
+    """A floater cluster in contact that no move frees: its cage has closed on it, so it carries load."""
+
+
 def _escape(packing: Packing, st: _State, i, j, overlap, floater) -> np.ndarray:
-    """Per floater in contact: t u, u the normalised sum of the unit normals n_c (from each neighbour
-    to the floater) of its contacts and of its near neighbours (gap below ``WEDGE_GAP`` diameters:
-    the other side of the wedge, which a move off one contact alone runs into), t = max_c
-    overlap_c / (u . n_c) (1 + 1e-6) over its contacts. Where some u . n_c <= 0 (a 3D floater
-    held by three contacts around it), the least-norm dx with n_c . dx = overlap_c (1 + 1e-6) on
-    the contacts and >= 0 on the near gaps, if it exists; else (a floater caged by its near
-    neighbours) the shortest dx that opens the contacts and closes no near gap by more than half
-    (``_least_move``); else zero."""
+    """Per cluster of floaters in contact (floaters linked by contacts or near gaps, below
+    ``WEDGE_GAP`` diameters), a move opening its contacts. A single floater moves by t u, u the
+    normalised sum of the unit normals n_c (from each neighbour to the floater) of its contacts and
+    of its near neighbours (the other side of the wedge, which a move off one contact alone runs
+    into), t = max_c overlap_c / (u . n_c) (1 + 1e-6) over its contacts. Where some u . n_c <= 0 (a
+    3D floater held by three contacts around it), the least-norm dx with n_c . dx = overlap_c
+    (1 + 1e-6) on the contacts and >= 0 on the near gaps, if it exists. Else, and for a cluster of
+    floaters touching or nearly touching each other (one caged by the others: 2D N = 1024 seed 1,
+    floaters 176 and 458), the shortest joint move that opens every contact of the cluster and
+    closes no near gap by more than half, else 99 % (``_least_distance``). Raises ``_Caged`` where no such move
+    exists (the cage has closed on the cluster)."""
     box = Box(np.diag(st.lh))
     dx = np.zeros_like(st.xh)
-    for a in np.flatnonzero(floater):
-        mine = (i == a) | (j == a)
-        if not mine.any():
+    depth = {}
+    for c in range(len(i)):
+        depth[(int(i[c]), int(j[c]))] = depth[(int(j[c]), int(i[c]))] = float(overlap[c])
+    seen = set()
+    for a0 in np.unique(np.concatenate([i[floater[i]], j[floater[j]]])).tolist():
+        if a0 in seen:
             continue
-        others = np.where(i[mine] == a, j[mine], i[mine])
-        dr = box.minimum_image(st.xh[a] - st.xh)
-        r = np.linalg.norm(dr, axis=1)
-        r[a] = np.inf
-        gap = r - 0.5 * (packing.diameters[a] + packing.diameters)
-        near = np.flatnonzero(gap < WEDGE_GAP)
-        normals = dr[near] / r[near, None]
-        u = normals.sum(axis=0)
-        if np.linalg.norm(u) == 0.0:
-            continue
-        u /= np.linalg.norm(u)
-        proj = normals @ u
-        ends = dr[others] / r[others, None] @ u
-        if proj.min() > 0 and ends.min() > 0:
-            dx[a] = u * float(np.max(overlap[mine] / ends)) * (1.0 + 1e-6)
-            continue
-        # no common direction (e.g. three contacts of a 3D floater around it): the least-norm move
-        # that opens each contact and near gap to first order, n_c . dx = max(-gap_c, 0)
-        target = np.maximum(-gap[near], 0.0)
-        for c, b in enumerate(others):
-            target[near == b] = overlap[mine][c]
-        move = np.linalg.lstsq(normals, target * (1.0 + 1e-6), rcond=None)[0]
-        if np.all(normals @ move >= target - 1e-9 * target.max()):
-            dx[a] = move
-            continue
-        # caged (the near normals surround it, so no move keeps off every neighbour): the least move
-        # that opens the contacts and approaches each near neighbour by at most half its gap
-        lower = np.where(target > 0, target * (1.0 + 1e-6), -0.5 * np.maximum(gap[near], 0.0))
-        move = _least_move(normals, lower)
-        if move is not None:
-            dx[a] = move
+        cluster, stack, near = [], [a0], {}
+        seen.add(a0)
+        while stack:  # the floaters linked to a0 by contacts or near gaps
+            a = stack.pop()
+            cluster.append(a)
+            near[a] = _near(packing, box, st.xh, a)
+            for b in near[a][0].tolist():
+                if floater[b] and b not in seen:
+                    seen.add(b)
+                    stack.append(b)
+        move = _single_escape(near[a0], depth, a0) if len(cluster) == 1 else None
+        if move is None:
+            move = _cluster_move(packing, box, st.xh, cluster, depth)
+        dx[cluster] = move
     return dx
 
 
-def _least_move(normals: np.ndarray, lower: np.ndarray) -> np.ndarray | None:
-    """The shortest dx with normals @ dx >= lower (a few constraints in d <= 3 dimensions): the
-    least-norm solution with at most d of them active (a minimum-norm point of a polyhedron has d
-    or fewer independent active constraints), the shortest that satisfies all; None if none does."""
-    tol = 1e-9 * float(np.abs(lower).max())
-    best = None
-    for k in range(1, normals.shape[1] + 1):
-        for active in itertools.combinations(range(len(lower)), k):
-            rows = list(active)
-            move = np.linalg.lstsq(normals[rows], lower[rows], rcond=None)[0]
-            if np.all(normals @ move >= lower - tol) and (best is None or move @ move < best @ best):
-                best = move
-    return best
+def _near(packing: Packing, box: Box, x: np.ndarray, a: int, reach: float = WEDGE_GAP) -> tuple:
+    """The neighbours of ``a`` with a gap below ``reach`` (float64, diameters): (indices, unit
+    normals from each to ``a``, gaps)."""
+    dr = box.minimum_image(x[a] - x)
+    r = np.linalg.norm(dr, axis=1)
+    r[a] = np.inf
+    gap = r - 0.5 * (packing.diameters[a] + packing.diameters)
+    near = np.flatnonzero(gap < reach)
+    return near, dr[near] / r[near, None], gap[near]
+
+
+def _single_escape(near: tuple, depth: dict, a: int) -> np.ndarray | None:
+    """A lone floater's move along its summed normals, or the least-norm move opening its contacts
+    (``_escape``); None if neither does."""
+    others, normals, gap = near
+    contact = np.array([(a, b) in depth for b in others.tolist()])
+    u = normals.sum(axis=0)
+    if np.linalg.norm(u) == 0.0:
+        return None
+    u /= np.linalg.norm(u)
+    over = np.array([depth[(a, b)] for b in others[contact].tolist()])
+    ends = normals[contact] @ u
+    if (normals @ u).min() > 0 and ends.min() > 0:
+        return u * float(np.max(over / ends)) * (1.0 + 1e-6)
+    # no common direction (e.g. three contacts of a 3D floater around it): the least-norm move
+    # that opens each contact and near gap to first order, n_c . dx = max(-gap_c, 0)
+    target = np.maximum(-gap, 0.0)
+    target[contact] = over
+    move = np.linalg.lstsq(normals, target * (1.0 + 1e-6), rcond=None)[0]
+    if np.all(normals @ move >= target - 1e-9 * target.max()):
+        return move
+    return None
+
+
+def _cluster_move(packing: Packing, box: Box, x: np.ndarray, cluster: list, depth: dict) -> np.ndarray:
+    """The shortest joint move (len(cluster), d) of a floater cluster, the rest fixed, that opens
+    each contact by 1 + 1e-6 of its (dd) overlap and closes each other gap by at most half, else
+    by at most 99 % (a tight cage); ``_Caged`` if neither exists (``_joint_move``)."""
+    for share in (0.5, 0.99):
+        move = _joint_move(packing, box, x, cluster, depth, share)
+        if move is not None:
+            return move
+    raise _Caged(f"floaters {sorted(cluster)} are caged: no move opens their contacts (the cage has closed on them)")
+
+
+def _joint_move(packing: Packing, box: Box, x: np.ndarray, cluster: list, depth: dict, share: float):
+    """``_cluster_move`` closing gaps below ``reach`` by at most ``share`` of themselves; a pair inside
+    the cluster is one constraint on the difference of its two moves. ``reach`` starts at
+    ``WEDGE_GAP`` and grows to twice the largest possible closing (2 max|move| per particle) until
+    no gap beyond it can close. None if no move exists, or if ``reach`` would be a diameter or more
+    (moves of 1/4 to 1/2 diameter)."""
+    d = packing.dim
+    where = {a: k for k, a in enumerate(cluster)}
+    reach = WEDGE_GAP
+    while reach < 1.0:
+        rows, lower = [], []
+        for a in cluster:
+            for b, n, g in zip(*_near(packing, box, x, a, reach)):
+                b = int(b)
+                if b in where and b < a:
+                    continue  # a pair inside the cluster, written once
+                row = np.zeros(len(cluster) * d)
+                row[where[a] * d:(where[a] + 1) * d] = n
+                if b in where:
+                    row[where[b] * d:(where[b] + 1) * d] = -n
+                rows.append(row)
+                lower.append(depth[(a, b)] * (1.0 + 1e-6) if (a, b) in depth else -share * max(g, 0.0))
+        move = _least_distance(np.array(rows), np.array(lower))
+        if move is None:
+            return None
+        move = move.reshape(len(cluster), d)
+        largest = 2.0 * float(np.linalg.norm(move, axis=1).max())  # the most a gap can close
+        if largest < reach:
+            return move
+        reach = 2.0 * largest
+    return None
+
+
+def _least_distance(g: np.ndarray, h: np.ndarray) -> np.ndarray | None:
+    """The shortest x with g @ x >= h, None if there is none: least-distance programming by
+    non-negative least squares (Lawson & Hanson, Solving Least Squares Problems (1974), ch. 23):
+    u >= 0 minimising |E u - f|, E = [g^T; h^T], f = (0, ..., 0, 1); with r = E u - f, x = -r[:-1] /
+    r[-1], and r = 0 means the constraints are incompatible. h is scaled to 1 for the solve."""
+    scale = float(np.abs(h).max())
+    if scale == 0.0:
+        return np.zeros(g.shape[1])
+    e = np.vstack([g.T, h[None, :] / scale])
+    f = np.zeros(g.shape[1] + 1)
+    f[-1] = 1.0
+    u = nnls(e, f)[0]
+    r = e @ u - f
+    if abs(r[-1]) < 1e-12:
+        return None
+    x = -r[:-1] / r[-1] * scale
+    return x if np.all(g @ x >= h - 1e-9 * scale) else None
 
 
 def _newton_step(packing: Packing, st: _State, net: Network) -> np.ndarray:
@@ -371,6 +450,9 @@ def _newton(packing: Packing, st: _State, network: tuple, settings: RefineSettin
             if new.residual(dia, eps) < res or dd.dd_sub(*new.energy, *net.energy)[0] < 0:
                 break
             dx = 0.5 * dx
+        else:  # no step lowers either: stuck (accepting the last, smallest one would go uphill)
+            raise RuntimeError(f"no Newton step of {STEP_HALVINGS} halvings lowers the largest net force ({res:.1e} of "
+                               f"the mean contact force) or the energy")
         st, net = trial, new
     raise RuntimeError(f"double-double force balance not reached in {settings.max_newton} Newton steps (largest "
                        f"net force {net.residual(dia, eps):.1e} of the mean contact force, {net.n_contacts} contacts)")
@@ -386,37 +468,52 @@ def balance(packing: Packing, st: _State, settings: RefineSettings, network: tup
     default the contacts of ``st``), then the contacts found again in double-double; while they
     differ (a contact opened or closed, a floater touches) Newton again on the new network. A
     network that comes back (a contact in tension without which another overlaps: a rearrangement
-    that no network solve finds) falls back once on FIRE in float64 at the same box
+    that no network solve finds), or a floater cluster whose cage has closed on it (``_Caged``: it
+    carries load, so it joins the network), falls back once on FIRE in float64 at the same box
     (``_float64_relax``), where float64 resolves the state. (state, network evaluated
     unilaterally, Newton steps)."""
+    relaxed = False
+
+    def relieve(st):
+        nonlocal relaxed
+        net = evaluate(packing, st)
+        try:
+            return _relieve_floaters(packing, st, net)
+        except _Caged as caged:
+            if relaxed:
+                raise
+            st, relaxed = _float64_relax(packing, st, net.pressure, str(caged)), True
+            return _relieve_floaters(packing, st, evaluate(packing, st))
+
     if network is None:
-        st, net = _relieve_floaters(packing, st, evaluate(packing, st))
+        st, net = relieve(st)
         network = _network(net)
-    total, seen, relaxed = 0, set(), False
+    total, seen = 0, set()
     for _ in range(settings.max_network_updates):
         st, steps = _newton(packing, st, network, settings)
         total += steps
-        st, net = _relieve_floaters(packing, st, evaluate(packing, st))
+        st, net = relieve(st)
         key = frozenset(zip(network[0].tolist(), network[1].tolist()))
         if _pairs(net) == key and np.array_equal(net.floater, network[2]):
             return st, net, total
         if key in seen and not relaxed:
-            st, relaxed = _float64_relax(packing, st, net.pressure), True
-            st, net = _relieve_floaters(packing, st, evaluate(packing, st))
+            st, relaxed = _float64_relax(packing, st, net.pressure, "the contact network rearranges"), True
+            st, net = relieve(st)
         seen.add(key)
         network = _network(net)
     raise RuntimeError(f"the contact network kept changing over {settings.max_network_updates} Newton solves")
 
 
-def _float64_relax(packing: Packing, st: _State, pressure: float) -> _State:
+def _float64_relax(packing: Packing, st: _State, pressure: float, why: str) -> _State:
     """FIRE at the fixed box in float64 (the compiled engine) from the high parts: the contact
-    changes of a rearrangement, found where float64 resolves the forces (``pressure_floor``)."""
+    changes of a rearrangement or of a closed cage (``why``), found where float64 resolves the
+    forces (``pressure_floor``)."""
     box = Box(np.diag(st.lh))
     start = Packing(st.xh, packing.diameters, box, packing.potential)
     floor = pressure_floor(start, MinimizerSettings())
     if pressure < floor:
-        raise RuntimeError(f"the contact network rearranges at p = {pressure:.2e}, below what float64 resolves "
-                           f"({floor:.1e}), and there is no double-double minimiser for that yet")
+        raise RuntimeError(f"{why} at p = {pressure:.2e}, below what float64 resolves ({floor:.1e}), and there is no "
+                           f"double-double minimiser for that yet")
     with open_engine(start, "fire", "numba") as sim:
         minimize(sim, MinimizerSettings())
         x = box.wrap(sim.packing().positions)
