@@ -254,3 +254,12 @@ def test_mirrored_start_lands_on_the_mirror_family():
 def test_bad_plans_are_refused(kwargs, message):
     with pytest.raises(ValueError, match=message):
         FamilySampling(**kwargs)
+
+
+def test_families_command_mirrors_about_the_middle_of_a_symmetric_range(tmp_path, capsys):
+    """A range symmetric about gamma = 0 (the one N = 6 allows) gets the mirror gamma -> -gamma."""
+    argv = ["families", "--n", "8", "--gamma-min", "-0.01", "--gamma-max", "0.01", "--spacing", "0.01",
+            "--substeps", "2", "--starts", "2", "--out", str(tmp_path / "f"), "--quiet"]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert "mirror gamma -> 0 - gamma" in out and "families met in [0, 0.01] by how many" in out
