@@ -92,11 +92,12 @@ class FamilySampling:
         for _ in range(40):
             mid = 0.5 * (lo + hi)
             lo, hi = (mid, hi) if fits_cell(cell.with_shear_strain(mid), reach) else (lo, mid)
+        edge = math.floor(lo * 100) / 100
+        example = f" (e.g. --gamma-min {-edge:g} --gamma-max {edge:g})" if edge > 0 else ""
         raise ValueError(f"N = {self.n} disks ({self.sizes}) do not fit the cell at gamma = {bad[0]:.6g}: at phi "
                          f"{FIT_PHI} the box is narrower than twice the largest contact distance (unique minimum "
                          f"image) once |gamma - k| > {lo:.3f}, k the nearest integer; keep every strain within "
-                         f"{lo:.3f} of an integer (e.g. --gamma-min {-math.floor(lo * 100) / 100:g} --gamma-max "
-                         f"{math.floor(lo * 100) / 100:g}) or use more particles")
+                         f"{lo:.3f} of an integer{example} or use more particles")
 
     @property
     def grid(self) -> np.ndarray:
