@@ -4,17 +4,28 @@ richness estimate, and a small real sampling end to end."""
 import numpy as np
 import pytest
 
-from jamflow.analysis.families import (by_starts, convergence, jackknife, join, matching_pairs, mirror_by_sightings,
-                                      mirror_check, mirrored, more_samples_needed, richness, symmetric_strain)
+from jamflow.analysis.families import (
+    by_starts,
+    convergence,
+    jackknife,
+    join,
+    matching_pairs,
+    mirror_by_sightings,
+    mirror_check,
+    mirrored,
+    more_samples_needed,
+    richness,
+    symmetric_strain,
+)
 from jamflow.cli.app import main
-from jamflow.protocols.compression import at_shear_strain, compress, initial_packing
-from jamflow.protocols.settings import seed_protocol
-from jamflow.model.packing import BoxTooSmall
-from jamflow.protocols import families as families_protocol
-from jamflow.protocols.families import FamilySampling, sample, sample_start, signature
-from jamflow.protocols.shear import Network
 from jamflow.io.families_file import load_family_points
+from jamflow.model.packing import BoxTooSmall
 from jamflow.plots.shear import richness_figure
+from jamflow.protocols import families as families_protocol
+from jamflow.protocols.compression import at_shear_strain, compress, initial_packing
+from jamflow.protocols.families import FamilySampling, sample, sample_start, signature
+from jamflow.protocols.settings import seed_protocol
+from jamflow.protocols.shear import Network
 
 
 def points(rows):

@@ -95,7 +95,7 @@ def richness_figure(path, panels) -> Path:
     """One panel per sampling, ``panels`` = [(title, rows of analysis.families.by_starts)]:
     distinct families found against the random starts per grid point K (all, and in the half
     the row's ``half`` counts), with the Chao1 and jackknife estimates of all and their standard
-    errors."""
+    errors; the y axis ends 30 % above the largest-K estimates (small-K error bars clipped)."""
     fig = Figure(figsize=(5.5 * len(panels), 4.5), layout="constrained")
     FigureCanvasAgg(fig)
     for ax, (title, rows) in zip(np.atleast_1d(fig.subplots(1, len(panels))), panels):
@@ -106,6 +106,8 @@ def richness_figure(path, panels) -> Path:
                                    ("jack2", "jackknife 2", "tab:green")):
             ax.errorbar(k, [r[key] for r in rows], yerr=[r[f"{key}_se"] for r in rows], fmt="^:", ms=4,
                         capsize=2, color=colour, label=f"{label} +- s.e.")
-        ax.set(xlabel="random starts per grid point K", ylabel="geometric families", title=title, ylim=(0, None))
+        last = rows[-1]  # the small-K error bars are clipped: the axis follows the largest K
+        top = 1.3 * max(last[key] + last[f"{key}_se"] for key in ("chao1", "jack1", "jack2"))
+        ax.set(xlabel="random starts per grid point K", ylabel="geometric families", title=title, ylim=(0, top))
         ax.legend(fontsize=8)
     return save_figure(fig, path)

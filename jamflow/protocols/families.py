@@ -25,8 +25,8 @@ from jamflow.model.box import Box
 from jamflow.model.packing import BoxTooSmall, fits_cell, particle_volumes
 from jamflow.model.shapes.shape import SPHERE
 from jamflow.model.sizes import parse_sizes
-from jamflow.protocols.outcome import JammingFailed
 from jamflow.protocols.compression import check_strain, jam
+from jamflow.protocols.outcome import JammingFailed
 from jamflow.protocols.shear import shear, shear_protocol
 
 SEED_STRIDE = 100_000
