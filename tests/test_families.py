@@ -4,14 +4,28 @@ richness estimate, and a small real sampling end to end."""
 import numpy as np
 import pytest
 
-from jamflow.analysis.families import (convergence, join, matching_pairs, mirror_by_sightings, mirror_check,
-                                      mirrored, richness, symmetric_strain)
+from jamflow.analysis.families import (
+    by_starts,
+    convergence,
+    jackknife,
+    join,
+    matching_pairs,
+    mirror_by_sightings,
+    mirror_check,
+    mirrored,
+    more_samples_needed,
+    richness,
+    symmetric_strain,
+)
 from jamflow.cli.app import main
-from jamflow.protocols.compression import at_shear_strain, compress, initial_packing
-from jamflow.protocols.settings import seed_protocol
-from jamflow.protocols.families import FamilySampling, sample, signature
-from jamflow.protocols.shear import Network
 from jamflow.io.families_file import load_family_points
+from jamflow.model.packing import BoxTooSmall
+from jamflow.plots.shear import richness_figure
+from jamflow.protocols import families as families_protocol
+from jamflow.protocols.compression import at_shear_strain, compress, initial_packing
+from jamflow.protocols.families import FamilySampling, sample, sample_start, signature
+from jamflow.protocols.settings import seed_protocol
+from jamflow.protocols.shear import Network
 
 
 def points(rows):
@@ -96,6 +110,76 @@ def test_richness_is_chao1_of_the_sampled_packings():
     assert r["chao1_se"] == pytest.approx(np.sqrt(2 + 49 / 9 + 8 / 9), rel=1e-12)
 
 
+def test_richness_adds_jackknife_and_coverage():
+    rows = [(k, k, 10 * k + 1, 0.8 + 0.01 * k, 0.0, "a", 0) for k in range(5)]
+    rows += [(5, 5, 1, 0.8, 0.0, "a", 0), (6, 6, 61, 0.9, 0.0, "a", 0), (7, 7, 61, 0.9, 0.0, "a", 0)]
+    r = richness(join(points(rows), 0.001))  # n = 8 sampled, S_obs = 6, f1 = 4, f2 = 2
+    assert r["jack1"] == pytest.approx(6 + 4 * 7 / 8, rel=1e-12)
+    assert r["coverage"] == pytest.approx(1 - 4 / 8, rel=1e-12)
+
+
+def test_jackknife_closed_form():
+    """Burnham & Overton (1978) on the abundances 1, 1, 1, 2, 2, 3, 5 (n = 15, S_obs = 7,
+    f1 = 3, f2 = 2), worked by hand: S = sum a_j f_j, var = sum a_j^2 f_j - S."""
+    counts = [1, 1, 1, 2, 2, 3, 5]
+    s1, se1 = jackknife(counts, 1)
+    assert s1 == pytest.approx(7 + 3 * 14 / 15, rel=1e-12)  # 9.8
+    assert se1 == pytest.approx(np.sqrt(3 * (14 / 15) * (29 / 15)), rel=1e-12)  # f1 c (1 + c), c = 14/15
+    s2, se2 = jackknife(counts, 2)
+    a1, a2 = 1 + 27 / 15, 1 - 13**2 / (15 * 14)
+    assert s2 == pytest.approx(7 + 3 * 27 / 15 - 2 * 169 / 210, rel=1e-12)  # 10.790...
+    assert se2 == pytest.approx(np.sqrt(3 * a1**2 + 2 * a2**2 + 2 - s2), rel=1e-12)
+    with pytest.raises(ValueError, match="order"):
+        jackknife(counts, 3)
+
+
+def test_more_samples_needed_inverts_the_extrapolation():
+    """S_obs = 6, f1 = 4, n = 8, Chao1 8 (f0 = 2): 90 % of 8 needs m with 2 (1 - 0.8^m) = 1.2."""
+    rich = dict(observed=6, singletons=4, sampled=8, chao1=8.0)
+    m = more_samples_needed(rich, 0.9)
+    assert m == pytest.approx(np.log(0.4) / np.log(0.8), rel=1e-12)
+    assert 6 + 2 * (1 - (1 - 4 / (8 * 2 + 4)) ** m) == pytest.approx(0.9 * 8, rel=1e-12)
+    assert more_samples_needed(rich, 0.5) == 0.0 and more_samples_needed(rich, 1.0) == float("inf")
+
+
+def test_mirror_about_zero_is_the_mirror_about_one_half():
+    """gamma -> -gamma on a lattice from -0.002: the point at 0.001 lands on the one at -0.001."""
+    p = points([(0, 0, 3, 0.8, 0.2, "a", 0), (1, 1, 1, 0.8, -0.2, "a", 0)])
+    p["gamma"] = -0.002 + p["strain_index"] * 0.001
+    m = mirrored(p, 0.001, -0.002, center=0.0)
+    assert m["strain_index"].tolist() == [1, 3] and np.allclose(m["gamma"], [-0.001, 0.001])
+    fam = join(p, 0.001, -0.002)
+    assert mirror_check(fam, center=0.0).partner == {0: {1}, 1: {0}}
+    with pytest.raises(ValueError, match="multiple of 1/2"):
+        mirrored(p, 0.001, -0.002, center=0.3)
+
+
+def test_small_cells_are_refused_before_work_with_the_strain_limit():
+    """N = 6 bidisperse disks fit the cell at phi 0.84 only within |gamma - k| <= 0.243: a plan
+    beyond it is refused when it is made, naming the limit and a range that works."""
+    with pytest.raises(ValueError, match=r"gamma = 0\.25: .* > 0\.243.*--gamma-min -0\.24 --gamma-max 0\.24"):
+        FamilySampling(n=6, gamma_max=1.0)
+    assert len(FamilySampling(n=6, gamma_min=-0.24, gamma_max=0.24).grid) == 49
+    with pytest.raises(ValueError, match="even unsheared"):
+        FamilySampling(n=4, gamma_max=0.01)
+
+
+def test_families_command_refuses_a_small_cell_in_one_line(tmp_path, capsys):
+    argv = ["families", "--n", "6", "--gamma-max", "0.5", "--out", str(tmp_path / "f"), "--quiet"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "0.243" in err and not (tmp_path / "f").exists()
+
+
+def test_a_start_denser_than_its_cell_is_a_failure_not_an_abort(monkeypatch):
+    def too_dense(**kwargs):
+        raise BoxTooSmall("box too small")
+    monkeypatch.setattr(families_protocol, "jam", too_dense)
+    plan = FamilySampling(n=6, gamma_min=0.0, gamma_max=0.02, spacing=0.01, starts=1)
+    pts, failures = sample_start(plan, 1, 0, 0)
+    assert pts == [] and len(failures) == 1 and "box too small" in failures[0]
+
+
 def test_signature_ignores_labels():
     start = initial_packing(10, 2, "bi:1.4:0.5", "spring", 3, 0.8)
     p = compress(at_shear_strain(start, 0.1), seed_protocol()).packing
@@ -150,6 +234,14 @@ def test_families_resume_adds_rounds_only(small, capsys):
         _resumed(small / "points.h5", FamilySampling(n=8, gamma_max=0.02, spacing=0.01, substeps=5, starts=4))
 
 
+def test_richness_by_starts_matches_convergence_and_draws(small, tmp_path):
+    pts = load_family_points(small / "points.h5")[1]
+    rows = by_starts(pts, 0.0025, counts=[1, 2, 3], hi=0.02)
+    assert [(r["starts"], r["half"], r["total"]) for r in rows] == convergence(pts, 0.0025, counts=[1, 2, 3], hi=0.02)
+    assert rows[-1]["chao1"] == richness(join(pts, 0.0025, starts=3))["chao1"] and rows[-1]["sampled"] == 9
+    assert richness_figure(tmp_path / "r.png", [("N = 8", rows), ("again", rows)]).stat().st_size > 500
+
+
 def test_mirrored_start_lands_on_the_mirror_family():
     """Item 1's inversion through the family rule: a start jammed at 0.25 and its mirror at 0.75."""
     plan = FamilySampling(n=10, gamma_min=0.0, gamma_max=1.0, spacing=0.25, substeps=1, starts=1)
@@ -173,3 +265,12 @@ def test_mirrored_start_lands_on_the_mirror_family():
 def test_bad_plans_are_refused(kwargs, message):
     with pytest.raises(ValueError, match=message):
         FamilySampling(**kwargs)
+
+
+def test_families_command_mirrors_about_the_middle_of_a_symmetric_range(tmp_path, capsys):
+    """A range symmetric about gamma = 0 (the one N = 6 allows) gets the mirror gamma -> -gamma."""
+    argv = ["families", "--n", "8", "--gamma-min", "-0.01", "--gamma-max", "0.01", "--spacing", "0.01",
+            "--substeps", "2", "--starts", "2", "--out", str(tmp_path / "f"), "--quiet"]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert "mirror gamma -> 0 - gamma" in out and "families met in [0, 0.01] by how many" in out

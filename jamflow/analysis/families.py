@@ -169,15 +169,18 @@ def join(points: dict, step: float, gamma_min: float = 0.0, tol_phi: float = TOL
     return Families(points, family, float(step), float(gamma_min))
 
 
-def mirrored(points: dict, step: float, gamma_min: float = 0.0) -> dict:
-    """The points mapped by the inversion gamma -> 1 - gamma (Sigma / P and the fabric's
-    <2 n_x n_y> change sign)."""
-    shift = (1.0 - 2 * gamma_min) / step  # gamma_min + m step -> 1 - gamma_min - m step
+def mirrored(points: dict, step: float, gamma_min: float = 0.0, center: float = 0.5) -> dict:
+    """The points mapped by the inversion gamma -> 2 center - gamma, center a multiple of 1/2
+    (1 - gamma for center 1/2, -gamma for 0: one map, as gamma and gamma + 1 are one cell);
+    Sigma / P and the fabric's <2 n_x n_y> change sign."""
+    if abs(2 * center - round(2 * center)) > 1e-12:
+        raise ValueError(f"the mirror centre {center} must be a multiple of 1/2 (gamma -> 1 - gamma, -gamma, ...)")
+    shift = (2 * center - 2 * gamma_min) / step  # gamma_min + m step -> 2 center - gamma_min - m step
     if abs(shift - round(shift)) > 1e-6:
-        raise ValueError(f"the strain lattice (gamma_min {gamma_min}, step {step}) is not symmetric about 1/2")
+        raise ValueError(f"the strain lattice (gamma_min {gamma_min}, step {step}) is not symmetric about {center:g}")
     out = dict(points)
     out["strain_index"] = round(shift) - points["strain_index"]
-    out["gamma"] = 1.0 - points["gamma"]
+    out["gamma"] = 2 * center - points["gamma"]
     out["mu"] = -points["mu"]
     if "fabric_b" in points:
         out["fabric_b"] = -points["fabric_b"]
@@ -218,11 +221,12 @@ def mirror_by_sightings(families: Families, check: MirrorCheck, among, bins=((1,
     return out
 
 
-def mirror_check(families: Families, tol_phi: float = TOL_PHI, tol_mu: float = TOL_MU) -> MirrorCheck:
-    """Map every family's points to 1 - gamma and match them against all points by the
-    family rule (same strain, signature, phi_J within tol_phi, Sigma / P within tol_mu)."""
+def mirror_check(families: Families, tol_phi: float = TOL_PHI, tol_mu: float = TOL_MU,
+                 center: float = 0.5) -> MirrorCheck:
+    """Map every family's points to 2 center - gamma (``mirrored``) and match them against all
+    points by the family rule (same strain, signature, phi_J within tol_phi, Sigma / P within tol_mu)."""
     pts = families.points
-    mirror = mirrored(pts, families.step, families.gamma_min)
+    mirror = mirrored(pts, families.step, families.gamma_min, center)
     partner = {f: set() for f in range(families.count)}
     worst_phi = worst_mu = 0.0
     for p, q in matching_pairs(mirror, pts, tol_phi, tol_mu):
@@ -235,30 +239,86 @@ def convergence(points: dict, step: float, gamma_min: float = 0.0, counts=None, 
                 tol_phi: float = TOL_PHI, tol_mu: float = TOL_MU) -> list[tuple[int, int, int]]:
     """(K, families met in [lo, hi], families met anywhere) using the first K starts per grid
     point, K in ``counts`` (default ~12 values from 1 to all)."""
+    return [(row["starts"], row["half"], row["total"])
+            for row in by_starts(points, step, gamma_min, counts, lo, hi, tol_phi, tol_mu, estimate=False)]
+
+
+def by_starts(points: dict, step: float, gamma_min: float = 0.0, counts=None, lo: float = 0.0, hi: float = 0.5,
+              tol_phi: float = TOL_PHI, tol_mu: float = TOL_MU, estimate: bool = True) -> list[dict]:
+    """One row per K in ``counts`` (default ~12 values from 1 to all), the families of the first
+    K starts per grid point: ``starts`` K, ``half`` met in [lo, hi], ``total`` met anywhere, and
+    with ``estimate`` the ``richness`` entries."""
     total = int(points["start"].max()) + 1 if len(points["start"]) else 0
     counts = counts or sorted({int(k) for k in np.unique(np.geomspace(1, max(total, 1), 12).round())} | {total})
-    out = []
+    rows = []
     for k in counts:
         fam = join(points, step, gamma_min, tol_phi, tol_mu, starts=k)
-        out.append((k, fam.count_in(lo, hi), fam.count))
-    return out
+        rows.append(dict(starts=k, half=fam.count_in(lo, hi), total=fam.count, **(richness(fam) if estimate else {})))
+    return rows
 
 
 def richness(families: Families) -> dict:
     """How complete the sampling is, from the sampled packings (the jammed random starts,
-    step 0 of each path): families they fell into, how many were found once (f1) and twice
-    (f2), and the bias-corrected Chao1 estimate of the families a sampler of this kind would
-    find with unlimited starts, S_obs + f1 (f1 - 1) / (2 (f2 + 1)) (Chao, Biometrics 43, 783
-    (1987)); it assumes every family has a fixed chance per start, which strains and basin
-    sizes make only roughly true. ``chao1_se``: its standard error from the variance of the
-    bias-corrected form, f1 (f1 - 1) / (2 (f2 + 1)) + f1 (2 f1 - 1)^2 / (4 (f2 + 1)^2)
-    + f1^2 f2 (f1 - 1)^2 / (4 (f2 + 1)^4) (Chao, in Encyclopedia of Statistical Sciences, 2nd ed.,
-    Wiley (2005); the form EstimateS uses)."""
+    step 0 of each path; n of them): families they fell into (S_obs), how many were found once
+    (f1) and twice (f2), and estimates of the families a sampler of this kind would find with
+    unlimited starts. All assume every family has a fixed chance per start, which strains and
+    basin sizes make only roughly true; their errors are sampling errors under that assumption.
+
+    * ``chao1``: bias-corrected Chao1, S_obs + f1 (f1 - 1) / (2 (f2 + 1)) (Chao, Biometrics 43,
+      783 (1987)); ``chao1_se`` from the variance f1 (f1 - 1) / (2 (f2 + 1)) + f1 (2 f1 - 1)^2 /
+      (4 (f2 + 1)^2) + f1^2 f2 (f1 - 1)^2 / (4 (f2 + 1)^4) (Chao, in Encyclopedia of Statistical
+      Sciences, 2nd ed., Wiley (2005); the form EstimateS uses).
+    * ``jack1``, ``jack2``: first- and second-order jackknife (``jackknife``).
+    * ``coverage``: Good-Turing sample coverage 1 - f1 / n, the chance that one more sampled
+      packing falls into a family already found (Good, Biometrika 40, 237 (1953))."""
     sampled = families.points["step"] == 0
     counts = np.bincount(families.family[sampled])
     counts = counts[counts > 0]
     f1, f2 = int(np.sum(counts == 1)), int(np.sum(counts == 2))
     g = f2 + 1.0
     variance = f1 * (f1 - 1) / (2 * g) + f1 * (2 * f1 - 1) ** 2 / (4 * g**2) + f1**2 * f2 * (f1 - 1) ** 2 / (4 * g**4)
-    return dict(sampled=int(sampled.sum()), observed=len(counts), singletons=f1, doubletons=f2,
-                chao1=float(len(counts) + f1 * (f1 - 1) / (2 * g)), chao1_se=float(np.sqrt(variance)))
+    n = int(sampled.sum())
+    jack1, jack1_se = jackknife(counts, 1)
+    jack2, jack2_se = jackknife(counts, 2)
+    return dict(sampled=n, observed=len(counts), singletons=f1, doubletons=f2,
+                chao1=float(len(counts) + f1 * (f1 - 1) / (2 * g)), chao1_se=float(np.sqrt(variance)),
+                jack1=jack1, jack1_se=jack1_se, jack2=jack2, jack2_se=jack2_se,
+                coverage=1.0 - f1 / n if n else float("nan"))  # n = 0: every start failed
+
+
+def jackknife(counts, order: int) -> tuple[float, float]:
+    """(estimate, standard error) of the richness by the first- or second-order jackknife of
+    Burnham & Overton (Biometrika 65, 625 (1978)), written for n sampled individuals (counts:
+    how many of them fell into each class found): S = sum_j a_j f_j with f_j the classes found
+    j times, a_j = 1 but a_1 = 1 + (n - 1) / n (order 1); a_1 = 1 + (2 n - 3) / n and
+    a_2 = 1 - (n - 2)^2 / (n (n - 1)) (order 2); variance sum_j a_j^2 f_j - S (ibid.)."""
+    counts = np.asarray(counts, dtype=np.int64)
+    n = int(counts.sum())
+    f = np.bincount(counts, minlength=3)[1:]  # f[j - 1] = f_j
+    a = np.ones(len(f))
+    if order not in (1, 2):
+        raise ValueError(f"jackknife order must be 1 or 2, got {order!r}")
+    if n < 2:
+        return float(len(counts)), float("nan")
+    if order == 1:
+        a[0] = 1 + (n - 1) / n
+    elif order == 2:
+        a[0] = 1 + (2 * n - 3) / n
+        a[1] = 1 - (n - 2) ** 2 / (n * (n - 1))
+    estimate = float(np.sum(a * f))
+    return estimate, float(np.sqrt(max(np.sum(a * a * f) - estimate, 0.0)))
+
+
+def more_samples_needed(rich: dict, fraction: float) -> float:
+    """Further sampled packings m after which the expected number of families found reaches
+    ``fraction`` of the Chao1 estimate S: the extrapolation S_obs + f0 (1 - (1 - f1 / (n f0 +
+    f1))^m), f0 = S - S_obs (Shen, Chao & Lin, Ecology 84, 798 (2003); Chao et al., Ecology 90,
+    1125 (2009)), solved for m; 0 if already reached, inf if f1 = 0 leaves nothing to extrapolate."""
+    s_obs, f1, n = rich["observed"], rich["singletons"], rich["sampled"]
+    f0 = rich["chao1"] - s_obs
+    short = fraction * rich["chao1"] - s_obs
+    if short <= 0:
+        return 0.0
+    if f1 == 0 or f0 <= short:
+        return float("inf")
+    return float(np.log(1 - short / f0) / np.log(1 - f1 / (n * f0 + f1)))

@@ -71,6 +71,16 @@ def warn_float64_only(packing: Packing, what: str) -> None:
 DENSEST_PHI = {2: math.pi / (2 * math.sqrt(3)), 3: math.pi / (3 * math.sqrt(2))}
 
 
+class BoxTooSmall(ValueError):
+    """The box is narrower than twice the largest contact distance (``fits_cell``)."""
+
+
+def fits_cell(box: Box, reach: float) -> bool:
+    """True when a contact distance of up to 2 ``reach`` (the largest particle's reach, twice)
+    stays below half of every width of the reduced cell, so each pair has one minimum image."""
+    return 4.0 * reach < float(box.widths.min())
+
+
 def particle_volumes(diameters: np.ndarray, dim: int) -> np.ndarray:
     """Area (2D) or volume (3D) of disks/spheres with the given diameters."""
     return SPHERE.volumes(diameters, dim)
@@ -113,9 +123,9 @@ class Packing:
         elif self.orientations is not None:
             raise ValueError("disks and spheres have no orientations; pass orientations=None")
         self._check_boundary(len(dia))
-        if len(dia) and 4 * self.shape.reach(dia).max() >= self.box.widths.min():
-            raise ValueError("box too small: the largest contact distance must stay below half "
-                             "the box width for a unique minimum image; use more particles")
+        if len(dia) and not fits_cell(self.box, self.shape.reach(dia).max()):
+            raise BoxTooSmall("box too small: the largest contact distance must stay below half "
+                              "the box width for a unique minimum image; use more particles")
         pos.setflags(write=False)
         dia.setflags(write=False)
         if self.extended is not None and not self.extended.matches(pos, self.box):

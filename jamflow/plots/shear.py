@@ -89,3 +89,25 @@ def _runs(gamma, phi, step):
     """Split a family's curve where strains were skipped (breaks of the solid line)."""
     cut = np.flatnonzero(np.diff(gamma) > 1.5 * step) + 1
     return [(g, p) for g, p in zip(np.split(gamma, cut), np.split(phi, cut))]
+
+
+def richness_figure(path, panels) -> Path:
+    """One panel per sampling, ``panels`` = [(title, rows of analysis.families.by_starts)]:
+    distinct families found against the random starts per grid point K (all, and in the half
+    the row's ``half`` counts), with the Chao1 and jackknife estimates of all and their standard
+    errors; the y axis ends 30 % above the largest-K estimates (small-K error bars clipped)."""
+    fig = Figure(figsize=(5.5 * len(panels), 4.5), layout="constrained")
+    FigureCanvasAgg(fig)
+    for ax, (title, rows) in zip(np.atleast_1d(fig.subplots(1, len(panels))), panels):
+        k = np.array([r["starts"] for r in rows])
+        ax.plot(k, [r["total"] for r in rows], "o-", color="k", label="found, any strain")
+        ax.plot(k, [r["half"] for r in rows], "s--", color="0.5", label="found, first half")
+        for key, label, colour in (("chao1", "Chao1", "tab:blue"), ("jack1", "jackknife 1", "tab:orange"),
+                                   ("jack2", "jackknife 2", "tab:green")):
+            ax.errorbar(k, [r[key] for r in rows], yerr=[r[f"{key}_se"] for r in rows], fmt="^:", ms=4,
+                        capsize=2, color=colour, label=f"{label} +- s.e.")
+        last = rows[-1]  # the small-K error bars are clipped: the axis follows the largest K
+        top = 1.3 * max(last[key] + last[f"{key}_se"] for key in ("chao1", "jack1", "jack2"))
+        ax.set(xlabel="random starts per grid point K", ylabel="geometric families", title=title, ylim=(0, top))
+        ax.legend(fontsize=8)
+    return save_figure(fig, path)

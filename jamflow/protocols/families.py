@@ -15,17 +15,25 @@ independent random start and adding starts keeps the earlier ones.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
-
+import math
 import warnings
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from jamflow.protocols.outcome import JammingFailed
+from jamflow.model.box import Box
+from jamflow.model.packing import BoxTooSmall, fits_cell, particle_volumes
+from jamflow.model.shapes.shape import SPHERE
+from jamflow.model.sizes import parse_sizes
 from jamflow.protocols.compression import check_strain, jam
+from jamflow.protocols.outcome import JammingFailed
 from jamflow.protocols.shear import shear, shear_protocol
 
 SEED_STRIDE = 100_000
+# The packing fraction at which a plan's cells must hold the particles: phi_J of bidisperse disks
+# in the large-N limit, 0.84 (O'Hern, Silbert, Liu & Nagel, PRE 68, 011306 (2003)). A start that
+# jams denser than its cell can hold at its strain is a failure of that start (``sample_start``).
+FIT_PHI = 0.84
 POINT_FIELDS = ("start", "grid", "direction", "step", "segment", "strain_index", "gamma", "phi_j", "mu",
                 "fabric_a", "fabric_b", "pressure", "n_contacts", "n_floaters", "signature")
 
@@ -61,6 +69,35 @@ class FamilySampling:
                 raise ValueError(f"{name} must be a positive integer, got {value!r}")
         if self.starts > SEED_STRIDE:
             raise ValueError(f"at most {SEED_STRIDE} starts per grid point")
+        self._check_cell()
+
+    def _check_cell(self) -> None:
+        """Refuse, before any work, grid strains whose Lees-Edwards cell cannot hold the N disks at
+        phi = FIT_PHI (box narrower than twice the largest contact distance: no unique minimum
+        image, ``model.packing.fits_cell``); sizes drawn at random are checked start by start."""
+        spec = parse_sizes(self.sizes)
+        if not spec.discrete:
+            return
+        diameters = spec.draw(self.n, np.random.default_rng(0))
+        side = math.sqrt(particle_volumes(diameters, 2).sum() / FIT_PHI)
+        reach = float(SPHERE.reach(diameters).max())
+        cell = Box.cube(side, 2)
+        bad = [g for g in self.grid if not fits_cell(cell.with_shear_strain(float(g)), reach)]
+        if not bad:
+            return
+        lo, hi = 0.0, 0.5  # the largest reduced strain |gamma - k| that fits, by bisection
+        if not fits_cell(cell, reach):
+            raise ValueError(f"N = {self.n} disks ({self.sizes}) do not fit the cell even unsheared at phi {FIT_PHI}: "
+                             "the box is narrower than twice the largest contact distance; use more particles")
+        for _ in range(40):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if fits_cell(cell.with_shear_strain(mid), reach) else (lo, mid)
+        edge = math.floor(lo * 100) / 100
+        example = f" (e.g. --gamma-min {-edge:g} --gamma-max {edge:g})" if edge > 0 else ""
+        raise ValueError(f"N = {self.n} disks ({self.sizes}) do not fit the cell at gamma = {bad[0]:.6g}: at phi "
+                         f"{FIT_PHI} the box is narrower than twice the largest contact distance (unique minimum "
+                         f"image) once |gamma - k| > {lo:.3f}, k the nearest integer; keep every strain within "
+                         f"{lo:.3f} of an integer{example} or use more particles")
 
     @property
     def grid(self) -> np.ndarray:
@@ -101,7 +138,7 @@ def sample_start(plan: FamilySampling, s: int, k: int, first_segment: int) -> tu
     seed = SEED_STRIDE * s + k + plan.seed
     try:
         jammed = jam(n=plan.n, sizes=plan.sizes, seed=seed, gamma=float(grid[s]), engine=plan.engine)
-    except JammingFailed as err:
+    except (JammingFailed, BoxTooSmall) as err:  # a start jamming denser than its cell holds (FIT_PHI)
         return [], [f"start {k} at gamma {grid[s]:.6g} (seed {seed}): {err}"]
     points, failures, segment = [], [], first_segment
     for direction, target in ((+1, s + 1), (-1, s - 1)):
@@ -112,7 +149,7 @@ def sample_start(plan: FamilySampling, s: int, k: int, first_segment: int) -> tu
                 warnings.simplefilter("ignore")  # a rearranging first step is part of what is sampled
                 path = shear(jammed.packing, direction * plan.step, float(grid[target]), shear_protocol(),
                              engine=plan.engine)
-        except JammingFailed as err:
+        except (JammingFailed, BoxTooSmall) as err:
             failures.append(f"start {k} at gamma {grid[s]:.6g} (seed {seed}), shear to {grid[target]:.6g}: {err}")
             continue
         seg = first_segment  # step 0 is the sampled packing itself: the same segment both ways

@@ -87,12 +87,13 @@ def report(plan: FamilySampling, points: dict, failures: list, out: Path) -> Non
 
     families = join(points, plan.step, plan.gamma_min)
     conv = convergence(points, plan.step, plan.gamma_min, lo=max(0.0, plan.gamma_min), hi=min(0.5, plan.gamma_max))
-    both_halves = plan.gamma_min <= 0.0 and plan.gamma_max >= 1.0
-    mirror = mirror_check(families)
+    centre = 0.5 * (plan.gamma_min + plan.gamma_max)  # the mirror gamma -> 2 centre - gamma (2 centre an integer)
+    both_halves = abs(2 * centre - round(2 * centre)) < 1e-9
+    mirror = mirror_check(families, center=centre if both_halves else 0.5)
     rich = richness(families)
     save_family_table(out / "families.h5", plan, families, conv, mirror, rich)
     write_csv(out / "families.csv", families.table())
-    families_figure(out / "families.png", families, mirror if both_halves else None, conv, rich,
+    families_figure(out / "families.png", families, mirror if both_halves and centre == 0.5 else None, conv, rich,
                     title=f"(a) N = {plan.n} {plan.sizes}: {families.count} geometric families, "
                           f"{plan.starts} starts x {len(plan.grid)} strains")
     print(f"{families.count} families ({families.count_in(0.0, 0.5)} met in [0, 1/2], "
@@ -102,12 +103,12 @@ def report(plan: FamilySampling, points: dict, failures: list, out: Path) -> Non
     print("families (met in [0, 1/2] / anywhere) against starts per grid point: "
           + ", ".join(f"{k}: {c}/{a}" for k, c, a in conv))
     if both_halves:
-        for lo, hi in ((0.5, 1.0), (0.0, 0.5)):
+        for lo, hi in ((centre, plan.gamma_max), (plan.gamma_min, centre)):
             met = families.met_in(lo, hi)
-            print(f"mirror gamma -> 1 - gamma: {mirror.matched(met)} of the {len(met)} families met in [{lo:g}, {hi:g}] "
-                  "land on a sampled family")
-        rows = mirror_by_sightings(families, mirror, families.met_in(0.5, 1.0))
-        print("  families met in [1/2, 1] by how many sampled paths: mirror found / families: "
+            print(f"mirror gamma -> {2 * centre:g} - gamma: {mirror.matched(met)} of the {len(met)} families met in "
+                  f"[{lo:g}, {hi:g}] land on a sampled family")
+        rows = mirror_by_sightings(families, mirror, families.met_in(centre, plan.gamma_max))
+        print(f"  families met in [{centre:g}, {plan.gamma_max:g}] by how many sampled paths: mirror found / families: "
               + ", ".join(f"{label}: {found}/{total}" for label, total, found in rows))
         print(f"matched families that do not pair up one to one: {len(mirror.unpaired)}; worst |d phi_J| "
               f"{mirror.worst_phi:.1e}, |d Sigma/P| {mirror.worst_mu:.1e} over the matched points")
