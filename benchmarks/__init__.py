@@ -83,6 +83,9 @@ BENCHMARKS: dict[str, Benchmark] = {
     "refine_cost": Benchmark(
         "speed", "double-double refinement to p = 1e-14 against the float64 onset (N = 64, 256; docs/guide/precision.md)",
         ["--n", "64", "--seeds", "1", "--out", "{tmp}/refine-cost.csv"]),
+    "dd_read": Benchmark(
+        "accuracy", "a double-double file read back: contacts, zero modes, G, P from hi + lo against float64 (issue 28)",
+        ["--n", "64", "--seeds", "2", "2"]),
     "jammed_side": Benchmark(
         "speed", "jammed-side protocol (overshoot, pressure ladder, Newton on the contact network) against `fast` (issue 27)",
         ["--n", "64", "--seeds", "1", "1", "--top", "0", "--gauss-newton", "--out", "{tmp}/jammed-side.csv"]),

@@ -107,7 +107,8 @@ def check_packing(packing: Packing, energy_per_particle: float | None = None, ma
     """
     from jamflow.mechanics.reference import energy_forces_pressure
 
-    warn_float64_only(packing, "check_packing (use the checks of jamflow.refine, counted in double-double)")
+    warn_float64_only(packing, "the energy and force balance of check_packing (its contacts read hi + lo; "
+                               "jamflow.refine checks forces in double-double)")
     ref = energy_forces_pressure(packing, pairs="near")
     v = ref.energy / packing.n if energy_per_particle is None else float(energy_per_particle)
     worst = float(np.abs(ref.forces).max()) if ref.forces.size else 0.0

@@ -31,7 +31,8 @@ import scipy.linalg
 
 from jamflow.model.packing import Packing
 from jamflow.model.pairs import overlapping_pairs, overlapping_sites
-from jamflow.mechanics.hessian import Coordinates, _local_index, _sphere_derivatives, pair_blocks, pair_terms
+from jamflow.mechanics.hessian import (Coordinates, _local_index, _sphere_derivatives, energy_second_derivatives,
+                                       pair_terms)
 from jamflow.mechanics.dynamical_matrix import DynamicalMatrix
 from jamflow.mechanics.strains import BULK, SHEAR, Strain
 
@@ -193,9 +194,7 @@ def contact_moduli(packing: Packing, i, j, dr, sigma, overlap, kept) -> ContactM
     dr, sigma = np.asarray(dr, float), np.asarray(sigma, float)
     delta = np.asarray(overlap, float) / sigma
     ds, d2s = _sphere_derivatives(dr, sigma * (1.0 - delta), sigma)
-    v1 = -pot.epsilon * delta ** (pot.alpha - 1.0)
-    v2 = pot.epsilon * (pot.alpha - 1.0) * delta ** (pot.alpha - 2.0)
-    blocks = pair_blocks(v1, v2, ds, d2s)
+    v1, blocks = energy_second_derivatives(pot, None, ds, d2s, delta)
     coords = Coordinates.of(packing)
     if coords.n_rot:
         raise ValueError("contact_moduli is written for disks and spheres")

@@ -40,6 +40,7 @@ the same network that ``Contacts`` counts.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -47,7 +48,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from jamflow.model.packing import Packing
-from jamflow.model.pairs import overlapping_pairs, overlapping_sites
+from jamflow.model.pairs import overlapping_pairs, overlapping_sites, pair_geometry
 from jamflow.model.shapes.rotations import rotation_matrices
 
 
@@ -128,6 +129,7 @@ class ReducedDistances(NamedTuple):
     s: np.ndarray  # (P,) < 1
     ds: np.ndarray  # (P, L)
     d2s: np.ndarray  # (P, L, L)
+    delta: np.ndarray | None = None  # (P,) 1 - s = overlap / sigma from double-double overlaps (None: from s)
 
 
 def reduced_distances(packing: Packing, skin: float = 0.0) -> ReducedDistances:
@@ -148,21 +150,30 @@ class PairTerms(NamedTuple):
     hessian: np.ndarray  # (P, L, L)
 
 
-def law_derivatives(potential, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """dV/ds and d2V/ds2 of the pair law at reduced distances s < 1."""
-    return potential.energy_force(s, potential.params)[1], potential.curvature(s, potential.params)
+def law_derivatives(potential, s: np.ndarray, delta: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """dV/ds and d2V/ds2 of the pair law at reduced distances s < 1; ``delta``: 1 - s known more
+    precisely than from s (double-double overlaps / sigma, spring laws only: the law of
+    ``potentials.spring_energy_force`` evaluated at s = 1 - delta without forming s; at an overlap
+    ~1e-14 a float64 s keeps only ~2 of its digits)."""
+    if delta is None:
+        return potential.energy_force(s, potential.params)[1], potential.curvature(s, potential.params)
+    if not math.isfinite(getattr(potential, "alpha", math.nan)):
+        raise ValueError(f"double-double overlaps are evaluated for the spring law, not {potential.spec!r}")
+    alpha, eps = potential.alpha, potential.epsilon
+    return -eps * delta ** (alpha - 1.0), eps * (alpha - 1.0) * delta ** (alpha - 2.0)
 
 
 def pair_terms(packing: Packing) -> PairTerms:
     """Gradient and Hessian blocks of every contact: V' ds and V'' ds ds^T + V' d2s."""
     red = reduced_distances(packing)
-    v1, hess = energy_second_derivatives(packing.potential, red.s, red.ds, red.d2s)
+    v1, hess = energy_second_derivatives(packing.potential, red.s, red.ds, red.d2s, red.delta)
     return PairTerms(red.i, red.j, v1[:, None] * red.ds, hess)
 
 
-def energy_second_derivatives(potential, s, ds, d2s):
-    """(V', blocks): dV/ds and the pair blocks V'' ds ds^T + V' d2s of each contact."""
-    v1, v2 = law_derivatives(potential, s)
+def energy_second_derivatives(potential, s, ds, d2s, delta=None):
+    """(V', blocks): dV/ds and the pair blocks V'' ds ds^T + V' d2s of each contact (``delta``:
+    see ``law_derivatives``)."""
+    v1, v2 = law_derivatives(potential, s, delta)
     return v1, pair_blocks(v1, v2, ds, d2s)
 
 
@@ -212,8 +223,8 @@ def _assemble(coords: Coordinates, i, j, blocks) -> sp.csr_matrix:
 def _sphere_reduced(packing: Packing, coords: Coordinates, skin: float = 0.0):
     """s = r / sigma: ds = (n, -n) / sigma, d2s = (I - n n) / (r sigma) in [[+, -], [-, +]]
     (with V(s) this is K = V'' n n^T + V'/r (I - n n^T) per block, ``pair_stiffness``)."""
-    i, j, dr, r, sigma = overlapping_pairs(packing, skin)
-    return i, j, r / sigma, *_sphere_derivatives(dr, r, sigma)
+    i, j, dr, r, sigma, overlap = pair_geometry(packing, skin)
+    return i, j, r / sigma, *_sphere_derivatives(dr, r, sigma), None if overlap is None else overlap / sigma
 
 
 def _sphere_derivatives(dr, r, sigma):

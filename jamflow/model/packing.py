@@ -250,8 +250,11 @@ class Packing:
         """The packing of particles ``keep`` (indices or mask), same box, shape and potential."""
         orient = None if self.orientations is None else self.orientations[keep]
         fixed = None if self.fixed is None else self.fixed[keep]
+        ext = self.extended
+        if ext is not None:  # the low parts of the kept particles come along
+            ext = replace(ext, positions_hi=ext.positions_hi[keep], positions_lo=ext.positions_lo[keep])
         return replace(self, positions=self.positions[keep], diameters=self.diameters[keep],
-                       orientations=orient, fixed=fixed, metadata={**self.metadata, **metadata})
+                       orientations=orient, fixed=fixed, extended=ext, metadata={**self.metadata, **metadata})
 
     def scaled_to_phi(self, phi: float) -> "Packing":
         """Affine rescaling of box and positions to packing fraction ``phi``."""

@@ -14,11 +14,13 @@ along them and no ghost crosses them.
 
 from __future__ import annotations
 
+from typing import NamedTuple
 
 import numpy as np
 
+from jamflow.model import ddouble
 from jamflow.model.box import Box
-from jamflow.model.packing import Packing
+from jamflow.model.packing import Packing, warn_float64_only
 
 _compiled_cell_list = None  # set by ``use_compiled_cell_list``
 
@@ -154,18 +156,72 @@ def contact_distances(packing: Packing, i: np.ndarray, j: np.ndarray, dr: np.nda
     raise ValueError(f"{packing.shape.name(packing.dim)} particles touch site by site; use overlapping_sites")
 
 
-def overlapping_pairs(packing: Packing, skin: float = 0.0):
-    """(i, j, dr, r, sigma) for every pair of disks, spheres, ellipses or spheroids with
-    r_ij < sigma_ij + skin (skin 0: the overlapping pairs, no tolerance; float64 separations
-    dr = r_i - r_j; skin in diameters, for the gaps a step may close)."""
+class PairGeometry(NamedTuple):
+    """Pairs within reach and their geometry (``pair_geometry``), diameters."""
+
+    i: np.ndarray  # (P,)
+    j: np.ndarray  # (P,)
+    dr: np.ndarray  # (P, d) minimum-image r_i - r_j
+    r: np.ndarray  # (P,) |dr|
+    sigma: np.ndarray  # (P,) contact distances
+    overlap: np.ndarray | None  # (P,) sigma - r from double-double positions (None: float64, sigma - r)
+
+
+def pair_geometry(packing: Packing, skin: float = 0.0) -> PairGeometry:
+    """Every pair of disks, spheres, ellipses or spheroids with r_ij < sigma_ij + skin (skin 0: the
+    overlapping pairs, no tolerance; skin in diameters, for the gaps a step may close). float64
+    separations, or, for disks and spheres carrying double-double coordinates (``Packing.extended``),
+    separations, distances and overlaps evaluated from hi + lo (``dd_separations``): there an overlap
+    ~1e-14 is below one ulp of a coordinate and the float64 test r < sigma misses contacts (issue 28)."""
     if packing.n < 2:
-        return (np.empty(0, int), np.empty(0, int), np.empty((0, packing.dim)), np.empty(0), np.empty(0))
-    i, j = candidate_pairs(packing, 2.0 * float(packing.shape.reach(packing.diameters).max()) + skin)
+        return PairGeometry(np.empty(0, int), np.empty(0, int), np.empty((0, packing.dim)), np.empty(0), np.empty(0),
+                            None)
+    rmax = 2.0 * float(packing.shape.reach(packing.diameters).max()) + skin
+    extended = packing.extended is not None and packing.shape.kind == "sphere"
+    if packing.extended is not None and not extended:
+        warn_float64_only(packing, f"the pair geometry of {packing.shape.name(packing.dim)} particles")
+    i, j = candidate_pairs(packing, rmax * (1.0 + 1e-9) if extended else rmax)  # hi parts: pad by their round-off
+    if extended:
+        return _dd_pair_geometry(packing, i, j, skin)
     dr = separations(packing, i, j)
     r = np.linalg.norm(dr, axis=1)
     sigma = contact_distances(packing, i, j, dr)
     keep = r < sigma + skin
-    return i[keep], j[keep], dr[keep], r[keep], sigma[keep]
+    return PairGeometry(i[keep], j[keep], dr[keep], r[keep], sigma[keep], None)
+
+
+def dd_separations(packing: Packing, i: np.ndarray, j: np.ndarray) -> tuple:
+    """(hi, lo) (P, d) minimum images r_i - r_j of a double-double packing in its orthogonal periodic
+    box of sides hi + lo: ``jamflow.model.ddouble`` elementwise, the rule of the compiled kernel
+    (``engines.compiled.ddkernel.separation``, k = floor(dx / L + 1/2) boxes subtracted)."""
+    ext = packing.extended
+    xh, xl = packing.positions, ext.positions_lo
+    lh, ll = packing.box.lengths, ext.lengths_lo
+    dh, dl = ddouble.dd_sub(xh[i], xl[i], xh[j], xl[j])
+    k = np.floor(dh / lh + 0.5)
+    return ddouble.dd_sub(dh, dl, *ddouble.dd_mul_d(lh, ll, k))
+
+
+def _dd_pair_geometry(packing: Packing, i, j, skin: float) -> PairGeometry:
+    """``pair_geometry`` of disks/spheres from double-double separations; the overlap
+    sigma - r is formed in double-double (sigma = (a_i + a_j) / 2 exactly) and rounded last."""
+    dh, dl = dd_separations(packing, i, j)
+    r2h, r2l = np.zeros(len(i)), np.zeros(len(i))
+    for c in range(packing.dim):
+        r2h, r2l = ddouble.dd_add(r2h, r2l, *ddouble.dd_mul(dh[:, c], dl[:, c], dh[:, c], dl[:, c]))
+    rh, rl = ddouble.dd_sqrt(r2h, r2l) if len(i) else (r2h, r2l)
+    sh, sl = ddouble.two_sum(packing.diameters[i], packing.diameters[j])
+    oh, ol = ddouble.dd_sub(0.5 * sh, 0.5 * sl, rh, rl)
+    keep = (oh > -skin) | ((oh == -skin) & (ol > 0))
+    overlap = (oh + ol)[keep]
+    sigma = (0.5 * sh + 0.5 * sl)[keep]
+    return PairGeometry(i[keep], j[keep], (dh + dl)[keep], (rh + rl)[keep], sigma, overlap)
+
+
+def overlapping_pairs(packing: Packing, skin: float = 0.0):
+    """(i, j, dr, r, sigma) of ``pair_geometry`` (double-double packings: contacts by their
+    double-double overlaps)."""
+    return pair_geometry(packing, skin)[:5]
 
 
 def site_packing(packing: Packing) -> tuple[Packing, np.ndarray]:

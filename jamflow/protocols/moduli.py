@@ -25,7 +25,7 @@ import numpy as np
 
 from jamflow.engines.choose import engine_name
 from jamflow.minimize.settings import MinimizerSettings
-from jamflow.model.packing import Packing
+from jamflow.model.packing import Packing, warn_float64_only
 from jamflow.mechanics.contacts import Contacts
 from jamflow.mechanics.elastic import HessianModuli, HessianModuliResult
 from jamflow.mechanics.strains import BULK, SHEAR, STRAINS
@@ -118,6 +118,7 @@ class Moduli:
             raise ValueError("every particle is a floater: the packing has no rigid contact network and no moduli; "
                              "compress it above onset first (jamflow jam --above 1e-4)")
         engine_name(packing, (self.sweeps.minimizer or MinimizerSettings()).method, self.engine)  # who relaxes
+        warn_float64_only(packing, "the strain sweeps (float64 relaxations; the Hessian route reads hi + lo)")
         hessian = self._hessian(packing)
         roundoff = {}
         for strain in STRAINS:
