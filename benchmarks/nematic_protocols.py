@@ -96,7 +96,8 @@ def start_order(protocol: str) -> float | None:
     """The start's nematic order S of a default compression label: 0 for the random start, 1
     for aligned, S for nematic:S; None for any other protocol."""
     words = protocol.split()
-    if words[0] != "compression" or len(words) > 2:
+    if words[0] != "compression" or len(words) > 2 or not (len(words) == 1 or words[1] == "aligned"
+                                                          or words[1].startswith("nematic:")):
         return None
     return 0.0 if len(words) == 1 else check_start(words[1])
 
@@ -152,6 +153,11 @@ def report(path: Path, keep: Path | None, draw=()) -> None:
     chart(groups, keep, path.with_suffix(".png"), curve, draw)
 
 
+def tick(protocol: str) -> str:
+    """A short axis label of a protocol label: the start, "random" for the plain compression."""
+    return protocol.replace("compression", "", 1).strip() or "random"
+
+
 def _median_row(rows):
     """The packing whose P2 is nearest the group's median (the one drawn)."""
     median = np.median([float(r["p2"]) for r in rows])
@@ -180,8 +186,8 @@ def chart(groups, keep, path: Path, curve=(), draw=()) -> None:
     for value, text in ((FIGURE_C, "Fig. 2.23(c)"), (FIGURE_D, "Fig. 2.23(d)")):
         axes[0].axhline(value, ls="--", color="tab:red", lw=0.8)
         axes[0].text(len(keys) - 0.6, value + 0.01, text, color="tab:red", fontsize=7)
-    axes[0].set_xticks(range(len(keys)), [k[0].replace(" ", "\n") + (f"\ndalpha {k[1]:g}" if k[1] else "") for k in keys],
-                       fontsize=7)
+    axes[0].set_xticks(range(len(keys)), [tick(k[0]) + (f" dalpha {k[1]:g}" if k[1] else "") for k in keys],
+                       fontsize=7, rotation=40, ha="right")
     axes[0].set_xlim(-0.5, len(keys) - 0.3)
     axes[0].set_ylim(0, 1)
     axes[0].set_ylabel("nematic order $P_2$")
