@@ -32,33 +32,37 @@ from tqdm import tqdm
 from jamflow import jam
 from jamflow.mechanics.checks import check_packing
 from jamflow.io.packing_file import load_packing, save_packing
+from jamflow.model.shapes.rotations import check_start
 from jamflow.protocols.anneal import anneal
 from jamflow.protocols.settings import DEFAULT_PROTOCOL, PROTOCOLS
 
 from common import ANNEAL_COLUMNS as COLUMNS, anneal_row as _row, pyplot, read_rows, save_figure, stats, write_rows  # (benchmarks/ is the script's directory)
 
 SIZES = "mono"
+FIGURE_C, FIGURE_D = 0.64, 0.11  # the chapter's P2 of Figure 2.23(c) (roughly aligned) and (d) (random)
 
 
-def label(protocol: str, orientations: str = "random", phi0: float | None = None) -> str:
-    """The protocol column: the protocol, then its start if not the default."""
+def label(protocol: str, orientations: str = "random", phi0: float | None = None,
+          jam_protocol: str = DEFAULT_PROTOCOL) -> str:
+    """The protocol column: the protocol, then its start and compression settings if not the default."""
     return " ".join([protocol] + ([orientations] if orientations != "random" else [])
-                    + ([f"phi0={phi0:g}"] if phi0 is not None else []))
+                    + ([f"phi0={phi0:g}"] if phi0 is not None else [])
+                    + ([jam_protocol] if jam_protocol != DEFAULT_PROTOCOL else []))
 
 
 def one(protocol: str, n: int, alpha: float, seed: int, dalpha: float, orientations: str = "random",
-        phi0: float | None = None):
+        phi0: float | None = None, jam_protocol: str = DEFAULT_PROTOCOL):
     """(row, final packing) of one protocol run."""
     t = time.process_time()
     if protocol == "compression":
-        settings = PROTOCOLS[DEFAULT_PROTOCOL](phi0=phi0)
+        settings = PROTOCOLS[jam_protocol](phi0=phi0)
         packing = jam(n=n, sizes=SIZES, seed=seed, shape=f"ellipse:{alpha:g}", settings=settings,
                       orientations=orientations).packing
     else:
         disks = jam(n=n, sizes=SIZES, seed=seed)
         packing = anneal(disks.packing, alpha, dalpha, seed=seed, orientations=orientations).packing
     cpu = time.process_time() - t
-    return _row(label(protocol, orientations, phi0), dalpha if protocol == "anneal" else 0.0, seed, n, alpha, packing,
+    return _row(label(protocol, orientations, phi0, jam_protocol), dalpha if protocol == "anneal" else 0.0, seed, n, alpha, packing,
                 check_packing(packing), cpu), packing
 
 
@@ -74,18 +78,50 @@ def run(args) -> None:
     dalpha = args.dalpha if args.protocol == "anneal" else 0.0
     if args.phi0 is not None and args.protocol == "anneal":
         raise SystemExit("--phi0 is the compression's start; annealing starts from a jammed disk packing")
-    protocol = label(args.protocol, args.orientations, args.phi0)
+    if args.jam_protocol != DEFAULT_PROTOCOL and args.protocol == "anneal":
+        raise SystemExit("--jam-protocol is the compression's settings; annealing uses the default")
+    protocol = label(args.protocol, args.orientations, args.phi0, args.jam_protocol)
     done = {(r["protocol"], float(r["dalpha"]), int(r["seed"])) for r in rows}
     todo = [s for s in range(args.seeds) if (protocol, dalpha, s) not in done]
     for seed in tqdm(todo, desc=f"{protocol} alpha {args.alpha:g}", unit="packing"):
-        row, packing = one(args.protocol, args.n, args.alpha, seed, dalpha, args.orientations, args.phi0)
+        row, packing = one(args.protocol, args.n, args.alpha, seed, dalpha, args.orientations, args.phi0,
+                           args.jam_protocol)
         if keep:
             save_packing(keep / name(protocol, dalpha, seed), packing)
         rows.append(row)
         write_rows(out, rows, COLUMNS)
 
 
-def report(path: Path, keep: Path | None) -> None:
+def start_order(protocol: str) -> float | None:
+    """The start's nematic order S of a default compression label: 0 for the random start, 1
+    for aligned, S for nematic:S; None for any other protocol."""
+    words = protocol.split()
+    if words[0] != "compression" or len(words) > 2 or not (len(words) == 1 or words[1] == "aligned"
+                                                          or words[1].startswith("nematic:")):
+        return None
+    return 0.0 if len(words) == 1 else check_start(words[1])
+
+
+def order_curve(groups):
+    """Rows (S, P2, P2 s.e., phi_J, phi_J s.e., packings) of the default compression, by S."""
+    curve = []
+    for (protocol, _), g in groups.items():
+        s = start_order(protocol)
+        if s is not None:
+            curve.append((s, *stats(r["p2"] for r in g)[:2], *stats(r["phi_j"] for r in g)))
+    return sorted(curve)
+
+
+def start_for(curve, target: float) -> float | None:
+    """The start order S at which the measured mean P2 crosses ``target`` (linear interpolation
+    between the neighbouring measured S), None if no pair brackets it."""
+    for (s0, p0, *_), (s1, p1, *_) in zip(curve, curve[1:]):
+        if (p0 - target) * (p1 - target) <= 0 and p0 != p1:
+            return s0 + (target - p0) * (s1 - s0) / (p1 - p0)
+    return None
+
+
+def report(path: Path, keep: Path | None, draw=()) -> None:
     rows = read_rows(path)
     groups = {}
     for r in rows:
@@ -107,7 +143,19 @@ def report(path: Path, keep: Path | None) -> None:
         (a, sa, _), (b, sb, _) = (stats(r["p2"] for r in groups[k]) for k in keys)
         print(f"\n{keys[1][0]} - {keys[0][0]}: P2 {b - a:+.3f} +- {np.hypot(sa, sb):.3f}; "
               f"1/sqrt(N) = {1 / np.sqrt(int(rows[0]['n'])):.3f}")
-    chart(groups, keep, path.with_suffix(".png"))
+    curve = order_curve(groups)
+    if len(curve) > 1:
+        print("\nstart S -> jammed P2 +- s.e., phi_J +- s.e. (packings)")
+        for s, p2, p2_se, phi, phi_se, k in curve:
+            print(f"  S = {s:g}: P2 = {p2:.3f} +- {p2_se:.3f}, phi_J = {phi:.4f} +- {phi_se:.4f} ({k})")
+        found = start_for(curve, FIGURE_C)
+        print(f"  P2 = {FIGURE_C} (Figure 2.23(c)) at S = " + ("none bracketed" if found is None else f"{found:.3f}"))
+    chart(groups, keep, path.with_suffix(".png"), curve, draw)
+
+
+def tick(protocol: str) -> str:
+    """A short axis label of a protocol label: the start, "random" for the plain compression."""
+    return protocol.replace("compression", "", 1).strip() or "random"
 
 
 def _median_row(rows):
@@ -116,15 +164,18 @@ def _median_row(rows):
     return min(rows, key=lambda r: abs(float(r["p2"]) - median))
 
 
-def chart(groups, keep, path: Path) -> None:
+def chart(groups, keep, path: Path, curve=(), draw=()) -> None:
     from jamflow.plots.drawing import draw_into
 
     plt = pyplot()
     keys = sorted(groups)
-    typical = [(k, _median_row(groups[k])) for k in keys] if keep else []
+    typical = [(k, _median_row(groups[k])) for k in keys if not draw or k[0] in draw] if keep else []
     drawn = [(k, r) for k, r in typical if (keep / name(k[0], k[1], int(r["seed"]))).exists()]  # the kept ones
-    fig, axes = plt.subplots(1, 1 + len(drawn), figsize=(4.2 * (1 + len(drawn)), 4.2))
+    extra = len(curve) > 1
+    fig, axes = plt.subplots(1, 1 + extra + len(drawn), figsize=(4.2 * (1 + extra + len(drawn)), 4.2))
     axes = np.atleast_1d(axes)
+    if extra:
+        order_panel(axes[1], curve)
     for x, k in enumerate(keys):
         p2 = [float(r["p2"]) for r in groups[k]]
         m, se, _ = stats(p2)
@@ -132,16 +183,16 @@ def chart(groups, keep, path: Path) -> None:
         axes[0].errorbar([x + 0.25], [m], yerr=[se], fmt="s", color="k", capsize=3)
     n = int(next(iter(groups.values()))[0]["n"])
     axes[0].axhline(1 / np.sqrt(n), ls=":", color="gray", lw=0.8, label=r"$1/\sqrt{N}$")
-    for value, text in ((0.64, "Fig. 2.23(c)"), (0.11, "Fig. 2.23(d)")):
+    for value, text in ((FIGURE_C, "Fig. 2.23(c)"), (FIGURE_D, "Fig. 2.23(d)")):
         axes[0].axhline(value, ls="--", color="tab:red", lw=0.8)
         axes[0].text(len(keys) - 0.6, value + 0.01, text, color="tab:red", fontsize=7)
-    axes[0].set_xticks(range(len(keys)), [k[0].replace(" ", "\n") + (f"\ndalpha {k[1]:g}" if k[1] else "") for k in keys],
-                       fontsize=7)
+    axes[0].set_xticks(range(len(keys)), [tick(k[0]) + (f" dalpha {k[1]:g}" if k[1] else "") for k in keys],
+                       fontsize=7, rotation=40, ha="right")
     axes[0].set_xlim(-0.5, len(keys) - 0.3)
     axes[0].set_ylim(0, 1)
     axes[0].set_ylabel("nematic order $P_2$")
     axes[0].legend(fontsize=8)
-    for ax, (k, r) in zip(axes[1:], drawn):
+    for ax, (k, r) in zip(axes[1 + extra:], drawn):
         packing = load_packing(keep / name(k[0], k[1], int(r["seed"])))
         draw_into(ax, packing, color_by="orientation", contacts=False)
         ax.set_title(f"{k[0]}, seed {r['seed']}: $P_2$ = {float(r['p2']):.2f}", fontsize=9)
@@ -149,6 +200,22 @@ def chart(groups, keep, path: Path) -> None:
         ax.set_yticks([])
     fig.suptitle(f"monodisperse ellipses, alpha = {float(r['alpha']) if drawn else 3:g}, N = {n} (cf. chapter Figure 2.23(c, d))")
     save_figure(fig, path)
+
+
+def order_panel(ax, curve) -> None:
+    """Jammed P2 (left axis) and phi_J (right axis) against the start's order S, with s.e."""
+    s, p2, p2_se, phi, phi_se, _ = (np.array(c, float) for c in zip(*curve))
+    ax.errorbar(s, p2, yerr=p2_se, fmt="o-", color="k", capsize=3, label="jammed $P_2$")
+    ax.plot([0, 1], [0, 1], ":", color="gray", lw=0.8, label="start $P_2$ = S")
+    ax.axhline(FIGURE_C, ls="--", color="tab:red", lw=0.8)
+    ax.set_xlabel("start nematic order S (--orientations nematic:S)")
+    ax.set_ylabel("nematic order $P_2$")
+    ax.set_xlim(-0.05, 1.05)
+    ax.set_ylim(0, 1)
+    ax.legend(fontsize=7, loc="upper left")
+    twin = ax.twinx()
+    twin.errorbar(s, phi, yerr=phi_se, fmt="s--", color="tab:blue", capsize=3, ms=4)
+    twin.set_ylabel(r"$\phi_J$", color="tab:blue")
 
 
 def main(argv=None) -> None:
@@ -160,15 +227,20 @@ def main(argv=None) -> None:
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--protocol", choices=("compression", "anneal"), default="compression")
     ap.add_argument("--dalpha", type=float, default=0.1)
-    ap.add_argument("--orientations", choices=("random", "aligned"), default="random",
-                    help="directors at the start (compression) or the first annealing step")
+    ap.add_argument("--orientations", default="random",
+                    help="directors at the start (compression) or the first annealing step: random, aligned "
+                         "or nematic:S (jamflow jam --orientations)")
+    ap.add_argument("--jam-protocol", choices=sorted(PROTOCOLS), default=DEFAULT_PROTOCOL,
+                    help="compression: its settings (jamflow jam --protocol; default the fast one)")
     ap.add_argument("--phi0", type=float, default=None, help="compression: start packing fraction (default 0.8)")
     ap.add_argument("--out", default="docs/notes/nematic-protocols.csv")
     ap.add_argument("--keep", default=None, help="directory of the final packings (HDF5)")
     ap.add_argument("--report", default=None, metavar="CSV")
+    ap.add_argument("--draw", action="append", default=[], metavar="PROTOCOL",
+                    help="--report: draw the median packing of this protocol label (repeat; default every kept one)")
     args = ap.parse_args(argv)
     if args.report:
-        report(Path(args.report), Path(args.keep) if args.keep else None)
+        report(Path(args.report), Path(args.keep) if args.keep else None, args.draw)
     else:
         run(args)
 

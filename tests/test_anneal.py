@@ -62,6 +62,28 @@ def test_an_aligned_first_step_turns_every_director_along_x(disks, tmp_path, cap
         check_anneal(start, 1.5, 0.05, None, "sideways")
 
 
+def test_a_nematic_first_step_draws_directors_in_a_cone_about_x(disks, tmp_path, capsys, monkeypatch):
+    """--orientations nematic:S (issue 30): the first step's directors uniform in [-D, D] about x
+    with sin(2D) / (2D) = S (rotations.cone_half_angle), recorded; nematic:1 is aligned; a bad S
+    is refused before work with one line."""
+    import jamflow.protocols.anneal as anneal
+    from jamflow.model.shapes.rotations import cone_half_angle
+
+    start = load_packing(disks)
+    grown = _grown(start, 1.05, "exact", np.random.default_rng(0), "nematic:0.5")
+    half = cone_half_angle(0.5)
+    assert np.sin(2 * half) / (2 * half) == pytest.approx(0.5, abs=1e-14)
+    assert np.all(np.abs(grown.orientations) <= half) and np.ptp(grown.orientations) > 0.5 * half
+    assert grown.metadata["orientations"] == "nematic:0.5"
+    one = _grown(start, 1.05, "exact", np.random.default_rng(0), "nematic:1")
+    np.testing.assert_array_equal(one.orientations, np.zeros(start.n))
+    monkeypatch.setattr(anneal, "jam", lambda *a, **k: pytest.fail("work started"))
+    assert main(["anneal", str(disks), "--to", "1.1", "--dalpha", "0.05", "--orientations", "nematic:2", "--quiet",
+                 "--out", str(tmp_path / "x.h5")]) == 2
+    err = capsys.readouterr().err
+    assert "--orientations 'nematic:2' is not one of random, aligned, nematic:S" in err and len(err.splitlines()) == 1
+
+
 def test_cli_anneal_records_every_step_and_writes_a_checked_packing(disks, tmp_path, capsys):
     out = tmp_path / "annealed.h5"
     assert main(["anneal", str(disks), "--to", "1.1", "--dalpha", "0.05", "--seed", "4", "--quiet",

@@ -91,9 +91,10 @@ def add_spec_arguments(p, skip=()) -> None:
     add("--precision", choices=PRECISIONS, default="double",
         help="double-double (with --pressure P, disks/spheres, spring): the float64 onset refined to P by Newton steps "
              "in double-double (jamflow refine; P down to ~2e-18 at N ~ 300; docs/guide/precision.md)")
-    add("--orientations", choices=START_ORIENTATIONS, default="random",
-        help="start orientations of particles with an axis: random (uniform, chapter step 1) or aligned "
-             "(every director along x: a nematic start, P2 = 1; Figure 2.23(c), docs/validation.md)")
+    add("--orientations", default="random", metavar="{" + ",".join(START_ORIENTATIONS) + "}",
+        help="start orientations of particles with an axis: random (uniform, chapter step 1), aligned "
+             "(every director along x: a nematic start, P2 = 1; Figure 2.23(c), docs/validation.md) or "
+             "nematic:S (directors uniform in a cone about x with P2 = S in (0, 1]; nematic:1 = aligned)")
 
 
 def add_md_damping_argument(p) -> None:

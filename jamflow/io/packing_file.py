@@ -20,8 +20,8 @@ epsilon, pressures in epsilon / diameter^d)::
                                    pile's fraction under gravity, phi_J(P->0) at constant
                                    pressure, NaN where none is known: one pressure, or a
                                    packing saved without one), start_orientations
-                                   (how the start's orientations were drawn: "random" or
-                                   "aligned", ``jamflow jam --orientations``; "" unknown
+                                   (how the start's orientations were drawn: "random",
+                                   "aligned" or "nematic:S", ``jamflow jam --orientations``; "" unknown
                                    or round particles)
     /positions  (N, d)      float64, Cartesian, wrapped into the cell
     /positions_lo (N, d)    float64, double-double packings only (root attribute precision =

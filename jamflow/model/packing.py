@@ -266,8 +266,9 @@ def random_packing(n: int, dim: int, sizes: SizeSpec, phi: float, seed: int,
                    potential: Potential | None = None, shape=SPHERE, separated: bool = False,
                    orientations: str = "random") -> Packing:
     """Uniformly random positions in a square/cubic box at packing fraction ``phi`` and, for
-    shapes that are not round, uniformly random orientations (chapter step 1), or all aligned
-    along x with ``orientations="aligned"`` (``rotations.start_orientations``). Diameters are
+    shapes that are not round, uniformly random orientations (chapter step 1), all aligned
+    along x with ``orientations="aligned"``, or in a cone about x with nematic order S with
+    ``"nematic:S"`` (``rotations.start_orientations``). Diameters are
     drawn first, then positions, then orientations, from one generator. ``separated`` (rigid
     bodies): orientations first, then positions by random sequential addition, so that no two
     bodies overlap (``separated_positions``)."""

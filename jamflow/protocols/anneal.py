@@ -21,7 +21,7 @@ import numpy as np
 from jamflow.model.nematic import Nematic
 from jamflow.mechanics.checks import check_packing
 from jamflow.model.packing import Packing
-from jamflow.model.shapes.rotations import START_ORIENTATIONS, start_orientations
+from jamflow.model.shapes.rotations import check_start, start_orientations
 from jamflow.model.shapes.shape import SPHERE, Ellipsoid
 from jamflow.protocols.settings import DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings
 from jamflow.protocols.outcome import JammingFailed, JamResult
@@ -65,7 +65,8 @@ def anneal_alphas(alpha0: float, target: float, dalpha: float) -> np.ndarray:
 def check_anneal(start: Packing, target: float, dalpha: float, contact: str | None = None,
                  orientations: str = "random") -> float:
     """Refuse, before any work, what cannot be annealed; returns the start's aspect ratio.
-    ``orientations``: the first step's major-axis directions, "random" or "aligned" (round starts)."""
+    ``orientations``: the first step's major-axis directions, "random", "aligned" or "nematic:S"
+    (round starts; ``rotations.start_orientations``)."""
     for name, value in (("--to", target), ("--dalpha", dalpha)):
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
             raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
@@ -76,9 +77,7 @@ def check_anneal(start: Packing, target: float, dalpha: float, contact: str | No
     if start.box.walls or start.fixed is not None or start.gravity:
         raise ValueError("shape annealing runs in a periodic box: the input has walls, fixed particles or gravity")
     alpha0 = 1.0 if kind == "sphere" else float(start.shape.alpha)
-    if orientations not in START_ORIENTATIONS:
-        raise ValueError(f"--orientations {orientations!r} is not one of {', '.join(START_ORIENTATIONS)}")
-    if orientations != "random" and kind != "sphere":
+    if check_start(orientations) is not None and kind != "sphere":
         raise ValueError(f"--orientations {orientations} sets the first step's directions of a round start; the input "
                          f"{start.shape.name(start.dim)}s keep their own: leave --orientations out")
     if target == alpha0:
@@ -99,7 +98,7 @@ def check_anneal(start: Packing, target: float, dalpha: float, contact: str | No
 
 
 def _grown(packing: Packing, alpha: float, contact: str, rng: np.random.Generator, start: str = "random") -> Packing:
-    """``packing`` with aspect ratio ``alpha`` (directors ``start``, random or aligned, if it was
+    """``packing`` with aspect ratio ``alpha`` (directors ``start``, random, aligned or nematic:S, if it was
     round), box and positions rescaled so that phi stays what it was."""
     orientations, metadata = packing.orientations, {**packing.metadata, "anneal": True}
     if orientations is None:
@@ -115,7 +114,8 @@ def anneal(start: Packing, target: float, dalpha: float, settings: CompressionSe
     """Anneal the shape of the jammed ``start`` to aspect ratio ``target`` in steps of ``dalpha``.
 
     ``seed``: the random major-axis directions of the first step (a round start only);
-    ``orientations`` "aligned": all of them along x instead (a nematic start, Figure 2.23(c)).
+    ``orientations`` "aligned": all of them along x instead (a nematic start, Figure 2.23(c));
+    "nematic:S": in a cone about x with P2 = S (``rotations.start_orientations``).
     ``observers``: callables ``f(row: dict)`` after each step (progress bars). JammingFailed
     if a step's protocol fails, or the last step's packing fails its checks.
     """

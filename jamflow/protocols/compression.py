@@ -25,7 +25,7 @@ from jamflow.minimize.settings import MinimizerSettings
 from jamflow.model.packing import DENSEST_PHI, Packing, SeparationFailed, random_packing
 from jamflow.model.potentials import POTENTIALS, Potential, Spring, parse_potential
 from jamflow.model.shapes.parse import parse_shape
-from jamflow.model.shapes.rotations import START_ORIENTATIONS
+from jamflow.model.shapes.rotations import check_start
 from jamflow.model.sizes import SizeSpec, parse_sizes
 from jamflow.model.walls import parse_walls, wall_loads, with_walls
 from jamflow.protocols.outcome import HISTORY_COLUMNS, JammingFailed, JamResult, record_minimization
@@ -65,7 +65,8 @@ def jam(n: int = 64, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | P
     ``sizes`` scale whole particles (an ellipse's b; a = ALPHA b). ``contact``: the contact-distance
     method of ellipses/spheroids (exact, gaussian, cleaver, linear, quadratic).
     ``orientations``: the start's orientations of particles with an axis, "random" (uniform) or
-    "aligned" (every director along x, a nematic start; ``rotations.start_orientations``).
+    "aligned" (every director along x, a nematic start) or "nematic:S" (a partially nematic start
+    about x, P2 = S; ``rotations.start_orientations``).
     ``walls``: walled axes (``"y"``, ``"x,y"``, ...; ``jamflow.model.walls``) of ``wall_type``
     smooth or rough. ``gravity`` g > 0 settles the packing on the floor instead of
     compressing it (``jamflow.protocols.gravity``; needs walls on the last axis).
@@ -138,10 +139,9 @@ MAX_SEED = 2**63 - 1  # seeds are stored as int64 in the packing file
 
 
 def check_start_orientations(orientations, particle, dim: int) -> None:
-    """Refuse an unknown start of the orientations, and "aligned" for round particles (no axis)."""
-    if orientations not in START_ORIENTATIONS:
-        raise ValueError(f"--orientations {orientations!r} is not one of {', '.join(START_ORIENTATIONS)}")
-    if orientations != "random" and not particle.oriented:
+    """Refuse an unknown start of the orientations, and "aligned" or "nematic:S" for round
+    particles (no axis)."""
+    if check_start(orientations) is not None and not particle.oriented:
         raise ValueError(f"--orientations {orientations} applies to particles with an axis (ellipses, spheroids, "
                          f"rigid bodies), not to {particle.name(dim)}s: leave --orientations out")
 
@@ -150,7 +150,7 @@ def initial_packing(n, dim, sizes, potential, seed, phi0, shape="disk", walls=No
                     gravity=0.0, contact="exact", orientations="random") -> Packing:
     """Validated random start (chapter step 1), with walls and gravity if given; errors before any
     engine work. ``contact``: the contact-distance method of ellipses/spheroids; ``orientations``:
-    "random" or "aligned" (``rotations.start_orientations``; particles with an axis only)."""
+    "random", "aligned" or "nematic:S" (``rotations.start_orientations``; particles with an axis only)."""
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
         raise ValueError(f"n must be an integer >= 2, got {n!r}")
     if isinstance(dim, bool) or not isinstance(dim, (int, np.integer)) or dim not in (2, 3):

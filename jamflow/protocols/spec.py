@@ -66,7 +66,7 @@ class JamSpec:
     stress: str = "iso"  # with pressure: iso | aniso | tri
     gamma: float | None = None  # fixed Lees-Edwards shear strain
     precision: str = "double"  # double | double-double (with pressure: float64 onset, then jamflow.refine)
-    orientations: str = "random"  # start orientations of particles with an axis: random | aligned
+    orientations: str = "random"  # start orientations of particles with an axis: random | aligned | nematic:S
 
     @classmethod
     def from_options(cls, **options) -> "JamSpec":

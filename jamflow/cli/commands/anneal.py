@@ -1,6 +1,7 @@
 """Particle-shape annealing (chapter section 2.3.3, Figure 2.18): grow the aspect ratio of the
 particles of a jammed disk/sphere packing IN.h5 to ALPHA in steps of D, re-jamming at every
-step (random major-axis directions at the first one, or all along x with --orientations aligned). The last packing is written to --out
+step (random major-axis directions at the first one, all along x with --orientations aligned, or
+in a cone about x with --orientations nematic:S). The last packing is written to --out
 (checked like jamflow jam's), with one row per step (phi_J, <z>, floaters, ...) in its
 ``anneal`` group; docs/notes/ellipses.md compares the result with compression."""
 
@@ -30,9 +31,10 @@ def add_arguments(p) -> None:
     p.add_argument("--contact", choices=METHODS_CONTACT, default=None,
                    help="contact distance (default: the input's, exact for disks/spheres)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the first step's major-axis directions")
-    p.add_argument("--orientations", choices=START_ORIENTATIONS, default="random",
-                   help="the first step's major-axis directions: random (uniform) or aligned (all along x: a "
-                        "nematic start, Figure 2.23(c), docs/validation.md)")
+    p.add_argument("--orientations", default="random", metavar="{" + ",".join(START_ORIENTATIONS) + "}",
+                   help="the first step's major-axis directions: random (uniform), aligned (all along x: a "
+                        "nematic start, Figure 2.23(c), docs/validation.md) or nematic:S (in a cone about x, "
+                        "P2 = S in (0, 1])")
     p.add_argument("--protocol", choices=PROTOCOL_NAMES, default=DEFAULT_PROTOCOL,
                    metavar="{" + ",".join(sorted(PROTOCOLS)) + "}",
                    help="compression protocol of each re-jam (jamflow jam --protocol; 'seed' is accepted as the old "

@@ -12,6 +12,8 @@ Conventions used throughout jamflow:
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 UNIT_TOL = 1e-8  # | |q| - 1 | allowed for a quaternion read from a user or a file
@@ -87,18 +89,65 @@ def random_orientations(n: int, dim: int, rng: np.random.Generator) -> np.ndarra
                             b * np.sin(2 * np.pi * u3), b * np.cos(2 * np.pi * u3)])
 
 
-START_ORIENTATIONS = ("random", "aligned")  # the starts of ``start_orientations``
+START_ORIENTATIONS = ("random", "aligned", "nematic:S")  # the starts of ``start_orientations``
+
+
+def check_start(kind) -> float | None:
+    """The start's nematic order S of a start ``kind``: None for "random", 1 for "aligned",
+    S for "nematic:S" with S in (0, 1]; a one-line ValueError for anything else."""
+    if kind == "random":
+        return None
+    if kind == "aligned":
+        return 1.0
+    head, _, value = str(kind).partition(":") if isinstance(kind, str) else ("", "", "")
+    try:
+        s = float(value) if head == "nematic" else math.nan
+    except ValueError:
+        s = math.nan
+    if not 0.0 < s <= 1.0:  # also refuses nan
+        raise ValueError(f"--orientations {kind!r} is not one of random, aligned, nematic:S with the start's "
+                         "nematic order S in (0, 1] (e.g. nematic:0.5)")
+    return s
+
+
+def cone_half_angle(s: float) -> float:
+    """2D: the half-width D of the uniform law theta in [-D, D] whose P2 = <cos 2 theta> =
+    sin(2D) / (2D) is ``s`` in (0, 1]; sinc falls monotonically on 2D in [0, pi], so the root
+    is unique (bisection to round-off; D = pi / 2 is isotropic, P2 = 0)."""
+    lo, hi = 0.0, 0.5 * math.pi
+    for _ in range(80):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if math.sin(2 * mid) / (2 * mid) > s else (lo, mid)
+    return 0.5 * (lo + hi)
+
+
+def nematic_orientations(s: float, n: int, dim: int, rng: np.random.Generator) -> np.ndarray:
+    """Orientations whose nematic order about x is ``s`` in expectation (directors uniform in a
+    cone about x). 2D: theta uniform in [-D, D], <cos 2 theta> = sin(2D) / (2D) = s
+    (``cone_half_angle``). 3D: cos beta (beta the angle to x) uniform in [c, 1] and the azimuth
+    uniform, <(3 cos^2 beta - 1) / 2> = c (1 + c) / 2 = s, c = (sqrt(1 + 8 s) - 1) / 2; each
+    body turned from x by the shortest rotation (``quaternion_from_director``), as "aligned"."""
+    if dim == 2:
+        half = cone_half_angle(s)
+        return rng.uniform(-half, half, n)
+    c = 0.5 * (math.sqrt(1.0 + 8.0 * s) - 1.0)
+    cos_b, azimuth = rng.uniform(c, 1.0, n), 2 * np.pi * rng.random(n)
+    sin_b = np.sqrt(1.0 - cos_b ** 2)
+    return quaternion_from_director(np.column_stack([cos_b, sin_b * np.cos(azimuth), sin_b * np.sin(azimuth)]))
 
 
 def start_orientations(kind: str, n: int, dim: int, rng: np.random.Generator) -> np.ndarray:
-    """Orientations of a start: "random" (``random_orientations``, chapter step 1) or "aligned"
+    """Orientations of a start: "random" (``random_orientations``, chapter step 1), "aligned"
     (every director along x: theta = 0 in 2D, the unit quaternion in 3D; a nematic start,
-    P2 = 1, for Figure 2.23(c)). "aligned" draws nothing from ``rng``."""
-    if kind == "random":
+    P2 = 1, for Figure 2.23(c)), or "nematic:S" (a partially nematic start about x, P2 = S in
+    expectation, ``nematic_orientations``; "nematic:1" is "aligned"). "aligned" draws nothing
+    from ``rng``."""
+    s = check_start(kind)
+    if s is None:
         return random_orientations(n, dim, rng)
-    if kind == "aligned":
+    if s == 1.0:
         return np.zeros(n) if dim == 2 else np.tile([1.0, 0.0, 0.0, 0.0], (n, 1))
-    raise ValueError(f"start orientations {kind!r} is not one of {', '.join(START_ORIENTATIONS)}")
+    return nematic_orientations(s, n, dim, rng)
 
 
 def quaternion_from_director(u: np.ndarray) -> np.ndarray:
