@@ -63,6 +63,8 @@ def test_widths_command_draws_two_tables_on_one_plot(tmp_path):
     for label, table in (("2D", a), ("3D", b)):
         row = next(csv.DictReader(open(table)))
         assert f"{label}: " in done.stdout and f"nu = {float(row['nu']):.3f} +- {float(row['nu_err']):.3f}" in done.stdout
+        chi2 = float(row["nu_chi2_dof"])  # the table's, from onset_statistics; the command refits the rows
+        assert f"chi2/dof = {chi2:.2f}" in done.stdout and 0 < chi2 < 4
     assert "N = 64, 128, 256;" in done.stdout and fig.stat().st_size > 10_000
 
 

@@ -265,6 +265,11 @@ class WidthCurve:
     nu: Fit  # as the table states it (its error is the table's bootstrap error)
     amplitude: float
 
+    @property
+    def chi2(self) -> float:
+        """chi^2 per degree of freedom of the fit (``width_chi2``)."""
+        return width_chi2(self.n, self.width, self.width_err, self.nu.value, self.amplitude)
+
 
 WIDTH_COLUMNS = ("n", "width", "width_err", "nu", "nu_err")
 

@@ -32,6 +32,6 @@ def run(args) -> int:
     widths_figure(curves, args.figure)
     for c in curves:
         print(f"{c.label}: N = {', '.join(str(int(n)) for n in c.n)}; nu = {c.nu.value:.3f} +- {c.nu.err:.3f}, "
-              f"W = {c.amplitude:.4g} N^-nu")
+              f"W = {c.amplitude:.4g} N^-nu, chi2/dof = {c.chi2:.2f}")
     print(f"-> {args.figure}")
     return 0
