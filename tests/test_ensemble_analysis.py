@@ -8,8 +8,9 @@ import h5py
 import numpy as np
 import pytest
 
+from jamflow.cli.commands.onsets import write_table
 from jamflow.ensemble import Store, run_ensemble
-from jamflow.ensemble.onsets import onset_statistics
+from jamflow.ensemble.onsets import onset_statistics, width_chi2
 
 JAMFLOW = [sys.executable, "-m", "jamflow.cli"]
 
@@ -33,6 +34,52 @@ def test_fits_recover_the_exponent_and_the_limit_of_synthetic_onsets():
     for s in res.sizes:  # bootstrap error of a normal sample's sd against its closed form sd / sqrt(2 (n - 1))
         assert s.width_err == pytest.approx(s.width / np.sqrt(2 * (s.count - 1)), rel=0.2)
         assert s.mean_phi_err == pytest.approx(s.width / np.sqrt(s.count))
+
+
+def test_chi2_of_the_width_fit_measures_how_well_the_power_law_fits():
+    ns = np.array([64.0, 128, 256, 512])
+    law = 0.1 * ns**-0.5
+    assert width_chi2(ns, law, 0.05 * law, 0.5, 0.1) == pytest.approx(0, abs=1e-20)
+    off = law * [1, 1, np.exp(0.15), 1]  # one width 3 errors (5 % each, in log W) off the law
+    assert width_chi2(ns, off, 0.05 * off, 0.5, 0.1) == pytest.approx(3**2 / (4 - 2), rel=1e-12)
+    res = onset_statistics(synthetic_rows(), n_bootstrap=100)  # widths that follow the law within their errors
+    assert 0 < res.width_chi2 < 4
+    kinked = [r for r in synthetic_rows() if r["n"] != 128] + synthetic_rows(amplitude=0.4, sizes=(128,))[:-1]
+    assert onset_statistics(kinked, n_bootstrap=100).width_chi2 > 50
+
+
+def write_onsets_table(path, **synthetic):
+    write_table(path, onset_statistics(synthetic_rows(**synthetic), n_bootstrap=100))
+    return path
+
+
+def test_widths_command_draws_two_tables_on_one_plot(tmp_path):
+    a = write_onsets_table(tmp_path / "a.csv")
+    b = write_onsets_table(tmp_path / "b.csv", nu=0.35, sizes=(64, 128, 256), seed=2)
+    fig = tmp_path / "w.png"
+    done = subprocess.run(JAMFLOW + ["widths", str(a), str(b), "--labels", "2D", "3D", "--figure", str(fig)],
+                          capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    for label, table in (("2D", a), ("3D", b)):
+        row = next(csv.DictReader(open(table)))
+        assert f"{label}: " in done.stdout and f"nu = {float(row['nu']):.3f} +- {float(row['nu_err']):.3f}" in done.stdout
+        chi2 = float(row["nu_chi2_dof"])  # the table's, from onset_statistics; the command refits the rows
+        assert f"chi2/dof = {chi2:.2f}" in done.stdout and 0 < chi2 < 4
+    assert "N = 64, 128, 256;" in done.stdout and fig.stat().st_size > 10_000
+
+
+def test_widths_command_refuses_what_is_not_an_onsets_table(tmp_path):
+    a = write_onsets_table(tmp_path / "a.csv")
+    edited = tmp_path / "edited.csv"
+    edited.write_text(a.read_text().replace(next(csv.DictReader(open(a)))["nu"], "0.5"))
+    (tmp_path / "other.csv").write_text("n,phi_j\n64,0.64\n")
+    for args, message in (([str(edited)], "is not the fit of its rows"), ([str(tmp_path / "other.csv")], "no column width"),
+                          ([str(a), "--labels", "x", "y"], "2 label(s) for 1 table(s)"),
+                          ([str(tmp_path / "none.csv")], "no such table")):
+        done = subprocess.run(JAMFLOW + ["widths", *args, "--figure", str(tmp_path / "w.png")], capture_output=True,
+                              text=True)
+        assert done.returncode == 2 and message in done.stderr and len(done.stderr.splitlines()) == 1, done.stderr
+    assert not (tmp_path / "w.png").exists()
 
 
 def test_too_few_packings_are_refused():

@@ -38,6 +38,7 @@ SUBCOMMANDS = {
     "crosscheck": ("jamflow.cli.commands.crosscheck", "run the LAMMPS deck and the Python controller from one start and compare"),
     "ensemble": ("jamflow.cli.commands.ensemble", "many packings (seeds x N) on a Dask cluster into a resumable store"),
     "onsets": ("jamflow.cli.commands.onsets", "distribution of jamming onsets of an ensemble store: P(phi_J), W(N), nu"),
+    "widths": ("jamflow.cli.commands.widths", "W(N) of several onsets tables (e.g. 2D and 3D) on one plot, with their fits"),
 }
 
 # argparse's own pattern (-1, -.5) misses exponents (-1e-3), which it then reads as unknown options

@@ -6,13 +6,17 @@ replacement). Over N: W ~ N^-nu (weighted least squares on log W - log N; seed: 
 spheres, O'Hern, Silbert, Liu & Nagel, PRE 68, 011306, 2003) and the finite-size
 extrapolation <phi_J>(N) = phi_inf - a N^-nu (the shift scales as the width, O'Hern et al.
 2003), linear in N^-nu at the fitted nu. Errors of nu and phi_inf are the spread of the same
-fits over bootstrap replicates of every N at once.
+fits over bootstrap replicates of every N at once: statistical errors under the power law; how
+well the law fits is the chi^2 per degree of freedom of log W (``OnsetResult.width_chi2``). Tables
+of several systems (``jamflow onsets --table``) are drawn together by ``widths_figure``.
 """
 
 from __future__ import annotations
 
+import csv
 from collections import defaultdict
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -66,6 +70,11 @@ class OnsetResult:
     shift: float  # a in <phi_J>(N) = phi_inf - a N^-nu
     n_bootstrap: int
 
+    @property
+    def width_chi2(self) -> float:
+        """chi^2 per degree of freedom of the fit W ~ N^-nu (see ``width_chi2``)."""
+        return width_chi2(*_width_arrays(self.sizes), self.nu.value, self.amplitude)
+
     def __repr__(self) -> str:
         """One line: dim, the sizes N, nu and phi_inf with their errors, bootstrap replicates."""
         return (f"OnsetResult(dim={self.dim}, n={[s.n for s in self.sizes]}, nu={self.nu.value:.3f}+-{self.nu.err:.3f}, "
@@ -76,6 +85,12 @@ class OnsetResult:
                      width=s.width, width_err=s.width_err, mean_z=float(np.mean(s.z)),
                      sd_z=float(np.std(s.z, ddof=1)), isostatic_fraction=float(np.mean(s.isostatic)))
                 for s in self.sizes]
+
+
+def _width_arrays(sizes):
+    """(N, W, error of W) of SizeStats as float arrays."""
+    return (np.array([s.n for s in sizes], float), np.array([s.width for s in sizes]),
+            np.array([s.width_err for s in sizes]))
 
 
 def rows_by_size(rows) -> tuple[int, dict]:
@@ -110,9 +125,8 @@ def onset_statistics(rows, n_bootstrap: int = 1000, seed: int = 0) -> OnsetResul
     sizes = [SizeStats(n, phis[n], np.array([float(r["mean_z"]) for r in g]), _isostatic(g, dim), failed,
                        float(np.std(np.std(boot[n], axis=1, ddof=1), ddof=1)))
              for n, (g, failed) in groups.items()]
-    ns = np.array([s.n for s in sizes], float)
-    w_err = np.array([s.width_err for s in sizes])
-    nu, amp, phi_inf, shift = _fits(ns, np.array([s.width for s in sizes]), w_err,
+    ns, width, w_err = _width_arrays(sizes)
+    nu, amp, phi_inf, shift = _fits(ns, width, w_err,
                                     np.array([s.mean_phi for s in sizes]), np.array([s.mean_phi_err for s in sizes]))
     boot_w = np.array([np.std(boot[int(n)], axis=1, ddof=1) for n in ns])  # (sizes, B)
     boot_mean = np.array([boot[int(n)].mean(axis=1) for n in ns])
@@ -156,14 +170,29 @@ def _isostatic(group, dim) -> np.ndarray:
 def _fits(ns, width, width_err, mean, mean_err):
     """(nu, amplitude, phi_inf, shift): log W = log A - nu log N and <phi_J> = phi_inf - a N^-nu,
     both weighted least squares; nan where fewer than 2 sizes (3 for phi_inf)."""
-    if len(ns) < 2:
-        return (np.nan,) * 4
-    slope, intercept = np.polyfit(np.log(ns), np.log(width), 1, w=width / width_err)
-    nu = -slope
+    nu, amplitude = width_fit(ns, width, width_err)
     if len(ns) < 3:
-        return nu, float(np.exp(intercept)), np.nan, np.nan
+        return nu, amplitude, np.nan, np.nan
     a_slope, phi_inf = np.polyfit(ns ** (-nu), mean, 1, w=1.0 / mean_err)
-    return nu, float(np.exp(intercept)), float(phi_inf), float(-a_slope)
+    return nu, amplitude, float(phi_inf), float(-a_slope)
+
+
+def width_fit(ns, width, width_err) -> tuple[float, float]:
+    """(nu, A) of W = A N^-nu: weighted least squares of log W on log N, each point weighted by
+    W / err(W) (the inverse error of log W); nan when fewer than 2 sizes."""
+    if len(ns) < 2:
+        return np.nan, np.nan
+    slope, intercept = np.polyfit(np.log(ns), np.log(width), 1, w=np.asarray(width) / np.asarray(width_err))
+    return float(-slope), float(np.exp(intercept))
+
+
+def width_chi2(ns, width, width_err, nu, amplitude) -> float:
+    """chi^2 per degree of freedom of W = A N^-nu in log W (errors err(W) / W); about 1 when the
+    power law describes the widths within their errors; nan with fewer than 3 sizes."""
+    if len(ns) < 3:
+        return float("nan")
+    resid = (np.log(width) - np.log(amplitude) + nu * np.log(ns)) * np.asarray(width) / np.asarray(width_err)
+    return float(np.sum(resid**2) / (len(ns) - 2))
 
 
 def histograms(values_by_n: dict, bins: int):
@@ -219,6 +248,72 @@ def onsets_figure(result: OnsetResult, path, bins: int = 30, published: float | 
     ax[1, 1].legend(fontsize=8)
     fig.suptitle(f"{result.dim}D jamming onsets: {sum(s.count for s in result.sizes)} packings, "
                  f"{result.n_bootstrap} bootstrap replicates")
+    fig.tight_layout()
+    save_figure(fig, path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+@dataclass(frozen=True)
+class WidthCurve:
+    """W(N) of one system from an onsets table (``jamflow onsets --table``), with its fit."""
+
+    label: str
+    n: np.ndarray
+    width: np.ndarray
+    width_err: np.ndarray
+    nu: Fit  # as the table states it (its error is the table's bootstrap error)
+    amplitude: float
+
+    @property
+    def chi2(self) -> float:
+        """chi^2 per degree of freedom of the fit (``width_chi2``)."""
+        return width_chi2(self.n, self.width, self.width_err, self.nu.value, self.amplitude)
+
+
+WIDTH_COLUMNS = ("n", "width", "width_err", "nu", "nu_err")
+
+
+def read_width_curve(path, label: str | None = None) -> WidthCurve:
+    """W(N) of an onsets table; refuses a file that is not one (a missing column, fewer than 2
+    sizes, or a stated nu that is not the fit of its rows). ``label`` defaults to the file's stem."""
+    with open(path, newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    missing = [c for c in WIDTH_COLUMNS if not rows or c not in rows[0]]
+    if missing:
+        raise ValueError(f"{path}: no column {', '.join(missing)}: not a table written by jamflow onsets --table")
+    if len(rows) < 2:
+        raise ValueError(f"{path}: {len(rows)} size(s); W(N) needs at least 2")
+    n, width, err = (np.array([float(r[c]) for r in rows]) for c in ("n", "width", "width_err"))
+    nu, amplitude = width_fit(n, width, err)
+    stated = float(rows[0]["nu"])
+    if not abs(nu - stated) <= 1e-9 * max(1.0, abs(stated)):
+        raise ValueError(f"{path}: its nu = {stated} is not the fit of its rows (nu = {nu}); was the table edited?")
+    label = label if label is not None else Path(path).stem
+    return WidthCurve(label, n, width, err, Fit(stated, float(rows[0]["nu_err"])), amplitude)
+
+
+def widths_figure(curves, path):
+    """W(N) of several systems on one log-log plot, each with its fit W = A N^-nu."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.ticker import NullLocator
+
+    fig, ax = plt.subplots(figsize=(6.5, 4.8))
+    for k, c in enumerate(curves):
+        color = f"C{k}"
+        ax.errorbar(c.n, c.width, yerr=c.width_err, fmt="os^Dv"[k % 5], color=color,
+                    label=rf"{c.label}: $\nu$ = {c.nu.value:.3f} $\pm$ {c.nu.err:.3f}")
+        grid = np.geomspace(c.n.min(), c.n.max(), 50)
+        ax.plot(grid, c.amplitude * grid ** -c.nu.value, "-", color=color, lw=1)
+    ticks = sorted({int(n) for c in curves for n in c.n})
+    ax.set(xscale="log", yscale="log", xlabel="N", ylabel=r"W = sd($\phi_J$)",
+           title=r"width of the jamming onsets, fits $W \propto N^{-\nu}$ (bootstrap errors)")
+    ax.set_xticks(ticks, [str(n) for n in ticks], minor=False)
+    ax.xaxis.set_minor_locator(NullLocator())
+    ax.legend(fontsize=8)
     fig.tight_layout()
     save_figure(fig, path, dpi=110)
     plt.close(fig)

@@ -50,7 +50,8 @@ def run(args) -> int:
 
 def write_table(path, result) -> Path:
     rows = result.table()
-    fit = dict(nu=result.nu.value, nu_err=result.nu.err, phi_inf=result.phi_inf.value, phi_inf_err=result.phi_inf.err)
+    fit = dict(nu=result.nu.value, nu_err=result.nu.err, nu_chi2_dof=result.width_chi2, phi_inf=result.phi_inf.value,
+               phi_inf_err=result.phi_inf.err)
     return write_csv(path, [{**r, **fit} for r in rows])
 
 
@@ -65,7 +66,8 @@ def report_text(result, published=None) -> str:
     for r in result.table():
         lines.append(f"{r['n']:>6} {r['packings']:>8} {r['failed']:>6} {r['mean_phi_j']:.5f} +- {r['mean_phi_j_err']:.5f} "
                      f"{r['width']:.5f} +- {r['width_err']:.5f} {r['mean_z']:8.4f} {r['isostatic_fraction']:9.3f}")
-    lines.append(f"W ~ N^-nu: nu = {result.nu.value:.3f} +- {result.nu.err:.3f} (bootstrap, {result.n_bootstrap} replicates)")
+    lines.append(f"W ~ N^-nu: nu = {result.nu.value:.3f} +- {result.nu.err:.3f} (bootstrap, {result.n_bootstrap} replicates); "
+                 f"chi2/dof of the power law = {result.width_chi2:.2f}")
     lines.append(f"<phi_J>(N) = phi_inf - a N^-nu: phi_inf = {result.phi_inf.value:.4f} +- {result.phi_inf.err:.4f}"
                  + (f" (published large-N value about {published})" if published else ""))
     return "\n".join(lines)
