@@ -38,6 +38,7 @@ _EXPORTS = {
     "load_packing": "jamflow.io.packing_file",
     "run_ensemble": "jamflow.ensemble",
     "refine": "jamflow.protocols.refine",
+    "refine_to_vtol": "jamflow.protocols.refine",
     "RefineSettings": "jamflow.protocols.refine",
     "RefineResult": "jamflow.protocols.refine",
 }

@@ -151,7 +151,7 @@ def test_cli_jam_double_double_and_refine(tmp_path, capsys):
 
 @pytest.mark.parametrize("argv, message", [
     (["jam", "--precision", "double-double", "--pressure", "1e-14", "--engine", "lammps"], "needs the numba engine"),
-    (["jam", "--precision", "double-double"], "give --pressure P"),
+    (["jam", "--precision", "double-double", "--pressure", "1e-14", "--vtol", "1e-24"], "not both"),
     (["jam", "--precision", "double-double", "--pressure", "1e-30"], "P >= 1.9e-18"),
     (["jam", "--pressure", "1e-14"], "or --precision double-double"),
 ])

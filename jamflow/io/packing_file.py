@@ -221,7 +221,8 @@ def save_refined(result, path, *, force: bool = False) -> Path:
     with replacing([path] if force else []):
         return save_packing(path, result.packing, energy_per_particle=result.energy_per_particle,
                             pressure_tensor=result.pressure_tensor,
-                            protocol={**result.settings.as_dict(), "engine": "numba", "seconds": result.seconds},
+                            protocol={**result.settings.as_dict(), "engine": "numba", "seconds": result.seconds,
+                                      "refines": result.refines},
                             history=result.history, target_pressure=result.settings.pressure, stress="iso",
                             checks=checks)
 

@@ -73,6 +73,9 @@ PAIR_SKIN = 0.05  # candidate pairs within the largest diameter + this (diameter
 STEP_HALVINGS = 12
 WEDGE_SWEEPS = 20  # F / k relief sweeps before a wedged floater escapes along its contact normals
 WEDGE_GAP = 1e-8  # neighbours this near (diameters) bound the escape of a wedged floater
+ENERGY_EXPONENT = 2.0  # V ~ p^(alpha / (alpha - 1)) at a fixed network: alpha = 2, the linear spring
+VTOL_SPREAD = 2.0  # V / ((d / 2) eps delta^2), bounded from above (measured 1.3-1.5: dd_vtol_floor)
+MAX_VTOL_REFINES = 6  # refinements (secant steps in log p, log V) to land V in (V_tol, 2 V_tol)
 
 
 @dataclass(frozen=True)
@@ -85,6 +88,7 @@ class RefineSettings:
     max_newton: int = 60  # Newton steps per balanced state
     max_secant: int = 30  # box rescalings per decade of pressure
     max_network_updates: int = 10  # Newton solves with a new contact network per balanced state
+    v_tol: float | None = None  # energy window V_tol < V < 2 V_tol per particle this pressure was chosen for
 
     def __post_init__(self):
         _check_pressure(self.pressure)
@@ -94,8 +98,9 @@ class RefineSettings:
                 raise ValueError(f"{name} must be a number in (0, 1), got {value!r}")
 
     def as_dict(self) -> dict:
+        window = {} if self.v_tol is None else {"v_tol": self.v_tol}
         return {"precision": "double-double", "target_pressure": self.pressure, "force_tol": self.force_tol,
-                "pressure_tol": self.pressure_tol}
+                "pressure_tol": self.pressure_tol, **window}
 
 
 def dd_force_floor(packing: Packing) -> float:
@@ -112,6 +117,40 @@ def dd_pressure_floor(packing: Packing, force_tol: float = 1e-12) -> float:
 
 def check_refine(packing: Packing, settings: RefineSettings) -> None:
     """Refuse, before any work, what the refinement cannot do."""
+    _check_scene(packing)
+    floor = dd_pressure_floor(packing, settings.force_tol)
+    if settings.pressure < floor:
+        raise ValueError(f"target pressure {settings.pressure:g} is below what double-double resolves at N = "
+                         f"{packing.n} (box side {packing.box.lengths.max():.3g}): contact forces ~ P a^(d-1) must "
+                         f"stay 1/force_tol = {1 / settings.force_tol:.0e} times above the double-double force "
+                         f"round-off {dd_force_floor(packing):.1e}, so P >= {floor:.1e}; choose a larger target pressure")
+
+
+def dd_vtol_floor(packing: Packing, force_tol: float = 1e-12) -> float:
+    """Smallest V_tol (per particle) double-double resolves: the energy at ``dd_pressure_floor``. At
+    a fixed network of linear springs a contact's overlap delta ~ P (area per particle) / eps, so
+    V ~ VTOL_SPREAD (d / 2) eps delta^2 (z = 2d contacts, eps delta^2 / 2 each); measured on 2D
+    float64 onsets, N = 64 and 256: V / ((d / 2) eps delta^2) = 1.3-1.5 with the area per particle of
+    ``packing`` (a start below phi_J, whose larger area makes the floor conservative)."""
+    eps = packing.potential.epsilon
+    delta = dd_pressure_floor(packing, force_tol) * packing.box.volume / packing.n / eps
+    return VTOL_SPREAD * 0.5 * packing.dim * eps * delta**packing.potential.alpha  # V ~ delta^alpha
+
+
+def check_vtol(packing: Packing, v_tol: float, force_tol: float = 1e-12) -> None:
+    """Refuse, before any work, a V_tol the refinement cannot reach (``dd_vtol_floor``)."""
+    _check_scene(packing)
+    if not (math.isfinite(v_tol) and v_tol > 0):
+        raise ValueError(f"--vtol must be a finite positive number, got {v_tol}")
+    floor = dd_vtol_floor(packing, force_tol)
+    if v_tol < floor:
+        raise ValueError(f"vtol {v_tol:g} is below what double-double resolves at N = {packing.n}: its pressure would "
+                         f"be below the double-double floor P >= {dd_pressure_floor(packing, force_tol):.1e} "
+                         f"(jamflow.protocols.refine.dd_pressure_floor); use --vtol >= {floor:.1e}")
+
+
+def _check_scene(packing: Packing) -> None:
+    """Refuse particles, potentials and boxes the refinement is not written for."""
     if packing.shape.kind != "sphere":
         raise ValueError(f"double-double refinement is written for disks and spheres, not "
                          f"{packing.shape.name(packing.dim)} particles")
@@ -121,12 +160,6 @@ def check_refine(packing: Packing, settings: RefineSettings) -> None:
     if packing.box.walls or packing.box.is_triclinic or packing.fixed is not None or packing.gravity > 0:
         raise ValueError("double-double refinement needs an orthogonal periodic box without walls, gravity or fixed "
                          "particles")
-    floor = dd_pressure_floor(packing, settings.force_tol)
-    if settings.pressure < floor:
-        raise ValueError(f"target pressure {settings.pressure:g} is below what double-double resolves at N = "
-                         f"{packing.n} (box side {packing.box.lengths.max():.3g}): contact forces ~ P a^(d-1) must "
-                         f"stay 1/force_tol = {1 / settings.force_tol:.0e} times above the double-double force "
-                         f"round-off {dd_force_floor(packing):.1e}, so P >= {floor:.1e}; choose a larger target pressure")
 
 
 class _State:
@@ -544,6 +577,7 @@ class RefineResult:
     start_contacts: set
     seconds: float
     onset: object = None  # the float64 JamResult refined (``jamflow jam --precision double-double``), if any
+    refines: int = 1  # refinements made (``refine_to_vtol``: secant steps to the energy window)
 
     @property
     def pressure(self) -> float:
@@ -596,9 +630,15 @@ class RefineResult:
     def energy_per_particle(self) -> float:
         return float(self.network.energy[0] / self.packing.n)
 
+    @property
+    def in_window(self) -> bool | None:
+        """V_tol < V < 2 V_tol for the double-double energy per particle (None without ``settings.v_tol``)."""
+        v_tol = self.settings.v_tol
+        return None if v_tol is None else bool(v_tol < self.energy_per_particle < 2.0 * v_tol)
+
     def checks(self) -> PackingChecks:
-        """The packing checks, from the double-double forces and contacts (no energy window: the
-        state is fixed by its pressure). Force balance here is the refinement's own criterion,
+        """The packing checks, from the double-double forces and contacts (the energy window of
+        ``settings.v_tol`` if the pressure was chosen for one, else none). Force balance here is the refinement's own criterion,
         ``settings.force_tol``, far below the float64 checks' ``BALANCE_RTOL``."""
         net, p = self.network, self.packing
         fc = net.contact_forces(p.diameters, p.potential.epsilon)
@@ -606,7 +646,8 @@ class RefineResult:
         fmax = float(np.linalg.norm(net.forces[live], axis=1).max()) if live.any() else 0.0
         kept, ratio = int(live.sum()), self.force_balance
         return PackingChecks(
-            energy_per_particle=self.energy_per_particle, v_tol=None, in_window=None, max_force=fmax,
+            energy_per_particle=self.energy_per_particle, v_tol=self.settings.v_tol, in_window=self.in_window,
+            max_force=fmax,
             force_tol=self.settings.force_tol * float(fc.mean()) if len(fc) else None,
             mean_contact_force=float(fc.mean()) if len(fc) else math.nan, force_ratio=ratio,
             force_balanced=bool(ratio <= self.settings.force_tol), n_contacts=self.n_contacts,
@@ -628,11 +669,14 @@ class RefineResult:
         opened, closed = self.contact_changes()
         target = self.settings.pressure
         onset = "" if self.onset is None else f"float64 onset {self.onset.summary()}\n"
+        window = "" if self.settings.v_tol is None else (
+            f"\ndouble-double: V = {self.energy_per_particle:.4e} = {self.energy_per_particle / self.settings.v_tol:.3f} "
+            f"V_tol (V_tol = {self.settings.v_tol:g}), {self.refines} refinement(s)")
         return onset + (f"double-double: P_target = {target:.3e}  P = {self.pressure:.6e} (rel. {self.pressure / target - 1:+.1e})  "
                 f"phi = {self.phi[0]:.15f}  N_c = {self.n_contacts} (isostatic {self.isostatic_contacts}, "
                 f"{self.n_floaters} floaters; {len(opened)} opened, {len(closed)} closed)  max|F|/<f> = "
                 f"{self.force_balance:.1e}  {len(self.history['pressure'])} states, "
-                f"{int(np.sum(self.history['newton_steps']))} Newton steps (double-double), {self.seconds:.2f} s")
+                f"{int(np.sum(self.history['newton_steps']))} Newton steps (double-double), {self.seconds:.2f} s") + window
 
 
 def _pairs(net: Network) -> set:
@@ -683,6 +727,44 @@ def refine(packing: Packing, pressure: float, *, settings: RefineSettings | None
         raise JammingFailed(f"double-double refinement failed: {err}") from None
     return RefineResult(st.wrapped().packing(packing), net, settings, {k: np.array(v) for k, v in rows.items()},
                         start_contacts, time.perf_counter() - t0, onset)
+
+
+def refine_to_vtol(packing: Packing, v_tol: float, *, force_tol: float = 1e-12, observers=(),
+                   onset=None) -> RefineResult:
+    """Refine ``packing`` (as ``refine``) to the pressure whose double-double energy per particle V
+    lands in V_tol < V < 2 V_tol. The first target is p0 (1.5 V_tol / V0)^(1 / ENERGY_EXPONENT) from the
+    packing's own double-double (p0, V0), V ~ p^2 at a fixed network of linear springs; while V is
+    outside the window, a secant on (log p, log V) picks the next pressure, each refinement continuing
+    from the last refined state (at most ``MAX_VTOL_REFINES``). ``JammingFailed`` if V never lands."""
+    check_vtol(packing, v_tol, force_tol)
+    t0 = time.perf_counter()
+    first = evaluate(packing, _State.of(packing))
+    if first.pressure <= 0 or first.energy[0] <= 0:
+        raise JammingFailed("double-double refinement failed: the packing carries no pressure: refine a jammed packing")
+    points = [(math.log(first.pressure), math.log(first.energy[0] / packing.n))]
+    goal, slope, state = math.log(1.5 * v_tol), ENERGY_EXPONENT, packing
+    floor = dd_pressure_floor(packing, force_tol)
+    for k in range(1, MAX_VTOL_REFINES + 1):
+        slope = _log_secant(points, slope)
+        pressure = max(math.exp(points[-1][0] + (goal - points[-1][1]) / slope), floor)  # an overshoot stops at the floor
+        result = refine(state, pressure, settings=RefineSettings(pressure, force_tol=force_tol, v_tol=v_tol),
+                        observers=observers, onset=onset)
+        if result.in_window:
+            return replace(result, refines=k, seconds=time.perf_counter() - t0)
+        points.append((math.log(result.pressure), math.log(result.energy_per_particle)))
+        state = result.packing
+    raise JammingFailed(f"double-double refinement failed: V = {result.energy_per_particle:.3e} after "
+                        f"{MAX_VTOL_REFINES} refinements (p = {result.pressure:.3e}) is outside the window "
+                        f"({v_tol:g}, {2 * v_tol:g})")
+
+
+def _log_secant(points: list, slope: float) -> float:
+    """d log V / d log p from the last two points, or ``slope`` if they do not give a positive one."""
+    if len(points) < 2:
+        return slope
+    (pa, va), (pb, vb) = points[-2], points[-1]
+    secant = (vb - va) / (pb - pa) if pb != pa else math.nan
+    return secant if math.isfinite(secant) and secant > 0 else slope
 
 
 def _targets(start: float, target: float) -> tuple:

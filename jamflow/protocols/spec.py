@@ -34,6 +34,7 @@ from jamflow.protocols.settings import DEFAULT_PROTOCOL, PROTOCOLS, CompressionS
 
 
 PRECISIONS = ("double", "double-double")  # --precision: float64, or a float64 onset refined by jamflow.refine
+ONSET_VTOL = 1e-16  # the float64 onset of --precision double-double --vtol V below it (the JamSpec default)
 
 
 @dataclass(frozen=True)
@@ -65,7 +66,7 @@ class JamSpec:
     pressure: float | None = None  # target pressure: the box relaxes (eps / diameter^d)
     stress: str = "iso"  # with pressure: iso | aniso | tri
     gamma: float | None = None  # fixed Lees-Edwards shear strain
-    precision: str = "double"  # double | double-double (with pressure: float64 onset, then jamflow.refine)
+    precision: str = "double"  # double | double-double (float64 onset, then jamflow.refine to pressure or vtol)
     orientations: str = "random"  # start orientations of particles with an axis: random | aligned | nematic:S
 
     @classmethod
@@ -91,6 +92,16 @@ class JamSpec:
         """The protocol run: ``protocol`` (the old name "seed" is "chapter"), or the default."""
         return protocol_name(self.protocol or DEFAULT_PROTOCOL)
 
+    @property
+    def dd_vtol(self) -> bool:
+        """--precision double-double without --pressure: the onset is refined to the window of ``vtol``."""
+        return self.precision == "double-double" and self.pressure is None
+
+    @property
+    def onset_vtol(self) -> float:
+        """V_tol of the float64 compression: ``vtol``, or with ``dd_vtol`` at most ``ONSET_VTOL``."""
+        return max(self.vtol, ONSET_VTOL) if self.dd_vtol else self.vtol
+
 
 def compression_settings(spec: JamSpec) -> CompressionSettings:
     """The compression protocol and minimiser of a spec; refuses bad numbers and combinations."""
@@ -102,9 +113,10 @@ def compression_settings(spec: JamSpec) -> CompressionSettings:
     _check_choice("minimizer", spec.minimizer, METHODS)
     _check_choice("md-damping", spec.md_damping, MD_DAMPINGS)
     _check_choice("creep", spec.creep, CREEP_METHODS)
-    minimizer = MinimizerSettings(method=spec.minimizer, force_tol=spec.ftol, v_min=spec.vtol, damping=spec.damping,
+    v_tol = spec.onset_vtol
+    minimizer = MinimizerSettings(method=spec.minimizer, force_tol=spec.ftol, v_min=v_tol, damping=spec.damping,
                                   md_damping=spec.md_damping, creep=spec.creep)
-    return PROTOCOLS[spec.protocol_name](phi0=spec.phi0, dphi0=spec.dphi0, v_tol=spec.vtol, minimizer=minimizer)
+    return PROTOCOLS[spec.protocol_name](phi0=spec.phi0, dphi0=spec.dphi0, v_tol=v_tol, minimizer=minimizer)
 
 
 def _check_choice(option: str, value, choices) -> None:
@@ -149,13 +161,14 @@ PARTNERS = {
 
 
 def check_precision(spec: JamSpec) -> None:
-    """--precision double-double: a float64 onset refined to --pressure by ``jamflow.refine`` (the
-    compiled engine's double-double kernel), periodic boxes only."""
+    """--precision double-double: a float64 onset refined to --pressure, or to the energy window of
+    --vtol, by ``jamflow.refine`` (the compiled engine's double-double kernel), periodic boxes only."""
     _check_choice("precision", spec.precision, PRECISIONS)
     if spec.precision == "double":
         return
-    if spec.pressure is None:
-        raise ValueError("--precision double-double refines the onset to a target pressure: give --pressure P")
+    if spec.pressure is not None and spec.vtol != JamSpec.vtol:
+        raise ValueError("--precision double-double refines the onset to one target: give --pressure P (a pressure) "
+                         "or --vtol V (the energy window V < V_dd < 2 V), not both")
     if spec.engine == "lammps":
         raise ValueError("--precision double-double needs the numba engine (--engine numba or auto): LAMMPS computes "
                          "in float64 only")
@@ -206,11 +219,18 @@ def prepare(spec: JamSpec):
     if spec.gamma is not None:
         start = at_shear_strain(start, spec.gamma)  # refuses a strain that is not finite, or walls with a shear
     if spec.precision == "double-double":
-        from jamflow.protocols.refine import RefineSettings, check_refine  # here: refine loads scipy (~0.3 s)
+        from jamflow.protocols.refine import (  # here: refine loads scipy (~0.3 s)
+            RefineSettings,
+            check_refine,
+            check_vtol,
+        )
 
         engine_name(start, spec.minimizer, spec.engine)
         check_resolution(start, settings)
-        check_refine(start, RefineSettings(spec.pressure))  # the double-double floor, before the onset is made
+        if spec.dd_vtol:
+            check_vtol(start, spec.vtol)  # the double-double floor of V_tol, before the onset is made
+        else:
+            check_refine(start, RefineSettings(spec.pressure))  # the double-double floor, before the onset is made
         return settings, start
     if spec.pressure is not None:
         from jamflow.protocols.pressure import PressureSettings, check_pressure_start, pressure_sequence
@@ -223,8 +243,23 @@ def prepare(spec: JamSpec):
     if start.shape.kind == "rigid" and settings.minimizer.md_damping != "viscous":
         raise ValueError(f"--md-damping {settings.minimizer.md_damping} is for disks and spheres: rigid bodies are "
                          "damped by fix rigid langevin (set its rate with --damping)")
-    check_resolution(start, settings)
+    check_float64_resolution(start, settings)
     return settings, start
+
+
+def check_float64_resolution(start, settings) -> None:
+    """``check_resolution``, whose refusal of a V_tol below float64 also names --precision double-double
+    where it applies (disks/spheres, linear spring, periodic box)."""
+    try:
+        check_resolution(start, settings)
+    except ValueError as err:
+        pot = start.potential
+        refinable = (start.shape.kind == "sphere" and pot.name == "spring" and getattr(pot, "alpha", None) == 2.0
+                     and not start.box.walls and not start.gravity)
+        if not refinable or "vtol" not in str(err):
+            raise
+        raise ValueError(f"{err}; or --precision double-double, which refines the float64 onset to the window of "
+                         f"--vtol V down to ~1e-32 (docs/guide/precision.md)") from None
 
 
 def run_jam(spec: JamSpec, observers=(), engine_options=None, prepared=None, destination=None):
@@ -235,12 +270,13 @@ def run_jam(spec: JamSpec, observers=(), engine_options=None, prepared=None, des
     would write, named in the failure message."""
     settings, start = prepared or prepare(spec)
     if spec.precision == "double-double":
-        from jamflow.protocols.refine import refine
+        from jamflow.protocols.refine import refine, refine_to_vtol
 
         onset = jam(start=start, settings=settings, observers=observers, engine=spec.engine,
                     engine_options=engine_options)
         checked(onset, settings.minimizer, settings.v_tol, destination)
-        refined = refine(onset.packing, spec.pressure, onset=onset)
+        refined = (refine_to_vtol(onset.packing, spec.vtol, onset=onset) if spec.dd_vtol else
+                   refine(onset.packing, spec.pressure, onset=onset))
         checks = refined.checks()
         if not checks.passed:
             raise JammingFailed(f"the refined packing failed its checks: {'; '.join(checks.problems())}"
