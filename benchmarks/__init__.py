@@ -83,6 +83,9 @@ BENCHMARKS: dict[str, Benchmark] = {
     "refine_cost": Benchmark(
         "speed", "double-double refinement to p = 1e-14 against the float64 onset (N = 64, 256; docs/guide/precision.md)",
         ["--n", "64", "--seeds", "1", "--out", "{tmp}/refine-cost.csv"]),
+    "dd_vtol": Benchmark(
+        "accuracy", "jam --precision double-double --vtol V: refinements, V / V_tol, pressure (N = 64, 256; issue 28)",
+        ["--n", "64", "--vtol", "2e-35", "--seeds", "1"]),
     "dd_read": Benchmark(
         "accuracy", "a double-double file read back: contacts, zero modes, G, P from hi + lo against float64 (issue 28)",
         ["--n", "64", "--seeds", "2", "2"]),

@@ -89,8 +89,9 @@ def add_spec_arguments(p, skip=()) -> None:
     add("--gamma", type=float, default=None,
         help="jam at this fixed Lees-Edwards shear strain (any finite value; chapter section 2.2)")
     add("--precision", choices=PRECISIONS, default="double",
-        help="double-double (with --pressure P, disks/spheres, spring): the float64 onset refined to P by Newton steps "
-             "in double-double (jamflow refine; P down to ~2e-18 at N ~ 300; docs/guide/precision.md)")
+        help="double-double (disks/spheres, spring): the float64 onset refined by Newton steps in double-double "
+             "(jamflow refine) to --pressure P (down to ~2e-18 at N ~ 300), or without --pressure to the pressure "
+             "whose energy lands in the --vtol window (down to ~1e-35; docs/guide/precision.md)")
     add("--orientations", default="random", metavar="{" + ",".join(START_ORIENTATIONS) + "}",
         help="start orientations of particles with an axis: random (uniform, chapter step 1), aligned "
              "(every director along x: a nematic start, P2 = 1; Figure 2.23(c), docs/validation.md) or "

@@ -7,7 +7,8 @@ periodic cell is sheared to that fixed Lees-Edwards strain (section 2.2, docs/no
 DPHI the onset packing is compressed affinely by DPHI and minimised again, and that packing is
 written (attribute dphi_above; the state jamflow moduli measures, chapter section 4.5). With --precision
 double-double --pressure P the float64 onset is refined to P in double-double (jamflow refine;
-see the docs, guide/precision) and written with positions_lo."""
+see the docs, guide/precision) and written with positions_lo; with --precision double-double --vtol V
+(no --pressure) it is refined to the pressure whose double-double energy lands in V < V_dd < 2 V."""
 
 from __future__ import annotations
 
