@@ -388,7 +388,7 @@ def test_commands_refuse_a_symlinked_output_before_work_and_force_it(tmp_path, c
     source = out / "p.h5"
     source.write_bytes(packing_file.read_bytes())
     args, link = {"shear": (["shear", str(source), "--dgamma", "1e-3", "--to", "2e-3", "--out", str(out)], "p.shear.h5"),
-                  "families": (["families", "--n", "6", "--out", str(out)], "families.h5"),
+                  "families": (["families", "--n", "8", "--out", str(out)], "families.h5"),
                   "moduli": (["moduli", str(source)], "p.moduli.h5")}[command]
     (out / link).symlink_to(tmp_path / "elsewhere.h5")
     assert main([*args, "--quiet", "--no-figure"] if command != "families" else [*args, "--quiet"]) == 2
