@@ -354,9 +354,9 @@ def report(paths, figure, min_pn2, quiet=False) -> dict:
         for (dim, n), seeds in _ensembles(rows).items():
             mp, mdz, mg = _means(seeds, sorted(seeds))
             means[f"{dim}D N={n}"] = (np.full(len(mp), float(n)), mp, mdz, mg)
-        collapse = "; ".join(f"{dim}D collapse: Delta z {result[(dim, 'all', 'dz')]['slope']:.2f} +- "
-                             f"{result[(dim, 'all', 'dz')]['err']:.2f}, G {result[(dim, 'all', 'G')]['slope']:.2f} +- "
-                             f"{result[(dim, 'all', 'G')]['err']:.2f}" for dim in sorted({d for d, _, _ in result})
+        collapse = "; ".join(f"{dim}D collapse: Delta z {result[(dim, 'all', 'dz')]['slope']:.3f} +- "
+                             f"{result[(dim, 'all', 'dz')]['err']:.3f}, G {result[(dim, 'all', 'G')]['slope']:.3f} +- "
+                             f"{result[(dim, 'all', 'G')]['err']:.3f}" for dim in sorted({d for d, _, _ in result})
                              if (dim, "all", "dz") in result and (dim, "all", "G") in result)
         ladder_figure(figure, series, means, PUBLISHED, fitted,
                       title=f"Pressure ladder (double-double), fits over p N^2 >= {min_pn2:g}\n{collapse}")
