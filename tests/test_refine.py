@@ -213,15 +213,20 @@ def test_hessian_moduli_on_the_double_double_network(onset32, refined32):
     assert abs(np.trace(low.pressure_tensor) / 2 / refined32.pressure - 1) < 1e-6
 
 
+def _enthalpy_minimum(n: int, dim: int, seed: int, last: int):
+    """The float64 onset of ``seed`` taken down in pressure, two a decade from 1e-2 to 10^(-last/2)."""
+    pk = jamflow.jam(n=n, dim=dim, seed=seed, engine="numba").packing
+    for k in range(4, last + 1):
+        pk = jam_at_pressure(pk, PressureSettings((10 ** (-k / 2),)), engine="numba").packing
+    return pk
+
+
 def test_a_floater_wedged_at_the_float64_round_off_is_freed():
     """N = 64, seed 7, its float64 enthalpy minimum at p = 1e-8 (from 1e-2, two pressures a decade):
     floater 28 touches particles 1 and 14 with overlaps ~1.4e-14 (float64 round-off) along nearly
     opposite normals, its net force ~0; moving it by F / k never closed them ("floaters still
     overlap after 200 relief sweeps", failed before); it now escapes along its contact normals."""
-    pk = jamflow.jam(n=64, seed=7, engine="numba").packing
-    for k in range(4, 17):
-        pk = jam_at_pressure(pk, PressureSettings((10 ** (-k / 2),)), engine="numba").packing
-    r = refine(pk, 1e-8)
+    r = refine(_enthalpy_minimum(n=64, dim=2, seed=7, last=16), 1e-8)
     assert abs(r.pressure / 1e-8 - 1) < 1e-3 and r.force_balance < 1e-10
     assert not r.network.floater_overlaps and r.n_contacts >= r.isostatic_contacts
 
@@ -231,10 +236,7 @@ def test_a_3d_floater_held_by_three_contacts_around_it_is_freed():
     contacts (overlaps ~1e-9) with no direction opening all three along their summed normals; the
     least-norm move n_c . dx = overlap_c frees it (before: "floaters still overlap after 200 relief
     sweeps")."""
-    pk = jamflow.jam(n=128, dim=3, seed=2, engine="numba").packing
-    for k in range(4, 11):
-        pk = jam_at_pressure(pk, PressureSettings((10 ** (-k / 2),)), engine="numba").packing
-    r = refine(pk, 1e-5)
+    r = refine(_enthalpy_minimum(n=128, dim=3, seed=2, last=10), 1e-5)
     assert abs(r.pressure / 1e-5 - 1) < 1e-3 and r.force_balance < 1e-10
     assert not r.network.floater_overlaps and r.n_contacts >= r.isostatic_contacts
 
