@@ -29,7 +29,7 @@ import numpy as np
 
 from jamflow.mechanics.contacts import Contacts
 from jamflow.mechanics.force_floor import packing_force_floor
-from jamflow.model.packing import Packing, warn_float64_only
+from jamflow.model.packing import Packing
 from jamflow.model.shapes.rotations import generalized_torques as body_torques
 
 BALANCE_RTOL = 1e-3  # max net force / mean contact force above this: not at an energy minimum
@@ -107,8 +107,6 @@ def check_packing(packing: Packing, energy_per_particle: float | None = None, ma
     """
     from jamflow.mechanics.reference import energy_forces_pressure
 
-    warn_float64_only(packing, "the energy and force balance of check_packing (its contacts read hi + lo; "
-                               "jamflow.refine checks forces in double-double)")
     ref = energy_forces_pressure(packing, pairs="near")
     v = ref.energy / packing.n if energy_per_particle is None else float(energy_per_particle)
     worst = float(np.abs(ref.forces).max()) if ref.forces.size else 0.0

@@ -49,6 +49,7 @@ import scipy.sparse as sp
 
 from jamflow.model.packing import Packing
 from jamflow.model.pairs import overlapping_pairs, overlapping_sites, pair_geometry
+from jamflow.model.potentials import spring_of_overlap
 from jamflow.model.shapes.rotations import rotation_matrices
 
 
@@ -160,7 +161,7 @@ def law_derivatives(potential, s: np.ndarray, delta: np.ndarray | None = None) -
     if not math.isfinite(getattr(potential, "alpha", math.nan)):
         raise ValueError(f"double-double overlaps are evaluated for the spring law, not {potential.spec!r}")
     alpha, eps = potential.alpha, potential.epsilon
-    return -eps * delta ** (alpha - 1.0), eps * (alpha - 1.0) * delta ** (alpha - 2.0)
+    return spring_of_overlap(delta, potential.params)[1], eps * (alpha - 1.0) * delta ** (alpha - 2.0)
 
 
 def pair_terms(packing: Packing) -> PairTerms:

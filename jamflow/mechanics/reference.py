@@ -25,7 +25,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from jamflow.model.packing import Packing
-from jamflow.model.pairs import all_pairs, candidate_pairs, contact_distances, separations, site_packing
+from jamflow.model.pairs import (
+    all_pairs,
+    candidate_pairs,
+    contact_distances,
+    dd_pair_geometry,
+    pair_geometry,
+    separations,
+    site_packing,
+)
+from jamflow.model.potentials import spring_of_overlap
 from jamflow.model.walls import face_loads, gravity_terms, smooth_wall_terms
 
 
@@ -79,6 +88,8 @@ def _pairs(packing: Packing, near: bool):
 
 
 def _spheres(packing: Packing, near: bool):
+    if packing.extended is not None:
+        return _dd_spheres(packing, near)
     i, j = _pairs(packing, near)
     if packing.fixed is not None:  # fixed particles do not interact with each other
         i, j = i[~(packing.fixed[i] & packing.fixed[j])], j[~(packing.fixed[i] & packing.fixed[j])]
@@ -87,6 +98,19 @@ def _spheres(packing: Packing, near: bool):
     sigma = contact_distances(packing, i, j)
     v, dv = _reduced(packing.potential, r, sigma)
     fpair = (-dv / (sigma * r))[:, None] * dr  # force on i from j
+    return i, j, dr, fpair, float(v.sum()), None
+
+
+def _dd_spheres(packing: Packing, near: bool):
+    """Spheres with double-double coordinates (``Packing.extended``; periodic, linear or any spring):
+    the overlaps from hi + lo (``pairs.dd_pair_geometry``) and the law at the reduced overlap
+    (``potentials.spring_of_overlap``), so that forces ~1e-14 keep their digits; the directions, the
+    sums and the virial in float64 (relative round-off ~1e-16 of a contact force)."""
+    if not hasattr(packing.potential, "alpha"):
+        raise ValueError(f"double-double packings are evaluated for the spring law, not {packing.potential.spec!r}")
+    i, j, dr, r, sigma, overlap = pair_geometry(packing) if near else dd_pair_geometry(packing, *all_pairs(packing.n), 0.0)
+    v, dv = spring_of_overlap(overlap / sigma, packing.potential.params)
+    fpair = (-dv / (sigma * r))[:, None] * dr
     return i, j, dr, fpair, float(v.sum()), None
 
 

@@ -182,7 +182,7 @@ def pair_geometry(packing: Packing, skin: float = 0.0) -> PairGeometry:
         warn_float64_only(packing, f"the pair geometry of {packing.shape.name(packing.dim)} particles")
     i, j = candidate_pairs(packing, rmax * (1.0 + 1e-9) if extended else rmax)  # hi parts: pad by their round-off
     if extended:
-        return _dd_pair_geometry(packing, i, j, skin)
+        return dd_pair_geometry(packing, i, j, skin)
     dr = separations(packing, i, j)
     r = np.linalg.norm(dr, axis=1)
     sigma = contact_distances(packing, i, j, dr)
@@ -202,7 +202,7 @@ def dd_separations(packing: Packing, i: np.ndarray, j: np.ndarray) -> tuple:
     return ddouble.dd_sub(dh, dl, *ddouble.dd_mul_d(lh, ll, k))
 
 
-def _dd_pair_geometry(packing: Packing, i, j, skin: float) -> PairGeometry:
+def dd_pair_geometry(packing: Packing, i, j, skin: float) -> PairGeometry:
     """``pair_geometry`` of disks/spheres from double-double separations; the overlap
     sigma - r is formed in double-double (sigma = (a_i + a_j) / 2 exactly) and rounded last."""
     dh, dl = dd_separations(packing, i, j)

@@ -40,7 +40,13 @@ def spring_energy_force(s, p: SpringParams):
     spring is written with integer constants, so that exact rational s (``fractions.Fraction``) stays
     exact: the reference of the double-double kernel (tests/test_ddouble.py); for floats the bits are
     those of 0.5 eps x x (halving is exact)."""
-    x = 1 - s
+    return spring_of_overlap(1 - s, p)
+
+
+def spring_of_overlap(x, p: SpringParams):
+    """``spring_energy_force`` at the reduced overlap x = 1 - s = (sigma - r) / sigma, for an x known
+    more precisely than a float64 s carries it (double-double overlaps: at x ~ 1e-14, s = 1 - x keeps
+    ~2 digits of x)."""
     if p.alpha == 2.0:
         return p.epsilon * x * x / 2, -p.epsilon * x
     return p.epsilon / p.alpha * x**p.alpha, -p.epsilon * x ** (p.alpha - 1.0)

@@ -7,7 +7,7 @@ the law is written once. Kernels call it only inside contact (s < 1).
 
 from __future__ import annotations
 
-from jamflow.model.potentials import POTENTIALS
+from jamflow.model.potentials import POTENTIALS, spring_of_overlap
 from jamflow.engines.compiled import when_numba_starts
 
 _LAWS = {cls.Params: cls.energy_force for cls in POTENTIALS.values()}
@@ -28,6 +28,15 @@ def _register():
 
         def impl(params, s):
             return law(s, params)
+
+        return impl
+
+    @overload(spring_of_overlap, jit_options={"cache": True})
+    def _spring_of_overlap(x, params):  # the spring's law of s calls its law of the overlap 1 - s
+        law = numba.njit(spring_of_overlap)
+
+        def impl(x, params):
+            return law(x, params)
 
         return impl
 
