@@ -4,11 +4,17 @@ contact number and the Hessian-route shear modulus at each state; the collapse a
 (Goodrich, Liu & Nagel, PRL 109, 095704 (2012)); phi_J fitted from the lowest decades.
 
 Per (d, N, seed): a float64 onset (``jamflow.jam``), then the ladder in descending order, each state
-from the previous one. Above ``--switch`` (default 1.5e-9) the step down is a float64 enthalpy
-minimisation at the next pressure (``jam_at_pressure``, the compiled FIRE) and the state is then
-balanced in double-double at that pressure (``jamflow.refine``): decompressing through the contact
-rearrangements of the high pressures with the double-double Newton walk cost 10-40 s per state at
-N = 64 (its float64 FIRE fallback runs once per balance). At and below ``--switch`` every state is
+from the previous one. Above ``--switch`` (default 1.5e-9) the step down is a float64 state near the
+next pressure, then balanced in double-double at that pressure (``jamflow.refine``): decompressing
+through the contact rearrangements of the high pressures with the double-double Newton walk cost
+10-40 s per state at N = 64 (its float64 FIRE fallback runs once per balance). The first float64
+state is the enthalpy minimum at the top pressure (``jam_at_pressure``, the compiled FIRE with the
+box free); the next ones (``--float64 fixed-box``, the default) the previous state rescaled to the
+phi extrapolated from the last two balanced states and relaxed by FIRE at that box, or
+(``--float64 enthalpy``, the route of the 2D rows) enthalpy minima again. The enthalpy FIRE stops at
+its iteration cap (5e5) mid-rearrangement in 3D (30-60 s a state at N = 512, max|F|/<f> ~1e-3 left);
+FIRE at a fixed box converges in a fraction of that (3D N = 512 seed 1: the ladder in 124 s against
+>14 CPU min). At and below ``--switch`` every state is
 ``jamflow.refine(previous, p)``. Recorded per state: p and phi (hi + lo from the double-double box),
 N_c (double-double contacts between non-floaters), N' (non-floaters), N_c - (d (N' - 1) + 1),
 Delta z = z - z_iso with z = 2 N_c / N' and z_iso = 2 d (N' - 1) / N' (Goodrich et al.'s 2d - 2d/N':
@@ -19,7 +25,8 @@ the float64 positions, and what float64 sees of the network: the double-double c
 non-floaters it misses, those it adds, and its pairs touching a floater (round-off overlaps). A failed state is a row with its
 error; the ladder of that packing stops there.
 
-    python benchmarks/pressure_ladder.py --dim 2 --n 64 256 --seeds 10 --out docs/notes/pressure-ladder.csv
+    python benchmarks/pressure_ladder.py --dim 2 --n 64 256 --seeds 10 --float64 enthalpy --out docs/notes/pressure-ladder.csv
+    python benchmarks/pressure_ladder.py --dim 3 --n 128 512 --seeds 20 --out docs/notes/pressure-ladder-3d.csv
     python benchmarks/pressure_ladder.py --report docs/notes/pressure-ladder.csv   (fits, phi_J, figure)
     python benchmarks/pressure_ladder.py --quick --out X.csv                        (N = 16, 3 pressures)
     python benchmarks/pressure_ladder.py --n 256 --seeds 13 13 --self-stress --out X.csv  (why N_c is one more)
@@ -39,9 +46,14 @@ from pathlib import Path
 import numpy as np
 
 import jamflow
+from jamflow.engines.choose import open_engine
 from jamflow.mechanics.elastic import HessianModuli
+from jamflow.mechanics.reference import energy_forces_pressure
+from jamflow.minimize.rules import minimize
+from jamflow.minimize.settings import MinimizerSettings
 from jamflow.model.pairs import overlapping_pairs
 from jamflow.protocols.pressure import PressureSettings, jam_at_pressure
+from jamflow.protocols.refine import RELAX_V_MIN
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import DOCS
@@ -52,6 +64,7 @@ COLUMNS = ["dim", "n", "seed", "target", "route", "status", "p", "phi", "phi_lo"
            "excess", "z", "z_iso", "delta_z", "force_balance", "G", "B", "G_float64", "float64_same_network",
            "float64_missing", "float64_extra", "float64_floater_touching",
            "contacts_hash", "float64_seconds", "refine_seconds", "error"]
+STEP_BACKOFFS = 8  # fixed-box steps halfway back towards the last state when a guess lands unjammed
 F64_TRIES = 4  # jam_at_pressure calls per float64 state (each to the minimiser's iteration cap)
 PUBLISHED = {"dz": 0.5, "G": 0.5}  # linear spring: Delta z ~ p^1/2, G ~ p^1/2 (p N^2 >> 1)
 
@@ -148,29 +161,61 @@ def float64_enthalpy_minimum(packing, target, tries: int = F64_TRIES):
     return packing
 
 
-def run_packing(dim, n, seed, pressures, switch, g64_max_dof, sizes, last=None) -> list[dict]:
-    """Above ``switch``: the float64 chain (each enthalpy minimum from the previous float64 one) and
-    each of its states balanced in double-double (a failure there is recorded and the chain goes
-    on). At and below: each state refined from the previous double-double one (a failure stops).
-    ``last``: a list given the last RefineResult."""
+def float64_at_phi(packing, phi):
+    """``packing`` rescaled affinely to packing fraction ``phi`` and relaxed there by float64 FIRE at
+    that box (to force balance: no V < V_min stop, ``refine.RELAX_V_MIN``)."""
+    start = replace(packing, extended=None).scaled_to_phi(phi)
+    with open_engine(start, "fire", "numba") as sim:
+        minimize(sim, MinimizerSettings(v_min=RELAX_V_MIN))
+        return sim.packing()
+
+
+def fixed_box_step(packing, points, target):
+    """The float64 state for ``target`` by ``float64_at_phi`` at the phi of the secant through the
+    last two (phi, p) ``points`` (p linear in phi near onset for the spring); a state that carries
+    no pressure (the guess fell below its onset) is tried again halfway back to the last point, at
+    most STEP_BACKOFFS times."""
+    (fa, pa), (fb, pb) = points[-2], points[-1]
+    phi = fb + (target - pb) * (fb - fa) / (pb - pa)
+    for _ in range(STEP_BACKOFFS):
+        state = float64_at_phi(packing, phi)
+        if energy_forces_pressure(state, pairs="near").pressure > 0:
+            return state
+        phi = 0.5 * (phi + fb)
+    raise RuntimeError(f"no jammed float64 state between phi = {phi:.10f} and {fb:.10f}")
+
+
+def run_packing(dim, n, seed, pressures, switch, g64_max_dof, sizes, last=None, float64="fixed-box") -> list[dict]:
+    """Above ``switch``: the float64 chain, each of its states balanced in double-double (a failure
+    there is recorded and the chain goes on). Its first state is the enthalpy minimum at the top
+    pressure from the onset; then, ``float64="enthalpy"``, each enthalpy minimum from the previous
+    float64 state (``float64_enthalpy_minimum``), or, ``"fixed-box"``, the previous state rescaled
+    to the phi extrapolated from the last two balanced states (the onset first, at p = 0) and
+    relaxed at that box (``fixed_box_step``). At and below ``switch``: each state refined from the
+    previous double-double one (a failure stops). ``last``: a list given the last RefineResult."""
     rows = []
     t0 = time.perf_counter()
     onset = jamflow.jam(n=n, dim=dim, seed=seed, engine="numba", sizes=sizes)
     t_onset = time.perf_counter() - t0
     f64_packing, dd_packing, first = onset.packing, None, True
+    points = [(onset.packing.phi, 0.0)]
     for target in pressures:
         route = "float64+dd" if target > switch else "dd"
+        if route == "float64+dd" and float64 == "fixed-box" and not first:
+            route = "box+dd"
         t64 = t_onset if first else 0.0
         first = False
         try:
+            t0 = time.perf_counter()
             if route == "float64+dd":
-                t0 = time.perf_counter()
                 start = f64_packing = float64_enthalpy_minimum(f64_packing, target)
-                t64 += time.perf_counter() - t0
+            elif route == "box+dd":
+                start = f64_packing = fixed_box_step(f64_packing, points, target)
             elif dd_packing is None:
                 raise RuntimeError("no double-double state above to start from")
             else:
                 start = dd_packing
+            t64 += time.perf_counter() - t0
             t0 = time.perf_counter()
             r = jamflow.refine(start, target)
             trf = time.perf_counter() - t0
@@ -184,6 +229,7 @@ def run_packing(dim, n, seed, pressures, switch, g64_max_dof, sizes, last=None) 
             continue
         rows.append(state_row(dim, n, seed, target, route, r, g64_max_dof, t64, trf))
         dd_packing = r.packing
+        points.append((r.phi[0], r.pressure))
         if last is not None:
             last[:] = [r]
     return rows
@@ -385,6 +431,9 @@ def main(argv=None) -> int:
     ap.add_argument("--sizes", default="bi:1.4:0.5", help="size spec (default: 50:50 bidisperse 1 : 1.4)")
     ap.add_argument("--top", type=float, default=1e-2)
     ap.add_argument("--bottom", type=float, default=1e-14)
+    ap.add_argument("--float64", choices=("fixed-box", "enthalpy"), default="fixed-box",
+                    help="float64 steps below the top pressure: relaxations at the box of the extrapolated phi "
+                         "(default), or enthalpy minimisations (the 2D and 3D N = 128 rows before 2026-12-03)")
     ap.add_argument("--switch", type=float, default=1.5e-9, help="float64 steps down above this pressure")
     ap.add_argument("--g64-max-dof", type=int, default=600, help="HessianModuli on float64 up to N d")
     ap.add_argument("--out", default=str(DOCS / "pressure-ladder.csv"))
@@ -408,7 +457,7 @@ def main(argv=None) -> int:
         for seed in seeds:
             t0 = time.perf_counter()
             last = []
-            rows = run_packing(args.dim, n, seed, pressures, args.switch, args.g64_max_dof, args.sizes, last)
+            rows = run_packing(args.dim, n, seed, pressures, args.switch, args.g64_max_dof, args.sizes, last, args.float64)
             if args.self_stress and last:
                 print(f"d={args.dim} N={n} seed={seed} at p = {last[0].pressure:.3e}: {self_stresses(last[0])}", flush=True)
             write(args.out, rows, append)

@@ -371,3 +371,19 @@ def test_a_start_newton_cannot_balance_is_relaxed_once_in_float64():
     r = refine(capped, 10**-4.5)
     assert r.force_balance < 1e-12 and abs(r.pressure / 10**-4.5 - 1) < 1e-4
     assert r.n_contacts >= r.isostatic_contacts
+
+
+def test_the_float64_fallback_relaxes_below_the_chapters_v_min(refined32):
+    """The fallback FIRE (``_float64_relax``) relaxes to force balance: below p ~ 1e-8 the energy per
+    particle (~1e-20 at 1e-10) is under the chapter's V_min = 1e-16, whose stop ended the FIRE at once
+    and returned the state unrelaxed (before RELAX_V_MIN)."""
+    import jamflow.protocols.refine as refine_module
+
+    at = refine(refined32.packing, 1e-10)
+    assert at.energy_per_particle < 1e-16
+    shaken = replace(at.packing, extended=None, positions=at.packing.positions
+                     + 1e-9 * np.random.default_rng(5).standard_normal((32, 2)))
+    before = check_packing(shaken).force_ratio
+    st = refine_module._float64_relax(shaken, refine_module._State.of(shaken), 1e-10, "test")
+    after = check_packing(st.packing(shaken)).force_ratio
+    assert before > 1 and after < 1e-3  # float64 FIRE stops at max|F| ~ 1e-14 ~ 1e-4 of a contact force here

@@ -75,6 +75,8 @@ WEDGE_SWEEPS = 20  # F / k relief sweeps before a wedged floater escapes along i
 WEDGE_GAP = 1e-8  # neighbours this near (diameters) bound the escape of a wedged floater
 ENERGY_EXPONENT = 2.0  # V ~ p^(alpha / (alpha - 1)) at a fixed network: alpha = 2, the linear spring
 VTOL_SPREAD = 2.0  # V / ((d / 2) eps delta^2), bounded from above (measured 1.3-1.5: dd_vtol_floor)
+RELAX_V_MIN = 1e-300  # the float64 FIRE relaxes to force balance: the chapter's V < V_min stop (1e-16 per
+# particle) would end it at once below p ~ 1e-8, where V ~ p^2 is smaller, and return the state unrelaxed
 MAX_VTOL_REFINES = 6  # refinements (secant steps in log p, log V) to land V in (V_tol, 2 V_tol)
 
 
@@ -565,7 +567,7 @@ def _float64_relax(packing: Packing, st: _State, pressure: float, why: str) -> _
         raise RuntimeError(f"{why} at p = {pressure:.2e}, below what float64 resolves ({floor:.1e}), and there is no "
                            f"double-double minimiser for that yet")
     with open_engine(start, "fire", "numba") as sim:
-        minimize(sim, MinimizerSettings())
+        minimize(sim, MinimizerSettings(v_min=RELAX_V_MIN))
         x = box.wrap(sim.packing().positions)
     return _State(x, np.zeros_like(x), st.lh, st.ll)
 
