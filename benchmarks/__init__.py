@@ -92,6 +92,9 @@ BENCHMARKS: dict[str, Benchmark] = {
     "jammed_side": Benchmark(
         "speed", "jammed-side protocol (overshoot, pressure ladder, Newton on the contact network) against `fast` (issue 27)",
         ["--n", "64", "--seeds", "1", "1", "--top", "0", "--gauss-newton", "--out", "{tmp}/jammed-side.csv"]),
+    "newton_landing": Benchmark(
+        "speed", "float64 bisection to a loose window, then the double-double Newton landing to V_tol, against `fast` (issue 27)",
+        ["--n", "64", "--seeds", "1", "--loose", "1e-12", "--out", "{tmp}/newton-landing.csv"]),
     "pressure_ladder": Benchmark(
         "study", "pressure ladder 1e-2 .. 1e-14 in double-double: Delta z and G against p N^2, phi_J (issue 28)",
         ["--quick", "--out", "{tmp}/pressure-ladder.csv"]),

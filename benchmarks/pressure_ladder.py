@@ -27,7 +27,7 @@ error; the ladder of that packing stops there.
 
     python benchmarks/pressure_ladder.py --dim 2 --n 64 256 --seeds 10 --float64 enthalpy --out docs/notes/pressure-ladder.csv
     python benchmarks/pressure_ladder.py --dim 3 --n 128 512 --seeds 20 --out docs/notes/pressure-ladder-3d.csv
-    python benchmarks/pressure_ladder.py --report docs/notes/pressure-ladder.csv   (fits, phi_J, figure)
+    python benchmarks/pressure_ladder.py --report docs/notes/pressure-ladder.csv docs/notes/pressure-ladder-3d.csv   (fits, phi_J, figure)
     python benchmarks/pressure_ladder.py --quick --out X.csv                        (N = 16, 3 pressures)
     python benchmarks/pressure_ladder.py --n 256 --seeds 13 13 --self-stress --out X.csv  (why N_c is one more)
 """

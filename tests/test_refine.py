@@ -387,3 +387,17 @@ def test_the_float64_fallback_relaxes_below_the_chapters_v_min(refined32):
     st = refine_module._float64_relax(shaken, refine_module._State.of(shaken), 1e-10, "test")
     after = check_packing(st.packing(shaken)).force_ratio
     assert before > 1 and after < 1e-3  # float64 FIRE stops at max|F| ~ 1e-14 ~ 1e-4 of a contact force here
+
+
+def test_a_floater_cluster_too_large_to_move_together_goes_to_the_float64_fallback(monkeypatch):
+    """More than MAX_JOINT_FLOATERS floaters in one cluster (a state past its onset: N = 1024 seed 5
+    landed from V = 1e-12 to 1e-16 had 978 in contact) are handed to the float64 FIRE as caged,
+    without the least-distance problem of d x 978 unknowns (20 s of the 24 s landing before)."""
+    import jamflow.protocols.refine as refine_module
+    from jamflow.model.box import Box
+
+    pk = jamflow.jam(n=16, seed=1, engine="numba").packing
+    monkeypatch.setattr(refine_module, "MAX_JOINT_FLOATERS", 8)
+    monkeypatch.setattr(refine_module, "_least_distance", lambda g, h: pytest.fail("solved a too-large cluster"))
+    with pytest.raises(refine_module._Caged, match="9 floaters in contact form one cluster"):
+        refine_module._cluster_move(pk, Box(np.diag(pk.box.lengths)), pk.positions, list(range(9)), {})

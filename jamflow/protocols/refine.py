@@ -75,6 +75,8 @@ WEDGE_SWEEPS = 20  # F / k relief sweeps before a wedged floater escapes along i
 WEDGE_GAP = 1e-8  # neighbours this near (diameters) bound the escape of a wedged floater
 ENERGY_EXPONENT = 2.0  # V ~ p^(alpha / (alpha - 1)) at a fixed network: alpha = 2, the linear spring
 VTOL_SPREAD = 2.0  # V / ((d / 2) eps delta^2), bounded from above (measured 1.3-1.5: dd_vtol_floor)
+MAX_JOINT_FLOATERS = 64  # larger floater clusters are not moved together (a least-distance problem of d x
+# their number unknowns; every particle of N = 1024 past its onset: 20 s) but handed to the float64 FIRE
 RELAX_V_MIN = 1e-300  # the float64 FIRE relaxes to force balance: the chapter's V < V_min stop (1e-16 per
 # particle) would end it at once below p ~ 1e-8, where V ~ p^2 is smaller, and return the state unrelaxed
 MAX_VTOL_REFINES = 6  # refinements (secant steps in log p, log V) to land V in (V_tol, 2 V_tol)
@@ -381,7 +383,11 @@ def _single_escape(near: tuple, depth: dict, a: int) -> np.ndarray | None:
 def _cluster_move(packing: Packing, box: Box, x: np.ndarray, cluster: list, depth: dict) -> np.ndarray:
     """The shortest joint move (len(cluster), d) of a floater cluster, the rest fixed, that opens
     each contact by 1 + 1e-6 of its (dd) overlap and closes each other gap by at most half, else
-    by at most 99 % (a tight cage); ``_Caged`` if neither exists (``_joint_move``)."""
+    by at most 99 % (a tight cage); ``_Caged`` if neither exists (``_joint_move``), or if the cluster
+    has more than ``MAX_JOINT_FLOATERS`` floaters."""
+    if len(cluster) > MAX_JOINT_FLOATERS:
+        raise _Caged(f"{len(cluster)} floaters in contact form one cluster, too many to move together (more than "
+                     f"{MAX_JOINT_FLOATERS}): the state is far from balance or below its onset")
     for share in (0.5, 0.99):
         move = _joint_move(packing, box, x, cluster, depth, share)
         if move is not None:
