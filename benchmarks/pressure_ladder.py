@@ -29,7 +29,7 @@ error; the ladder of that packing stops there.
     python benchmarks/pressure_ladder.py --dim 3 --n 128 512 --seeds 20 --out docs/notes/pressure-ladder-3d.csv
     python benchmarks/pressure_ladder.py --report docs/notes/pressure-ladder.csv docs/notes/pressure-ladder-3d.csv   (fits, phi_J, figure)
     python benchmarks/pressure_ladder.py --quick --out X.csv                        (N = 16, 3 pressures)
-    python benchmarks/pressure_ladder.py --n 256 --seeds 13 13 --self-stress --out X.csv  (why N_c is one more)
+    python benchmarks/pressure_ladder.py --n 256 --seeds 13 13 --float64 enthalpy --self-stress --out X.csv  (why N_c is one more)
 """
 
 from __future__ import annotations
@@ -64,6 +64,7 @@ COLUMNS = ["dim", "n", "seed", "target", "route", "status", "p", "phi", "phi_lo"
            "excess", "z", "z_iso", "delta_z", "force_balance", "G", "B", "G_float64", "float64_same_network",
            "float64_missing", "float64_extra", "float64_floater_touching",
            "contacts_hash", "float64_seconds", "refine_seconds", "error"]
+STEP_FLOOR = 10.0  # a fixed-box state below target / STEP_FLOOR is taken as unjammed
 STEP_BACKOFFS = 8  # fixed-box steps halfway back towards the last state when a guess lands unjammed
 F64_TRIES = 4  # jam_at_pressure calls per float64 state (each to the minimiser's iteration cap)
 PUBLISHED = {"dz": 0.5, "G": 0.5}  # linear spring: Delta z ~ p^1/2, G ~ p^1/2 (p N^2 >> 1)
@@ -172,14 +173,15 @@ def float64_at_phi(packing, phi):
 
 def fixed_box_step(packing, points, target):
     """The float64 state for ``target`` by ``float64_at_phi`` at the phi of the secant through the
-    last two (phi, p) ``points`` (p linear in phi near onset for the spring); a state that carries
-    no pressure (the guess fell below its onset) is tried again halfway back to the last point, at
-    most STEP_BACKOFFS times."""
+    last two (phi, p) ``points`` (p linear in phi near onset for the spring); a state whose pressure
+    is below target / STEP_FLOOR (it rearranged below its onset: 3D N = 512 seed 13 at 3.2e-5 relaxed
+    to p = 2e-17, every particle a floater) is tried again halfway back to the last point, at most
+    STEP_BACKOFFS times."""
     (fa, pa), (fb, pb) = points[-2], points[-1]
     phi = fb + (target - pb) * (fb - fa) / (pb - pa)
     for _ in range(STEP_BACKOFFS):
         state = float64_at_phi(packing, phi)
-        if energy_forces_pressure(state, pairs="near").pressure > 0:
+        if energy_forces_pressure(state, pairs="near").pressure > target / STEP_FLOOR:
             return state
         phi = 0.5 * (phi + fb)
     raise RuntimeError(f"no jammed float64 state between phi = {phi:.10f} and {fb:.10f}")
