@@ -40,7 +40,6 @@ the same network that ``Contacts`` counts.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -49,7 +48,7 @@ import scipy.sparse as sp
 
 from jamflow.model.packing import Packing
 from jamflow.model.pairs import overlapping_pairs, overlapping_sites, pair_geometry
-from jamflow.model.potentials import spring_of_overlap
+from jamflow.model.potentials import overlap_law_params, spring_curvature_of_overlap, spring_of_overlap
 from jamflow.model.shapes.rotations import rotation_matrices
 
 
@@ -158,10 +157,8 @@ def law_derivatives(potential, s: np.ndarray, delta: np.ndarray | None = None) -
     ~1e-14 a float64 s keeps only ~2 of its digits)."""
     if delta is None:
         return potential.energy_force(s, potential.params)[1], potential.curvature(s, potential.params)
-    if not math.isfinite(getattr(potential, "alpha", math.nan)):
-        raise ValueError(f"double-double overlaps are evaluated for the spring law, not {potential.spec!r}")
-    alpha, eps = potential.alpha, potential.epsilon
-    return spring_of_overlap(delta, potential.params)[1], eps * (alpha - 1.0) * delta ** (alpha - 2.0)
+    params = overlap_law_params(potential)
+    return spring_of_overlap(delta, params)[1], spring_curvature_of_overlap(delta, params)
 
 
 def pair_terms(packing: Packing) -> PairTerms:

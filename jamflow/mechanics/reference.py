@@ -34,7 +34,7 @@ from jamflow.model.pairs import (
     separations,
     site_packing,
 )
-from jamflow.model.potentials import spring_of_overlap
+from jamflow.model.potentials import overlap_law_params, spring_of_overlap
 from jamflow.model.walls import face_loads, gravity_terms, smooth_wall_terms
 
 
@@ -106,10 +106,9 @@ def _dd_spheres(packing: Packing, near: bool):
     the overlaps from hi + lo (``pairs.dd_pair_geometry``) and the law at the reduced overlap
     (``potentials.spring_of_overlap``), so that forces ~1e-14 keep their digits; the directions, the
     sums and the virial in float64 (relative round-off ~1e-16 of a contact force)."""
-    if not hasattr(packing.potential, "alpha"):
-        raise ValueError(f"double-double packings are evaluated for the spring law, not {packing.potential.spec!r}")
+    params = overlap_law_params(packing.potential)
     i, j, dr, r, sigma, overlap = pair_geometry(packing) if near else dd_pair_geometry(packing, *all_pairs(packing.n), 0.0)
-    v, dv = spring_of_overlap(overlap / sigma, packing.potential.params)
+    v, dv = spring_of_overlap(overlap / sigma, params)
     fpair = (-dv / (sigma * r))[:, None] * dr
     return i, j, dr, fpair, float(v.sum()), None
 

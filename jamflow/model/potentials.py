@@ -54,7 +54,20 @@ def spring_of_overlap(x, p: SpringParams):
 
 def spring_curvature(s, p: SpringParams):
     """d2V/ds2 = eps (alpha - 1) (1 - s)^(alpha - 2); diverges at contact for alpha < 2."""
-    return p.epsilon * (p.alpha - 1.0) * (1.0 - s) ** (p.alpha - 2.0)
+    return spring_curvature_of_overlap(1.0 - s, p)
+
+
+def spring_curvature_of_overlap(x, p: SpringParams):
+    """``spring_curvature`` at the reduced overlap x = 1 - s (``spring_of_overlap``)."""
+    return p.epsilon * (p.alpha - 1.0) * x ** (p.alpha - 2.0)
+
+
+def overlap_law_params(potential) -> SpringParams:
+    """The parameters of ``potential`` for the laws of the reduced overlap: double-double overlaps
+    are evaluated for the spring law only (ValueError for another)."""
+    if not isinstance(potential.params, SpringParams):
+        raise ValueError(f"double-double overlaps are evaluated for the spring law, not {potential.spec!r}")
+    return potential.params
 
 
 class RLJParams(NamedTuple):
