@@ -46,14 +46,11 @@ from pathlib import Path
 import numpy as np
 
 import jamflow
-from jamflow.engines.choose import open_engine
 from jamflow.mechanics.elastic import HessianModuli
 from jamflow.mechanics.reference import energy_forces_pressure
-from jamflow.minimize.rules import minimize
-from jamflow.minimize.settings import MinimizerSettings
 from jamflow.model.pairs import overlapping_pairs
 from jamflow.protocols.pressure import PressureSettings, jam_at_pressure
-from jamflow.protocols.refine import RELAX_V_MIN
+from jamflow.protocols.refine import relax_at_box
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import DOCS
@@ -164,11 +161,8 @@ def float64_enthalpy_minimum(packing, target, tries: int = F64_TRIES):
 
 def float64_at_phi(packing, phi):
     """``packing`` rescaled affinely to packing fraction ``phi`` and relaxed there by float64 FIRE at
-    that box (to force balance: no V < V_min stop, ``refine.RELAX_V_MIN``)."""
-    start = replace(packing, extended=None).scaled_to_phi(phi)
-    with open_engine(start, "fire", "numba") as sim:
-        minimize(sim, MinimizerSettings(v_min=RELAX_V_MIN))
-        return sim.packing()
+    that box, to force balance (``refine.relax_at_box``)."""
+    return relax_at_box(replace(packing, extended=None).scaled_to_phi(phi))
 
 
 def fixed_box_step(packing, points, target):

@@ -203,6 +203,10 @@ class _State:
             xh[:, a], xl[:, a] = dd.dd_sub(xh[:, a], xl[:, a], sh, sl)
         return _State(xh, xl, self.lh, self.ll)
 
+    def float64(self, template: Packing) -> Packing:
+        """The high parts as a float64 packing of ``template``'s particles and potential."""
+        return Packing(self.xh, template.diameters, Box(np.diag(self.lh)), template.potential)
+
     def packing(self, template: Packing) -> Packing:
         box = Box(np.diag(self.lh), template.box.periodic)
         return replace(template, positions=self.xh, box=box, extended=None).with_low_parts(self.xl, self.ll)
@@ -251,7 +255,7 @@ class Network:
 def evaluate(packing: Packing, st: _State, network: tuple | None = None) -> Network:
     """Overlaps, forces, energy and pressure of ``st`` in double-double; its contacts and floaters.
     ``network`` (i, j, floater): evaluate that fixed contact network as bilateral springs instead."""
-    hi = Packing(st.xh, packing.diameters, Box(np.diag(st.lh)), packing.potential)
+    hi = st.float64(packing)
     if network is None:
         i, j = candidate_pairs(hi, float(packing.diameters.max()) + PAIR_SKIN)
     else:
@@ -527,16 +531,21 @@ def balance(packing: Packing, st: _State, settings: RefineSettings, network: tup
     unilaterally, Newton steps)."""
     relaxed = False
 
-    def relieve(st):
+    def fall_back(st, pressure, why):
+        """The one float64 FIRE of this balance, then the floaters relieved."""
         nonlocal relaxed
+        relaxed = True
+        st = _float64_relax(packing, st, pressure, why)
+        return _relieve_floaters(packing, st, evaluate(packing, st))
+
+    def relieve(st):
         net = evaluate(packing, st)
         try:
             return _relieve_floaters(packing, st, net)
         except _Caged as caged:
             if relaxed:
                 raise
-            st, relaxed = _float64_relax(packing, st, net.pressure, str(caged)), True
-            return _relieve_floaters(packing, st, evaluate(packing, st))
+            return fall_back(st, net.pressure, str(caged))
 
     if network is None:
         st, net = relieve(st)
@@ -548,8 +557,7 @@ def balance(packing: Packing, st: _State, settings: RefineSettings, network: tup
         except _Unbalanced as stuck:
             if relaxed:
                 raise
-            st, relaxed = _float64_relax(packing, st, evaluate(packing, st).pressure, str(stuck)), True
-            st, net = relieve(st)
+            st, net = fall_back(st, evaluate(packing, st).pressure, str(stuck))
             network = _network(net)
             continue
         total += steps
@@ -559,8 +567,7 @@ def balance(packing: Packing, st: _State, settings: RefineSettings, network: tup
             return st, net, total
         wandering = update + 1 == settings.max_network_updates // 2 and net.pressure >= _float64_floor(packing, st)
         if (key in seen or wandering) and not relaxed:
-            st, relaxed = _float64_relax(packing, st, net.pressure, "the contact network rearranges"), True
-            st, net = relieve(st)
+            st, net = fall_back(st, net.pressure, "the contact network rearranges")
         seen.add(key)
         network = _network(net)
     raise RuntimeError(f"the contact network kept changing over {settings.max_network_updates} Newton solves")
@@ -568,22 +575,26 @@ def balance(packing: Packing, st: _State, settings: RefineSettings, network: tup
 
 def _float64_floor(packing: Packing, st: _State) -> float:
     """The lowest pressure float64 resolves at the box of ``st`` (``pressure.pressure_floor``)."""
-    return pressure_floor(Packing(st.xh, packing.diameters, Box(np.diag(st.lh)), packing.potential), MinimizerSettings())
+    return pressure_floor(st.float64(packing), MinimizerSettings())
+
+
+def relax_at_box(packing: Packing) -> Packing:
+    """``packing`` relaxed by FIRE in float64 (the compiled engine) at its fixed box, to force
+    balance: no V < V_min stop (``RELAX_V_MIN``)."""
+    with open_engine(packing, "fire", "numba") as sim:
+        minimize(sim, MinimizerSettings(v_min=RELAX_V_MIN))
+        return sim.packing()
 
 
 def _float64_relax(packing: Packing, st: _State, pressure: float, why: str) -> _State:
-    """FIRE at the fixed box in float64 (the compiled engine) from the high parts: the contact
-    changes of a rearrangement or of a closed cage (``why``), found where float64 resolves the
-    forces (``pressure_floor``)."""
-    box = Box(np.diag(st.lh))
-    start = Packing(st.xh, packing.diameters, box, packing.potential)
-    floor = _float64_floor(packing, st)
+    """``relax_at_box`` of the high parts: the contact changes of a rearrangement or of a closed
+    cage (``why``), found where float64 resolves the forces (``pressure_floor``)."""
+    start = st.float64(packing)
+    floor = pressure_floor(start, MinimizerSettings())
     if pressure < floor:
         raise RuntimeError(f"{why} at p = {pressure:.2e}, below what float64 resolves ({floor:.1e}), and there is no "
                            f"double-double minimiser for that yet")
-    with open_engine(start, "fire", "numba") as sim:
-        minimize(sim, MinimizerSettings(v_min=RELAX_V_MIN))
-        x = box.wrap(sim.packing().positions)
+    x = start.box.wrap(relax_at_box(start).positions)
     return _State(x, np.zeros_like(x), st.lh, st.ll)
 
 
