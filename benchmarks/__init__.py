@@ -24,7 +24,8 @@ BENCHMARKS: dict[str, Benchmark] = {
     # --- speed -----------------------------------------------------------------------------------
     "speed_table": Benchmark(
         "speed", "default `jamflow jam` (whole process and in process) against the hand-written LAMMPS protocol",
-        ["--n", "64", "--seeds", "1", "--handwritten", "64", "--process-max", "64", "--out", "{tmp}/speed-table.csv"]),
+        ["--n", "64", "--seeds", "1", "--handwritten", "64", "--process-max", "64", "--out", "{tmp}/speed-table.csv",
+         "--trace", "{tmp}/trace.csv"]),
     "startup": Benchmark(
         "speed", "start-up of the jamflow command (--help, jam --n 64), its floors and a jam's first second",
         ["--repeats", "1", "--out", "{tmp}/startup.csv"]),
@@ -95,6 +96,8 @@ BENCHMARKS: dict[str, Benchmark] = {
     "newton_landing": Benchmark(
         "speed", "float64 bisection to a loose window, then the double-double Newton landing to V_tol, against `fast` (issue 27)",
         ["--n", "64", "--seeds", "1", "--loose", "1e-12", "--out", "{tmp}/newton-landing.csv"]),
+    "ldl_reuse": Benchmark(
+        "speed", "the polish's SuperLU factorisations against an LDL^T keeping its symbolic analysis (qdldl; issue 27)"),
     "pressure_ladder": Benchmark(
         "study", "pressure ladder 1e-2 .. 1e-14 in double-double: Delta z and G against p N^2, phi_J (issue 28)",
         ["--quick", "--out", "{tmp}/pressure-ladder.csv"]),

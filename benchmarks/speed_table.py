@@ -12,6 +12,8 @@ Baseline: the chapter's protocol written directly on the LAMMPS Python module --
     python benchmarks/speed_table.py --dim 3 --sizes mono --n 512 --seeds 1 2 3 --handwritten 512 --out docs/notes/speed-table.csv
     python benchmarks/speed_table.py --chart docs/notes/speed-table.csv --png docs/notes/speed-2.png
     python benchmarks/speed_table.py --summary docs/notes/speed-table.csv    # the markdown rows of docs/notes/speed-2.md
+    timeout 6000 python benchmarks/speed_table.py --n 16384 --seeds 1 --process-max 0 --out docs/notes/speed-table-s11.csv \
+        --trace docs/notes/speed-trace-n16384.csv    # a row per minimisation as it ends: the path of a run that is stopped
 
 Whole process: ``python -m jamflow.cli jam ...`` wall and CPU (user + sys) seconds, imports
 and numba's cache load included. In process: ``jam()`` with a warm interpreter. Rows are
@@ -86,11 +88,29 @@ def handwritten_jam(packing, data_path, cap=100_000, v_tol=1e-16, dphi0=1e-4):
 
 
 
-def jamflow_row(n, dim, sizes, seed, tmp, process: bool) -> dict:
+def tracer(path: Path, n: int, seed: int, c0: float):
+    """An observer of ``jam`` appending one row per minimisation to ``path`` as it ends (so a run
+    stopped from outside, e.g. by ``timeout``, leaves its path so far)."""
+    def observe(step):
+        r = step["result"]
+        append_row(path, list(TRACE_COLUMNS), {
+            "n": n, "seed": seed, "step": step["step"], "phi": f"{step['phi']:.12f}", "dphi": f"{step['dphi']:.4g}",
+            "energy_per_particle": f"{r.energy_per_particle:.5g}", "reason": r.reason, "iterations": r.iterations,
+            "max_force": f"{r.max_force:.3g}", "creep_steps": r.creep_steps,
+            "cpu_s": round(time.process_time() - c0, 1)})
+    return observe
+
+
+TRACE_COLUMNS = ("n", "seed", "step", "phi", "dphi", "energy_per_particle", "reason", "iterations", "max_force",
+                 "creep_steps", "cpu_s")
+
+
+def jamflow_row(n, dim, sizes, seed, tmp, process: bool, trace: Path | None = None) -> dict:
     wall, cpu = whole_process(n, dim, sizes, seed, tmp) if process else (None, None)
     settings = PROTOCOLS[DEFAULT_PROTOCOL]()
     t0, c0 = time.perf_counter(), time.process_time()
-    r = jam(n=n, dim=dim, sizes=sizes, seed=seed, settings=settings)
+    observers = [tracer(trace, n, seed, c0)] if trace else []
+    r = jam(n=n, dim=dim, sizes=sizes, seed=seed, settings=settings, observers=observers)
     inproc, inproc_cpu = time.perf_counter() - t0, time.process_time() - c0
     ftol = settings.minimizer.resolved_force_tol(r.packing.box, r.packing.potential.contact_stiffness)
     checks = check_packing(r.packing, r.energy_per_particle, None, settings.v_tol, ftol)
@@ -200,6 +220,8 @@ def main(argv=None):
     ap.add_argument("--cap", type=int, default=100_000, help="baseline FIRE iteration cap per minimisation")
     ap.add_argument("--process-max", type=int, default=1024, help="whole-process runs only up to this N")
     ap.add_argument("--out", default="docs/notes/speed-table.csv")
+    ap.add_argument("--trace", default=None, metavar="CSV", help="also append a row per minimisation of the in-process "
+                    "jams (phi, V, stop reason, iterations, CPU s so far) to this CSV")
     ap.add_argument("--chart", default=None, nargs="+", metavar="CSV", help="only draw the chart of these CSVs' rows")
     ap.add_argument("--png", default="docs/notes/speed-2.png")
     ap.add_argument("--summary", default=None, metavar="CSV", help="only print the markdown rows of this CSV")
@@ -213,7 +235,8 @@ def main(argv=None):
     with tempfile.TemporaryDirectory() as tmp:
         for n in args.n:
             for seed in args.seeds:
-                rows = [jamflow_row(n, args.dim, args.sizes, seed, tmp, n <= args.process_max)]
+                rows = [jamflow_row(n, args.dim, args.sizes, seed, tmp, n <= args.process_max,
+                                    Path(args.trace) if args.trace else None)]
                 if n in args.handwritten and (args.handwritten_seeds is None or seed in args.handwritten_seeds):
                     rows.append(handwritten_row(n, args.dim, args.sizes, seed, tmp, args.cap))
                 for row in rows:
