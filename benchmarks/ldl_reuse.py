@@ -11,7 +11,7 @@ K = J^T W J + mu I over *all* pairs within sigma + SKIN is fixed: inactive rows 
 For each seed: the default jam's packing, compressed affinely by ``--dphi`` and relaxed by FIRE to
 max force 1e-9 (where the polish starts, ``minimize.settings.CREEP_FORCE``); then one
 ``polish.model_step`` as jamflow runs it (one SuperLU per active-set iteration) against the same
-semismooth Newton with the LDL^T, and the factorisation alone timed both ways (minimum of
+``model_step`` given the LDL^T (``ReusedLDL``), and the factorisation alone timed both ways (minimum of
 ``--repeats``, wall milliseconds). Needs ``pip install qdldl`` (not a jamflow dependency).
 
     python benchmarks/ldl_reuse.py --n 1024 --seeds 1 2 3 --out docs/notes/ldl-reuse.csv
@@ -48,31 +48,25 @@ def _weighted(jac, weights, mu):
     return sp.triu((jw.T @ jw + mu * sp.identity(jac.shape[1], format="csc")).tocsc(), format="csc")
 
 
-def ldl_model_step(delta, jac, mu, polish):
-    """``polish.model_step`` with one symbolic analysis and numeric LDL^T updates."""
-    import qdldl
+class ReusedLDL:
+    """A ``factorise`` for ``polish.model_step``: the LDL^T of J^T W J + mu I over all pairs of
+    ``jac``, analysed on the first call and refactorised numerically on the later ones."""
 
-    dx = np.zeros(jac.shape[1])
-    solver, pattern, k = None, None, 0
-    for k in range(1, polish.INNER + 1):
-        lin = delta + jac @ dx
-        active = lin > 0
-        grad = jac[active].T @ lin[active] + mu * dx
-        matrix = _weighted(jac, np.where(active, 1.0, TINY), mu)
-        if solver is None:
-            solver, pattern = qdldl.Solver(matrix, upper=True), (matrix.indptr.copy(), matrix.indices.copy())
+    def __init__(self, jac):
+        self.jac, self.solver, self.pattern = jac, None, None
+
+    def __call__(self, ja, active, mu):
+        import qdldl
+
+        matrix = _weighted(self.jac, np.where(active, 1.0, TINY), mu)
+        if self.solver is None:
+            self.solver = qdldl.Solver(matrix, upper=True)
+            self.pattern = (matrix.indptr.copy(), matrix.indices.copy())
+        elif not (np.array_equal(matrix.indptr, self.pattern[0]) and np.array_equal(matrix.indices, self.pattern[1])):
+            raise RuntimeError("the weighted matrix changed its pattern")
         else:
-            if not (np.array_equal(matrix.indptr, pattern[0]) and np.array_equal(matrix.indices, pattern[1])):
-                raise RuntimeError("the weighted matrix changed its pattern")
-            solver.update(matrix, upper=True)
-        p = solver.solve(-grad)
-        t = polish.line_minimum(lin, jac @ p, dx, p, mu) if float(grad @ p) < 0 else 0.0
-        if t <= 0:
-            break
-        dx = dx + t * p
-        if t >= 1.0 and np.array_equal(delta + jac @ dx > 0, active):
-            break
-    return dx, k
+            self.solver.update(matrix, upper=True)
+        return self.solver
 
 
 def polish_start(n, seed, dphi):
@@ -89,21 +83,19 @@ def polish_start(n, seed, dphi):
 
 
 def row(n, seed, dphi, repeats):
-    import scipy.sparse as sp
-    import scipy.sparse.linalg as spla
     import qdldl
 
     from jamflow.minimize import polish
 
     start, relaxed = polish_start(n, seed, dphi)
     delta, jac = polish.model(start)
-    mu = polish.SHIFT * max(float(np.asarray(jac.multiply(jac).sum(axis=0)).max(initial=0.0)), 1.0)
-    t_step_lu, (dx_lu, active, inner_lu) = _best_ms(lambda: polish.model_step(delta, jac, mu), repeats)
-    t_step_ldl, (dx_ldl, inner_ldl) = _best_ms(lambda: ldl_model_step(delta, jac, mu, polish), repeats)
+    mu = polish.shift(jac)
+    t_step_lu, (dx_lu, _, inner_lu) = _best_ms(lambda: polish.model_step(delta, jac, mu), repeats)
+    t_step_ldl, (dx_ldl, _, inner_ldl) = _best_ms(
+        lambda: polish.model_step(delta, jac, mu, factorise=ReusedLDL(jac)), repeats)
     on = delta > 0
-    ja, eye = jac[on], sp.identity(jac.shape[1], format="csc")
-    t_lu, _ = _best_ms(lambda: spla.splu((ja.T @ ja + mu * eye).tocsc(), permc_spec="MMD_AT_PLUS_A",
-                                        diag_pivot_thresh=0.0, options=dict(SymmetricMode=True)), repeats)
+    ja = jac[on]
+    t_lu, _ = _best_ms(lambda: polish.superlu(ja, on, mu), repeats)
     matrix = _weighted(jac, np.where(on, 1.0, TINY), mu)
     t_build, _ = _best_ms(lambda: _weighted(jac, np.where(on, 1.0, TINY), mu), repeats)
     t_analyse, solver = _best_ms(lambda: qdldl.Solver(matrix, upper=True), repeats)

@@ -220,7 +220,7 @@ def main(argv=None):
     ap.add_argument("--cap", type=int, default=100_000, help="baseline FIRE iteration cap per minimisation")
     ap.add_argument("--process-max", type=int, default=1024, help="whole-process runs only up to this N")
     ap.add_argument("--out", default="docs/notes/speed-table.csv")
-    ap.add_argument("--trace", default=None, metavar="CSV", help="also append a row per minimisation of the in-process "
+    ap.add_argument("--trace", type=Path, default=None, metavar="CSV", help="also append a row per minimisation of the in-process "
                     "jams (phi, V, stop reason, iterations, CPU s so far) to this CSV")
     ap.add_argument("--chart", default=None, nargs="+", metavar="CSV", help="only draw the chart of these CSVs' rows")
     ap.add_argument("--png", default="docs/notes/speed-2.png")
@@ -235,8 +235,7 @@ def main(argv=None):
     with tempfile.TemporaryDirectory() as tmp:
         for n in args.n:
             for seed in args.seeds:
-                rows = [jamflow_row(n, args.dim, args.sizes, seed, tmp, n <= args.process_max,
-                                    Path(args.trace) if args.trace else None)]
+                rows = [jamflow_row(n, args.dim, args.sizes, seed, tmp, n <= args.process_max, args.trace)]
                 if n in args.handwritten and (args.handwritten_seeds is None or seed in args.handwritten_seeds):
                     rows.append(handwritten_row(n, args.dim, args.sizes, seed, tmp, args.cap))
                 for row in rows:

@@ -163,23 +163,34 @@ def line_minimum(a: np.ndarray, b: np.ndarray, dx: np.ndarray, p: np.ndarray, mu
     return lo
 
 
-def model_step(delta: np.ndarray, jac: sp.csr_matrix, mu: float) -> tuple[np.ndarray, int, int]:
-    """Minimise m(dx) by semismooth Newton with exact line searches on m; ends when a full step
-    keeps the active set. Returns (dx, pairs in the last active set, active-set iterations)."""
+def shift(jac: sp.csr_matrix) -> float:
+    """mu of the model: ``SHIFT`` times the largest diagonal of J^T J (at least ``SHIFT``)."""
+    return SHIFT * max(float(np.asarray(jac.multiply(jac).sum(axis=0)).max(initial=0.0)), 1.0)
+
+
+def superlu(ja: sp.csr_matrix, active: np.ndarray, mu: float):
+    """SuperLU of J_a^T J_a + mu I (``ja`` the active rows of J; ``active`` unused here, given to
+    every factorisation ``model_step`` may be passed)."""
     import scipy.sparse as sp
     import scipy.sparse.linalg as spla  # loaded only when a polish runs
 
+    eye = sp.identity(ja.shape[1], format="csc")
+    return spla.splu((ja.T @ ja + mu * eye).tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                     options=dict(SymmetricMode=True))
+
+
+def model_step(delta: np.ndarray, jac: sp.csr_matrix, mu: float, factorise=superlu) -> tuple[np.ndarray, int, int]:
+    """Minimise m(dx) by semismooth Newton with exact line searches on m; ends when a full step
+    keeps the active set. ``factorise(ja, active, mu)`` returns an object whose ``solve(b)`` solves
+    (J_a^T J_a + mu I) x = b. Returns (dx, pairs in the last active set, active-set iterations)."""
     dx = np.zeros(jac.shape[1])
-    eye = sp.identity(jac.shape[1], format="csc")
     k = 0
     for k in range(1, INNER + 1):
         lin = delta + jac @ dx
         active = lin > 0
         ja = jac[active]
         grad = ja.T @ lin[active] + mu * dx
-        lu = spla.splu((ja.T @ ja + mu * eye).tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                       options=dict(SymmetricMode=True))
-        p = lu.solve(-grad)
+        p = factorise(ja, active, mu).solve(-grad)
         t = line_minimum(lin, jac @ p, dx, p, mu) if float(grad @ p) < 0 else 0.0
         if t <= 0:
             break
@@ -239,7 +250,7 @@ def polish(engine, ftol: float, max_steps: int = MAX_STEPS, on_step=None) -> Pol
     steps = []
     while worst >= ftol and len(steps) < max_steps:
         delta, jac = model(packing)
-        mu = SHIFT * max(float(np.asarray(jac.multiply(jac).sum(axis=0)).max(initial=0.0)), 1.0)
+        mu = shift(jac)
         noise = 8 * np.finfo(float).eps * float(np.sum(np.maximum(delta, 0.0)))  # V = sum delta^2 / 2, each delta to ~eps
         before = worst
         dx, n_active, inner = model_step(delta, jac, mu)
