@@ -101,6 +101,20 @@ def write_rows(path: Path, rows: list[dict], columns) -> None:
             w.writerows(rows)
 
 
+def check_outputs(*paths) -> None:
+    """Exit with a clear message before any work starts if one of the output ``paths`` (None
+    skipped) cannot be written (``jamflow.support.files.check_writable``)."""
+    from jamflow.support.files import check_writable
+
+    for path in paths:
+        if path is None:
+            continue
+        try:
+            check_writable(path)
+        except ValueError as err:
+            raise SystemExit(f"error: {err}") from None
+
+
 def append_row(path: Path, columns, row: dict) -> None:
     """Append one row (header first if the file is new) and flush it to disk."""
     path = Path(path)

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from common import append_row  # (benchmarks/ is the script's directory)
+from common import append_row, check_outputs  # (benchmarks/ is the script's directory)
 
 TINY = 1e-150  # the weight of an inactive pair: keeps the pattern, adds nothing a float64 sum sees
 
@@ -121,6 +121,7 @@ def main(argv=None):
         import qdldl  # noqa: F401
     except ImportError:
         raise SystemExit("ldl_reuse needs qdldl, which jamflow does not install: pip install qdldl")
+    check_outputs(args.out and Path(args.out))
     for n in args.n:
         for seed in args.seeds:
             r = row(n, seed, args.dphi, args.repeats)

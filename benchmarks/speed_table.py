@@ -39,7 +39,7 @@ from jamflow.mechanics.checks import check_packing
 from jamflow.protocols.settings import PROTOCOLS, DEFAULT_PROTOCOL
 from jamflow.protocols.compression import initial_packing, jam
 
-from common import append_row, run_process  # (benchmarks/ is the script's directory)
+from common import append_row, check_outputs, run_process  # (benchmarks/ is the script's directory)
 
 
 def whole_process(n, dim, sizes, seed, tmp) -> tuple[float, float]:
@@ -230,8 +230,9 @@ def main(argv=None):
         return summary(args.summary)
     if args.chart:
         return chart(args.chart, args.png)
-    jam(n=16, seed=0)  # numba's cache load outside the in-process timings
     out = Path(args.out)
+    check_outputs(out, args.trace)
+    jam(n=16, seed=0)  # numba's cache load outside the in-process timings
     with tempfile.TemporaryDirectory() as tmp:
         for n in args.n:
             for seed in args.seeds:
