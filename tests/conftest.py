@@ -1,7 +1,13 @@
-"""Shared fixtures: small random packings in orthogonal and tilted boxes."""
+"""Shared fixtures: small random packings in orthogonal and tilted boxes; eigen-solvers that
+return the other sign of every eigenvector (``flipped_eigen_solvers``, and the whole run with
+JAMFLOW_FLIP_EIGENVECTORS=1)."""
+
+import os
 
 import numpy as np
 import pytest
+import scipy.linalg
+import scipy.sparse.linalg
 
 from jamflow.model.box import Box
 from jamflow.model.packing import Packing
@@ -36,3 +42,57 @@ def tilted(packing, tilt: float):
 def rel(a, b) -> float:
     """Largest absolute difference over the largest |b|."""
     return float(np.max(np.abs(np.asarray(a) - np.asarray(b))) / np.max(np.abs(b)))
+
+
+# --- eigen-solvers of another machine ----------------------------------------------------------
+TIED = 1e-8  # eigenvalues this close (relative to the largest |eigenvalue|) count as tied
+
+
+def _other_machine(values, vectors, permute: bool):
+    """Every eigenvector negated; with ``permute`` the pairs of each run of tied eigenvalues reversed."""
+    vectors = -vectors
+    if permute and len(values) > 1:
+        order, start = np.arange(len(values)), 0
+        scale = max(float(np.abs(values).max()), np.finfo(float).tiny)
+        for k in range(1, len(values) + 1):
+            if k == len(values) or abs(values[k] - values[k - 1]) > TIED * scale:
+                order[start:k] = order[start:k][::-1]
+                start = k
+        values, vectors = values[order], vectors[:, order]
+    return values, vectors
+
+
+def flipped_eigen_solvers(patch, permute: bool = True) -> None:
+    """Make numpy's and scipy's ``eigh`` and scipy's ``eigsh`` return every eigenvector with the
+    other sign (and, with ``permute``, tied eigenpairs in reverse order), as a LAPACK or ARPACK
+    of another machine may. ``patch(module, name, value)`` sets an attribute (monkeypatch.setattr)."""
+    np_eigh, sp_eigh, eigsh = np.linalg.eigh, scipy.linalg.eigh, scipy.sparse.linalg.eigsh
+
+    def numpy_eigh(a, *args, **kwargs):
+        out = np_eigh(a, *args, **kwargs)
+        return type(out)(*_other_machine(*out, permute))
+
+    def scipy_eigh(a, *args, **kwargs):
+        out = sp_eigh(a, *args, **kwargs)
+        return _other_machine(*out, permute) if isinstance(out, tuple) else out
+
+    def sparse_eigsh(a, *args, **kwargs):
+        out = eigsh(a, *args, **kwargs)
+        return _other_machine(*out, permute) if isinstance(out, tuple) else out
+
+    patch(np.linalg, "eigh", numpy_eigh)
+    patch(scipy.linalg, "eigh", scipy_eigh)
+    patch(scipy.sparse.linalg, "eigsh", sparse_eigsh)
+
+
+@pytest.fixture
+def flipped_eigenvectors(monkeypatch):
+    """For the test: eigen-solvers that return the other sign and the other order of tied pairs."""
+    flipped_eigen_solvers(monkeypatch.setattr)
+
+
+def pytest_configure(config):
+    """JAMFLOW_FLIP_EIGENVECTORS=1: the whole run (this process; not the subprocesses it starts)
+    with every eigenvector of the other sign, results must not change."""
+    if os.environ.get("JAMFLOW_FLIP_EIGENVECTORS") == "1":
+        flipped_eigen_solvers(setattr, permute=False)

@@ -30,6 +30,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import scipy.linalg as sla
 
+from jamflow.model.frames import canonical_signs
 from jamflow.model.packing import Packing
 from jamflow.analysis import quartic
 from jamflow.mechanics.deformation import energy_change, network_amplitudes, opening_amplitude  # noqa: F401 (public here)
@@ -44,7 +45,7 @@ class SpectrumResult:
     """Eigen-decomposition of one packing's dynamical matrix (ascending eigenvalues)."""
 
     eigenvalues: np.ndarray  # (m,), eps / diameter^2; all d N' of them when complete
-    eigenvectors: np.ndarray | None  # (d N', m) orthonormal columns, or None
+    eigenvectors: np.ndarray | None  # (d N', m) orthonormal columns (signs: ``model.frames.canonical_signs``), or None
     dynamical: DynamicalMatrixResult
     e_min: float
     mass: float  # M in omega = sqrt(e / M)
@@ -145,7 +146,7 @@ def branch_labels(spec: SpectrumResult) -> np.ndarray | None:
     zero = np.abs(spec.eigenvalues) <= spec.e_min
     labels = np.where(zero, 1, np.where(fraction < 0.5, 2, 3))
     k = np.flatnonzero(zero)
-    labels[k[np.argsort(fraction[k])[max(len(k) - spec.dim, 0):]]] = 0
+    labels[k[np.argsort(fraction[k], kind="stable")[max(len(k) - spec.dim, 0):]]] = 0
     return labels
 
 
@@ -207,7 +208,8 @@ def _dense(matrix, vectors: bool):
     a = matrix.toarray()
     a = 0.5 * (a + a.T)
     if vectors:
-        return sla.eigh(a)
+        values, vecs = sla.eigh(a)
+        return values, canonical_signs(vecs)
     return sla.eigh(a, eigvals_only=True), None
 
 
@@ -284,7 +286,7 @@ class ModeProfile:
     """Energy profile Delta V(delta) along one nontrivial mode."""
 
     eigenvalue: float  # Rayleigh quotient of the mode, eps / diameter^2
-    mode: np.ndarray  # (d_f N',) unit vector orthogonal to the translations
+    mode: np.ndarray  # (d_f N',) unit vector orthogonal to the translations (sign: ``model.frames.canonical_signs``)
     deltas: np.ndarray  # amplitudes delta (diameters)
     delta_v_plus: np.ndarray  # V(xi_0 + delta e) - V(xi_0), total, eps
     delta_v_minus: np.ndarray  # V(xi_0 - delta e) - V(xi_0)
@@ -476,7 +478,7 @@ def lowest_nontrivial_modes(spec: SpectrumResult, count: int | None = None) -> t
         raise ValueError("no nontrivial mode: the packing has no degrees of freedom beyond translations")
     values, coeffs = np.linalg.eigh(basis.T @ (dyn.matrix @ basis))
     modes = basis @ coeffs
-    modes /= np.linalg.norm(modes, axis=0)
+    modes = canonical_signs(modes / np.linalg.norm(modes, axis=0))
     keep = len(values) if count is None else min(count, len(values))
     return values[:keep], modes[:, :keep]
 

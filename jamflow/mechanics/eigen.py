@@ -15,6 +15,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse.linalg as spla
 
+from jamflow.model.frames import canonical_signs
+
 START_SEED = 0  # ARPACK's start vector: the same in every call, so a run repeats bit for bit
 
 
@@ -26,10 +28,12 @@ def lowest_eigenpairs(matrix, k: int, shift: float, *, grow_above: float | None 
     largest value found exceeds it (``analysis.modes``: every zero mode bracketed). ``ascending``:
     sort by value (otherwise ARPACK's order). ``dense_limit``: matrices of at most this many
     rows, or with k >= n - 1, are diagonalised densely (numpy ``eigh``: all n pairs, ascending).
+    Each vector's sign is ``jamflow.model.frames.canonical_signs``'s, not the solver's.
     """
     n = matrix.shape[0]
     if n <= dense_limit or k >= n - 1:
-        return np.linalg.eigh(matrix.toarray())
+        values, vectors = np.linalg.eigh(matrix.toarray())
+        return values, canonical_signs(vectors)
     while True:
         k = min(k, n - 2)
         values, vectors = spla.eigsh(matrix.tocsc(), k=k, sigma=-shift, which="LM", v0=start_vector(n))
@@ -37,7 +41,7 @@ def lowest_eigenpairs(matrix, k: int, shift: float, *, grow_above: float | None 
             order = np.argsort(values)
             values, vectors = values[order], vectors[:, order]
         if grow_above is None or values[-1] > grow_above or k >= n - 2:
-            return values, vectors
+            return values, canonical_signs(vectors)
         k *= 2
 
 

@@ -1,5 +1,6 @@
 """The model layer: what a packing is. Box, particle sizes, potentials, shapes, the ``Packing``
-value object, the pair search and the wall geometry. Imports nothing else of jamflow."""
+value object, the pair search, the wall geometry, and eigenvectors fixed by the problem rather than
+the eigen-solver (``frames``). Imports nothing else of jamflow."""
 
 from jamflow.support.lazy import lazy_submodules as _lazy_submodules
 

@@ -6,13 +6,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from jamflow.model.frames import canonical_signs
 from jamflow.model.packing import Packing
 
 
 # --- nematic order ---------------------------------------------------------------------------
 @dataclass(frozen=True)
 class NematicResult:
-    """P2 = largest eigenvalue of the order tensor; ``director`` its unit eigenvector."""
+    """P2 = largest eigenvalue of the order tensor; ``director`` its unit eigenvector, signed by
+    ``jamflow.model.frames.canonical_signs`` (n and -n are the same director)."""
 
     p2: float
     director: np.ndarray
@@ -41,7 +43,7 @@ class Nematic:
         dim = u.shape[1]
         tensor = (dim * np.einsum("na,nb->ab", u, u) / len(u) - np.eye(dim)) / (dim - 1)
         values, vectors = np.linalg.eigh(tensor)
-        return NematicResult(float(values[-1]), vectors[:, -1].copy(), tensor)
+        return NematicResult(float(values[-1]), canonical_signs(vectors[:, -1]), tensor)
 
 
 def _unit_axes(orientations) -> np.ndarray:

@@ -86,8 +86,8 @@ def _sorted_frequencies(ax, spectra, colour="branches"):
 
 def _nontrivial_sorted(s) -> np.ndarray:
     """Indices of every mode but the d trivial translations (the d smallest |e|), by ascending e."""
-    order = np.argsort(np.abs(s.eigenvalues))[s.dim:]
-    return order[np.argsort(s.eigenvalues[order])]
+    order = np.argsort(np.abs(s.eigenvalues), kind="stable")[s.dim:]
+    return order[np.argsort(s.eigenvalues[order], kind="stable")]
 
 
 def _sorted_axes(ax, spectra, title):

@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from jamflow.model.frames import principal_frame
 from jamflow.model.shapes.union import union_moments
 
 
@@ -177,10 +178,12 @@ class RigidBody:
     ``sites`` (S, d) and ``site_diameters`` (S,) describe the body at scale 1, in any frame:
     the constructor moves the origin to the centre of mass of the union of the sites and turns
     the sites to the principal axes, smallest moment first (the body x-axis, the director of a
-    linear body). With ``body_frame=True`` the sites are taken as given, already in that frame
-    (as a packing file stores them), so orientations keep their meaning. Site overlap inside a
-    body carries no energy; the volume is the union's (``shapes.union``). ``label`` names the
-    body (e.g. "dimer:1.5") for files and messages.
+    linear body), in the frame ``jamflow.model.frames.principal_frame`` fixes by the sites
+    (proper; signs and tied axes independent of the eigen-solver). With ``body_frame=True`` the
+    sites are taken as given, already in that frame (as a packing file stores them), so
+    orientations keep their meaning. Site overlap inside a body carries no energy; the volume is
+    the union's (``shapes.union``). ``label`` names the body (e.g. "dimer:1.5") for files and
+    messages.
     """
 
     sites: np.ndarray
@@ -215,8 +218,7 @@ class RigidBody:
                 raise ValueError(f"body-frame sites must have their centre of mass at the origin, it is at {centre}")
             centre, frame = np.zeros_like(centre), np.eye(len(centre))
         else:
-            values, vectors = np.linalg.eigh(inertia if inertia is not None else -central)
-            frame = vectors * np.where(np.linalg.det(vectors) < 0, [-1] + [1] * (len(centre) - 1), 1)
+            frame = principal_frame(inertia if inertia is not None else -central, sites - centre)
         body = (sites - centre) @ frame
         body[np.abs(body) < 1e-14 * max(1.0, np.abs(body).max())] = 0.0
         body.setflags(write=False)
