@@ -2,7 +2,8 @@
 tied eigenpairs: the rigid bodies' principal frames (``jamflow.model.frames.principal_frame``),
 whole jams, normal modes and the nematic director are bit-identical when numpy's and scipy's
 ``eigh`` and scipy's ``eigsh`` return every eigenvector negated and tied pairs reversed
-(``conftest.flipped_eigen_solvers``), as LAPACK or ARPACK on another machine may."""
+(``conftest.flipped_eigen_solvers``), as LAPACK or ARPACK on another machine may (modes: signs
+only, a degenerate eigenspace has no canonical basis)."""
 
 import numpy as np
 import pytest
@@ -14,8 +15,6 @@ from jamflow.model.shapes.nmers import trimer_max_bend
 from jamflow.model.shapes.rotations import rotation_matrices
 
 EQUILATERAL = f"trimer:2:{trimer_max_bend(2.0)!r}"  # three touching sites: isotropic in 2D, I_x = I_y in 3D
-
-
 TETRAHEDRON = 0.3 * np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]], float)  # isotropic: 3 tied moments
 
 
