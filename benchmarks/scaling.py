@@ -50,7 +50,7 @@ def controller(n, seed, protocol="seed", engine="lammps"):
 def deck(n, seed, ranks):
     """The deck from jamflow's own random start (a data file), as the cross-check runs it."""
     from jamflow.decks.jam import deck_variables, run_deck
-    from jamflow.io.packing_file import write_lammps_data
+    from jamflow.engines.lammps.data_file import write_lammps_data
     from jamflow.protocols.settings import CompressionSettings
     from jamflow.protocols.compression import initial_packing
 

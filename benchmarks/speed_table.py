@@ -32,9 +32,9 @@ from pathlib import Path
 
 import numpy as np
 
+from jamflow.engines.lammps.data_file import write_lammps_data
 from jamflow.engines.lammps.library import new_lammps
 from jamflow.engines.lammps.pair_styles import harmonic_cut_commands
-from jamflow.io.packing_file import write_lammps_data
 from jamflow.mechanics.checks import check_packing
 from jamflow.protocols.settings import PROTOCOLS, DEFAULT_PROTOCOL
 from jamflow.protocols.compression import initial_packing, jam

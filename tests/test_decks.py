@@ -12,8 +12,8 @@ from jamflow.cli.commands import crosscheck as crosscheck_command
 from jamflow.decks.crosscheck import compare, crosscheck
 from jamflow.decks.jam import (DeckFailed, deck_text, deck_variables, default_deck_path, emit_deck, read_data_file,
                                run_deck, run_pressure_deck)
+from jamflow.engines.lammps.data_file import write_lammps_data
 from jamflow.mechanics.reference import energy_forces_pressure
-from jamflow.io.packing_file import write_lammps_data
 from jamflow.protocols.compression import compress, initial_packing
 from jamflow.protocols.settings import fast_protocol
 from jamflow.protocols.pressure import PressureSettings, jam_at_pressure

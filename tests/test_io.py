@@ -2,9 +2,10 @@ import h5py
 import numpy as np
 import pytest
 
+from jamflow.engines.lammps.data_file import write_lammps_data
 from jamflow.engines.lammps.engine import LammpsEngine
 from jamflow.mechanics.reference import energy_forces_pressure
-from jamflow.io.packing_file import load_packing, read_attrs, save_packing, to_universe, write_lammps_data
+from jamflow.io.packing_file import load_packing, read_attrs, save_packing, to_universe
 from jamflow.model.potentials import Spring
 
 

@@ -7,8 +7,8 @@ import pytest
 from jamflow.cli.app import main
 from jamflow.decks.crosscheck import compare_shear, crosscheck_shear
 from jamflow.decks.jam import DeckFailed
+from jamflow.engines.lammps.data_file import write_lammps_data
 from jamflow.mechanics.reference import energy_forces_pressure
-from jamflow.io.packing_file import write_lammps_data
 from jamflow.protocols.compression import jam
 from jamflow.protocols.settings import seed_protocol
 from jamflow.protocols.shear import shear

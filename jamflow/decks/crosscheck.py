@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from jamflow.decks.jam import DeckResult, deck_variables, run_deck
-from jamflow.io.packing_file import write_lammps_data
+from jamflow.engines.lammps.data_file import write_lammps_data
 from jamflow.model.packing import Packing
 from jamflow.model.pairs import overlapping_pairs
 from jamflow.protocols.compression import compress, initial_packing

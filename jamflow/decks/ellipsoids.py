@@ -28,7 +28,7 @@ from jamflow.decks.jam import (
     start_values,
     system_values,
 )
-from jamflow.io.packing_file import write_lammps_data
+from jamflow.engines.lammps.data_file import write_lammps_data
 from jamflow.model.packing import Packing
 from jamflow.model.potentials import Potential, Spring
 from jamflow.model.shapes.shape import Ellipsoid

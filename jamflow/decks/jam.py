@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from jamflow import __version__
-from jamflow.io.packing_file import write_lammps_data
+from jamflow.engines.lammps.data_file import write_lammps_data
 from jamflow.minimize.settings import MinimizerSettings
 from jamflow.model.box import Box
 from jamflow.model.packing import Packing

@@ -20,7 +20,7 @@ import numpy as np
 from jamflow.decks.jam import (DeckFailed, PROTOCOL_COLUMNS, _num, check_workdir, lammps_error, optional_values,
                                protocol_values, read_data_file, render, run_lmp, system_values)
 from jamflow.support.files import atomic_path
-from jamflow.io.packing_file import write_lammps_data
+from jamflow.engines.lammps.data_file import write_lammps_data
 from jamflow.model.packing import Packing
 from jamflow.protocols.settings import CompressionSettings, chapter_protocol
 from jamflow.protocols.shear import shear_strains

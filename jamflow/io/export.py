@@ -7,8 +7,8 @@ shapes and orientations; and the LAMMPS data file a simulation starts from.
   ``BOX BOUNDS`` block.
 - Extended XYZ (``xyz``): ``Lattice`` = the three cell vectors, ``Properties=species:S:1:pos:R:3:
   radius:R:1...``, ``pbc``.
-- LAMMPS data file (``lammps-data``): ``jamflow.io.packing_file.write_lammps_data`` (atom_style
-  sphere, ellipsoid, or hybrid sphere molecular for rigid bodies).
+- LAMMPS data file (``lammps-data``): ``jamflow.engines.lammps.data_file.write_lammps_data``
+  (atom_style sphere, ellipsoid, or hybrid sphere molecular for rigid bodies).
 - HOOMD-blue GSD (``gsd``): ``jamflow.io.gsd_file.write_gsd`` (needs the ``gsd`` package).
 
 Ellipses/spheroids add their axes and quaternions (``_rows``); rigid bodies are written one row
@@ -29,8 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
+from jamflow.engines.lammps.data_file import write_lammps_data
 from jamflow.io.gsd_file import write_gsd
-from jamflow.io.packing_file import write_lammps_data
 from jamflow.model.packing import Packing
 from jamflow.support.files import atomic_path
 

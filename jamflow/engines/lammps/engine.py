@@ -36,10 +36,10 @@ from lammps import LMP_STYLE_GLOBAL, LMP_TYPE_SCALAR, LMP_TYPE_VECTOR
 
 from jamflow.engines.base import Capabilities, State, Window
 from jamflow.engines.lammps.bodies import RIGID_CHECK, RIGID_FIX, BodySites
+from jamflow.engines.lammps.data_file import lammps_quaternions, write_lammps_data
 from jamflow.engines.lammps.library import lammps_quote, new_lammps, scratch_directory
 from jamflow.engines.lammps.pair_styles import pair_setup, uses_harmonic_cut
 from jamflow.engines.lammps.plugin_build import load_plugin
-from jamflow.io.packing_file import lammps_quaternions, write_lammps_data
 from jamflow.model.box import Box
 from jamflow.model.packing import Packing
 from jamflow.model.pairs import site_packing
