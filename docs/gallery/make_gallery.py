@@ -3,8 +3,8 @@
 Each ``figure_*`` function below makes the pictures of one chapter figure with jamflow's library
 API and its plotting functions (``jamflow.plots``), at the smallest N that still shows the
 physics; docs/gallery.md shows the pictures with the code that made them. The PNGs go to
-docs/gallery/images/ (not committed: CI runs this script before sphinx-build, and the site build
-stops with a message naming this script when a picture is missing).
+docs/gallery/images/ (not committed: the site build, docs/conf.py, runs this script for the
+pictures that are missing, and stops with a message naming it when it cannot make one).
 
     python docs/gallery/make_gallery.py                   # all figures (about a minute on 2 cores)
     python docs/gallery/make_gallery.py --only 2.16 2.31  # some of them
