@@ -60,7 +60,7 @@ BENCHMARKS: dict[str, Benchmark] = {
     "memory_per_particle": Benchmark(
         "speed", "peak memory per particle of a jam run (basis of BYTES_PER_PARTICLE; one run per process)"),
     "ensemble_throughput": Benchmark(
-        "speed", "200 packings on a 2-worker local cluster against a plain loop of jamflow jam (issue 15)"),
+        "speed", "200 packings on a 2-worker local cluster against a plain loop of jamflow jam (docs/notes/ensembles.md)"),
     # --- scaling ---------------------------------------------------------------------------------
     "scaling": Benchmark(
         "scaling", "time per packing against N: Python controller, LAMMPS deck (1 and 2 ranks), defaults",
@@ -85,21 +85,21 @@ BENCHMARKS: dict[str, Benchmark] = {
         "speed", "double-double refinement to p = 1e-14 against the float64 onset (N = 64, 256; docs/guide/precision.md)",
         ["--n", "64", "--seeds", "1", "--out", "{tmp}/refine-cost.csv"]),
     "dd_vtol": Benchmark(
-        "accuracy", "jam --precision double-double --vtol V: refinements, V / V_tol, pressure (N = 64, 256; issue 28)",
+        "accuracy", "jam --precision double-double --vtol V: refinements, V / V_tol, pressure (N = 64, 256; docs/guide/precision.md)",
         ["--n", "64", "--vtol", "2e-35", "--seeds", "1"]),
     "dd_read": Benchmark(
-        "accuracy", "a double-double file read back: contacts, zero modes, G, P from hi + lo against float64 (issue 28)",
+        "accuracy", "a double-double file read back: contacts, zero modes, G, P from hi + lo against float64 (docs/guide/precision.md)",
         ["--n", "64", "--seeds", "2", "2"]),
     "jammed_side": Benchmark(
-        "speed", "jammed-side protocol (overshoot, pressure ladder, Newton on the contact network) against `fast` (issue 27)",
+        "speed", "jammed-side protocol (overshoot, pressure ladder, Newton on the contact network) against `fast` (docs/notes/speed-3.md)",
         ["--n", "64", "--seeds", "1", "1", "--top", "0", "--gauss-newton", "--out", "{tmp}/jammed-side.csv"]),
     "newton_landing": Benchmark(
-        "speed", "float64 bisection to a loose window, then the double-double Newton landing to V_tol, against `fast` (issue 27)",
+        "speed", "float64 bisection to a loose window, then the double-double Newton landing to V_tol, against `fast` (docs/notes/speed-3.md)",
         ["--n", "64", "--seeds", "1", "--loose", "1e-12", "--out", "{tmp}/newton-landing.csv"]),
     "ldl_reuse": Benchmark(
-        "speed", "the polish's SuperLU factorisations against an LDL^T keeping its symbolic analysis (qdldl; issue 27)"),
+        "speed", "the polish's SuperLU factorisations against an LDL^T keeping its symbolic analysis (qdldl; docs/notes/speed-3.md)"),
     "pressure_ladder": Benchmark(
-        "study", "pressure ladder 1e-2 .. 1e-14 in double-double: Delta z and G against p N^2, phi_J (issue 28)",
+        "study", "pressure ladder 1e-2 .. 1e-14 in double-double: Delta z and G against p N^2, phi_J (docs/guide/precision.md)",
         ["--quick", "--out", "{tmp}/pressure-ladder.csv"]),
     "vtol_resolution": Benchmark(
         "accuracy", "where V_tol stops being resolvable in float64 (docs/notes/vtol-resolution.csv; minutes)"),
@@ -108,8 +108,8 @@ BENCHMARKS: dict[str, Benchmark] = {
     "table_2_1": Benchmark(
         "accuracy", "chapter Table 2.1 and Figure 2.12: errors of the contact-distance approximations"),
     # --- studies (documented results and figures) ---------------------------------------------------
-    "jamming_ensembles": Benchmark("study", "issue 2's acceptance ensembles: 2D disks N=256, 3D spheres N=512"),
-    "walls_gravity_pressure": Benchmark("study", "issue 16: walls, gravity and constant-pressure ensembles"),
+    "jamming_ensembles": Benchmark("study", "acceptance ensembles of jamming: 2D disks N=256, 3D spheres N=512"),
+    "walls_gravity_pressure": Benchmark("study", "walls, gravity and constant-pressure ensembles (docs/notes/walls-gravity-pressure.md)"),
     "structure_data": Benchmark("study", "generate (and cache) the jammed packings behind docs/notes/structure.md"),
     "structure_measure": Benchmark("study", "the measured values and figures of docs/notes/structure.md"),
     "ellipse_ensembles": Benchmark("study", "jammed 2D bidisperse ellipses at several aspect ratios, checked"),
@@ -120,7 +120,7 @@ BENCHMARKS: dict[str, Benchmark] = {
     "anneal_vs_compression": Benchmark("study", "particle-shape annealing against compression (chapter Fig. 2.18)"),
     "nematic_protocols": Benchmark("study", "nematic order of ellipse packings: annealing against compression"),
     "contact_methods": Benchmark("study", "CPU per packing against phi_J / <z> bias of the contact methods"),
-    "nmer_ensembles": Benchmark("study", "n-mer (dimer, trimer) ensembles, checked (issue 14)"),
+    "nmer_ensembles": Benchmark("study", "n-mer (dimer, trimer) ensembles, checked (docs/notes/nmers.md)"),
     "nmer_figures": Benchmark("study", "the figures and tables of docs/notes/nmers.md from the n-mer CSVs"),
     "nmer_stability": Benchmark("study", "checks and stability (dynamical matrix with rotations) of the n-mer ensembles"),
     "nmer_crosscheck": Benchmark("study", "LAMMPS vs compiled engine vs numpy reference for rigid n-mers: energy, forces, torques, pressure"),

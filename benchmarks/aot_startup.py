@@ -1,4 +1,4 @@
-"""The ahead-of-time compiled disk kernels against numba's (issue 17, item 1; docs/notes/speed-2.md
+"""The ahead-of-time compiled disk kernels against numba's (docs/notes/speed-2.md
 sections 10 and 12): whole processes.
 
 Whole processes, alternating run by run so that all see the same load (wall, and user + sys CPU
@@ -18,7 +18,7 @@ normal Python after the first run); the ``bytecode`` column says which.
     OPENBLAS_NUM_THREADS=1 python benchmarks/aot_startup.py --repeats 7 --seed 1 --out docs/notes/aot-startup.csv
 
 The microseconds per FIRE iteration, AOT against numba (``--speed N``, docs/notes/speed-2.md section
-12) needed the compiled engine's private arrays and were dropped with issue 25's benchmark suite:
+12) needed the compiled engine's private arrays and were dropped with the one-entry-point benchmark suite:
 ``git show 3ba76d2:benchmarks/aot_startup.py`` (benchmarks/ARCHIVE.md).
 (The session-5 rows of ``docs/notes/aot-startup.csv`` came from this script's first form, which built a
 module of its own and swapped it into a jam process by stand-ins: ``git show 6ad4af5:benchmarks/aot_startup.py``.)

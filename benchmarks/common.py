@@ -217,7 +217,7 @@ def jam_quietly(start, settings):
         return None, str(err)
 
 
-NMER_F_LIMIT = 1e-12  # issue 14: max force and generalized torque on non-floaters (the reference's), eps/diameter
+NMER_F_LIMIT = 1e-12  # docs/notes/nmers.md: max force and generalized torque on non-floaters (the reference's), eps/diameter
 
 ELLIPSE_SIZES = "bi:1.4:0.6667"  # 2:1 bidisperse, major-axis ratio 1.4
 ELLIPSE_COLUMNS = ["engine", "alpha", "seed", "n", "phi_j", "energy_per_particle", "pressure", "max_force",

@@ -1,4 +1,4 @@
-"""Speed against accuracy of the contact-distance methods in packings (issue 13, item 6): the
+"""Speed against accuracy of the contact-distance methods in packings (docs/notes/contact-distance.md): the
 same random starts jammed with each method, CPU time per packing against the bias of phi_J and
 <z> relative to the exact contact distance on the same start (paired differences).
 

@@ -1,5 +1,5 @@
-"""Whole jams of turning shapes against the soft-mode steps' ``creep_after`` (issue 27 item 4,
-docs/notes/ellipses.md, "FIRE's time unit and the oblate creep").
+"""Whole jams of turning shapes against the soft-mode steps' ``creep_after``
+(docs/notes/ellipses.md, "FIRE's time unit and the oblate creep").
 
     python benchmarks/creep_after.py run --dim 3 --sizes mono --shape spheroid:0.6 spheroid:1.5 \\
         --n 64 --seeds 1 2 3 4 5 --creep-after 50000 10000

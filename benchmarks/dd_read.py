@@ -1,4 +1,4 @@
-"""A double-double packing file read back (issue 28): contacts, floaters, zero modes, G and the
+"""A double-double packing file read back (docs/guide/precision.md): contacts, floaters, zero modes, G and the
 pressure from hi + lo (what ``jamflow.load_packing`` gives) against its float64 positions alone, and
 against the refinement itself (``RefineResult``: its double-double network, ``moduli()``, pressure).
 For each N and seed: ``jamflow.jam(n=N, seed=s)``, ``jamflow.refine(packing, P)``, save, load.

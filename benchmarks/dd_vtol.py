@@ -1,4 +1,4 @@
-"""``jamflow jam --precision double-double --vtol V`` (issue 28): for each N, V_tol and seed, the
+"""``jamflow jam --precision double-double --vtol V`` (docs/guide/precision.md): for each N, V_tol and seed, the
 float64 onset refined to the energy window (``run_jam(JamSpec(precision="double-double", vtol=V))``):
 refinements used, V / V_tol (double-double energy), pressure, max|F| / <f>, N_c against
 N' d - d + 1, contacts opened/closed from the onset, seconds (wall clock: "under load" on a

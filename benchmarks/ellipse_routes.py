@@ -1,4 +1,4 @@
-"""The two routes that jam ellipses, as distributions (issue 13 item 2): compiled FIRE over
+"""The two routes that jam ellipses, as distributions (docs/notes/ellipses.md): compiled FIRE over
 translations and rotations against LAMMPS damped dynamics (fix nve/asphere + fix langevin at
 T = 0 with angmom), from the same random starts (same seed), 2D 2:1 bidisperse ellipses
 (major-axis ratio 1.4), default protocol.

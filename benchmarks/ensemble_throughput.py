@@ -1,4 +1,4 @@
-"""Issue 15's acceptance run: 200 packings at N = 64 on a 2-worker local cluster.
+"""The ensemble's throughput run (docs/notes/ensembles.md): 200 packings at N = 64 on a 2-worker local cluster.
 
     flock /tmp/jamflow-bench.lock python benchmarks/ensemble_throughput.py --work /tmp/jamflow-ens/throughput
 

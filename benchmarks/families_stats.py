@@ -7,7 +7,7 @@ gamma -> 1 - gamma in the sample; family extents; the count against the number o
 its growth exponent; the richness estimates (Chao1, first- and second-order jackknife, with
 standard errors, and the sample coverage) against the starts, with the starts per strain the
 extrapolation needs to find 95 % of the Chao1 estimate; the count against the joining
-tolerances on phi_J and Sigma/P (issue 30). The mirror is gamma -> 2 c - gamma about the middle
+tolerances on phi_J and Sigma/P. The mirror is gamma -> 2 c - gamma about the middle
 c of the sampled range (1/2 for [0, 1], 0 for [-0.24, 0.24]). With --figure, the count and the
 estimates against K, one panel per DIR.
 

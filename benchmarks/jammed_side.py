@@ -1,4 +1,4 @@
-"""A jammed-side protocol with a Newton corrector (issue 27, item 2): a prototype, measured
+"""A jammed-side protocol with a Newton corrector (docs/notes/speed-3.md): a prototype, measured
 against the default ``fast`` protocol on the same seeds (docs/notes/speed-3.md; not kept as a
 protocol: it did not pay).
 

@@ -1,4 +1,4 @@
-"""Issue 2's acceptance ensembles: 10 seeds of 2D 50:50 bidisperse disks (ratio 1.4, N=256)
+"""The acceptance ensembles of jamming: 10 seeds of 2D 50:50 bidisperse disks (ratio 1.4, N=256)
 and 10 seeds of 3D monodisperse spheres (N=512), each checked independently of LAMMPS.
 
     python benchmarks/jamming_ensembles.py --protocol fast --out docs/notes/jamming-ensembles.csv

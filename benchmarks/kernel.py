@@ -1,4 +1,4 @@
-"""The compiled kernel against its floor (issue 17, item 5): microseconds per FIRE iteration
+"""The compiled kernel against its floor (docs/notes/speed-2.md): microseconds per FIRE iteration
 and per bare force loop over the same pairs, at N = 256, 1024, 4096 (2D, 50:50 bidisperse,
 a relaxed state at phi = 0.85, as near jamming), with the particles in their random order
 and reordered along a Morton (Z-order) curve, and the FIRE iteration cost for several skins.

@@ -1,5 +1,5 @@
 """The Gauss-Newton polish's factorisations, SuperLU against an LDL^T that keeps its symbolic analysis
-(issue 27 item 2: "CHOLMOD via scikit-sparse if it pays; reuse the symbolic factorisation").
+(whether reusing the symbolic factorisation pays; measured in docs/notes/speed-3.md).
 
 scikit-sparse (CHOLMOD) has no wheel for this Python on the package index this project installs
 from; ``qdldl`` (OSQP's LDL^T, a wheel) has the same split: ``Solver(K)`` orders (AMD) and analyses

@@ -8,7 +8,7 @@ aligned ellipses with P2 = 0.64, the other randomly oriented ones with P2 = 0.11
         --protocol anneal --dalpha 0.1 --out docs/notes/nematic-protocols.csv --keep /tmp/nematic
     python benchmarks/nematic_protocols.py --report docs/notes/nematic-protocols.csv --keep /tmp/nematic
 
-``--orientations aligned`` (issue 30): every director along x at the start (compression) or at
+``--orientations aligned``: every director along x at the start (compression) or at
 the first annealing step; ``--phi0``: the compression's start packing fraction. Both go into
 the protocol label (e.g. "compression aligned phi0=0.5").
 

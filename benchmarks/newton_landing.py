@@ -1,4 +1,4 @@
-"""Issue 27, a variant of item 2 (the jammed-side Newton corrector) for the last approach only: the
+"""A variant of the jammed-side Newton corrector (docs/notes/speed-3.md) for the last approach only: the
 float64 bisection of the default protocol stopped at a loose window V_L < V < 2 V_L, then the
 double-double Newton landing (``jamflow.refine_to_vtol``: Newton on the contact network, the secant
 in log p, log V) down to the chapter's window at V_tol = 1e-16; against the default jam

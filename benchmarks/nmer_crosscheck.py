@@ -1,5 +1,5 @@
 """LAMMPS vs compiled engine vs numpy reference for rigid n-mers on random overlapping
-configurations (issue 14): the worst relative differences of energy, body forces, torques and
+configurations (docs/notes/nmers.md): the worst relative differences of energy, body forces, torques and
 the molecular pressure tensor, per body, dimension and box.
 
     python benchmarks/nmer_crosscheck.py --out docs/notes/nmers/crosscheck.csv

@@ -1,4 +1,4 @@
-"""Ensembles of jammed rigid n-mers (issue 14), each packing checked independently of the engine
+"""Ensembles of jammed rigid n-mers (docs/notes/nmers.md), each packing checked independently of the engine
 that made it.
 
     python benchmarks/nmer_ensembles.py --shape nmer:2:1.5 --dim 2 --n 128 --seeds 0-19 \

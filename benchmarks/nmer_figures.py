@@ -1,4 +1,4 @@
-"""Figures and tables of issue 14 from the ensembles of benchmarks/nmer_ensembles.py.
+"""Figures and tables of docs/notes/nmers.md from the ensembles of benchmarks/nmer_ensembles.py.
 
     python benchmarks/nmer_figures.py --csv docs/notes/nmers/ensembles.csv docs/notes/nmers/ensembles3d.csv \
         --q6 docs/notes/nmers/q6-256.csv --routes docs/notes/nmers/routes.csv --out docs/notes/nmers
@@ -11,7 +11,7 @@
   2.26) from the largest N that has it, coloured by the director angle.
 - ``phi-z-alpha.png``: phi_J and <z> (site contacts among non-floaters) against alpha, 2D and 3D,
   mean and standard error, with the isostatic values 2 d_f and 2 d.
-- ``acceptance.png`` and the acceptance table (issue 14, "How we will know"): per packing the
+- ``acceptance.png`` and the acceptance table (docs/notes/nmers.md): per packing the
   largest force and generalized torque on non-floaters (numpy reference, all site pairs), and
   the zero modes beyond d against the free rotations of one-site bodies; per set how many
   packings are in the window, pass ``jamflow.mechanics.checks``, have exactly d zero modes as they stand,
@@ -300,7 +300,7 @@ def stability_table(stab_rows) -> list[tuple]:
     return out
 
 
-ACCEPTANCE_SETS = ((2, 1.2), (2, 1.5), (2, 2.0), (3, 1.5))  # issue 14: 20 packings each
+ACCEPTANCE_SETS = ((2, 1.2), (2, 1.5), (2, 2.0), (3, 1.5))  # the acceptance sets: 20 packings each
 ACCEPTANCE_N = 128
 
 

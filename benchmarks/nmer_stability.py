@@ -1,4 +1,4 @@
-"""Checks and stability of the jammed n-mer ensembles (issue 14): ``jamflow.mechanics.checks`` on every
+"""Checks and stability of the jammed n-mer ensembles (docs/notes/nmers.md): ``jamflow.mechanics.checks`` on every
 packing file (window, force and torque balance, contact count), the dynamical matrix with
 rotational coordinates (``jamflow.mechanics.hessian``, site-pair contacts, floaters removed), its
 zero modes against the d trivial translations and the free rotations of bodies touched on one

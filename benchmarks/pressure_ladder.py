@@ -1,4 +1,4 @@
-"""The pressure ladder of issue 28 (item 4): jammed packings followed from p = 1e-2 down to 1e-14, two
+"""The pressure ladder (docs/guide/precision.md): jammed packings followed from p = 1e-2 down to 1e-14, two
 pressures per decade, every state balanced in double-double (``jamflow.refine``), with the excess
 contact number and the Hessian-route shear modulus at each state; the collapse against p N^2
 (Goodrich, Liu & Nagel, PRL 109, 095704 (2012)); phi_J fitted from the lowest decades.

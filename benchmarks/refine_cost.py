@@ -1,4 +1,4 @@
-"""Cost of the double-double refinement (jamflow.refine, issue 28) against the float64 onset it starts
+"""Cost of the double-double refinement (jamflow.refine, docs/guide/precision.md) against the float64 onset it starts
 from: for each N and seed, ``jamflow.jam(n=N, seed=s)`` then ``jamflow.refine(onset.packing, P)``;
 seconds of each (wall clock: label it "under load" on a shared machine), minimisation iterations,
 refined states and Newton steps, N_c against N' d - d + 1, contacts opened/closed, max|F| / <f>;

@@ -1,5 +1,5 @@
-"""The side-by-side table of issue 17: jamflow's default ``jamflow jam`` as a whole process
-and in process, against the hand-written LAMMPS protocol (``handwritten_jam`` below: issue 7's baseline, formerly
+"""The side-by-side speed table (docs/notes/speed-2.md): jamflow's default ``jamflow jam`` as a whole process
+and in process, against the hand-written LAMMPS protocol (``handwritten_jam`` below: the speed baseline, formerly
 ``speed_vs_handwritten.py``), the same seeds and starts, with iterations per phase (compress /
 approach / final) and the packing checks.
 

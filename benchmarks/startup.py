@@ -1,4 +1,4 @@
-"""Start-up cost of the ``jamflow`` command (issue 17, item 1): whole-process wall and CPU
+"""Start-up cost of the ``jamflow`` command (docs/notes/speed-2.md): whole-process wall and CPU
 seconds of ``jamflow --help``, ``jamflow jam --help`` and ``jamflow jam --n 64`` (each of
 ``--seeds``, every repeat), the floors any such process stands on (the bare interpreter,
 ``import numpy``, and the smallest numba process: one cached njit function called once), and

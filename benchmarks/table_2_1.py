@@ -262,7 +262,7 @@ def main(argv=None):
 
 
 def alpha_one_section(m):
-    """Report lines: what the chapter's alpha = 1 and 1.2 entries would need (issue 30 item 4)."""
+    """Report lines: what the chapter's alpha = 1 and 1.2 entries would need."""
     ratios = ratios_for_chapter()
     bp = {a: mean_errors(a, m, 1.0)["cleaver"] for a in (1.2, 1.5, 2.0)}
     out = [

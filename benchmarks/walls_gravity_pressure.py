@@ -1,4 +1,4 @@
-"""Issue 16 ensembles: walls, gravity and constant pressure, 20 starts each (2D bidisperse, N = 256),
+"""Ensembles with walls, gravity and constant pressure, 20 starts each (2D bidisperse, N = 256),
 checked with the independent numpy reference, and phi_J at constant pressure against the
 compression protocol on the same starts.
 

@@ -1,4 +1,4 @@
-"""Old module paths (before the layered package, issue 25) kept importable: ``import jamflow.checks``
+"""Old module paths (before the layered package, docs/architecture.md) kept importable: ``import jamflow.checks``
 gives a module that forwards every name to its new home (``jamflow.mechanics.checks``) and warns
 once with the new path (DeprecationWarning). Stdlib only; nothing inside jamflow imports an old path."""
 

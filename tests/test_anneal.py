@@ -1,4 +1,4 @@
-"""Particle-shape annealing (issue 13 item 5, chapter section 2.3.3): the step sequence, the growth
+"""Particle-shape annealing (chapter section 2.3.3): the step sequence, the growth
 step (phi kept, random directors only from a round start), `jamflow anneal` end to end (every
 step recorded, the last packing checked, by the independent brute-force energy too), bad input
 refused before any work."""
@@ -44,7 +44,7 @@ def test_growth_keeps_phi_and_draws_directors_only_from_round_particles(disks):
 
 
 def test_an_aligned_first_step_turns_every_director_along_x(disks, tmp_path, capsys):
-    """--orientations aligned (issue 30, Figure 2.23(c)): the first step's directors all along x
+    """--orientations aligned (Figure 2.23(c)): the first step's directors all along x
     (P2 = 1), recorded in the file; an input that already has directions is refused."""
     start = load_packing(disks)
     grown = _grown(start, 1.05, "exact", np.random.default_rng(0), "aligned")
@@ -63,7 +63,7 @@ def test_an_aligned_first_step_turns_every_director_along_x(disks, tmp_path, cap
 
 
 def test_a_nematic_first_step_draws_directors_in_a_cone_about_x(disks, tmp_path, capsys, monkeypatch):
-    """--orientations nematic:S (issue 30): the first step's directors uniform in [-D, D] about x
+    """--orientations nematic:S: the first step's directors uniform in [-D, D] about x
     with sin(2D) / (2D) = S (rotations.cone_half_angle), recorded; nematic:1 is aligned; a bad S
     is refused before work with one line."""
     import jamflow.protocols.anneal as anneal

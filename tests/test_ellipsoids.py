@@ -1,4 +1,4 @@
-"""Ellipses and spheroids in every engine (issue 13): the compiled kernel and the LAMMPS plugin
+"""Ellipses and spheroids in every engine (docs/notes/ellipses.md): the compiled kernel and the LAMMPS plugin
 against the numpy reference for every contact-distance method (1e-12), the reference against
 finite differences, a two-ellipse closed form, minimisation with rotations in both engines,
 packings checked by an independent brute-force energy, bad input refused before work, and the
@@ -195,7 +195,7 @@ def test_fire_steps_in_units_of_the_stiffest_contact(alpha, orientation):
     relative coordinate's, lambda_max = 2 / l^2 (closed form). FIRE's time unit is l (``time_unit``), so
     lambda_max x time_unit^2 = 2 for every shape: its largest step dt0 tmax is equally far from the
     stability limit 2 / sqrt(lambda_max). (Before, the unit was 1: an oblate 0.6 ran at 1/0.6 of the
-    spheres' stability number, at the edge of stability: issue 27 item 4.)"""
+    spheres' stability number, at the edge of stability: docs/notes/ellipses.md, "FIRE's time unit and the oblate creep".)"""
     from jamflow.engines.compiled.fire import time_unit
     from jamflow.mechanics.hessian import hessian
 
@@ -212,7 +212,7 @@ def test_fire_steps_in_units_of_the_stiffest_contact(alpha, orientation):
 def test_oblate_spheroids_relax_at_the_prolate_rate():
     """Three random starts of 24 oblate spheroids (0.6) at phi = 0.68, just below onset, minimised to
     V/N < 1e-12: 2 313 FIRE iterations in all (483, 450, 1 380); with the time step in units of the
-    sphere diameter (before issue 27 item 4) 7 684 (3 285, 1 005, 3 394), FIRE resetting on P < 0
+    sphere diameter (as before the measurement in docs/notes/ellipses.md) 7 684 (3 285, 1 005, 3 394), FIRE resetting on P < 0
     every few steps. Counts, not times (deterministic on one machine)."""
     total = 0
     for seed in range(3):

@@ -316,7 +316,7 @@ def test_file_holding_another_task_is_not_accepted(tmp_path, cluster):
 def test_packings_on_two_mpi_ranks_each(tmp_path):
     """--mpi-ranks 2: every task runs the controller on LAMMPS over 2 ranks (mpirun) and matches
     the one-process LAMMPS packing of the same seed to round-off of phi."""
-    import mpi4py  # noqa: F401  (the test extra installs it: not skipped, issue 29)
+    import mpi4py  # noqa: F401  (the test extra installs it: not skipped)
     from distributed import Client
 
     from jamflow import jam
@@ -354,7 +354,7 @@ def test_a_damaged_manifest_is_bad_input_not_a_bug(tmp_path):
     assert "Traceback" not in done.stderr
 
 
-# -- issue 29: a huge seed range streams -------------------------------------------------------
+# -- a huge seed range streams ----------------------------------------------------------------
 def test_a_huge_seed_range_streams_in_chunks(tmp_path, monkeypatch, threaded):
     """Was: `--seeds 0:1000000000` built every task (and classified them all) before the first
     packing: ~140 MB/s of memory and no output. Now tasks are made CHUNK at a time."""
@@ -381,7 +381,7 @@ def test_a_huge_seed_range_streams_in_chunks(tmp_path, monkeypatch, threaded):
     assert len(packings(tmp_path / "s")) >= 3  # (a task running at the interrupt may still be writing)
 
 
-# -- issue 26: a script without the __main__ guard ------------------------------------------------
+# -- a script without the __main__ guard ---------------------------------------------------------
 ENSEMBLE_SCRIPT = '''import jamflow
 
 {guard}report = jamflow.run_ensemble("store", "0:1", [8], workers=1, dim=2, progress=False)

@@ -1,4 +1,4 @@
-"""Every script in examples/ runs at small N and writes its figure (issue 18: CI runs them)."""
+"""Every script in examples/ runs at small N and writes its figure (so CI runs them)."""
 
 import subprocess
 import sys

@@ -77,7 +77,7 @@ def test_a_reflected_twin_with_the_same_phi_and_stress_is_another_family():
     assert fam.count == 2 and fam.family[0] == fam.family[1] != fam.family[2]
     m = mirrored(p, 0.001)
     assert list(m["fabric_b"]) == [-0.05] * 3 and list(m["fabric_a"]) == [0.12, 0.12, -0.12]
-    assert join(p, 0.001, tol_fabric=0.3).count == 1  # a looser fabric tolerance merges the twin (issue 30)
+    assert join(p, 0.001, tol_fabric=0.3).count == 1  # a looser fabric tolerance merges the twin
 
 
 def test_no_joining_at_symmetric_strains():

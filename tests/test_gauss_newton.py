@@ -105,7 +105,7 @@ def test_gauss_newton_returns_a_displaced_packing_near_onset_to_its_minimum():
 def test_gauss_newton_returns_a_displaced_compressed_packing_to_the_fire_minimum(config, dim, phi):
     """Far above onset (P ~ 1e-2): Gauss-Newton converges linearly to ~5e-12 (it leaves the
     tension terms out; the full Newton step that went further was an option
-    no jam used, removed in issue 25); asked for 1e-30 it stops unconverged (a refused step, or out
+    no jam used, since removed); asked for 1e-30 it stops unconverged (a refused step, or out
     of steps) and the engine keeps the best state."""
     from jamflow.minimize.polish import MAX_STEPS
 

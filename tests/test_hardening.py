@@ -1,4 +1,4 @@
-"""Issue 18: the cases a new or careless user hit (docs/hardening.md has the catalogue).
+"""The cases a new or careless user hit (docs/hardening.md has the catalogue).
 Each test names what happened before the fix. Rule: a user error is one line, exit 2, no
 traceback, before any work; a failure during work has its own exit code and a remedy;
 nothing on disk is damaged and no temporary file outlives the process."""
@@ -319,7 +319,7 @@ def test_python_jam_rejects_bad_arguments_clearly(kwargs, error, message, monkey
         jamflow.jam(n=16, **kwargs)
 
 
-# --- issue 18 follow-up: the commands added since (shear, families, moduli, anneal, jam options) ---
+# --- the commands added later: shear, families, moduli, anneal, jam options -------------------
 def test_negative_values_with_an_exponent_are_values():
     # was: `jamflow shear --dgamma -1e-3` "expected one argument" (argparse read -1e-3 as an option)
     from jamflow.cli.app import build_parser
@@ -438,7 +438,7 @@ def test_jam_above_one_does_not_quote_an_onset_not_yet_known(tmp_path, capsys, m
     assert "--above 2 >= 1" in err and "0.000000" not in err
 
 
-# --- issue 18 leftovers: option names, quiet refusals, --contact, SIGKILL debris, Ctrl-C at start ---
+# --- option names, quiet refusals, --contact, SIGKILL debris, Ctrl-C at start -------------------
 @pytest.mark.parametrize("args,option", [
     (["families", "--spacing", "nan"], "--spacing"), (["families", "--gamma-min", "nan"], "--gamma-min"),
     (["families", "--gamma-max", "inf"], "--gamma-max"), (["shear", "P", "--dgamma", "nan", "--to", "1e-3"], "--dgamma"),
@@ -534,7 +534,7 @@ def test_ctrl_c_while_the_command_starts(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
-# --- issue 29: wrong physics or silently wrong data ------------------------------------------
+# --- wrong physics or silently wrong data ---------------------------------------------------
 def half_period_strains():
     """gamma = +-(k + 1/2), k = 0..3, and its two float64 neighbours on each side."""
     strains = []
@@ -766,7 +766,7 @@ def test_a_contact_method_without_second_derivatives_is_refused_before_work(tmp_
         prepare(JamSpec(n=16, sizes="mono", shape=shape, dim=dim, contact=contact))
 
 
-# --- issue 29: crashes, hangs, concurrency, paths and environment ------------------------------
+# --- crashes, hangs, concurrency, paths and environment ---------------------------------------
 ENOSPC_TEXT = os.strerror(28)
 H5_FLUSH_FAILED = ("Can't decrement id ref count (file write failed: time = Thu Dec  3 11:48:15 2026, filename = "
                    "'x.tmp', file descriptor = 3, errno = 28, error message = 'No space left on device')")

@@ -1,4 +1,4 @@
-"""Rigid bodies in LAMMPS (issue 14): sites as atoms with molecule ids, damped fix rigid (not
+"""Rigid bodies in LAMMPS (docs/notes/nmers.md): sites as atoms with molecule ids, damped fix rigid (not
 fix rigid/small: engine/lammps_bodies.py says why).
 Cross-checked against LAMMPS's own rigid-body accounting (compute rigid/local), the numpy
 reference and the compiled engine; box changes keep bodies rigid; minimisers that LAMMPS runs

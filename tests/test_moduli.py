@@ -187,7 +187,7 @@ def test_dimer_sweeps_agree_with_the_hessian_with_rotations():
 
 @pytest.mark.filterwarnings("error:the dynamical matrix has")
 def test_ellipse_sweeps_match_the_hessian_route():
-    """With the ellipse kernel (issue 13) the compiled engine relaxes ellipses, positions and
+    """With the ellipse kernel the compiled engine relaxes ellipses, positions and
     orientations, under strain: the sweeps' G and B agree with the Hessian route's (rotations in
     the dynamical matrix) on the stored N = 16 packing at phi_J + 1e-3, minimised there (a stable
     minimum: no negative eigenvalue beyond round-off, on the input and on the sweeps' base state;

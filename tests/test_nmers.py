@@ -1,4 +1,4 @@
-"""Rigid n-mers (issue 14): the --shape specs nmer/dimer/trimer, their geometry against the
+"""Rigid n-mers (docs/notes/nmers.md): the --shape specs nmer/dimer/trimer, their geometry against the
 definitions of jamflow.model.shapes.nmers, closed-form union volumes, the site masses LAMMPS needs,
 and the refusals of bad input."""
 

@@ -1,4 +1,4 @@
-"""Outputs that compose (issue 26): one naming rule for derived files (``jamflow.io.names``),
+"""Outputs that compose: one naming rule for derived files (``jamflow.io.names``),
 directories read without their result files."""
 
 import csv

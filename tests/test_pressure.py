@@ -1,4 +1,4 @@
-"""Constant stress (issue 16): the box as FIRE coordinates and LAMMPS fix box/relax. Closed forms
+"""Constant stress (docs/notes/walls-gravity-pressure.md): the box as FIRE coordinates and LAMMPS fix box/relax. Closed forms
 (ideal lattices at fixed pressure), box forces against finite differences of the enthalpy, jamming
 at a target pressure from random starts, phi_J extrapolation, and bad input."""
 

@@ -1,4 +1,4 @@
-"""Python that feels native (issue 26, item 3): dir() shows the public API and the layers' modules,
+"""Python that feels native: dir() shows the public API and the layers' modules,
 reprs are one short informative line, ``result.save(path)`` writes the file ``jamflow jam`` writes
 and refuses a packing that fails its checks, and ``jam()`` has the command's defaults."""
 

@@ -1,4 +1,4 @@
-"""Double-double refinement of jammed disk packings (issue 28): force balance, pressure and the
+"""Double-double refinement of jammed disk packings (docs/guide/precision.md): force balance, pressure and the
 isostatic contact count at p = 1e-14, where float64 cannot resolve the overlaps; agreement with the
 float64 constant-pressure minimisation where float64 suffices; the packing file's low parts."""
 

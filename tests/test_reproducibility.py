@@ -1,4 +1,4 @@
-"""A seed fixes the packing bit for bit on one machine, for every shape and engine path (issue 29).
+"""A seed fixes the packing bit for bit on one machine, for every shape and engine path.
 
 Each case runs the same jam twice in one process and compares positions, orientations, the
 iteration counts of every minimisation and the final energy exactly. The cases that were not

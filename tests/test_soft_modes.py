@@ -109,7 +109,7 @@ def test_the_lowest_eigenpairs_repeat_bit_for_bit():
 
 def test_an_ellipse_jam_with_soft_mode_steps_repeats_bit_for_bit():
     """N = 32 ellipses, seed 3: the soft-mode steps run (33 384 iterations, one step; 73 319 with the steps
-    every 50 000 iterations, before issue 27 item 4); before the fixed start
+    every 50 000 iterations, the old default); before the fixed start
     vector two runs of the same jam ended at different positions (docs/notes/soft-modes.md)."""
     from jamflow import jam
 
@@ -130,7 +130,7 @@ def test_the_soft_mode_trigger_waits_after_iterations_then_repeats():
 
 
 def test_soft_mode_steps_run_every_10_000_iterations_for_ellipses_and_spheroids():
-    """The measured defaults (docs/notes/ellipses.md, issue 27 item 4): 10 000 iterations for
+    """The measured defaults (docs/notes/ellipses.md, "FIRE's time unit and the oblate creep"): 10 000 iterations for
     ellipses and spheroids, 50 000 for the other shapes that take soft-mode steps (rigid bodies
     under the Hertz law); an explicit ``creep_after`` wins. Disks and spheres keep their creep
     method (2D: the polish once at 20 000 iterations; 3D: none), so their runs do not change."""
@@ -159,7 +159,7 @@ def test_soft_mode_steps_run_every_10_000_iterations_for_ellipses_and_spheroids(
 @pytest.mark.slow
 def test_an_oblate_jam_takes_soft_mode_steps_every_10_000_iterations():
     """24 oblate spheroids (0.6), seed 1, the default jam: 87 668 iterations with the steps every
-    10 000 iterations, 194 449 with every 50 000 (before issue 27 item 4), same phi_J
+    10 000 iterations, 194 449 with every 50 000 (the old default), same phi_J
     0.6978862503 (`python benchmarks/creep_after.py run --dim 3 --sizes mono --shape spheroid:0.6
     --n 24 --seeds 1 --creep-after 50000 10000`). Counts, not times."""
     from jamflow.protocols.spec import JamSpec, run_jam

@@ -72,7 +72,7 @@ def test_library_and_command_line_make_the_same_packing(tmp_path):
 
 
 def test_the_chapter_protocol_is_named_chapter_and_seed_stays_its_alias(tmp_path, capsys):
-    """Issue 26: "seed" meant the chapter and the random seed; the protocol is "chapter" now, and
+    """"seed" named both the chapter's protocol and the random seed; the protocol is "chapter" now, and
     "seed" (old command lines, specs, ensemble stores) still means it. Files record the settings,
     not the name, so both names write the same file."""
     from jamflow.cli.app import main

@@ -1,5 +1,5 @@
 """The tutorial notebook (docs/tutorial.ipynb) runs from top to bottom under nbmake, so its
-code works with this jamflow (issue 26); a cell that raises fails this test. It is stored
+code works with this jamflow; a cell that raises fails this test. It is stored
 without outputs, so the repository stays small and diffs stay readable."""
 
 import json

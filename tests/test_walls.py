@@ -1,4 +1,4 @@
-"""Walls and gravity (issue 16, chapter section 2.3): the walled box, closed forms (one disk pressed
+"""Walls and gravity (chapter section 2.3; docs/notes/walls-gravity-pressure.md): the walled box, closed forms (one disk pressed
 on a wall, a column of disks under gravity), the three implementations (numpy reference, compiled,
 LAMMPS) against each other and against finite differences, jammed packings with smooth and
 rough walls, the contact count, files, and bad input."""

@@ -12,7 +12,7 @@ QUIET_UNTIL_WORK = 1e-3  # tqdm's delay (s): > 0 and above the round-off of time
 
 class HiddenBar:
     """What a disabled bar does (counts, draws nothing), without importing tqdm: a ``--quiet``
-    run's start-up (issue 17) does not pay for it."""
+    run's start-up (measured in docs/notes/speed-2.md) does not pay for it."""
 
     def __init__(self, total=None):
         self.n, self.total = 0, total
@@ -68,7 +68,7 @@ class CompressionProgress:
     window, and the fast protocol grows its increments again after each reversal), so while the
     run goes the bar counts minimisations without a total, and the postfix's dphi tells how far
     the bisection has come. An estimated total (from the halvings still needed) moved up and down
-    and made the percentage jump back (60% 59/98, then 70% 91/130: issue 26). A run that ends sets
+    and made the percentage jump back (60% 59/98, then 70% 91/130). A run that ends sets
     the total to the minimisations it made, so its last line reads 100 %; a run that fails leaves
     the bar where it stopped.
     """

@@ -1,4 +1,4 @@
-"""Gauss-Newton active-set polish of a disk/sphere minimisation near force balance (issue 17).
+"""Gauss-Newton active-set polish of a disk/sphere minimisation near force balance (docs/notes/speed-2.md).
 
 With the linear spring (alpha = 2, eps = 1) the energy is a nonlinear least-squares objective,
 V = 1/2 sum_pairs max(0, delta_ij)^2 with delta = 1 - r_ij / sigma_ij (chapter eq. 2.1). Its
@@ -19,10 +19,10 @@ softest mode); its use is the creep of the final minimisations near onset, where
 contact change that the model's active set finds in one step.
 
 A full Newton step with the exact Hessian, tried first wherever H + mu I is positive definite,
-was an option until issue 25: quadratic far above onset, but near onset H is indefinite at almost
+was an option once: quadratic far above onset, but near onset H is indefinite at almost
 every state and it was never accepted in the N = 256 / 1024 jams, so it was removed.
 
-Rigid bodies of fused sites (n-mers, issue 14) are polished the same way: their energy is the same
+Rigid bodies of fused sites (n-mers) are polished the same way: their energy is the same
 sum over site pairs of different bodies, delta = 1 - s with s = |r_s - r_t| / sigma, and J is
 ds/dxi in the generalized coordinates of ``analysis.hessian.Coordinates`` (centres, then the
 rotations d_k theta; ``hessian.distance_jacobian``, the rows the dynamical matrix uses), so the

@@ -33,7 +33,7 @@ from jamflow.model.sizes import SizeSpec
 
 @dataclass(frozen=True)
 class Extended:
-    """Double-double coordinates of a packing (issue 28, ``jamflow.model.ddouble``): the true
+    """Double-double coordinates of a packing (``jamflow.model.ddouble``; docs/guide/precision.md): the true
     positions are ``Packing.positions + positions_lo`` and the true side lengths of the orthogonal
     periodic box ``Packing.box.lengths + lengths_lo``. ``positions_hi`` and ``lengths_hi`` record the
     float64 parts they were made with: a Packing whose positions or box differ (any operation that
@@ -60,7 +60,7 @@ def check_low_part(name: str, lo, shape: tuple) -> np.ndarray:
 
 
 def warn_float64_only(packing: Packing, what: str) -> None:
-    """Warn that ``what`` reads only the float64 part of a double-double packing (issue 28)."""
+    """Warn that ``what`` reads only the float64 part of a double-double packing."""
     if packing.extended is not None:
         source = packing.metadata.get("source", "the packing")
         warnings.warn(f"{source} carries extended precision (positions_lo, precision = double-double); {what} uses "

@@ -172,7 +172,8 @@ def pair_geometry(packing: Packing, skin: float = 0.0) -> PairGeometry:
     overlapping pairs, no tolerance; skin in diameters, for the gaps a step may close). float64
     separations, or, for disks and spheres carrying double-double coordinates (``Packing.extended``),
     separations, distances and overlaps evaluated from hi + lo (``dd_separations``): there an overlap
-    ~1e-14 is below one ulp of a coordinate and the float64 test r < sigma misses contacts (issue 28)."""
+    ~1e-14 is below one ulp of a coordinate and the float64 test r < sigma misses contacts
+    (docs/guide/precision.md)."""
     if packing.n < 2:
         return PairGeometry(np.empty(0, int), np.empty(0, int), np.empty((0, packing.dim)), np.empty(0), np.empty(0),
                             None)

@@ -1,4 +1,4 @@
-"""The pressure-ladder collapse figure (issue 28): the excess contact number Delta z and the shear
+"""The pressure-ladder collapse figure (docs/guide/precision.md): the excess contact number Delta z and the shear
 modulus G of jammed packings against the pressure p (top row) and, scaled by N, against p N^2
 (bottom row), one colour per (d, N), with published power laws drawn as dashed guides and the
 crossover p N^2 = 1 (Goodrich, Liu & Nagel, PRL 109, 095704 (2012)) marked."""

@@ -1,4 +1,4 @@
-"""Double-double refinement of a jammed packing of disks or spheres (issue 28).
+"""Double-double refinement of a jammed packing of disks or spheres (docs/guide/precision.md).
 
 float64 resolves a contact force only down to its round-off floor (``pressure.pressure_floor``:
 P >= 8.3e-12 for 2D bidisperse disks at N <= 300); near p ~ 1e-14 the overlaps (~1e-14

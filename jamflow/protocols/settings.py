@@ -89,7 +89,7 @@ def chapter_protocol(**overrides) -> CompressionSettings:
     return CompressionSettings(**overrides)
 
 
-seed_protocol = chapter_protocol  # its name before issue 26 (``--protocol chapter``), kept
+seed_protocol = chapter_protocol  # its old name, kept as an alias of ``--protocol chapter``
 
 
 def fast_protocol(**overrides) -> CompressionSettings:

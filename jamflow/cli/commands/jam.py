@@ -83,7 +83,7 @@ def run(args) -> int:
 def build_kernels_first(spec: JamSpec, start) -> None:
     """Build the ahead-of-time disk kernels, if this jam runs them and they are not built yet (once per
     machine, ~20 s, announced by one line on stderr), before the progress bar starts: the bar then
-    counts minimisations only, instead of drawing a first "1/1 100%" line after the build (issue 29)."""
+    counts minimisations only, instead of drawing a first "1/1 100%" line after the build."""
     from jamflow.engines.choose import engine_name
 
     if engine_name(start, spec.minimizer, spec.engine, pressure=spec.pressure is not None) == "numba":

@@ -1,5 +1,5 @@
 """Refine a jammed packing of disks or spheres (linear spring, periodic orthogonal box) in
-double-double arithmetic and walk it to the target pressure P (issue 28; see the docs, guide/precision):
+double-double arithmetic and walk it to the target pressure P (see the docs, guide/precision):
 Newton steps on its contact network with residual forces, overlaps and the virial in double-double,
 the box and positions dilated affinely between pressures. The output packing file carries
 positions_lo and box_lo beside positions and box (true value = hi + lo) and precision =

@@ -1,4 +1,4 @@
-"""Disks and spheres with the linear spring in double-double (issue 28): overlaps, energy, forces
+"""Disks and spheres with the linear spring in double-double (docs/guide/precision.md): overlaps, energy, forces
 and the virial of positions hi + lo in a periodic orthogonal box whose sides are hi + lo.
 
 The arithmetic is ``jamflow.model.ddouble``, compiled from its own source: each function is

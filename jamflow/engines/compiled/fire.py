@@ -17,7 +17,7 @@ smallest contact distance, so the largest stable step scales with l. The default
 10: up to 0.5) were measured on disks and spheres (l = 1); an oblate spheroid of aspect ratio 0.6
 touches face to face at l = 0.6, its stiffest modes (2.5x those of the prolate 1.5, measured)
 made FIRE run at the edge of stability at dt = 0.5, reset on P < 0 every ~4 steps, and creep
-(issue 27 item 4, docs/notes/ellipses.md): so the step is taken in units of l.
+(measured in docs/notes/ellipses.md, "FIRE's time unit and the oblate creep"): so the step is taken in units of l.
 
 The force/torque kernel comes from the pair list's type (``kernels.evaluate``); beside it
 FIRE calls the external field (``field.external``: walls, gravity, fixed particles). At
