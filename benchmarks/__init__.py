@@ -26,6 +26,9 @@ BENCHMARKS: dict[str, Benchmark] = {
         "speed", "default `jamflow jam` (whole process and in process) against the hand-written LAMMPS protocol",
         ["--n", "64", "--seeds", "1", "--handwritten", "64", "--process-max", "64", "--out", "{tmp}/speed-table.csv",
          "--trace", "{tmp}/trace.csv"]),
+    "newton_minimizer": Benchmark(
+        "speed", "the Newton-Krylov minimiser against FIRE: single minimisations above onset, whole jams by creep method",
+        ["single", "--n", "64", "--seeds", "1", "--dphi", "1e-6", "--out", "{tmp}/newton-single.csv"]),
     "startup": Benchmark(
         "speed", "start-up of the jamflow command (--help, jam --n 64), its floors and a jam's first second",
         ["--repeats", "1", "--out", "{tmp}/startup.csv"]),

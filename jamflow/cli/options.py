@@ -54,7 +54,9 @@ def add_spec_arguments(p, skip=()) -> None:
         help="what a creeping minimisation (unconverged after 10 000+ iterations near balance) does between FIRE "
              "windows: soft-modes (Newton steps along its softest modes, docs/notes/soft-modes.md), polish "
              "(Gauss-Newton active-set steps, disks/spheres and rigid bodies with the linear spring, "
-             "docs/notes/speed-2.md section 8, docs/notes/nmers.md), off; auto: polish for rigid bodies and 2D disks, "
+             "docs/notes/speed-2.md section 8, docs/notes/nmers.md), newton (Newton-Krylov steps on the exact "
+             "Hessian with a kept sparse Cholesky factor, disks/spheres with the linear spring, every 20 000 "
+             "iterations; docs/notes/newton-krylov.md), off; auto: polish for rigid bodies and 2D disks, "
              "soft-modes for ellipses and spheroids, in the compiled engine")
     add_engine_argument(p, skip,
                         help="auto: the compiled engine (FIRE, in process) wherever it runs the scene, else LAMMPS "

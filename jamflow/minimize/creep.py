@@ -7,8 +7,10 @@ A ``Creep`` is a trigger and a strategy. The trigger (``CreepTrigger``) says whe
 ``creep_force`` (``CREEP_FORCE``, 1e-9 eps/diameter; the rigid bodies' polish from 1e-6). The
 strategy takes the step with its own model and line search and returns how many steps it kept:
 ``polish.PolishSteps`` (Gauss-Newton active-set steps with Armijo backtracking on the exact
-energy; disks/spheres and rigid bodies, linear spring) or ``soft_modes.SoftModeSteps`` (a Newton
-step along the softest modes of the dynamical matrix, the best of a few lengths; any shape).
+energy; disks/spheres and rigid bodies, linear spring), ``soft_modes.SoftModeSteps`` (a Newton
+step along the softest modes of the dynamical matrix, the best of a few lengths; any shape) or
+``newton.NewtonSteps`` (Newton-Krylov relaxation to the force tolerance; disks/spheres, linear
+spring). A trigger with an ``after`` that is not aligned ends the window there (``until_due``).
 Which strategy and trigger pay for which scene was measured: ``rules._creep_method``.
 """
 
@@ -40,6 +42,17 @@ class CreepTrigger:
         elif not self.aligned and done < self.after:
             return False
         return done % self.after == 0 if self.aligned else True
+
+    def until_due(self, done: int) -> int | None:
+        """Iterations from ``done`` to the next point where the trigger may be due (a window should
+        end there), or None where the window's own length decides."""
+        if self.aligned:
+            return None
+        if not self.attempts:
+            return max(self.after - done, 1)
+        if self.every is None:
+            return None
+        return max(self.next_at - done, 1)
 
     def fired(self, done: int) -> None:
         self.attempts += 1

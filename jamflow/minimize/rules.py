@@ -73,6 +73,8 @@ def minimize(engine, settings: MinimizerSettings | None = None) -> MinimizeResul
     with engine.minimizer_session(settings, ftol) as run_window:
         while True:
             steps = min(settings.window, settings.max_iterations - done)
+            if creep is not None and creep.trigger.until_due(done) is not None:
+                steps = min(steps, creep.trigger.until_due(done))
             w = run_window(steps)
             done += w.iterations
             energy = w.objective / n
@@ -107,6 +109,13 @@ def _creep_method(engine, settings: MinimizerSettings, stiffness: float, ftol: f
         from jamflow.minimize.soft_modes import SoftModeSteps, trigger  # scipy.sparse.linalg: loaded only where it runs
 
         return Creep(trigger(template, settings.creep_after), SoftModeSteps(max(1.0, stiffness)))
+    if method == "newton":
+        from jamflow.minimize.newton import AFTER, NewtonSteps, newton_reason, newton_trigger
+
+        reason = newton_reason(template)
+        if reason:
+            raise ValueError(f"creep method 'newton': {reason}; use the creep method polish, soft-modes or off")
+        return Creep(newton_trigger(settings.creep_after or AFTER), NewtonSteps(ftol))
     if method == "polish":
         from jamflow.minimize.polish import AFTER, PolishSteps, polish_reason, polish_trigger
 

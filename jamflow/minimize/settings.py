@@ -15,7 +15,7 @@ METHODS = ("fire", "cg", "md")
 MD_DAMPINGS = ("viscous", "pairwise")
 
 
-CREEP_METHODS = ("auto", "soft-modes", "polish", "off")
+CREEP_METHODS = ("auto", "newton", "soft-modes", "polish", "off")
 CREEP_FORCE = 1e-9  # max force (eps/diameter) below which a minimisation that has not converged creeps
 
 
@@ -47,7 +47,9 @@ class MinimizerSettings:
     # what a creeping minimisation (not converged, max force below 1e-9; 1e-6 for the polish of rigid bodies)
     # does between FIRE windows at a fixed box:
     # "soft-modes": Newton steps along its softest modes (``jamflow.minimize.soft_modes``), "polish": Gauss-Newton
-    # active-set steps (``jamflow.minimize.polish``; disks/spheres and rigid bodies, linear spring), "off"; "auto" =
+    # active-set steps (``jamflow.minimize.polish``; disks/spheres and rigid bodies, linear spring), "newton":
+    # Newton-Krylov steps on the exact Hessian with a kept Cholesky factor (``jamflow.minimize.newton``; disks and
+    # spheres, linear spring; docs/notes/newton-krylov.md), "off"; "auto" =
     # what was measured to pay: the polish for rigid bodies (repeated every creep_after iterations) and for
     # 2D disks (once) with the linear spring, soft modes for the other shapes that turn (ellipses, spheroids,
     # rigid bodies with other laws) (docs/notes/nmers.md, docs/notes/soft-modes.md, docs/notes/speed-2.md section 8), nothing
