@@ -42,6 +42,7 @@ from functools import lru_cache
 import numpy as np
 
 from jamflow.minimize.creep import CreepTrigger
+from jamflow.minimize.polish import pair_geometry
 
 log = logging.getLogger(__name__)
 
@@ -84,22 +85,13 @@ class Model:
 
     @classmethod
     def at(cls, packing, x: np.ndarray) -> "Model":
-        import scipy.sparse as sp
-
         from jamflow.engines.compiled.spheres import build
 
         pairs = build(packing, x, SKIN)
         n, d = x.shape
-        dr = x[pairs.i] - x[pairs.j] + pairs.shift
-        r = np.sqrt(np.einsum("ij,ij->i", dr, dr))
-        unit = dr / r[:, None]
-        delta = 1.0 - r / pairs.sigma
-        g = unit / pairs.sigma[:, None]  # d delta / d x_j = +g, d delta / d x_i = -g
-        rows = np.repeat(np.arange(len(r)), 2 * d)
-        cols = np.concatenate([pairs.i[:, None] * d + np.arange(d), pairs.j[:, None] * d + np.arange(d)], axis=1)
-        jac = sp.csr_matrix((np.concatenate([-g, g], axis=1).ravel(), (rows, cols.ravel())), shape=(len(r), n * d))
+        dr, r, delta, jac = pair_geometry(x, pairs)
         on = delta > 0
-        blocks = _tension_blocks(delta[on], r[on], pairs.sigma[on], unit[on])
+        blocks = _tension_blocks(delta[on], r[on], pairs.sigma[on], dr[on] / r[on, None])
         tension = _pair_blocks(pairs.i[on], pairs.j[on], blocks, n, d)
         grad = jac[on].T @ delta[on]
         return cls(delta, jac, tension, grad, 0.5 * float(delta[on] @ delta[on]))

@@ -94,6 +94,12 @@ def polish_reason(packing) -> str:
 
 def overlaps(x: np.ndarray, pairs) -> tuple[np.ndarray, sp.csr_matrix]:
     """delta = 1 - r / sigma over ``pairs`` (i, j, shift, sigma) and its Jacobian J (P x N d)."""
+    return pair_geometry(x, pairs)[2:]
+
+
+def pair_geometry(x: np.ndarray, pairs):
+    """(dr, r, delta, J) of ``pairs`` (i, j, shift, sigma): dr = x_i - x_j + shift, r = |dr|,
+    delta = 1 - r / sigma and its Jacobian J = d delta / dx (P x N d, sparse)."""
     import scipy.sparse as sp  # loaded only when a polish runs
 
     n, d = x.shape
@@ -103,8 +109,8 @@ def overlaps(x: np.ndarray, pairs) -> tuple[np.ndarray, sp.csr_matrix]:
     g = dr / (r * pairs.sigma)[:, None]  # d delta / d x_j = +g, d delta / d x_i = -g
     rows = np.repeat(np.arange(len(r)), 2 * d)
     cols = np.concatenate([pairs.i[:, None] * d + np.arange(d), pairs.j[:, None] * d + np.arange(d)], axis=1)
-    return delta, sp.csr_matrix((np.concatenate([-g, g], axis=1).ravel(), (rows, cols.ravel())),
-                                shape=(len(r), n * d))
+    jac = sp.csr_matrix((np.concatenate([-g, g], axis=1).ravel(), (rows, cols.ravel())), shape=(len(r), n * d))
+    return dr, r, delta, jac
 
 
 def model(packing):
