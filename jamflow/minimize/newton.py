@@ -28,7 +28,7 @@ M = J_A^T J_A + mu I (mu the mean overlap, the scale of T) is also the precondit
 Cholesky factor is KEPT across steps and computed again only when the contacts differ from the
 factorised ones by more than ``REFACTOR_FRACTION`` or a step's solves needed more than
 ``CG_SLOW`` iterations. CHOLMOD (the ``cholespy`` wheel) factorises it where installed, SciPy's
-SuperLU otherwise. Measured against FIRE in docs/notes/large-n.md.
+SuperLU otherwise. Measured against FIRE in docs/notes/newton-krylov.md.
 """
 
 from __future__ import annotations
