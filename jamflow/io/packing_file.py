@@ -24,7 +24,8 @@ epsilon, pressures in epsilon / diameter^d)::
                                    (how the start's orientations were drawn: "random",
                                    "aligned" or "nematic:S", ``jamflow jam --orientations``; "" unknown
                                    or round particles)
-    /positions  (N, d)      float64, Cartesian, wrapped into the cell
+    /positions  (N, d)      float64, Cartesian, wrapped into the cell: the packing's positions bit
+                            for bit (``stored_packing``: wrapped once if they lay outside)
     /positions_lo (N, d)    float64, double-double packings only (root attribute precision =
                             "double-double", else "double"; ``jamflow refine``): the true
                             position is positions + positions_lo, wrapped in double-double
@@ -137,15 +138,14 @@ def save_packing(path, packing: Packing, *, energy_per_particle=None, pressure_t
     with hdf5_output(path) as f:
         f.attrs.update(attrs)
         f.attrs["precision"] = packing.precision
-        if packing.extended is None:
-            f["positions"] = packing.box.wrap(packing.positions)
-        else:  # hi + lo as they are (wrapped in double-double by the refinement): wrapping hi alone would break the sum
-            f["positions"] = packing.positions
-            f["positions_lo"] = packing.positions_lo
-            f["box_lo"] = packing.lengths_lo
-        f["diameters"] = packing.diameters
-        f["box"] = packing.box.h
-        for name, data in shape_datasets(packing.with_positions(packing.box.wrap(packing.positions))).items():
+        stored = stored_packing(packing)
+        f["positions"] = stored.positions
+        if stored.extended is not None:  # hi + lo as they are (wrapped in double-double by the refinement)
+            f["positions_lo"] = stored.positions_lo
+            f["box_lo"] = stored.lengths_lo
+        f["diameters"] = stored.diameters
+        f["box"] = stored.box.h
+        for name, data in shape_datasets(stored).items():
             f[name] = data
         if ptensor is not None:
             f["pressure_tensor"] = ptensor
@@ -166,6 +166,28 @@ def save_packing(path, packing: Packing, *, energy_per_particle=None, pressure_t
             for name, column in columns.items():
                 g[name] = np.asarray(column)
     return Path(path)
+
+
+IN_CELL_SLACK = 1e-12  # fractional coordinates in [-slack, 1 + slack) count as inside the cell (round-off of a wrap)
+
+
+def in_cell(box: Box, positions) -> bool:
+    """True when every position lies in the primary reduced cell along the periodic axes, up to
+    the round-off of ``Box.wrap`` (``IN_CELL_SLACK`` in fractional coordinates)."""
+    s = box.reduced().to_fractional(positions)[:, list(np.flatnonzero(box.periodic))]
+    return bool(np.all((s >= -IN_CELL_SLACK) & (s < 1.0 + IN_CELL_SLACK)))
+
+
+def stored_packing(packing: Packing) -> Packing:
+    """The packing a file holds for ``packing``: the packing itself, bit for bit, when its
+    positions lie in the cell (every engine and protocol wraps its packings once) or when it
+    carries double-double low parts (hi + lo are wrapped together by the refinement; wrapping hi
+    alone would break the sum); else the packing with its positions wrapped once. Wrapping again
+    positions that are already in the cell is not the identity (the fractional round trip moves
+    them by an ulp), so ``save_packing`` then ``load_packing`` returns the same bits."""
+    if packing.extended is not None or in_cell(packing.box, packing.positions):
+        return packing
+    return packing.with_positions(packing.box.wrap(packing.positions))
 
 
 def save_jam_result(path, result, checks, *, target_pressure=None, stress=None, force: bool = False, **run_info):
@@ -304,9 +326,30 @@ def load_packing(path) -> Packing:
                               float(f.attrs.get("gravity", 0.0)))
             if "positions_lo" in f:
                 packing = packing.with_low_parts(f["positions_lo"][...], f["box_lo"][...] if "box_lo" in f else None)
-            return packing
+            return _with_stored_orientations(packing, orientations)
         except ValueError as err:
             raise ValueError(f"{path} holds an invalid packing: {err}") from None
+
+
+UNIT_ROUNDOFF = 8 * np.finfo(float).eps  # | |q| - 1 | of a quaternion normalised in float64
+
+
+def _with_stored_orientations(packing: Packing, stored) -> Packing:
+    """``packing`` holding the file's orientations bit for bit. The Packing renormalises unit
+    quaternions, and renormalising quaternions already unit to round-off moves some by an ulp, so
+    without this a packing read back would differ from the one saved. Quaternions unit to round-off
+    (``UNIT_ROUNDOFF``, as every normalised one is) are kept as stored; others, within the unit check
+    of ``rotations.check_orientations``, are renormalised as before."""
+    if stored is None or packing.orientations is None or packing.dim != 3:
+        return packing
+    exact = np.array(stored, dtype=float)
+    unit = np.abs(np.linalg.norm(exact, axis=1) - 1.0) <= UNIT_ROUNDOFF  # others: renormalised, as given
+    exact[~unit] = packing.orientations[~unit]
+    if np.array_equal(exact, packing.orientations):
+        return packing
+    exact.setflags(write=False)
+    object.__setattr__(packing, "orientations", exact)  # a fresh, frozen Packing: nothing else refers to it yet
+    return packing
 
 
 def shape_datasets(packing: Packing) -> dict:
