@@ -320,18 +320,60 @@ def load_packing(path) -> Packing:
         h = f["box"][...]
         fixed = f["fixed"][...].astype(bool) if "fixed" in f else None
         try:
+            check_box(h)
             walls = parse_walls(_text(f.attrs.get("walls", "")), len(h))
             box = Box(h, tuple(a not in walls for a in range(len(h))))
             packing = Packing(f["positions"][...], f["diameters"][...], box, pot, meta, shape, orientations, fixed,
                               float(f.attrs.get("gravity", 0.0)))
-            if "positions_lo" in f:
-                packing = packing.with_low_parts(f["positions_lo"][...], f["box_lo"][...] if "box_lo" in f else None)
+            if "positions_lo" in f or "box_lo" in f:
+                if "positions_lo" not in f:
+                    raise ValueError("dataset box_lo without positions_lo: the double-double positions are missing")
+                lo = check_low_parts("positions_lo", packing.positions, f["positions_lo"][...])
+                box_lo = check_low_parts("box_lo", box.lengths, f["box_lo"][...]) if "box_lo" in f else None
+                packing = packing.with_low_parts(lo, box_lo)
             return _with_stored_orientations(packing, orientations)
         except ValueError as err:
             raise ValueError(f"{path} holds an invalid packing: {err}") from None
 
 
 UNIT_ROUNDOFF = 8 * np.finfo(float).eps  # | |q| - 1 | of a quaternion normalised in float64
+LOW_PART_ULPS = 1.0  # |lo| <= this many ulp(hi): a normalised double-double pair has |lo| <= ulp(hi) / 2
+
+
+def check_box(h) -> None:
+    """The ``box`` dataset ``h`` is a finite 2x2 or 3x3 cell with positive side lengths; a one-line
+    ValueError naming the dataset otherwise."""
+    h = np.asarray(h)
+    if h.ndim != 2 or h.shape[0] != h.shape[1] or h.shape[0] not in (2, 3):
+        raise ValueError(f"dataset box must be a 2x2 or 3x3 cell matrix, got shape {h.shape}")
+    if not np.issubdtype(h.dtype, np.number) or not np.all(np.isfinite(h)):
+        raise ValueError("dataset box has non-finite entries")
+    if np.any(np.diag(h) <= 0):
+        raise ValueError(f"dataset box has side lengths that are not positive: {np.diag(h).tolist()}")
+
+
+def check_low_parts(name: str, hi: np.ndarray, lo) -> np.ndarray:
+    """The low parts ``lo`` of the double-double values hi + lo read from dataset ``name``: finite,
+    of hi's shape, each at most ``LOW_PART_ULPS`` ulp(hi) in size (a normalised pair has |lo| <= ulp(hi)
+    / 2; a larger low part is no low part but damage, and would be believed by every double-double
+    computation). A one-line ValueError naming the dataset and the worst entry otherwise."""
+    arr = np.asarray(lo)
+    if arr.shape != hi.shape:
+        raise ValueError(f"dataset {name} must have shape {hi.shape} (one low part per value), got {arr.shape}")
+    if not np.issubdtype(arr.dtype, np.floating):
+        raise ValueError(f"dataset {name} must hold floating-point numbers, got {arr.dtype}")
+    arr = arr.astype(float)
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"dataset {name} must be finite (it holds NaN or inf)")
+    limit = LOW_PART_ULPS * np.spacing(np.abs(hi))
+    excess = np.abs(arr) > limit
+    if np.any(excess):
+        k = np.unravel_index(int(np.argmax(np.where(excess, np.abs(arr), -1.0))), arr.shape)  # the largest offender
+        where = f"[{', '.join(map(str, k))}]"
+        raise ValueError(f"dataset {name} has low parts larger than the ulp of their high parts ({int(excess.sum())} "
+                         f"of {arr.size}; worst {name}{where} = {arr[k]:.3g}, ulp {limit[k] / LOW_PART_ULPS:.3g}): "
+                         "not a double-double value; the file is damaged")
+    return arr
 
 
 def _with_stored_orientations(packing: Packing, stored) -> Packing:
