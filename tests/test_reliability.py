@@ -1,0 +1,132 @@
+"""File-system refusals, sizes that cannot fit, output names that look derived, benchmark outputs
+that must not overwrite curated data, and temporary files left behind (Dask, ahead-of-time build)."""
+
+from __future__ import annotations
+
+import errno
+import os
+import tempfile
+
+import pytest
+
+from jamflow.cli.app import main
+
+EXIT_USER = 2
+
+
+@pytest.fixture(scope="module")
+def packing_file(tmp_path_factory):
+    out = tmp_path_factory.mktemp("packing") / "p.h5"
+    assert main(["jam", "--n", "16", "--seed", "1", "--out", str(out), "--quiet"]) == 0
+    return out
+
+
+def one_line(err: str) -> str:
+    assert "Traceback" not in err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    return lines[0]
+
+
+def read_only(code):
+    """A stand-in for a mount that refuses writes with ``code`` (root ignores chmod)."""
+    def refuse(*args, **kwargs):
+        raise OSError(code, os.strerror(code), str(kwargs.get("dir") or (args[0] if args else "")))
+    return refuse
+
+
+@pytest.mark.parametrize("code, words", [(errno.EROFS, "read-only file system"), (errno.EACCES, "permission denied"),
+                                         (errno.ENOSPC, "no space left")])
+def test_jam_refuses_an_unwritable_directory_before_work(tmp_path, capsys, monkeypatch, code, words):
+    monkeypatch.setattr(tempfile, "mkstemp", read_only(code))
+    assert main(["jam", "--n", "16", "--out", str(tmp_path / "x.h5"), "--quiet"]) == EXIT_USER
+    line = one_line(capsys.readouterr().err)
+    assert words in line and "--out" in line
+
+
+def test_an_output_directory_on_a_read_only_mount_is_one_line(tmp_path, capsys, monkeypatch, packing_file):
+    monkeypatch.setattr(os, "mkdir", read_only(errno.EROFS))
+    monkeypatch.setattr(tempfile, "mkstemp", read_only(errno.EROFS))
+    code = main(["shear", str(packing_file), "--dgamma", "1e-3", "--to", "2e-3", "--out", str(tmp_path / "s"), "--quiet"])
+    assert code == EXIT_USER
+    line = one_line(capsys.readouterr().err)
+    assert "read-only file system" in line and "--out" in line
+
+
+def test_output_directory_turns_the_errno_into_a_refusal(tmp_path, monkeypatch):
+    from jamflow.support.files import output_directory
+
+    monkeypatch.setattr(os, "mkdir", read_only(errno.EROFS))
+    with pytest.raises(ValueError, match="read-only file system"):
+        with output_directory(tmp_path / "d"):
+            pass
+
+
+def test_a_real_unwritable_path_is_refused(tmp_path, capsys):
+    target = "/sys/jamflow-test.h5" if os.path.isdir("/sys") else "/proc/jamflow-test/x.h5"
+    assert main(["jam", "--n", "16", "--out", target, "--quiet"]) == EXIT_USER
+    assert "--out" in one_line(capsys.readouterr().err)
+
+
+def test_a_write_that_fails_during_work_is_one_line(tmp_path, capsys, monkeypatch):
+    def fail(*a, **k):
+        raise OSError(errno.EROFS, os.strerror(errno.EROFS), str(tmp_path / "x.h5"))
+    monkeypatch.setattr("jamflow.io.packing_file.save_packing", fail)
+    assert main(["jam", "--n", "16", "--out", str(tmp_path / "x.h5"), "--quiet"]) == EXIT_USER
+    line = one_line(capsys.readouterr().err)
+    assert "read-only file system" in line and str(tmp_path / "x.h5") in line
+
+
+@pytest.mark.parametrize("command", ["modes", "moduli"])
+def test_outputs_beside_the_input_name_no_option_the_command_lacks(tmp_path, capsys, monkeypatch, packing_file, command):
+    monkeypatch.setattr(tempfile, "mkstemp", read_only(errno.EROFS))
+    assert main([command, str(packing_file), "--no-figure"]) == EXIT_USER
+    line = one_line(capsys.readouterr().err)
+    assert "read-only file system" in line and "--out" not in line
+
+
+def test_modes_refuses_bins_that_cannot_fit(packing_file, capsys):
+    assert main(["modes", str(packing_file), "--bins", "100000000000", "--no-figure"]) == EXIT_USER
+    line = one_line(capsys.readouterr().err)
+    assert "--bins" in line and "10,000,000" in line
+
+
+@pytest.mark.parametrize("option", ["--dr", "--q6-dr"])
+def test_analyze_refuses_bin_widths_that_cannot_fit(packing_file, tmp_path, capsys, option):
+    assert main(["analyze", str(packing_file), option, "1e-11", "--out", str(tmp_path / "s.structure.h5")]) == EXIT_USER
+    line = one_line(capsys.readouterr().err)
+    assert option in line and "10,000,000" in line
+    assert not list(tmp_path.iterdir())
+
+
+def test_onsets_refuses_bins_that_cannot_fit(tmp_path, capsys):
+    store = tmp_path / "store"
+    store.mkdir()
+    (store / "summary.csv").write_text("n,seed,phi_J,z\n16,1,0.84,4.0\n16,2,0.83,4.0\n")
+    assert main(["onsets", str(store), "--bins", "100000000000"]) == EXIT_USER
+    assert "--bins" in one_line(capsys.readouterr().err)
+
+
+@pytest.mark.parametrize("name", ["x.shear.h5", "x.modes.h5", "x.moduli.hdf5", "x.structure.h5"])
+def test_jam_refuses_a_derived_output_name_before_work(tmp_path, capsys, name):
+    assert main(["jam", "--n", "16", "--out", str(tmp_path / name), "--quiet"]) == EXIT_USER
+    line = one_line(capsys.readouterr().err)
+    assert "--out" in line and "derived" in line
+    assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("command, options", [("refine", ["--pressure", "1e-12"]),
+                                              ("anneal", ["--to", "1.1", "--dalpha", "0.05", "--quiet"])])
+def test_packing_writers_refuse_a_derived_output_name(tmp_path, capsys, packing_file, command, options):
+    assert main([command, str(packing_file), *options, "--out", str(tmp_path / "y.shear.h5")]) == EXIT_USER
+    assert "derived" in one_line(capsys.readouterr().err)
+    assert not list(tmp_path.iterdir())
+
+
+def test_a_packing_named_so_is_read_back(tmp_path, capsys):
+    from jamflow.io.names import is_derived
+
+    out = tmp_path / "x-shear.h5"
+    assert not is_derived(out)
+    assert main(["jam", "--n", "16", "--out", str(out), "--quiet"]) == 0
+
