@@ -130,3 +130,84 @@ def test_a_packing_named_so_is_read_back(tmp_path, capsys):
     assert not is_derived(out)
     assert main(["jam", "--n", "16", "--out", str(out), "--quiet"]) == 0
 
+
+
+BENCH = __import__("pathlib").Path(__file__).resolve().parents[1] / "benchmarks"
+OUTPUT_OPTIONS = ("--out", "--out-dir", "--png", "--figure", "--figures", "--docs")
+
+
+def benchmark_sources():
+    return sorted(p for p in BENCH.glob("*.py") if p.name not in ("__init__.py", "__main__.py"))
+
+
+def test_no_benchmark_writes_into_docs_notes_by_default():
+    import re
+
+    bad = []
+    for path in benchmark_sources():
+        for number, line in enumerate(path.read_text().splitlines(), 1):
+            option = re.search(r'add_argument\("(--[\w-]+)"', line)
+            if option and option.group(1) in OUTPUT_OPTIONS and re.search(r'default=[^,)]*(docs/notes|DOCS\b)', line):
+                bad.append(f"{path.name}:{number}: {line.strip()}")
+    assert not bad, "\n".join(bad)
+
+
+def test_no_benchmark_truncates_its_results_table():
+    import re
+
+    bad = [f"{p.name}:{n}" for p in benchmark_sources() if p.name != "common.py"
+           for n, line in enumerate(p.read_text().splitlines(), 1)
+           if re.search(r'open\([^)]*"w"', line) and ".csv" in line]
+    bad += [f"{p.name}: DictWriter on a file opened for writing" for p in benchmark_sources() if p.name != "common.py"
+            and re.search(r'open\([^)]*"w"[^)]*\)[^\n]*\n[^\n]*csv\.(Dict)?[Ww]riter', p.read_text())]
+    assert not bad, "\n".join(bad)
+
+
+@pytest.fixture
+def common(monkeypatch):
+    import sys
+
+    monkeypatch.syspath_prepend(str(BENCH))
+    sys.modules.pop("common", None)
+    import common as module
+
+    yield module
+    sys.modules.pop("common", None)
+
+
+def test_merge_rows_keeps_earlier_rows_and_comments(tmp_path, common):
+    out = tmp_path / "t.csv"
+    common.merge_rows(out, [{"n": 1, "t": 0.5}], comment="# machine A")
+    common.merge_rows(out, [{"n": 2, "t": 0.7, "load": 1.0}], comment="# machine A")
+    text = out.read_text().splitlines()
+    assert text[0] == "# machine A" and text.count("# machine A") == 1
+    rows = common.read_rows(tmp_path / "plain.csv")
+    assert rows == []
+    import csv
+
+    rows = list(csv.DictReader(text[1:]))
+    assert [r["n"] for r in rows] == ["1", "2"] and rows[1]["load"] == "1.0" and rows[0]["load"] == ""
+
+
+def test_benchmark_defaults_are_in_the_scratch_directory(tmp_path, monkeypatch, common):
+    monkeypatch.setenv("JAMFLOW_BENCHMARK_OUT", str(tmp_path / "scratch"))
+    import importlib
+    import sys
+
+    sys.modules.pop("common", None)
+    module = importlib.import_module("common")
+    assert module.scratch("x.csv") == tmp_path / "scratch" / "x.csv"
+    assert (tmp_path / "scratch").is_dir()
+
+
+def test_pressure_ladder_adds_rows(tmp_path, common):
+    import importlib
+    import sys
+
+    sys.modules.pop("pressure_ladder", None)
+    ladder = importlib.import_module("pressure_ladder")
+    out = tmp_path / "ladder.csv"
+    ladder.write(out, [{"dim": 2, "n": 16, "seed": 1}])
+    ladder.write(out, [{"dim": 2, "n": 16, "seed": 2}])
+    assert len(common.read_rows(out)) == 2
+
