@@ -211,3 +211,51 @@ def test_pressure_ladder_adds_rows(tmp_path, common):
     ladder.write(out, [{"dim": 2, "n": 16, "seed": 2}])
     assert len(common.read_rows(out)) == 2
 
+
+ENSEMBLE_SCRIPT = """
+import sys
+from jamflow.ensemble import run_ensemble
+if __name__ == "__main__":
+    report = run_ensemble(sys.argv[1], "0:2", 16, workers=1, progress=False)
+    assert report.made == 2, report
+"""
+
+
+def test_a_dask_ensemble_leaves_nothing_in_tmpdir(tmp_path):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    script = tmp_path / "ensemble_run.py"
+    script.write_text(ENSEMBLE_SCRIPT)
+    root = str(Path(__file__).resolve().parents[1])
+    env = {**os.environ, "TMPDIR": str(scratch), "PYTHONPATH": os.pathsep.join([root, os.environ.get("PYTHONPATH", "")])}
+    done = subprocess.run([sys.executable, str(script), str(tmp_path / "store")], env=env, capture_output=True,
+                          text=True, timeout=240)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert sorted(p.name for p in (tmp_path / "store").glob("*.h5")) == ["n16_seed000000.h5", "n16_seed000001.h5"]
+    assert list(scratch.rglob("*")) == []
+
+
+DEBRIS = ("import sys, tempfile, pathlib; d = pathlib.Path(tempfile.mkdtemp(prefix='pycc-build-')); "
+          "(d / 'x.o').write_bytes(b'0'); sys.exit('CompilerError: simulated')")
+
+
+def test_a_failed_ahead_of_time_build_leaves_nothing_in_tmpdir(tmp_path, monkeypatch):
+    import sys
+
+    from jamflow.engines.compiled import aot
+
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    monkeypatch.setenv("TMPDIR", str(scratch))
+    monkeypatch.setattr(aot, "build_command", lambda out_dir: [sys.executable, "-c", DEBRIS])
+    cache = tmp_path / "cache"
+    target, failed = cache / "module.so", cache / "module.failed"
+    aot._build_locked(target, failed)
+    assert "simulated" in failed.read_text()
+    assert list(scratch.rglob("*")) == []
+    assert sorted(p.name for p in cache.iterdir()) == ["build.lock", "module.failed"]
+
