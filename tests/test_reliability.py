@@ -259,3 +259,15 @@ def test_a_failed_ahead_of_time_build_leaves_nothing_in_tmpdir(tmp_path, monkeyp
     assert list(scratch.rglob("*")) == []
     assert sorted(p.name for p in cache.iterdir()) == ["build.lock", "module.failed"]
 
+
+def test_families_refuses_a_grid_that_cannot_fit(tmp_path, capsys):
+    assert main(["families", "--n", "16", "--spacing", "1e-12", "--out", str(tmp_path / "f")]) == EXIT_USER
+    line = one_line(capsys.readouterr().err)
+    assert "--spacing" in line and "100,000" in line
+    assert not (tmp_path / "f").exists()
+
+
+def test_anneal_refuses_steps_that_cannot_fit(tmp_path, capsys, packing_file):
+    assert main(["anneal", str(packing_file), "--to", "2", "--dalpha", "1e-13", "--out", str(tmp_path / "a.h5")]) == EXIT_USER
+    line = one_line(capsys.readouterr().err)
+    assert "--dalpha" in line and "1,000,000" in line
