@@ -137,15 +137,17 @@ def _alive(pid: int) -> bool:
 
 
 @contextlib.contextmanager
-def output_directory(path):
+def output_directory(path, option: str | None = None):
     """Create the output directory ``path`` (its parent must exist) for the block; if the block
-    fails or is interrupted and the directory was made here and is still empty, remove it."""
+    fails or is interrupted and the directory was made here and is still empty, remove it. A
+    directory that cannot be made is a one-line ValueError naming ``option`` (``--out``)."""
     path = Path(path)
     made = not path.exists()
     try:
         path.mkdir(exist_ok=True)
     except OSError as err:
-        raise ValueError(f"cannot create the output directory {path}: {_reason(err)}") from None
+        advice = f"; choose another {option}" if option else ""
+        raise ValueError(f"cannot create the output directory {path}: {_reason(err)}{advice}") from None
     try:
         yield path
     except BaseException:

@@ -154,7 +154,7 @@ def run(args) -> int:
         raise ValueError(f"--plots {plots} is not a directory; give a directory for the PNG plots")
     if not plots.exists():
         check_writable(plots, option="--plots")  # its parent must exist and be writable; the command makes the directory
-    with output_directory(plots):  # made here: removed again if the command fails before writing into it
+    with output_directory(plots, "--plots"):  # made here: removed again if the command fails before writing into it
         return _run(args, diameters, plots)
 
 

@@ -82,7 +82,7 @@ def run(args) -> int:
     if args.emit_deck:
         return emit(args, packing, settings)
     data, figure = output_paths(args)
-    with output_directory(args.out):  # removed again if nothing gets written into it
+    with output_directory(args.out, "--out"):  # removed again if nothing gets written into it
         for out in [data] + ([] if args.no_figure else [figure]):
             check_writable(out, args.force, "--out")
         with warnings.catch_warnings(record=True) as caught, ShearProgress(disable=args.quiet) as progress:
