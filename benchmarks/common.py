@@ -20,13 +20,24 @@ import signal
 import statistics
 import subprocess
 import sys
+import tempfile
 import time
 import warnings
 from pathlib import Path
 
 # --- paths ----------------------------------------------------------------------------------------
 ROOT = Path(__file__).resolve().parents[1]
-DOCS = ROOT / "docs" / "notes"
+DOCS = ROOT / "docs" / "notes"  # curated results: written only when a run names them (--out docs/notes/...)
+SCRATCH = Path(os.environ.get("JAMFLOW_BENCHMARK_OUT") or Path(tempfile.gettempdir()) / "jamflow-benchmarks")
+
+
+def scratch(name: str = "") -> Path:
+    """The default output SCRATCH/``name`` of a benchmark (its directory created): a run never
+    writes into docs/notes/ unless told to. SCRATCH is $JAMFLOW_BENCHMARK_OUT, else
+    TMPDIR/jamflow-benchmarks."""
+    path = SCRATCH / name
+    (path if not name else path.parent).mkdir(parents=True, exist_ok=True)
+    return path
 
 
 # --- CPU, processes and time limits -----------------------------------------------------------------
@@ -88,6 +99,34 @@ def read_rows(path: Path) -> list[dict]:
         return []
     with path.open() as f:
         return list(csv.DictReader(f))
+
+
+def merge_rows(path, rows, columns=None, comment: str | None = None) -> Path:
+    """Add ``rows`` (dicts) to the results CSV at ``path``, keeping the rows it has: a second run
+    adds to the table instead of replacing it. The header is the union of the file's columns and
+    ``columns`` (default: the rows' keys); leading ``#`` comment lines are kept and ``comment``
+    is added if new. Written atomically."""
+    from jamflow.support.files import atomic_path
+
+    path = Path(path)
+    comments, old = [], []
+    if path.is_file():
+        with path.open(newline="") as f:
+            lines = f.read().splitlines(keepends=True)
+        while lines and lines[0].startswith("#"):
+            comments.append(lines.pop(0).rstrip("\r\n"))
+        old = list(csv.DictReader(lines))
+    if comment is not None and comment not in comments:
+        comments.append(comment)
+    keys = list(dict.fromkeys([*(k for r in old for k in r), *(columns or []), *(k for r in rows for k in r)]))
+    with atomic_path(path) as tmp, open(tmp, "w", newline="") as f:
+        for line in comments:
+            f.write(line + "\n")
+        w = csv.DictWriter(f, keys, restval="")
+        w.writeheader()
+        w.writerows(old)
+        w.writerows(rows)
+    return path
 
 
 def write_rows(path: Path, rows: list[dict], columns) -> None:
@@ -176,7 +215,8 @@ def save_figure(fig, path: Path) -> None:
 
 # --- command lines --------------------------------------------------------------------------------
 def command_line(doc, argv, run, chart, csv_path: Path, add_run_arguments, limit: float = 300.0):
-    """``run`` (append rows) / ``chart`` (CSV -> PNG) sub-commands of the sweep benchmarks."""
+    """``run`` (append rows; --out default: the scratch directory) / ``chart`` (CSV -> PNG; --out
+    default ``csv_path``, the curated table) sub-commands of the sweep benchmarks."""
     ap = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="what", required=True)
     r = sub.add_parser("run")
@@ -184,18 +224,21 @@ def command_line(doc, argv, run, chart, csv_path: Path, add_run_arguments, limit
     r.add_argument("--limit", type=float, default=limit, help="seconds per run before it is stopped")
     r.add_argument("--strict", action="store_true", help="fail if any run failed or timed out")
     c = sub.add_parser("chart")
-    for p in (r, c):
-        p.add_argument("--out", type=Path, default=csv_path)
+    r.add_argument("--out", type=Path, default=scratch(csv_path.name),
+                   help=f"CSV the rows are added to (default: the scratch directory; the curated table is {csv_path})")
+    c.add_argument("--out", type=Path, default=csv_path)
     args = ap.parse_args(argv)
     return run(args) if args.what == "run" else chart(args)
 
 
 def run_or_report(doc: str, add_arguments, run, report, out: str, argv=None) -> None:
     """The command line of a results study: options from ``add_arguments(parser)``, ``--out``
-    (default ``out``), ``--report CSV``: ``report(Path)`` instead of ``run(args)``."""
+    (default: ``out``'s name in the scratch directory; ``out`` is the curated table, written only
+    when named), ``--report CSV``: ``report(Path)`` instead of ``run(args)``."""
     ap = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_arguments(ap)
-    ap.add_argument("--out", default=out)
+    ap.add_argument("--out", default=str(scratch(Path(out).name)),
+                    help=f"CSV the rows are added to (default: the scratch directory; the curated table is {out})")
     ap.add_argument("--report", default=None, metavar="CSV")
     args = ap.parse_args(argv)
     if args.report:

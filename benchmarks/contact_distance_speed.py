@@ -15,7 +15,6 @@ contact function on 300 pairs. "exact (maximiser)" is the generic fallback path
 from __future__ import annotations
 
 import argparse
-import csv
 import importlib
 import platform
 import time
@@ -24,7 +23,7 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from common import DOCS  # (benchmarks/ is the script's directory)
+from common import scratch, merge_rows  # (benchmarks/ is the script's directory)
 
 from jamflow.model.shapes import contact_distance
 
@@ -129,15 +128,12 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=100_000)
     ap.add_argument("--repeat", type=int, default=5)
-    ap.add_argument("--out-dir", type=Path, default=DOCS, help="where the CSV and PNG go (default docs/notes/)")
+    ap.add_argument("--out-dir", type=Path, default=scratch(), help="where the CSV and PNG go (default: the scratch directory)")
     args = ap.parse_args(argv)
     rows = measure(args.n, args.repeat)
-    with open(args.out_dir / "contact-distance-speed.csv", "w", newline="") as fh:
-        fh.write(f"# {platform.processor() or platform.machine()}, numpy {np.__version__}, python {platform.python_version()}\n")
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: (f"{v:.4g}" if isinstance(v, float) else v) for k, v in r.items()})
+    merge_rows(args.out_dir / "contact-distance-speed.csv",
+               [{k: (f"{v:.4g}" if isinstance(v, float) else v) for k, v in r.items()} for r in rows],
+               comment=f"# {platform.processor() or platform.machine()}, numpy {np.__version__}, python {platform.python_version()}")
     plot(rows, args.out_dir / "contact-distance-speed.png")
 
 

@@ -31,7 +31,7 @@ from jamflow.mechanics.contacts import Contacts
 from jamflow.mechanics.reference import energy_forces_pressure
 from jamflow.model.shapes import Ellipsoid
 
-from common import pyplot, read_rows, save_figure, write_rows  # (benchmarks/ is the script's directory)
+from common import pyplot, read_rows, save_figure, scratch, write_rows  # (benchmarks/ is the script's directory)
 
 MIXTURES = {"bi:1.4:0.6667": ("exact", "cleaver", "linear", "quadratic"),
             "mono": ("exact", "gaussian", "linear", "quadratic")}
@@ -121,7 +121,7 @@ def main(argv=None) -> None:
     ap.add_argument("--n", type=int, default=64)
     ap.add_argument("--alpha", type=float, default=2.0)
     ap.add_argument("--seeds", type=int, default=10)
-    ap.add_argument("--out", default="docs/notes/contact-methods.csv")
+    ap.add_argument("--out", default=str(scratch("contact-methods.csv")))
     ap.add_argument("--report", default=None, metavar="CSV")
     args = ap.parse_args(argv)
     if args.report:

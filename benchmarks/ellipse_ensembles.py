@@ -25,7 +25,7 @@ from tqdm import tqdm
 
 from jamflow.mechanics.contacts import Contacts
 
-from common import ELLIPSE_COLUMNS, ellipse_row, pyplot, read_rows, save_figure, stats, write_rows  # (benchmarks/ is the script's directory)
+from common import ELLIPSE_COLUMNS, ellipse_row, pyplot, read_rows, save_figure, scratch, stats, write_rows  # (benchmarks/ is the script's directory)
 
 
 
@@ -115,7 +115,7 @@ def main(argv=None) -> None:
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--n", type=int, default=128)
     ap.add_argument("--engine", choices=("numba", "lammps"), default="numba")
-    ap.add_argument("--out", default="docs/notes/ellipse-ensembles.csv")
+    ap.add_argument("--out", default=str(scratch("ellipse-ensembles.csv")))
     ap.add_argument("--keep", default=None, help="directory to save every packing (HDF5), one per engine")
     ap.add_argument("--report", nargs="+", default=None, metavar="CSV")
     ap.add_argument("--packings", default=None, help="with --report: recount contacts of the packings kept here")

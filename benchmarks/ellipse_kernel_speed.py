@@ -16,19 +16,18 @@ recorded with each row.
 from __future__ import annotations
 
 import argparse
-import csv
 import os
 import time
 
 from jamflow.engines.compiled.engine import CompiledEngine
 from jamflow.engines.lammps.engine import LammpsEngine
-from jamflow.support.files import atomic_path
 from jamflow.minimize.settings import MinimizerSettings
 from jamflow.model.packing import random_packing
 from jamflow.model.potentials import Spring
 from jamflow.model.shapes import SPHERE, Ellipsoid
 from jamflow.model.sizes import parse_sizes
 from jamflow.minimize.rules import minimize
+from common import scratch, merge_rows  # (benchmarks/ is the script's directory)
 
 CASES = [("disk", None), ("ellipse", "exact"), ("ellipse", "cleaver"), ("ellipse", "linear"),
          ("ellipse", "quadratic")]
@@ -66,7 +65,7 @@ def main(argv=None):
     ap.add_argument("--alpha", type=float, default=1.6)
     ap.add_argument("--iterations", type=int, default=2000)
     ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--out", default="docs/notes/ellipse-kernel-speed.csv")
+    ap.add_argument("--out", default=str(scratch("ellipse-kernel-speed.csv")))
     args = ap.parse_args(argv)
     rows = []
     for n in args.n:
@@ -87,11 +86,7 @@ def main(argv=None):
                              alpha=args.alpha, us_per_iteration=f"{us:.2f}", ratio_to_disk=f"{us / base:.2f}",
                              load=f"{os.getloadavg()[0]:.1f}"))
             print(rows[-1], flush=True)
-    with atomic_path(args.out) as tmp:
-        with open(tmp, "w", newline="") as f:
-            w = csv.DictWriter(f, list(rows[0]))
-            w.writeheader()
-            w.writerows(rows)
+    merge_rows(args.out, rows)  # added to the rows of earlier runs
 
 
 if __name__ == "__main__":

@@ -17,9 +17,7 @@ idle machine: on this project's 2-core machine a busy second core halves single-
 from __future__ import annotations
 
 import argparse
-import csv
 import statistics
-from pathlib import Path
 
 from jamflow import jam
 from jamflow.engines.lammps.engine import LammpsEngine
@@ -27,6 +25,7 @@ from jamflow.engines.compiled.engine import CompiledEngine
 from jamflow.minimize.settings import MinimizerSettings
 from jamflow.protocols.compression import initial_packing
 from jamflow.minimize.rules import minimize
+from common import scratch, merge_rows  # (benchmarks/ is the script's directory)
 
 ENGINES = {"lammps": LammpsEngine, "numba": CompiledEngine}
 
@@ -81,17 +80,14 @@ def main(argv=None):
     ap.add_argument("--reps", type=int, default=3)
     ap.add_argument("--jam-n", type=int, default=1024)
     ap.add_argument("--jam-seeds", type=int, default=0)
-    ap.add_argument("--out", default="docs/notes/engines.csv")
+    ap.add_argument("--out", default=str(scratch("engines.csv")))
     args = ap.parse_args(argv)
     microseconds_per_iteration(CompiledEngine, near_jamming_state(64), 10)  # compile / load the kernels
     rows = per_iteration_rows(args.sizes, args.iterations, args.reps)
     if args.jam_seeds:
         rows += jam_rows(args.jam_n, args.jam_seeds)
-    with Path(args.out).open("w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["measure", "n", "seed", "lammps", "numba", "ratio", "lammps_us_per_iteration",
-                    "numba_us_per_iteration"])
-        w.writerows(rows)
+    columns = ["measure", "n", "seed", "lammps", "numba", "ratio", "lammps_us_per_iteration", "numba_us_per_iteration"]
+    merge_rows(args.out, [dict(zip(columns, row)) for row in rows], columns)  # added to the rows of earlier runs
     print(f"wrote {args.out} (per-iteration rows: microseconds; jam rows: seconds)")
 
 

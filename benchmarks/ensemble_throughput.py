@@ -28,6 +28,7 @@ import time
 from pathlib import Path
 
 import psutil
+from common import scratch, merge_rows  # (benchmarks/ is the script's directory)
 
 JAMFLOW = [sys.executable, "-m", "jamflow.cli"]
 
@@ -127,11 +128,7 @@ def robustness(work: Path, seeds: int, n: int, reference: dict) -> list[dict]:
 
 
 def write(path, rows):
-    columns = list(dict.fromkeys(k for r in rows for k in r))
-    with open(path, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=columns)
-        w.writeheader()
-        w.writerows(rows)
+    merge_rows(path, rows)  # added to the rows of earlier runs
     print(open(path).read())
 
 
@@ -163,7 +160,7 @@ def main(argv=None):
     ap.add_argument("--work", default="/tmp/jamflow-ens/throughput", help="scratch directory for the stores")
     ap.add_argument("--seeds", type=int, default=200)
     ap.add_argument("--n", type=int, default=64)
-    ap.add_argument("--docs", default="docs/notes")
+    ap.add_argument("--docs", default=str(scratch()))
     ap.add_argument("--plot-only", action="store_true", help="only redraw the chart from the CSV")
     args = ap.parse_args(argv)
     if args.plot_only:

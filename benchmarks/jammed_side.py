@@ -61,7 +61,7 @@ from jamflow.protocols.compression import initial_packing
 from jamflow.protocols.pressure import PressureSettings, jam_at_pressure
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from common import DOCS
+from common import scratch
 
 V_TOL = 1e-16
 SKIN = 0.1  # candidate pairs within the largest diameter + this (diameters), found again every state
@@ -403,8 +403,8 @@ def main(argv=None) -> int:
     ap.add_argument("--loose-overshoot", type=float, default=0.0,
                     help="--top 0: minimise the first jammed state to max force R x P only (0: the force floor)")
     ap.add_argument("--protocols", nargs="+", default=["fast", "ladder"])
-    ap.add_argument("--out", default=str(DOCS / "jammed-side.csv"))
-    ap.add_argument("--append", action="store_true")
+    ap.add_argument("--append", action="store_true", help="(no effect: rows are always added to --out)")
+    ap.add_argument("--out", default=str(scratch("jammed-side.csv")))
     ap.add_argument("--report", default=None, help="CSV: print the summary per variant")
     args = ap.parse_args(argv)
     if args.report:
@@ -414,8 +414,8 @@ def main(argv=None) -> int:
     GAUSS_NEWTON_FIRST, LOOSE_OVERSHOOT = args.gauss_newton, args.loose_overshoot
     jamflow.jam(n=16, seed=0)  # compile / load the kernels outside the measurement
     path = Path(args.out)
-    new = not (args.append and path.exists())
-    with open(path, "a" if args.append else "w", newline="") as fh:
+    new = not path.exists()
+    with open(path, "a", newline="") as fh:  # rows are added: earlier runs' rows are kept
         writer = csv.DictWriter(fh, COLUMNS, restval="")
         if new:
             writer.writeheader()

@@ -23,6 +23,7 @@ from jamflow import jam
 from jamflow.mechanics.contacts import Contacts
 from jamflow.mechanics.reference import energy_forces_pressure
 from jamflow.protocols.settings import PROTOCOL_NAMES, protocol_settings
+from common import scratch  # (benchmarks/ is the script's directory)
 
 SYSTEMS = {"2d-bi-256": dict(n=256, dim=2, sizes="bi:1.4:0.5"), "3d-mono-512": dict(n=512, dim=3, sizes="mono")}
 COLUMNS = ["system", "protocol", "seed", "repeat", "phi_j", "v", "max_force_nonfloater", "floaters",
@@ -60,7 +61,7 @@ def main(argv=None):
     ap.add_argument("--protocol", choices=PROTOCOL_NAMES, default="fast")
     ap.add_argument("--systems", nargs="+", choices=sorted(SYSTEMS), default=list(SYSTEMS))
     ap.add_argument("--seeds", type=int, default=10)
-    ap.add_argument("--out", default="docs/notes/jamming-ensembles.csv")
+    ap.add_argument("--out", default=str(scratch("jamming-ensembles.csv")))
     args = ap.parse_args(argv)
     out = Path(args.out)
     done = {(r["system"], r["protocol"], r["seed"], r["repeat"]) for r in csv.DictReader(out.open())} if out.exists() else set()

@@ -20,7 +20,7 @@ import os
 import time
 from pathlib import Path
 
-from common import append_row  # (benchmarks/ is the script's directory)
+from common import append_row, scratch  # (benchmarks/ is the script's directory)
 
 import numba
 import numpy as np
@@ -90,7 +90,7 @@ def main(argv=None):
     ap.add_argument("--sizes", type=int, nargs="+", default=[256, 1024, 4096])
     ap.add_argument("--skins", type=float, nargs="+", default=[0.1, 0.2, 0.3, 0.5])
     ap.add_argument("--repeats", type=int, default=5)
-    ap.add_argument("--out", default="docs/notes/kernel.csv")
+    ap.add_argument("--out", default=str(scratch("kernel.csv")))
     args = ap.parse_args(argv)
     rows = []
     for n in args.sizes:

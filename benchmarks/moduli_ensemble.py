@@ -18,7 +18,6 @@ Published: G ~ (phi - phi_J)^(alpha - 3/2), B ~ (phi - phi_J)^(alpha - 2), P ~ (
 from __future__ import annotations
 
 import argparse
-import csv
 import math
 import time
 import warnings
@@ -35,6 +34,8 @@ from jamflow.io.packing_file import load_packing, save_packing
 from jamflow.protocols.above import compress_above
 from jamflow.protocols.outcome import JammingFailed
 from jamflow.protocols.compression import jam
+
+from common import merge_rows  # (benchmarks/ is the script's directory)
 
 DPHIS = (1e-6, 3e-6, 1e-5, 3e-5, 1e-4, 3e-4, 1e-3, 3e-3, 1e-2)
 PUBLISHED = {"spring": {"G": 0.5, "B": 0.0, "P": 1.0, "G/B": 0.5}, "hertz": {"G": 1.0, "B": 0.5, "P": 1.5, "G/B": 0.5}}
@@ -218,10 +219,7 @@ def report(rows, args) -> None:
         return
     docs = Path(args.docs)
     tag = f"n{args.n}"
-    with open(docs / f"moduli-ensemble-{tag}.csv", "w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=COLUMNS)
-        writer.writeheader()
-        writer.writerows(rows)
+    merge_rows(docs / f"moduli-ensemble-{tag}.csv", rows, COLUMNS)  # added to the rows of earlier runs
     with open(docs / f"moduli-scaling-{tag}.txt", "w") as fh:
         fh.write("\n".join(lines) + "\n")
     seeds = len({r["seed"] for r in rows})

@@ -36,7 +36,7 @@ from jamflow.model.shapes.rotations import check_start
 from jamflow.protocols.anneal import anneal
 from jamflow.protocols.settings import DEFAULT_PROTOCOL, PROTOCOLS
 
-from common import ANNEAL_COLUMNS as COLUMNS, anneal_row as _row, pyplot, read_rows, save_figure, stats, write_rows  # (benchmarks/ is the script's directory)
+from common import ANNEAL_COLUMNS as COLUMNS, anneal_row as _row, pyplot, read_rows, save_figure, scratch, stats, write_rows  # (benchmarks/ is the script's directory)
 
 SIZES = "mono"
 FIGURE_C, FIGURE_D = 0.64, 0.11  # the chapter's P2 of Figure 2.23(c) (roughly aligned) and (d) (random)
@@ -233,7 +233,7 @@ def main(argv=None) -> None:
     ap.add_argument("--jam-protocol", choices=sorted(PROTOCOLS), default=DEFAULT_PROTOCOL,
                     help="compression: its settings (jamflow jam --protocol; default the fast one)")
     ap.add_argument("--phi0", type=float, default=None, help="compression: start packing fraction (default 0.8)")
-    ap.add_argument("--out", default="docs/notes/nematic-protocols.csv")
+    ap.add_argument("--out", default=str(scratch("nematic-protocols.csv")))
     ap.add_argument("--keep", default=None, help="directory of the final packings (HDF5)")
     ap.add_argument("--report", default=None, metavar="CSV")
     ap.add_argument("--draw", action="append", default=[], metavar="PROTOCOL",

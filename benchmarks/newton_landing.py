@@ -18,7 +18,7 @@ import argparse
 import sys
 import time
 
-from common import DOCS, append_row
+from common import append_row, scratch
 
 COLUMNS = ["n", "seed", "loose", "default_cpu", "default_iterations", "default_phi_j", "loose_cpu", "loose_iterations",
            "landing_cpu", "total_cpu", "phi", "dphi", "v_over_vtol", "force_balance", "checks_passed", "error"]
@@ -53,7 +53,7 @@ def main(argv=None) -> int:
     ap.add_argument("--n", type=int, nargs="+", default=[1024])
     ap.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3])
     ap.add_argument("--loose", type=float, nargs="+", default=[1e-12], help="V_L of the float64 bisection")
-    ap.add_argument("--out", default=str(DOCS / "newton-landing.csv"))
+    ap.add_argument("--out", default=str(scratch("newton-landing.csv")))
     args = ap.parse_args(argv)
     for n in args.n:
         for loose in args.loose:

@@ -12,7 +12,6 @@ plugin pair style); orthogonal box and tilt 0.37. tests/test_lammps_bodies.py as
 from __future__ import annotations
 
 import argparse
-import csv
 
 import numpy as np
 
@@ -20,11 +19,11 @@ from jamflow.model.box import Box
 from jamflow.engines.compiled.engine import CompiledEngine
 from jamflow.engines.lammps.engine import LammpsEngine
 from jamflow.mechanics.reference import energy_forces_pressure
-from jamflow.support.files import atomic_path
 from jamflow.model.packing import random_packing
 from jamflow.model.potentials import Spring
 from jamflow.model.shapes import parse_shape
 from jamflow.model.sizes import parse_sizes
+from common import scratch, merge_rows  # (benchmarks/ is the script's directory)
 
 SPECS = ["nmer:2:1.5", "nmer:2:2", "nmer:3:1.5", "dimer:1.5:0.7", "trimer:2:0.3"]
 
@@ -45,7 +44,7 @@ def rel(a, b) -> float:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--out", default="docs/notes/nmers/crosscheck.csv")
+    ap.add_argument("--out", default=str(scratch("nmers/crosscheck.csv")))
     args = ap.parse_args(argv)
     rows = []
     for spec in SPECS:
@@ -62,10 +61,7 @@ def main(argv=None) -> int:
                                          forces=f"{rel(s.forces, ref.forces):.2e}",
                                          torques=f"{rel(s.torques, ref.torques):.2e}",
                                          pressure=f"{rel(s.pressure_tensor, ref.pressure_tensor):.2e}"))
-    with atomic_path(args.out) as tmp, open(tmp, "w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
+    merge_rows(args.out, rows)  # added to the rows of earlier runs
     for engine in ("lammps", "numba"):
         worst = {k: max(float(r[k]) for r in rows if r["engine"] == engine) for k in ("energy", "forces", "torques", "pressure")}
         print(engine, "worst relative difference to the reference over", sum(r["engine"] == engine for r in rows),

@@ -40,7 +40,7 @@ from jamflow.analysis.structure import RDF  # noqa: E402
 from jamflow.support.files import atomic_path
 from jamflow.io.packing_file import load_packing  # noqa: E402
 from jamflow.plots.drawing import draw_into  # noqa: E402
-from common import NMER_F_LIMIT as F_LIMIT  # noqa: E402  (benchmarks/ is the script's directory)
+from common import NMER_F_LIMIT as F_LIMIT, scratch  # noqa: E402  (benchmarks/ is the script's directory)
 
 FIGURE_2_26 = (1.04, 1.1, 1.2, 1.3, 1.4, 1.6)
 CHAPTER_N = 256  # Figure 2.25's system size
@@ -370,7 +370,7 @@ def main(argv=None) -> int:
     ap.add_argument("--q6", default="docs/notes/nmers/q6-256.csv")
     ap.add_argument("--routes", default="docs/notes/nmers/routes.csv")
     ap.add_argument("--stability", default="docs/notes/nmers/stability.csv")
-    ap.add_argument("--out", default="docs/notes/nmers")
+    ap.add_argument("--out", default=str(scratch("nmers/")))
     args = ap.parse_args(argv)
     out = Path(args.out)
     plot_bodies(out / "bodies.png")

@@ -32,6 +32,7 @@ from jamflow.analysis.modes import Spectrum, Stability
 from jamflow.mechanics.checks import check_packing
 from jamflow.support.files import atomic_path
 from jamflow.io.packing_file import load_packing
+from common import scratch  # (benchmarks/ is the script's directory)
 
 COLUMNS = ["shape", "dim", "n", "seed", "checks_passed", "problems", "n_kept", "contacts", "isostatic_count",
            "free_rotations", "n_zero", "extra_zero", "free_in_matrix", "zero_residual", "unexplained_zero",
@@ -66,7 +67,7 @@ def main(argv=None) -> int:
     ap.add_argument("--csv", default="docs/notes/nmers/ensembles.csv")
     ap.add_argument("--shapes", nargs="*", default=None, help="only these shape specs (default: every rigid body)")
     ap.add_argument("--dim", type=int, default=None)
-    ap.add_argument("--out", default="docs/notes/nmers/stability.csv")
+    ap.add_argument("--out", default=str(scratch("nmers/stability.csv")))
     args = ap.parse_args(argv)
     out = Path(args.out)
     with open(args.csv) as fh:

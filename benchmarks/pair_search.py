@@ -14,7 +14,6 @@ did not return (float32 round-off beyond its 1e-5 pad).
 from __future__ import annotations
 
 import argparse
-import csv
 import statistics
 import time
 from pathlib import Path
@@ -24,6 +23,8 @@ import numpy as np
 from jamflow.model.box import Box
 from jamflow.model.pairs import neighbor_pairs
 from tqdm import tqdm
+
+from common import merge_rows  # (benchmarks/ is the script's directory)
 
 
 def configuration(n: int, dim: int, strain: float, seed: int = 0):
@@ -77,10 +78,7 @@ def main(argv=None):
                          neighbor_pairs_s=f"{t64:.5f}", freud_float32_s=f"{t32:.5f}", freud_missed=missed))
         print(rows[-1], flush=True)
     if args.out:
-        with args.out.open("w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=list(rows[0]))
-            w.writeheader()
-            w.writerows(rows)
+        merge_rows(args.out, rows)  # added to the rows of earlier runs
 
 
 if __name__ == "__main__":

@@ -27,7 +27,7 @@ error; the ladder of that packing stops there.
 
     python benchmarks/pressure_ladder.py --dim 2 --n 64 256 --seeds 10 --float64 enthalpy --out docs/notes/pressure-ladder.csv
     python benchmarks/pressure_ladder.py --dim 3 --n 128 512 --seeds 20 --out docs/notes/pressure-ladder-3d.csv
-    python benchmarks/pressure_ladder.py --report docs/notes/pressure-ladder.csv docs/notes/pressure-ladder-3d.csv   (fits, phi_J, figure)
+    python benchmarks/pressure_ladder.py --report docs/notes/pressure-ladder.csv docs/notes/pressure-ladder-3d.csv --figure docs/notes/pressure-ladder.png
     python benchmarks/pressure_ladder.py --quick --out X.csv                        (N = 16, 3 pressures)
     python benchmarks/pressure_ladder.py --n 256 --seeds 13 13 --float64 enthalpy --self-stress --out X.csv  (why N_c is one more)
 """
@@ -53,7 +53,7 @@ from jamflow.protocols.pressure import PressureSettings, jam_at_pressure
 from jamflow.protocols.refine import relax_at_box
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from common import DOCS
+from common import scratch
 
 warnings.filterwarnings("ignore", message=".*carries extended precision.*")
 
@@ -231,11 +231,12 @@ def run_packing(dim, n, seed, pressures, switch, g64_max_dof, sizes, last=None, 
     return rows
 
 
-def write(path, rows, append):
+def write(path, rows):
+    """Add ``rows`` to the CSV at ``path`` (header first if it is new): earlier rows are kept."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    new = not (append and path.exists())
-    with open(path, "a" if append else "w", newline="") as fh:
+    new = not path.exists()
+    with open(path, "a", newline="") as fh:
         writer = csv.DictWriter(fh, COLUMNS, restval="")
         if new:
             writer.writeheader()
@@ -432,10 +433,10 @@ def main(argv=None) -> int:
                          "(default), or enthalpy minimisations (the 2D and 3D N = 128 rows before 2026-12-03)")
     ap.add_argument("--switch", type=float, default=1.5e-9, help="float64 steps down above this pressure")
     ap.add_argument("--g64-max-dof", type=int, default=600, help="HessianModuli on float64 up to N d")
-    ap.add_argument("--out", default=str(DOCS / "pressure-ladder.csv"))
-    ap.add_argument("--append", action="store_true")
+    ap.add_argument("--append", action="store_true", help="(no effect: rows are always added to --out)")
+    ap.add_argument("--out", default=str(scratch("pressure-ladder.csv")))
     ap.add_argument("--report", nargs="+", default=None, help="CSV(s): fit, print and draw")
-    ap.add_argument("--figure", default=str(DOCS / "pressure-ladder.png"))
+    ap.add_argument("--figure", default=str(scratch("pressure-ladder.png")))
     ap.add_argument("--min-pn2", type=float, default=10.0, help="fit over p N^2 >= this")
     ap.add_argument("--quick", action="store_true", help="N = 16, one seed, 3 pressures (seconds); --out required")
     ap.add_argument("--self-stress", action="store_true", help="print the self-stresses of each ladder's last state")
@@ -448,7 +449,6 @@ def main(argv=None) -> int:
         args.switch = 5e-4
     seeds = range(1, args.seeds[0] + 1) if len(args.seeds) == 1 else range(args.seeds[0], args.seeds[1] + 1)
     pressures = ladder(args.top, args.bottom)
-    append = args.append
     for n in args.n:
         for seed in seeds:
             t0 = time.perf_counter()
@@ -456,8 +456,7 @@ def main(argv=None) -> int:
             rows = run_packing(args.dim, n, seed, pressures, args.switch, args.g64_max_dof, args.sizes, last, args.float64)
             if args.self_stress and last:
                 print(f"d={args.dim} N={n} seed={seed} at p = {last[0].pressure:.3e}: {self_stresses(last[0])}", flush=True)
-            write(args.out, rows, append)
-            append = True
+            write(args.out, rows)
             ok = [r for r in rows if r["status"] == "ok"]
             print(f"d={args.dim} N={n} seed={seed}: {len(ok)}/{len(pressures)} states, {time.perf_counter() - t0:.1f} s"
                   + (f", last p = {ok[-1]['p']}, N_c - iso = {ok[-1]['excess']}" if ok else ""), flush=True)

@@ -22,6 +22,7 @@ from pathlib import Path
 from jamflow import jam
 from jamflow.mechanics.checks import check_packing
 from jamflow.protocols.settings import FAST_PROTOCOL, CompressionSettings
+from common import scratch  # (benchmarks/ is the script's directory)
 
 VARIANTS = {
     "seed": {},
@@ -84,7 +85,7 @@ def main(argv=None):
     ap.add_argument("--sizes", default="bi:1.4:0.5")
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--variants", nargs="+", default=["seed", "fast"], choices=list(VARIANTS))
-    ap.add_argument("--out", default="docs/notes/protocol-bias.csv")
+    ap.add_argument("--out", default=str(scratch("protocol-bias.csv")))
     args = ap.parse_args(argv)
     out = Path(args.out)
     done = {(r["variant"], r["seed"]) for r in csv.DictReader(out.open())} if out.exists() else set()

@@ -12,11 +12,12 @@ a refinement that fails is a row with its error.
 from __future__ import annotations
 
 import argparse
-import csv
 import sys
 import time
 
 import jamflow
+
+from common import merge_rows  # (benchmarks/ is the script's directory)
 
 COLUMNS = ["n", "seed", "target", "onset_seconds", "onset_iterations", "refine_seconds", "states", "newton_steps",
            "n_contacts", "isostatic", "opened", "closed", "force_balance", "pressure", "error"]
@@ -52,10 +53,7 @@ def main(argv=None) -> int:
             rows.append(one(n, seed, args.pressure))
             print("  ".join(f"{k}={v}" for k, v in rows[-1].items()), flush=True)
     if args.out:
-        with open(args.out, "w", newline="") as fh:
-            writer = csv.DictWriter(fh, COLUMNS)
-            writer.writeheader()
-            writer.writerows(rows)
+        merge_rows(args.out, rows, COLUMNS)  # added to the rows of earlier runs
     return 0
 
 

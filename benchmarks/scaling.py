@@ -27,7 +27,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from common import DOCS, command_line, pyplot, read_rows, save_figure, sweep
+from common import DOCS, command_line, scratch, pyplot, read_rows, save_figure, sweep
 
 CSV = DOCS / "scaling.csv"
 COLUMNS = ["n", "seed", "mode", "status", "seconds", "cpu_seconds", "phi_j", "minimizations", "iterations", "load"]
@@ -151,7 +151,7 @@ def crosscheck_main(argv):
     ap.add_argument("--seeds", type=int, nargs="+", default=list(range(10)))
     ap.add_argument("--ranks", type=int, default=2)
     ap.add_argument("--limit", type=float, default=300.0)
-    ap.add_argument("--out", type=Path, default=MPI_CSV)
+    ap.add_argument("--out", type=Path, default=scratch(MPI_CSV.name), help=f"CSV the rows are added to (curated: {MPI_CSV})")
     args = ap.parse_args(argv)
     points = [dict(n=n, seed=seed, ranks=args.ranks) for n in args.n for seed in args.seeds]
     sweep(args.out, MPI_COLUMNS, points, mpi_check, args.limit)

@@ -22,6 +22,7 @@ from jamflow.plots.shear import shear_path_figure
 from jamflow.protocols.compression import jam
 from jamflow.protocols.shear import shear
 from jamflow.io.shear_file import path_columns, save_shear_path
+from common import scratch  # (benchmarks/ is the script's directory)
 
 
 def main(argv=None) -> None:
@@ -32,7 +33,7 @@ def main(argv=None) -> None:
     parser.add_argument("--dgamma", type=float, default=0.002)
     parser.add_argument("--to", type=float, default=0.5)
     parser.add_argument("--engine", default="auto")
-    parser.add_argument("--out", default="docs/notes/shear-path-n10", help="prefix: PREFIX.png and PREFIX.shear.h5")
+    parser.add_argument("--out", default=str(scratch("shear-path-n10")), help="prefix: PREFIX.png and PREFIX.shear.h5")
     args = parser.parse_args(argv)
     start = jam(n=args.n, seed=args.seed, gamma=args.gamma0, engine=args.engine)
     cpu = time.process_time()

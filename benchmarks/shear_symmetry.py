@@ -13,7 +13,6 @@ mirrors as doubles) and 0.2 / 1.2 / 0.8 (1.2 - 1 = 0.19999999999999996 is 5.6e-1
 from __future__ import annotations
 
 import argparse
-import csv
 
 import numpy as np
 
@@ -21,6 +20,7 @@ from jamflow.mechanics.contacts import Contacts
 from jamflow.protocols.shear import Network
 from jamflow.protocols.compression import at_shear_strain, compress, initial_packing
 from jamflow.protocols.settings import fast_protocol, seed_protocol
+from common import scratch, merge_rows  # (benchmarks/ is the script's directory)
 
 PROTOCOLS = {"fast": fast_protocol, "seed": seed_protocol}
 
@@ -48,7 +48,7 @@ def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=10)
     parser.add_argument("--seeds", type=int, default=20)
-    parser.add_argument("--out", default="docs/notes/shear-symmetry.csv")
+    parser.add_argument("--out", default=str(scratch("shear-symmetry.csv")))
     args = parser.parse_args(argv)
     rows = []
     for protocol in PROTOCOLS:
@@ -59,10 +59,7 @@ def main(argv=None) -> None:
                 mirror = compare(a, jammed(args.n, seed, 1.0 - gamma, protocol, mirror=True), mirror=True)
                 for kind, r in (("gamma+1", plus), ("1-gamma mirrored", mirror)):
                     rows.append(dict(protocol=protocol, gamma=gamma, seed=seed, check=kind, **r))
-    with open(args.out, "w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
+    merge_rows(args.out, rows)  # added to the rows of earlier runs
     print("protocol  gamma  check             same contacts  same history  max dx (median, worst)  "
           "|dphi_J| worst  |dV|/V median")
     for protocol in PROTOCOLS:

@@ -39,7 +39,7 @@ from jamflow.mechanics.checks import check_packing
 from jamflow.protocols.settings import PROTOCOLS, DEFAULT_PROTOCOL
 from jamflow.protocols.compression import initial_packing, jam
 
-from common import append_row, check_outputs, run_process  # (benchmarks/ is the script's directory)
+from common import append_row, check_outputs, run_process, scratch  # (benchmarks/ is the script's directory)
 
 
 def whole_process(n, dim, sizes, seed, tmp) -> tuple[float, float]:
@@ -219,11 +219,11 @@ def main(argv=None):
     ap.add_argument("--handwritten-seeds", type=int, nargs="*", default=None, help="seeds of the baseline (default all)")
     ap.add_argument("--cap", type=int, default=100_000, help="baseline FIRE iteration cap per minimisation")
     ap.add_argument("--process-max", type=int, default=1024, help="whole-process runs only up to this N")
-    ap.add_argument("--out", default="docs/notes/speed-table.csv")
+    ap.add_argument("--out", default=str(scratch("speed-table.csv")))
     ap.add_argument("--trace", type=Path, default=None, metavar="CSV", help="also append a row per minimisation of the in-process "
                     "jams (phi, V, stop reason, iterations, CPU s so far) to this CSV")
     ap.add_argument("--chart", default=None, nargs="+", metavar="CSV", help="only draw the chart of these CSVs' rows")
-    ap.add_argument("--png", default="docs/notes/speed-2.png")
+    ap.add_argument("--png", default=str(scratch("speed-2.png")))
     ap.add_argument("--summary", default=None, metavar="CSV", help="only print the markdown rows of this CSV")
     args = ap.parse_args(argv)
     if args.summary:

@@ -2,22 +2,24 @@
 disks (seed 0) with spring:ALPHA at the smallest V_tol that jamflow.mechanics.checks.resolution accepts
 (x 1.5, at least 1e-16) and check the packing. Basis of compression.SPRING_ALPHA_RANGE.
 
-    python benchmarks/spring_exponents.py fast 1.5 2 2.5 3 4 6 8    (rows to docs/notes/spring-exponents.csv)
-    python benchmarks/spring_exponents.py seed 10                   (about 20 minutes)
+    python benchmarks/spring_exponents.py fast 1.5 2 2.5 3 4 6 8 --out docs/notes/spring-exponents.csv
+    python benchmarks/spring_exponents.py seed 10                   (about 20 minutes; rows to the scratch directory)
 
 The refusal in compress() is switched off here, since this measures what it refuses.
 """
 
 from __future__ import annotations
 
+import argparse
 import csv
 import sys
+from pathlib import Path
 
 import jamflow.protocols.compression as compression
 from jamflow.protocols.settings import protocol_name
 from jamflow.mechanics.checks import check_packing, resolution
 from jamflow.minimize.settings import MinimizerSettings
-from common import DOCS, jam_quietly  # (benchmarks/ is the script's directory)
+from common import DOCS, jam_quietly, scratch  # (benchmarks/ is the script's directory)
 
 CSV = DOCS / "spring-exponents.csv"
 COLUMNS = ["alpha", "protocol", "vtol", "status", "phi_j", "final_reason", "force_balance", "excess_contacts",
@@ -41,11 +43,15 @@ def one(alpha: float, protocol: str) -> dict:
 
 
 def main(argv=None) -> None:
-    argv = sys.argv[1:] if argv is None else argv
-    protocol, alphas = argv[0], [float(a) for a in argv[1:]]
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("protocol")
+    ap.add_argument("alphas", type=float, nargs="+")
+    ap.add_argument("--out", type=Path, default=scratch(CSV.name), help=f"CSV the rows are added to (curated: {CSV})")
+    args = ap.parse_args(argv)
+    protocol, alphas = args.protocol, args.alphas
     compression.check_resolution = lambda packing, settings: None  # measure what the check would refuse
-    new = not CSV.exists()
-    with open(CSV, "a", newline="") as fh:
+    new = not args.out.exists()
+    with open(args.out, "a", newline="") as fh:
         out = csv.DictWriter(fh, COLUMNS)
         if new:
             out.writeheader()

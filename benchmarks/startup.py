@@ -33,7 +33,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from common import append_row, python_process  # (benchmarks/ is the script's directory)
+from common import append_row, python_process, scratch  # (benchmarks/ is the script's directory)
 
 CLI = ["-m", "jamflow.cli"]
 COMMANDS = {"help": CLI + ["--help"], "jam-help": CLI + ["jam", "--help"],
@@ -69,7 +69,7 @@ def main(argv=None):
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--source", default=None, help="directory holding the jamflow package to time")
     ap.add_argument("--label", default="branch")
-    ap.add_argument("--out", default="docs/notes/startup.csv")
+    ap.add_argument("--out", default=str(scratch("startup.csv")))
     ap.add_argument("--seeds", type=int, nargs="+", default=[1], help="seeds of the jam-n64 command")
     ap.add_argument("--floors", action="store_true", help="also time the floors (python, numpy, numba)")
     ap.add_argument("--alternate", default=None, help="directory of another jamflow: jam-n64 of both, alternating")

@@ -25,6 +25,7 @@ from jamflow.analysis.structure import (RDF, StructureFactor, fcc_packing, rms_c
 from jamflow.io.packing_file import load_packing
 from jamflow.model.packing import random_packing
 from jamflow.model.sizes import parse_sizes
+from common import scratch  # (benchmarks/ is the script's directory)
 
 DATA = Path("/tmp/jamflow-structure-data")
 
@@ -145,7 +146,7 @@ def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("what", choices=("disks", "spheres", "checks"))
     parser.add_argument("--n", type=int, default=1024)
-    parser.add_argument("--figures", type=Path, default=Path("docs/notes"))
+    parser.add_argument("--figures", type=Path, default=scratch())
     args = parser.parse_args(argv)
     if args.what == "disks":
         disks(args.n, args.figures)

@@ -3,7 +3,7 @@ packing (window, force balance, contact count; jamflow.mechanics.checks) against
 jamflow.mechanics.checks.resolution predicts before any work (typical window overlap / position
 round-off, window contact force / force tolerance).
 
-    python benchmarks/vtol_resolution.py            (writes docs/notes/vtol-resolution.csv)
+    python benchmarks/vtol_resolution.py --out docs/notes/vtol-resolution.csv   (default: the scratch directory)
 
 The refusal in compress() is switched off here, since this measures what it refuses.
 Load-independent: iteration counts and pass/fail only, no timings.
@@ -11,16 +11,15 @@ Load-independent: iteration counts and pass/fail only, no timings.
 
 from __future__ import annotations
 
-import csv
+import argparse
 import sys
 
 import jamflow.protocols.compression as compression
 from jamflow.mechanics.checks import check_packing, resolution
 from jamflow.minimize.settings import MinimizerSettings
 
-from common import DOCS, jam_quietly  # (benchmarks/ is the script's directory)
+from common import append_row, jam_quietly, scratch  # (benchmarks/ is the script's directory)
 
-CSV = DOCS / "vtol-resolution.csv"
 COLUMNS = ["n", "potential", "seed", "vtol", "overlap_ratio", "force_ratio", "refused", "status", "passed",
            "force_balance", "max_force", "excess_contacts", "n_floaters", "v", "minimizations", "iterations"]
 CASES = [(n, pot) for n in (64, 256) for pot in ("spring", "hertz")]
@@ -45,17 +44,16 @@ def one(n, potential, seed, vtol) -> dict:
 
 
 def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", default=str(scratch("vtol-resolution.csv")), help="CSV the rows are added to")
+    args = ap.parse_args(argv)
     compression.check_resolution = lambda packing, settings: None  # measure what the check would refuse (column refused)
-    with open(CSV, "w", newline="") as fh:
-        out = csv.DictWriter(fh, COLUMNS)
-        out.writeheader()
-        for n, pot in CASES:
-            for vtol in VTOLS:
-                for seed in SEEDS:
-                    row = one(n, pot, seed, vtol)
-                    out.writerow(row)
-                    fh.flush()
-                    print(row, file=sys.stderr)
+    for n, pot in CASES:
+        for vtol in VTOLS:
+            for seed in SEEDS:
+                row = one(n, pot, seed, vtol)
+                append_row(args.out, COLUMNS, row)
+                print(row, file=sys.stderr)
 
 
 if __name__ == "__main__":

@@ -37,6 +37,7 @@ from jamflow.protocols.compression import initial_packing
 from jamflow.protocols.gravity import pile_fraction
 from jamflow.protocols.pressure import PressureSettings, extrapolate_phi_j, jam_at_pressure, shear_stress
 from jamflow.model.walls import face_pressures
+from common import scratch, merge_rows  # (benchmarks/ is the script's directory)
 
 SIZES = "bi:1.4:0.5"
 
@@ -136,11 +137,7 @@ def compare_rows(n, seeds):
 
 
 def write_csv(path, rows):
-    keys = list(dict.fromkeys(k for r in rows for k in r))
-    with open(path, "w", newline="") as fh:
-        w = csv.DictWriter(fh, keys)
-        w.writeheader()
-        w.writerows(rows)
+    merge_rows(path, rows)  # added to the rows of earlier runs
 
 
 def mean_se(values):
@@ -247,7 +244,7 @@ def main(argv=None):
     ap.add_argument("--n", type=int, default=256)
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--gravity", type=float, default=1e-5)
-    ap.add_argument("--out", default="docs/notes/walls-gravity-pressure")
+    ap.add_argument("--out", default=str(scratch("walls-gravity-pressure")))
     ap.add_argument("--figures-only", action="store_true",
                     help="redraw the figures from the CSVs (re-settles the gravity piles for the profiles)")
     args = ap.parse_args(argv)

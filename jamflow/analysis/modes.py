@@ -36,6 +36,7 @@ from jamflow.analysis import quartic
 from jamflow.mechanics.deformation import energy_change, network_amplitudes, opening_amplitude  # noqa: F401 (public here)
 from jamflow.mechanics.dynamical_matrix import DynamicalMatrix, DynamicalMatrixResult
 from jamflow.mechanics.eigen import lowest_eigenpairs
+from jamflow.support.machine import check_bins
 
 DENSE_MAX_DOF = 4096  # above this many degrees of freedom "auto" uses the sparse solver
 
@@ -252,6 +253,7 @@ class DensityOfStates:
     def __init__(self, bins: int = 40, omega_max: float | None = None):
         if not (isinstance(bins, (int, np.integer)) and bins >= 1):
             raise ValueError(f"bins must be a positive integer, got {bins!r}")
+        check_bins(bins, f"--bins {bins}", "give fewer")
         if omega_max is not None and not (math.isfinite(omega_max) and omega_max > 0):
             raise ValueError(f"omega_max must be a finite positive number or None, got {omega_max!r}")
         self.bins, self.omega_max = int(bins), omega_max

@@ -33,7 +33,7 @@ import numpy as np
 from jamflow.model.box import Box
 from jamflow.model.packing import Packing
 from jamflow.model.pairs import candidate_pairs, separations
-from jamflow.support.machine import physical_memory
+from jamflow.support.machine import MAX_BINS, check_bins, physical_memory
 
 PAIR_CHUNK = 200_000  # pairs per separation batch (keeps Box.minimum_image memory bounded)
 MAX_SPECIES = 8  # more distinct diameters than this is treated as continuous polydispersity
@@ -102,7 +102,9 @@ def radial_edges(r_max: float, dr: float) -> np.ndarray:
     positive("bin width dr", dr)
     if not dr < r_max:
         raise ValueError(f"bin width dr = {dr} must be smaller than r_max = {r_max:.4g}")
-    return np.arange(int(math.floor(r_max / dr + 1e-9)) + 1) * dr
+    count = check_bins(math.floor(r_max / dr + 1e-9), f"bin width dr = {dr:g} up to r_max = {r_max:.4g}",
+                       f"use a bin width of at least {r_max / MAX_BINS:.3g}")
+    return np.arange(count + 1) * dr
 
 
 def check_r_max(r_max, packings: Sequence[Packing]) -> float:

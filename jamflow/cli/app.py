@@ -126,7 +126,7 @@ def _classify(err: Exception) -> tuple[int | None, str]:
     from jamflow.engines.lammps.engine import LammpsError
     from jamflow.engines.lammps.plugin_build import PluginBuildError
     from jamflow.protocols.outcome import JammingFailed
-    from jamflow.support.files import DiskFull
+    from jamflow.support.files import DiskFull, file_system_refusal
 
     if isinstance(err, JammingFailed):
         return EXIT_JAMMING, f"jamming failed: {err}"
@@ -143,6 +143,8 @@ def _classify(err: Exception) -> tuple[int | None, str]:
         return EXIT_PLUGIN, str(err)
     if isinstance(err, DiskFull):
         return EXIT_USER, f"error: {err}"
+    if file_system_refusal(err):
+        return EXIT_USER, f"error: {file_system_refusal(err)}"
     if isinstance(err, (FileNotFoundError, PermissionError)) or (isinstance(err, ValueError) and _raised_by_jamflow(err)):
         return EXIT_USER, f"error: {err}"
     return None, ""

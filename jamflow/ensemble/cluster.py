@@ -8,7 +8,9 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
+import shutil
 import signal
+import tempfile
 from pathlib import Path
 
 from jamflow.support.spawn import GUARD, refuse_spawned_reimport
@@ -42,12 +44,32 @@ def dask_client(workers: int | None = None, scheduler: str | None = None, client
         return
     for name in ("distributed", "distributed.nanny", "distributed.scheduler", "distributed.worker"):
         logging.getLogger(name).setLevel(logging.ERROR)
+    with _scratch_directory() as scratch:
+        yield from _local_client(Client, LocalCluster, workers, scratch)
+
+
+@contextlib.contextmanager
+def _scratch_directory():
+    """A temporary directory for the local cluster's scratch space (Dask's ``temporary-directory``:
+    its ``dask-scratch-space/`` with the workers' directories and lock files), removed at the end,
+    also after an error or Ctrl-C, so that TMPDIR keeps nothing of the run."""
+    import dask
+
+    scratch = tempfile.mkdtemp(prefix="jamflow-dask-")
+    try:
+        with dask.config.set({"temporary-directory": scratch}):
+            yield scratch
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+
+
+def _local_client(Client, LocalCluster, workers, scratch):
     # workers ignore SIGINT (jamflow/ensemble/worker_setup.py): the disposition is inherited on spawn
     previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
         cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
                                dashboard_address=":0", silence_logs=logging.ERROR,
-                               preload=["jamflow.ensemble.worker_setup"])
+                               preload=["jamflow.ensemble.worker_setup"], local_directory=scratch)
     except RuntimeError as e:
         if "failed to start" not in str(e):
             raise

@@ -46,3 +46,15 @@ def without_derived(paths) -> tuple[list, list]:
 def packing_files(directory) -> list[Path]:
     """The packing files of a directory: its ``*.h5`` files but the derived ones, sorted."""
     return sorted(p for p in Path(directory).glob("*.h5") if not is_derived(p))
+
+
+def check_packing_name(path, option: str = "--out") -> None:
+    """Refuse (ValueError, before any work) a packing output ``path`` named as a derived result
+    file (``x.shear.h5``): every command that reads packings would refuse or skip it."""
+    if is_derived(path):
+        path = Path(path)
+        kind = Path(path.stem).suffix[1:]
+        other = path.with_name(f"{Path(path.stem).stem}-{kind}{path.suffix}")
+        raise ValueError(f"{option} {path} is named like a derived {kind} file (NAME.{kind}.h5): the commands that "
+                         f"read packings would refuse or skip it; choose another {option} such as {other}")
+

@@ -52,11 +52,17 @@ class AnnealResult:
         return self.final.packing
 
 
+MAX_STEPS = 1_000_000  # aspect-ratio steps of one anneal, each a minimisation
+
+
 def anneal_alphas(alpha0: float, target: float, dalpha: float) -> np.ndarray:
     """The aspect ratios of the steps after ``alpha0``: alpha0 +- k dalpha, the last one ``target``
     exactly (a shorter final step if dalpha does not divide the change)."""
     change = target - alpha0
     n = max(1, math.ceil(abs(change) / dalpha - 1e-9))
+    if n > MAX_STEPS:
+        raise ValueError(f"{n:.4g} steps of dalpha (--dalpha) = {dalpha:g} from {alpha0:g} to {target:g}: more than "
+                         f"{MAX_STEPS:,}; use a dalpha of at least {abs(change) / MAX_STEPS:.3g}")
     steps = alpha0 + math.copysign(dalpha, change) * np.arange(1, n + 1)
     steps[-1] = target
     return np.round(steps, 12)

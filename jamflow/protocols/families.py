@@ -30,6 +30,7 @@ from jamflow.protocols.outcome import JammingFailed
 from jamflow.protocols.shear import shear, shear_protocol
 
 SEED_STRIDE = 100_000
+MAX_GRID = 100_000  # grid strains: each is jammed once per start
 # The packing fraction at which a plan's cells must hold the particles: phi_J of bidisperse disks
 # in the large-N limit, 0.84 (O'Hern, Silbert, Liu & Nagel, PRE 68, 011306 (2003)). A start that
 # jams denser than its cell can hold at its strain is a failure of that start (``sample_start``).
@@ -63,6 +64,10 @@ class FamilySampling:
         if abs(count - round(count)) > 1e-6:
             raise ValueError(f"the grid spacing {self.spacing} must divide [{self.gamma_min}, {self.gamma_max}] "
                              "into whole intervals")
+        if round(count) + 1 > MAX_GRID:
+            raise ValueError(f"the grid spacing (--spacing) {self.spacing:g} gives {round(count) + 1:.4g} grid strains in "
+                             f"[{self.gamma_min:g}, {self.gamma_max:g}]: more than {MAX_GRID:,}; use a spacing of at "
+                             f"least {(self.gamma_max - self.gamma_min) / (MAX_GRID - 1):.3g}")
         for name in ("n", "substeps", "starts"):
             value = getattr(self, name)
             if not isinstance(value, (int, np.integer)) or value < 1:

@@ -137,12 +137,17 @@ def _alive(pid: int) -> bool:
 
 
 @contextlib.contextmanager
-def output_directory(path):
+def output_directory(path, option: str | None = None):
     """Create the output directory ``path`` (its parent must exist) for the block; if the block
-    fails or is interrupted and the directory was made here and is still empty, remove it."""
+    fails or is interrupted and the directory was made here and is still empty, remove it. A
+    directory that cannot be made is a one-line ValueError naming ``option`` (``--out``)."""
     path = Path(path)
     made = not path.exists()
-    path.mkdir(exist_ok=True)
+    try:
+        path.mkdir(exist_ok=True)
+    except OSError as err:
+        advice = f"; choose another {option}" if option else ""
+        raise ValueError(f"cannot create the output directory {path}: {_reason(err)}{advice}") from None
     try:
         yield path
     except BaseException:
@@ -182,17 +187,22 @@ _KINDS = ((stat.S_ISCHR, "character device"), (stat.S_ISBLK, "block device"), (s
           (stat.S_ISSOCK, "socket"))
 
 
-def check_writable(path, force: bool = False) -> None:
+def check_writable(path, force: bool = False, option: str | None = None) -> None:
     """Raise a clear ValueError before any work starts if ``path`` cannot or should not be
-    written: missing or read-only directory, a directory, and -- unless ``force`` -- a
-    symlink, a device node, FIFO or socket, or a read-only file (writing replaces the path
-    itself with a new regular file)."""
+    written: missing or read-only directory (read-only file system, permission denied, no
+    space: found by creating and removing a probe file there, which also holds for root), a
+    directory, and -- unless ``force`` -- a symlink, a device node, FIFO or socket, or a
+    read-only file (writing replaces the path itself with a new regular file). ``option``:
+    the command's option that chooses ``path`` (such as ``--out``), named in the advice;
+    None for a path that the command derives from its inputs."""
     path = Path(path)
     parent = path.parent if str(path.parent) else Path(".")
+    advice = f"choose another {option}" if option else "write beside a copy of the input in a writable directory"
     if not parent.is_dir():
         raise ValueError(f"cannot write {path}: directory {parent} does not exist; create it first")
-    if not os.access(parent, os.W_OK):
-        raise ValueError(f"cannot write {path}: directory {parent} is not writable; choose another --out")
+    problem = _unwritable(parent)
+    if problem:
+        raise ValueError(f"cannot write {path}: directory {parent} is not writable ({problem}); {advice}")
     if path.is_dir():
         raise ValueError(f"cannot write {path}: it is a directory; give a file name such as packing.h5")
     if force or os.path.abspath(path) in _REPLACEABLE.get() or not os.path.lexists(path):
@@ -208,6 +218,35 @@ def check_writable(path, force: bool = False) -> None:
     if not mode & 0o222 or not os.access(path, os.W_OK):
         raise ValueError(f"refusing to overwrite {path}: it is read-only; make it writable (chmod u+w), "
                          "choose another name, or --force to replace it")
+
+
+def _reason(err: OSError) -> str:
+    """An OSError's cause in words (``read-only file system``), without the traceback's path."""
+    return (os.strerror(err.errno) if err.errno else str(err)).lower()
+
+
+def _unwritable(directory) -> str | None:
+    """Why no file can be created in ``directory`` (its errno in words), or None if one can.
+    Creates and removes a probe file: ``os.access`` says yes to root on a read-only mount."""
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".jamflow-probe.", dir=directory)
+    except OSError as err:
+        return _reason(err)
+    os.close(fd)
+    os.unlink(probe)
+    return None
+
+
+FILE_SYSTEM_ERRNOS = (errno.EROFS, errno.EACCES, errno.EPERM, errno.ENOSPC, errno.EDQUOT)
+
+
+def file_system_refusal(err: BaseException) -> str | None:
+    """One line for an OSError the file system raised while writing (read-only file system,
+    permission denied, no space): ``cannot write PATH: reason``; None for any other error."""
+    if not isinstance(err, OSError) or err.errno not in FILE_SYSTEM_ERRNOS:
+        return None
+    where = f" {err.filename}" if err.filename else ""
+    return f"cannot write{where}: {_reason(err)}; choose a writable location and rerun"
 
 
 def check_not_input(path, inputs) -> None:

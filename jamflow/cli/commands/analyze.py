@@ -17,7 +17,7 @@ import numpy as np
 
 from jamflow.analysis.correlations import BondCorrelation, rdf_correlation_length
 from jamflow.analysis.order import BondOrder, first_minimum, translational_order
-from jamflow.analysis.structure import MAX_SPECIES, RDF, StructureFactor, positive
+from jamflow.analysis.structure import MAX_SPECIES, RDF, StructureFactor, max_reduced_radius, positive
 from jamflow.cli.inputs import add_input_arguments, load_inputs, parse_diameters
 from jamflow.ensemble.parallel import add_engine_arguments, expand_inputs, file_mapper
 from jamflow.ensemble.pooling import merge_rdf, merge_structure_factor, pooled_bins, structure_sums
@@ -34,6 +34,7 @@ from jamflow.plots.structure import (
     plot_structure_factor,
 )
 from jamflow.support.files import check_writable, output_directory, replacing
+from jamflow.support.machine import MAX_BINS, check_bins
 
 
 def add_arguments(p) -> None:
@@ -147,26 +148,30 @@ def run(args) -> int:
     diameters = parse_diameters(args.diameters)
     args.out = args.out or str(derived_path(args.files, "structure"))  # named by the inputs as given
     args.files = expand_inputs(args.files)  # a directory (ensemble store) stands for its packing files
-    check_writable(args.out, args.force)
+    check_writable(args.out, args.force, "--out")
     plots = Path(args.plots) if args.plots else Path(args.out).resolve().parent
     if plots.exists() and not plots.is_dir():
         raise ValueError(f"--plots {plots} is not a directory; give a directory for the PNG plots")
     if not plots.exists():
-        check_writable(plots)  # its parent must exist and be writable; the command makes the directory
-    with output_directory(plots):  # made here: removed again if the command fails before writing into it
+        check_writable(plots, option="--plots")  # its parent must exist and be writable; the command makes the directory
+    with output_directory(plots, "--plots"):  # made here: removed again if the command fails before writing into it
         return _run(args, diameters, plots)
 
 
 def _run(args, diameters, plots: Path) -> int:
     stem = Path(args.out).stem
     for suffix in PLOT_SUFFIXES:
-        check_writable(plots / f"{stem}-{suffix}.png", args.force)
+        check_writable(plots / f"{stem}-{suffix}.png", args.force, "--plots")
     packings, labels = load_inputs(args.files, args.format, diameters, args.dim)
     if len({p.dim for p in packings}) != 1:
         raise ValueError("the input files mix 2D and 3D packings; analyse them separately")
     one_each = len(packings) == len(args.files) and all(h5py.is_hdf5(f) for f in args.files)
     if (args.workers is not None or args.scheduler is not None) and not one_each:
         raise ValueError("--workers/--scheduler run one task per jamflow packing file; LAMMPS inputs run without them")
+    radius = max_reduced_radius(packings)  # g(r) and the q6 correlations are binned up to it
+    for option, width in (("--dr", args.dr), ("--q6-dr", args.q6_dr)):  # bins that cannot fit: refused now
+        if width > 0:
+            check_bins(math.floor(radius / width), f"{option} {width:g}", f"use {option} {radius / MAX_BINS:.3g} or larger")
     StructureFactor(k_max=args.k_max).check_memory(packings)  # a --k-max whose S(k) grid cannot fit: refused now
     res = analyze(packings, labels, args, files=args.files if one_each else None)
     with replacing([args.out, *(plots / f"{stem}-{s}.png" for s in PLOT_SUFFIXES)] if args.force else []):

@@ -11,6 +11,7 @@ import time
 
 
 from jamflow.cli.options import add_engine_argument, add_force_argument, add_quiet_argument, add_vtol_argument
+from jamflow.io.names import check_packing_name
 from jamflow.support.files import check_not_input, check_writable, replacing
 from jamflow.io.packing_file import load_packing, save_packing
 from jamflow.minimize.settings import MinimizerSettings
@@ -47,7 +48,8 @@ def add_arguments(p) -> None:
 
 
 def run(args) -> int:
-    check_writable(args.out, args.force)
+    check_packing_name(args.out)  # x.shear.h5 would be skipped or refused by every reader of packings
+    check_writable(args.out, args.force, "--out")
     check_not_input(args.out, [args.input])
     if not 0 <= args.seed <= MAX_SEED:
         raise ValueError(f"--seed must be a non-negative integer below 2^63 (it is stored as int64), got {args.seed}")

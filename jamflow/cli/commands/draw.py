@@ -31,7 +31,7 @@ def add_arguments(p) -> None:
 def run(args) -> int:
     out = Path(args.out) if args.out else Path(args.file).with_suffix(".png")
     figure_format(out)  # the suffix picks PNG, SVG or PDF; another is refused before work
-    check_writable(out, args.force)
+    check_writable(out, args.force, "--out")
     packing = load_input(args.file, args.format, parse_diameters(args.diameters), args.dim)
     with replacing([out] if args.force else []):
         draw_packing(packing, out, color_by=args.color_by, slice_at=args.slice, q6_r_min=args.q6_r_min)

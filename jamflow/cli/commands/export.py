@@ -29,7 +29,7 @@ def run(args) -> int:
     if args.format == "gsd":
         gsd_module()  # a missing gsd package is refused before work, naming the extra
     out = Path(args.out) if args.out else Path(args.file).with_suffix(SUFFIXES[args.format])
-    check_writable(out, args.force)
+    check_writable(out, args.force, "--out")
     packing = load_packing(args.file)
     with replacing([out] if args.force else []):
         export_packing(packing, out, args.format)

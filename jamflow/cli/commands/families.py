@@ -49,9 +49,11 @@ def run(args) -> int:
     points_file = out / "points.h5"
     outputs = [points_file] + [out / name for name in ("families.h5", "families.csv", "families.png")]
     for path in outputs if out.is_dir() else []:  # a new directory holds nothing to refuse
-        check_writable(path, args.force)
+        check_writable(path, args.force, "--out")
+    if not out.exists():
+        check_writable(out, option="--out")  # its parent must be writable: the command makes the directory
     total = plan.starts * len(plan.grid)
-    with output_directory(out), replacing(outputs if args.force else []):  # an empty new --out is removed on failure
+    with output_directory(out, "--out"), replacing(outputs if args.force else []):  # an empty new --out is removed on failure
         # one run per directory: a second run into it is refused (it would replace the first's files)
         with lock_directory(out, f"another jamflow families run is writing {out}; wait for it to end (then "
                                  "--resume continues its points.h5) or use another --out"):

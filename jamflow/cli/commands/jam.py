@@ -20,6 +20,7 @@ from jamflow.model.walls import wall_loads
 from jamflow.protocols.above import compress_above
 from jamflow.protocols.outcome import JammingFailed
 from jamflow.protocols.spec import JamSpec, prepare, run_jam
+from jamflow.io.names import check_packing_name
 from jamflow.support.files import check_writable, replacing
 
 
@@ -55,7 +56,8 @@ def check_deck_args(spec: JamSpec, args) -> None:
 
 
 def run(args) -> int:
-    check_writable(args.out, args.force)
+    check_packing_name(args.out)  # x.shear.h5 would be skipped or refused by every reader of packings
+    check_writable(args.out, args.force, "--out")
     spec = spec_from_args(args)
     check_deck_args(spec, args)
     prepared = settings, start = prepare(spec)
@@ -129,7 +131,7 @@ def emit(args, start, settings) -> int:
         raise ValueError(f"--emit-deck writes decks for disks/spheres and ellipses/spheroids, not {start.shape.name(start.dim)}")
     outputs = [args.emit_deck, Path(args.emit_deck).with_name(Path(args.emit_deck).stem + ".start.data")]
     for out in outputs:
-        check_writable(out, args.force)
+        check_writable(out, args.force, "--emit-deck")
     writer = emit_ellipsoid_deck if kind == "ellipsoid" else emit_deck
     with replacing(outputs if args.force else []):
         deck, data = writer(args.emit_deck, start, settings, out=Path(args.out).stem)

@@ -81,8 +81,8 @@ def run(args) -> int:
     written += [] if args.no_figure else [figure_path(args)]
     if not args.no_figure:
         figure_format(figure_path(args))  # PNG, SVG or PDF by the suffix; another is refused before work
-    for out in written:
-        check_writable(out, args.force)
+    for i, out in enumerate(written):  # NAME.modes.h5 beside each input; the pooled files where --figure goes
+        check_writable(out, args.force, None if i < len(args.files) else "--figure")
     rows = map_files(analyse_file, args.files, spectrum, args.save_vectors, args.force, source, workers=args.workers,
                      scheduler=args.scheduler, progress=len(args.files) > 1, desc="modes")
     for line, _, _ in rows:

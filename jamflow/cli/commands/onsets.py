@@ -8,6 +8,7 @@ from pathlib import Path
 
 from jamflow.plots.figure import figure_format
 from jamflow.support.files import check_writable, write_csv
+from jamflow.support.machine import check_bins
 
 # large-N phi_J (O'Hern, Silbert, Liu & Nagel, PRE 68, 011306, 2003; quoted by the chapter)
 PUBLISHED = {(2, "bi:1.4:0.5"): 0.842, (3, "mono"): 0.639}
@@ -35,11 +36,12 @@ def run(args) -> int:
         rows = [r for r in rows if int(r["n"]) in set(args.n)]
     if args.bins < 2:
         raise ValueError(f"--bins must be at least 2, got {args.bins}")
+    check_bins(args.bins, f"--bins {args.bins}", "give fewer")
     table = Path(args.table or store.dir / "onsets.csv")
     figure = Path(args.figure or store.dir / "onsets.png")
     figure_format(figure)  # PNG, SVG or PDF by the suffix; another is refused before work
-    for path in (table, figure):
-        check_writable(path)
+    for path, option in ((table, "--table"), (figure, "--figure")):
+        check_writable(path, option=option)
     result = onset_statistics(rows, n_bootstrap=args.bootstrap)
     write_table(table, result)
     onsets_figure(result, figure, bins=args.bins, published=published_value(rows, result.dim))

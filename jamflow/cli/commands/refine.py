@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import time
 
+from jamflow.io.names import check_packing_name
 from jamflow.support.files import check_not_input, check_writable
 
 
@@ -29,7 +30,8 @@ def run(args) -> int:
     from jamflow.io.packing_file import load_packing, save_refined
     from jamflow.protocols.refine import RefineSettings, refine
 
-    check_writable(args.out, args.force)
+    check_packing_name(args.out)  # x.shear.h5 would be skipped or refused by every reader of packings
+    check_writable(args.out, args.force, "--out")
     check_not_input(args.out, [args.packing])
     settings = RefineSettings(args.pressure, force_tol=args.force_tol)
     packing = load_packing(args.packing)

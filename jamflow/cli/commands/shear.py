@@ -69,6 +69,8 @@ def output_paths(args) -> tuple[Path, Path]:
         raise ValueError(f"--out {out} is a file; give a directory")
     if not out.parent.is_dir():
         raise ValueError(f"cannot create --out {out}: directory {out.parent} does not exist")
+    if not out.exists():
+        check_writable(out, option="--out")  # its parent must be writable: the command makes the directory
     return out / derived_path(args.packing, "shear").name, out / derived_path(args.packing, "shear", ".png").name
 
 
@@ -80,9 +82,9 @@ def run(args) -> int:
     if args.emit_deck:
         return emit(args, packing, settings)
     data, figure = output_paths(args)
-    with output_directory(args.out):  # removed again if nothing gets written into it
+    with output_directory(args.out, "--out"):  # removed again if nothing gets written into it
         for out in [data] + ([] if args.no_figure else [figure]):
-            check_writable(out, args.force)
+            check_writable(out, args.force, "--out")
         with warnings.catch_warnings(record=True) as caught, ShearProgress(disable=args.quiet) as progress:
             warnings.simplefilter("always")
             path = shear(packing, args.dgamma, args.to, settings, engine=args.engine, observers=[progress])
@@ -116,7 +118,7 @@ def emit(args, packing, settings) -> int:
 
     outputs = [args.emit_deck, Path(args.emit_deck).with_name(Path(args.emit_deck).stem + ".start.data")]
     for out in outputs:
-        check_writable(out, args.force)
+        check_writable(out, args.force, "--emit-deck")
     with replacing(outputs if args.force else []):
         deck, data = emit_shear_deck(args.emit_deck, packing, args.dgamma, args.to, settings,
                                      out=Path(args.packing).stem)

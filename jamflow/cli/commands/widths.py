@@ -27,7 +27,7 @@ def run(args) -> int:
     if missing:
         raise ValueError(f"no such table: {', '.join(missing)} (write one with jamflow onsets DIR --table FILE)")
     figure_format(args.figure)
-    check_writable(args.figure)
+    check_writable(args.figure, option="--figure")
     curves = [read_width_curve(t, label) for t, label in zip(args.tables, labels)]
     widths_figure(curves, args.figure)
     for c in curves:

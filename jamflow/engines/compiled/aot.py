@@ -126,8 +126,8 @@ def _build_locked(path: Path, failed: Path) -> None:
             shutil.rmtree(stale, ignore_errors=True)
         print("jamflow: compiling the ahead-of-time disk kernels once (~20 s) into", path.parent, file=sys.stderr,
               flush=True)
-        with tempfile.TemporaryDirectory(dir=path.parent) as tmp:
-            done = subprocess.run(build_command(tmp), capture_output=True, text=True)
+        with tempfile.TemporaryDirectory(dir=path.parent) as tmp:  # removed also on an error or Ctrl-C
+            done = subprocess.run(build_command(tmp), capture_output=True, text=True, env=build_environment(tmp))
             built = Path(tmp) / path.name
             if done.returncode == 0 and intact_shared_object(built):
                 os.replace(built, path)
@@ -148,6 +148,15 @@ def c_compiler() -> str | None:
         if found:
             return found
     return None
+
+
+def build_environment(out_dir: str) -> dict:
+    """The build's environment: TMPDIR inside the build directory ``out_dir``, so that the
+    compiler's scratch files (numba.pycc's ``pycc-build-*`` directory, kept when a compile fails
+    or is interrupted) go with it instead of staying in the user's TMPDIR."""
+    scratch = Path(out_dir) / "scratch"
+    scratch.mkdir(exist_ok=True)
+    return {**os.environ, "TMPDIR": str(scratch), "TEMP": str(scratch), "TMP": str(scratch)}
 
 
 def build_command(out_dir: str) -> list[str]:

@@ -1,0 +1,272 @@
+"""File-system refusals, sizes that cannot fit, output names that look derived, benchmark outputs
+that must not overwrite curated data, and temporary files left behind (Dask, ahead-of-time build)."""
+
+from __future__ import annotations
+
+import errno
+import os
+import tempfile
+
+import pytest
+
+from jamflow.cli.app import main
+
+EXIT_USER = 2
+
+
+@pytest.fixture(scope="module")
+def packing_file(tmp_path_factory):
+    out = tmp_path_factory.mktemp("packing") / "p.h5"
+    assert main(["jam", "--n", "16", "--seed", "1", "--out", str(out), "--quiet"]) == 0
+    return out
+
+
+def one_line(err: str) -> str:
+    assert "Traceback" not in err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    return lines[0]
+
+
+def read_only(code):
+    """A stand-in for a mount that refuses writes with ``code`` (root ignores chmod)."""
+    def refuse(*args, **kwargs):
+        raise OSError(code, os.strerror(code), str(kwargs.get("dir") or (args[0] if args else "")))
+    return refuse
+
+
+@pytest.mark.parametrize("code, words", [(errno.EROFS, "read-only file system"), (errno.EACCES, "permission denied"),
+                                         (errno.ENOSPC, "no space left")])
+def test_jam_refuses_an_unwritable_directory_before_work(tmp_path, capsys, monkeypatch, code, words):
+    monkeypatch.setattr(tempfile, "mkstemp", read_only(code))
+    assert main(["jam", "--n", "16", "--out", str(tmp_path / "x.h5"), "--quiet"]) == EXIT_USER
+    line = one_line(capsys.readouterr().err)
+    assert words in line and "--out" in line
+
+
+def test_an_output_directory_on_a_read_only_mount_is_one_line(tmp_path, capsys, monkeypatch, packing_file):
+    monkeypatch.setattr(os, "mkdir", read_only(errno.EROFS))
+    code = main(["shear", str(packing_file), "--dgamma", "1e-3", "--to", "2e-3", "--out", str(tmp_path / "s"), "--quiet"])
+    assert code == EXIT_USER
+    line = one_line(capsys.readouterr().err)
+    assert "read-only file system" in line and "--out" in line
+
+
+def test_output_directory_turns_the_errno_into_a_refusal(tmp_path, monkeypatch):
+    from jamflow.support.files import output_directory
+
+    monkeypatch.setattr(os, "mkdir", read_only(errno.EROFS))
+    with pytest.raises(ValueError, match="read-only file system"):
+        with output_directory(tmp_path / "d"):
+            pass
+
+
+def test_a_real_unwritable_path_is_refused(tmp_path, capsys):
+    target = "/sys/jamflow-test.h5" if os.path.isdir("/sys") else "/proc/jamflow-test/x.h5"
+    assert main(["jam", "--n", "16", "--out", target, "--quiet"]) == EXIT_USER
+    assert "--out" in one_line(capsys.readouterr().err)
+
+
+def test_a_write_that_fails_during_work_is_one_line(tmp_path, capsys, monkeypatch):
+    def fail(*a, **k):
+        raise OSError(errno.EROFS, os.strerror(errno.EROFS), str(tmp_path / "x.h5"))
+    monkeypatch.setattr("jamflow.io.packing_file.save_packing", fail)
+    assert main(["jam", "--n", "16", "--out", str(tmp_path / "x.h5"), "--quiet"]) == EXIT_USER
+    line = one_line(capsys.readouterr().err)
+    assert "read-only file system" in line and str(tmp_path / "x.h5") in line
+
+
+@pytest.mark.parametrize("command", ["modes", "moduli"])
+def test_outputs_beside_the_input_name_no_option_the_command_lacks(tmp_path, capsys, monkeypatch, packing_file, command):
+    monkeypatch.setattr(tempfile, "mkstemp", read_only(errno.EROFS))
+    assert main([command, str(packing_file), "--no-figure"]) == EXIT_USER
+    line = one_line(capsys.readouterr().err)
+    assert "read-only file system" in line and "--out" not in line
+
+
+def test_modes_refuses_bins_that_cannot_fit(packing_file, capsys):
+    assert main(["modes", str(packing_file), "--bins", "100000000000", "--no-figure"]) == EXIT_USER
+    line = one_line(capsys.readouterr().err)
+    assert "--bins" in line and "10,000,000" in line
+
+
+@pytest.mark.parametrize("option", ["--dr", "--q6-dr"])
+def test_analyze_refuses_bin_widths_that_cannot_fit(packing_file, tmp_path, capsys, option):
+    assert main(["analyze", str(packing_file), option, "1e-11", "--out", str(tmp_path / "s.structure.h5")]) == EXIT_USER
+    line = one_line(capsys.readouterr().err)
+    assert option in line and "10,000,000" in line
+    assert not list(tmp_path.iterdir())
+
+
+def test_onsets_refuses_bins_that_cannot_fit(tmp_path, capsys):
+    store = tmp_path / "store"
+    store.mkdir()
+    (store / "summary.csv").write_text("n,seed,phi_J,z\n16,1,0.84,4.0\n16,2,0.83,4.0\n")
+    assert main(["onsets", str(store), "--bins", "100000000000"]) == EXIT_USER
+    assert "--bins" in one_line(capsys.readouterr().err)
+
+
+@pytest.mark.parametrize("name", ["x.shear.h5", "x.modes.h5", "x.moduli.hdf5", "x.structure.h5"])
+def test_jam_refuses_a_derived_output_name_before_work(tmp_path, capsys, name):
+    assert main(["jam", "--n", "16", "--out", str(tmp_path / name), "--quiet"]) == EXIT_USER
+    line = one_line(capsys.readouterr().err)
+    assert "--out" in line and "derived" in line
+    assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("command, options", [("refine", ["--pressure", "1e-12"]),
+                                              ("anneal", ["--to", "1.1", "--dalpha", "0.05", "--quiet"])])
+def test_packing_writers_refuse_a_derived_output_name(tmp_path, capsys, packing_file, command, options):
+    assert main([command, str(packing_file), *options, "--out", str(tmp_path / "y.shear.h5")]) == EXIT_USER
+    assert "derived" in one_line(capsys.readouterr().err)
+    assert not list(tmp_path.iterdir())
+
+
+def test_a_packing_named_so_is_read_back(tmp_path, capsys):
+    from jamflow.io.names import is_derived
+
+    out = tmp_path / "x-shear.h5"
+    assert not is_derived(out)
+    assert main(["jam", "--n", "16", "--out", str(out), "--quiet"]) == 0
+
+
+
+BENCH = __import__("pathlib").Path(__file__).resolve().parents[1] / "benchmarks"
+OUTPUT_OPTIONS = ("--out", "--out-dir", "--png", "--figure", "--figures", "--docs")
+
+
+def benchmark_sources():
+    return sorted(p for p in BENCH.glob("*.py") if p.name not in ("__init__.py", "__main__.py"))
+
+
+def test_no_benchmark_writes_into_docs_notes_by_default():
+    import re
+
+    bad = []
+    for path in benchmark_sources():
+        for number, line in enumerate(path.read_text().splitlines(), 1):
+            option = re.search(r'add_argument\("(--[\w-]+)"', line)
+            if option and option.group(1) in OUTPUT_OPTIONS and re.search(r'default=[^,)]*(docs/notes|DOCS\b)', line):
+                bad.append(f"{path.name}:{number}: {line.strip()}")
+    assert not bad, "\n".join(bad)
+
+
+def test_no_benchmark_truncates_its_results_table():
+    import re
+
+    bad = [f"{p.name}:{n}" for p in benchmark_sources() if p.name != "common.py"
+           for n, line in enumerate(p.read_text().splitlines(), 1)
+           if re.search(r'open\([^)]*"w"', line) and ".csv" in line]
+    bad += [f"{p.name}: DictWriter on a file opened for writing" for p in benchmark_sources() if p.name != "common.py"
+            and re.search(r'open\([^)]*"w"[^)]*\)[^\n]*\n[^\n]*csv\.(Dict)?[Ww]riter', p.read_text())]
+    assert not bad, "\n".join(bad)
+
+
+@pytest.fixture
+def common(monkeypatch):
+    import sys
+
+    monkeypatch.syspath_prepend(str(BENCH))
+    sys.modules.pop("common", None)
+    import common as module
+
+    yield module
+    sys.modules.pop("common", None)
+
+
+def test_merge_rows_keeps_earlier_rows_and_comments(tmp_path, common):
+    out = tmp_path / "t.csv"
+    common.merge_rows(out, [{"n": 1, "t": 0.5}], comment="# machine A")
+    common.merge_rows(out, [{"n": 2, "t": 0.7, "load": 1.0}], comment="# machine A")
+    text = out.read_text().splitlines()
+    assert text[0] == "# machine A" and text.count("# machine A") == 1
+    rows = common.read_rows(tmp_path / "plain.csv")
+    assert rows == []
+    import csv
+
+    rows = list(csv.DictReader(text[1:]))
+    assert [r["n"] for r in rows] == ["1", "2"] and rows[1]["load"] == "1.0" and rows[0]["load"] == ""
+
+
+def test_benchmark_defaults_are_in_the_scratch_directory(tmp_path, monkeypatch, common):
+    monkeypatch.setenv("JAMFLOW_BENCHMARK_OUT", str(tmp_path / "scratch"))
+    import importlib
+    import sys
+
+    sys.modules.pop("common", None)
+    module = importlib.import_module("common")
+    assert module.scratch("x.csv") == tmp_path / "scratch" / "x.csv"
+    assert (tmp_path / "scratch").is_dir()
+
+
+def test_pressure_ladder_adds_rows(tmp_path, common):
+    import importlib
+    import sys
+
+    sys.modules.pop("pressure_ladder", None)
+    ladder = importlib.import_module("pressure_ladder")
+    out = tmp_path / "ladder.csv"
+    ladder.write(out, [{"dim": 2, "n": 16, "seed": 1}])
+    ladder.write(out, [{"dim": 2, "n": 16, "seed": 2}])
+    assert len(common.read_rows(out)) == 2
+
+
+ENSEMBLE_SCRIPT = """
+import sys
+from jamflow.ensemble import run_ensemble
+if __name__ == "__main__":
+    report = run_ensemble(sys.argv[1], "0:2", 16, workers=1, progress=False)
+    assert report.made == 2, report
+"""
+
+
+def test_a_dask_ensemble_leaves_nothing_in_tmpdir(tmp_path):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    script = tmp_path / "ensemble_run.py"
+    script.write_text(ENSEMBLE_SCRIPT)
+    root = str(Path(__file__).resolve().parents[1])
+    env = {**os.environ, "TMPDIR": str(scratch), "PYTHONPATH": os.pathsep.join([root, os.environ.get("PYTHONPATH", "")])}
+    done = subprocess.run([sys.executable, str(script), str(tmp_path / "store")], env=env, capture_output=True,
+                          text=True, timeout=240)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert sorted(p.name for p in (tmp_path / "store").glob("*.h5")) == ["n16_seed000000.h5", "n16_seed000001.h5"]
+    assert list(scratch.rglob("*")) == []
+
+
+DEBRIS = ("import sys, tempfile, pathlib; d = pathlib.Path(tempfile.mkdtemp(prefix='pycc-build-')); "
+          "(d / 'x.o').write_bytes(b'0'); sys.exit('CompilerError: simulated')")
+
+
+def test_a_failed_ahead_of_time_build_leaves_nothing_in_tmpdir(tmp_path, monkeypatch):
+    import sys
+
+    from jamflow.engines.compiled import aot
+
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    monkeypatch.setenv("TMPDIR", str(scratch))
+    monkeypatch.setattr(aot, "build_command", lambda out_dir: [sys.executable, "-c", DEBRIS])
+    cache = tmp_path / "cache"
+    target, failed = cache / "module.so", cache / "module.failed"
+    aot._build_locked(target, failed)
+    assert "simulated" in failed.read_text()
+    assert list(scratch.rglob("*")) == []
+    assert sorted(p.name for p in cache.iterdir()) == ["build.lock", "module.failed"]
+
+
+def test_families_refuses_a_grid_that_cannot_fit(tmp_path, capsys):
+    assert main(["families", "--n", "16", "--spacing", "1e-12", "--out", str(tmp_path / "f")]) == EXIT_USER
+    line = one_line(capsys.readouterr().err)
+    assert "--spacing" in line and "100,000" in line
+    assert not (tmp_path / "f").exists()
+
+
+def test_anneal_refuses_steps_that_cannot_fit(tmp_path, capsys, packing_file):
+    assert main(["anneal", str(packing_file), "--to", "2", "--dalpha", "1e-13", "--out", str(tmp_path / "a.h5")]) == EXIT_USER
+    line = one_line(capsys.readouterr().err)
+    assert "--dalpha" in line and "1,000,000" in line
