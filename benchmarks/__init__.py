@@ -26,6 +26,9 @@ BENCHMARKS: dict[str, Benchmark] = {
         "speed", "default `jamflow jam` (whole process and in process) against the hand-written LAMMPS protocol",
         ["--n", "64", "--seeds", "1", "--handwritten", "64", "--process-max", "64", "--out", "{tmp}/speed-table.csv",
          "--trace", "{tmp}/trace.csv"]),
+    "jump_ratio": Benchmark(
+        "speed", "whole default jams against the fast protocol's Newton-jump ratio, phi_J paired by seed",
+        ["--n", "64", "--seeds", "1:3", "--ratios", "10", "3", "--out", "{tmp}/jump-ratio.csv"]),
     "newton_minimizer": Benchmark(
         "speed", "the Newton-Krylov minimiser against FIRE: single minimisations above onset, whole jams by creep method",
         ["single", "--n", "64", "--seeds", "1", "--dphi", "1e-6", "--out", "{tmp}/newton-single.csv"]),

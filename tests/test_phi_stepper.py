@@ -68,7 +68,8 @@ def test_resolution_failure_is_reported():
 
 
 @pytest.mark.parametrize("kwargs", [dict(dphi_growth=0.5), dict(newton_ratio=1.0), dict(coarse_v_min=1e-16),
-                                    dict(dphi_max=-1.0)])
+                                    dict(dphi_max=-1.0), dict(large_n_newton_ratio=0.5), dict(large_n=1),
+                                    dict(large_n=2048.5)])
 def test_bad_shortcut_settings_rejected(kwargs):
     with pytest.raises(ValueError):
         CompressionSettings(**kwargs)
@@ -82,3 +83,19 @@ def test_loose_tolerance_never_comes_from_a_zero_pressure():
     assert stepper.minimizer().force_tol == stepper.s.coarse_force_tol
     stepper.pressure = 1e-6
     assert stepper.minimizer().force_tol == pytest.approx(1e-11)
+
+
+def test_newton_jumps_are_shorter_from_large_n_on():
+    """A jump from the same jammed state (V = 1e-10, so the predicted phi - phi_J is far above the
+    window) shrinks phi - phi_J by newton_ratio = 10 below large_n particles, by 3 from large_n on."""
+    settings = fast_protocol()
+    assert (settings.jump_ratio(1024), settings.jump_ratio(2048), settings.jump_ratio(16384)) == (10.0, 3.0, 3.0)
+    targets = {}
+    for n in (1024, 4096):
+        stepper = PhiStepper(settings, 2.0, VBAR, n)
+        stepper.side, stepper.crossed = "above", True
+        phi, v = 0.85, 1e-10
+        pressure = 2.0 * v * phi**2 / (1e-4 * VBAR)  # the virial pressure of phi - phi_J = 1e-4
+        targets[n] = stepper.next_phi(phi, v, pressure)
+    assert 0.85 - targets[1024] == pytest.approx(1e-4 * (1 - 1 / 10))
+    assert 0.85 - targets[4096] == pytest.approx(1e-4 * (1 - 1 / 3))

@@ -233,7 +233,7 @@ def bisect(sim, settings: CompressionSettings, *, observers=()) -> JamResult:
     current = sim.packing()  # phi and the volume it counts (walls: between them) of the current state
     base_box, base_phi = current.box, current.phi
     mean_volume = current.phi * current.box.volume / current.n_mobile  # the volume phi counts, per mobile particle
-    stepper = PhiStepper(settings, current.potential.onset_exponent, mean_volume)
+    stepper = PhiStepper(settings, current.potential.onset_exponent, mean_volume, current.n_mobile)
     rows = {c: [] for c in HISTORY_COLUMNS}
     phi, resumes = base_phi, 0
     for step in range(settings.max_steps):
@@ -366,7 +366,8 @@ class PhiStepper:
     ``newton`` jumps from a state above jamming to where V = 1.5 V_tol is predicted by
     V ~ (phi - phi_J)^alpha and the virial pressure P = phi^2 dV/dphi / v (v the mean particle
     volume), i.e. phi_J = phi - alpha V phi^2 / (P v), shrinking phi - phi_J by at most
-    ``newton_ratio`` per jump (and to no less than 3x the window's distance before the last
+    ``newton_ratio`` per jump (``large_n_newton_ratio`` from ``large_n`` particles on: a long jump
+    from a jammed state of many particles ends in an avalanche) (and to no less than 3x the window's distance before the last
     jump, as the prediction errs by a few % of phi - phi_J) so the packing stays jammed and
     in the same basin while the prediction sharpens. A jump that lands below jamming is
     followed by the chapter's rule with dphi = that jump: compress by half of it, then by a
@@ -376,8 +377,9 @@ class PhiStepper:
     ever reaching the window.)
     """
 
-    def __init__(self, settings: CompressionSettings, alpha: float, mean_volume: float):
+    def __init__(self, settings: CompressionSettings, alpha: float, mean_volume: float, n: int = 0):
         self.s, self.alpha, self.mean_volume = settings, alpha, mean_volume
+        self.jump_ratio = settings.jump_ratio(n)  # ``newton_ratio``, or ``large_n_newton_ratio`` from ``large_n`` on
         self.dphi, self.side, self.crossed = settings.dphi0, None, False
         self.last_step = 0.0
         self.final_approach = False  # True when the next minimisation aims at the window itself
@@ -421,7 +423,7 @@ class PhiStepper:
         width = self.alpha * v * phi**2 / (pressure * self.mean_volume)  # predicted phi - phi_J
         window = width * (1.5 * self.s.v_tol / v) ** (1.0 / self.alpha)  # predicted phi - phi_J at V = 1.5 V_tol
         self.final_approach = width <= 2 * NEWTON_FINAL_FACTOR * window
-        stop_at = window if self.final_approach else max(NEWTON_FINAL_FACTOR * window, width / self.s.newton_ratio)
+        stop_at = window if self.final_approach else max(NEWTON_FINAL_FACTOR * window, width / self.jump_ratio)
         self.dphi = width - stop_at  # a jump that lands below is then halved by the chapter rule
         return phi - self.dphi
 

@@ -31,6 +31,10 @@ class CompressionSettings:
     dphi_max: float = 1e-3  # cap on the grown increment
     newton: bool = False  # above jamming, jump to the predicted window from V and P (speed-up)
     newton_ratio: float = 20.0  # a Newton jump shrinks phi - phi_J at most by this factor (stays jammed)
+    # ... and at most by this one from large_n particles on: a long jump from a jammed state of many particles
+    # ends in an avalanche that FIRE follows for 1e5 iterations (docs/notes/newton-krylov.md, jump ratio)
+    large_n_newton_ratio: float = 3.0
+    large_n: int = 2048
     coarse_v_min: float | None = None  # before the first crossing, V below this counts as unjammed (speed-up)
     approach_force_rtol: float | None = None  # before the final approach: force tol = this x pressure (speed-up)
     coarse_force_tol: float = 1e-10  # force tolerance before the first crossing when approach_force_rtol is set
@@ -60,10 +64,18 @@ class CompressionSettings:
                              "state in the window would be stopped as unjammed; set MinimizerSettings(v_min=v_tol)")
         if self.coarse_v_min is not None and not (math.isfinite(self.coarse_v_min) and self.coarse_v_min > 2 * self.v_tol):
             raise ValueError(f"coarse_v_min must be a finite number above 2 V_tol, got {self.coarse_v_min}")
-        if not (math.isfinite(self.newton_ratio) and self.newton_ratio > 1):
-            raise ValueError(f"newton_ratio must be a finite number > 1, got {self.newton_ratio}")
+        for name in ("newton_ratio", "large_n_newton_ratio"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 1):
+                raise ValueError(f"{name} must be a finite number > 1, got {value!r}")
+        if isinstance(self.large_n, bool) or not isinstance(self.large_n, int) or self.large_n < 2:
+            raise ValueError(f"large_n must be an integer >= 2, got {self.large_n!r}")
         if self.max_steps < 1:
             raise ValueError("max_steps must be a positive integer")
+
+    def jump_ratio(self, n: int) -> float:
+        """The largest factor by which a Newton jump shrinks phi - phi_J for ``n`` particles."""
+        return min(self.newton_ratio, self.large_n_newton_ratio) if n >= self.large_n else self.newton_ratio
 
     def start_phi(self, dim: int, gravity: float = 0.0, shape=None) -> float:
         """phi0, or the default start for this dimension (a looser one under gravity, and for
