@@ -91,18 +91,19 @@ class Model:
         n, d = x.shape
         dr, r, delta, jac = pair_geometry(x, pairs)
         on = delta > 0
-        blocks = _tension_blocks(delta[on], r[on], pairs.sigma[on], dr[on] / r[on, None])
+        blocks = _tension_blocks(packing.potential, dr[on], r[on], pairs.sigma[on])
         tension = _pair_blocks(pairs.i[on], pairs.j[on], blocks, n, d)
         grad = jac[on].T @ delta[on]
         return cls(delta, jac, tension, grad, 0.5 * float(delta[on] @ delta[on]))
 
 
-def _tension_blocks(delta, r, sigma, unit) -> np.ndarray:
-    """(K, d, d) blocks delta * d^2 delta / du^2 = -delta / (r sigma) (I - n n^T) of each contact
-    on its relative coordinate u = x_i - x_j (eps/diameter^2)."""
-    d = unit.shape[1]
-    perp = np.eye(d)[None] - unit[:, :, None] * unit[:, None, :]
-    return -(delta / (r * sigma))[:, None, None] * perp
+def _tension_blocks(potential, dr, r, sigma) -> np.ndarray:
+    """(K, d, d) tension blocks V'(r)/r (I - n n^T) of each contact on its relative coordinate
+    u = x_i - x_j (the part of ``mechanics.hessian.pair_stiffness`` beyond J^T J; -delta / (r sigma)
+    for the linear spring; eps/diameter^2)."""
+    unit = dr / r[:, None]
+    perp = np.eye(dr.shape[1])[None] - unit[:, :, None] * unit[:, None, :]
+    return (potential.dv_dr(r, sigma) / r)[:, None, None] * perp
 
 
 def _pair_blocks(i, j, blocks, n: int, d: int):
@@ -129,7 +130,6 @@ class Preconditioner:
         size = jac_active.shape[1]
         self.matrix = (jac_active.T @ jac_active + mu * sp.identity(size, format="csr")).tocsr()
         self.active = active.copy()
-        self.mu = mu
         self._solve = factorise(self.matrix)
 
     def solve(self, b: np.ndarray) -> np.ndarray:
