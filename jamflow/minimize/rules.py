@@ -114,7 +114,8 @@ def _creep_method(engine, settings: MinimizerSettings, stiffness: float, ftol: f
 
         reason = newton_reason(template)
         if reason:
-            raise ValueError(f"creep method 'newton': {reason}; use the creep method polish, soft-modes or off")
+            raise ValueError(f"creep method 'newton': {reason}; use the creep method auto (what was measured to pay "
+                             "for this scene) or off")
         return Creep(newton_trigger(settings.creep_after or AFTER), NewtonSteps(ftol))
     if method == "polish":
         from jamflow.minimize.polish import AFTER, PolishSteps, polish_reason, polish_trigger
