@@ -73,8 +73,9 @@ def minimize(engine, settings: MinimizerSettings | None = None) -> MinimizeResul
     with engine.minimizer_session(settings, ftol) as run_window:
         while True:
             steps = min(settings.window, settings.max_iterations - done)
-            if creep is not None and creep.trigger.until_due(done) is not None:
-                steps = min(steps, creep.trigger.until_due(done))
+            due_in = creep.trigger.until_due(done) if creep is not None else None
+            if due_in is not None:
+                steps = min(steps, due_in)
             w = run_window(steps)
             done += w.iterations
             energy = w.objective / n

@@ -366,9 +366,10 @@ class PhiStepper:
     ``newton`` jumps from a state above jamming to where V = 1.5 V_tol is predicted by
     V ~ (phi - phi_J)^alpha and the virial pressure P = phi^2 dV/dphi / v (v the mean particle
     volume), i.e. phi_J = phi - alpha V phi^2 / (P v), shrinking phi - phi_J by at most
-    ``newton_ratio`` per jump (``large_n_newton_ratio`` from ``large_n`` particles on: a long jump
-    from a jammed state of many particles ends in an avalanche) (and to no less than 3x the window's distance before the last
-    jump, as the prediction errs by a few % of phi - phi_J) so the packing stays jammed and
+    ``newton_ratio`` per jump, ``large_n_newton_ratio`` from ``large_n`` particles on (a long jump
+    from a jammed state of many particles ends in an avalanche), and to no less than 3x the
+    window's distance before the last jump, as the prediction errs by a few % of phi - phi_J, so
+    the packing stays jammed and
     in the same basin while the prediction sharpens. A jump that lands below jamming is
     followed by the chapter's rule with dphi = that jump: compress by half of it, then by a
     growing step while still below. (An
