@@ -1,5 +1,6 @@
 """File-system refusals, sizes that cannot fit, output names that look derived, benchmark outputs
-that must not overwrite curated data, and temporary files left behind (Dask, ahead-of-time build)."""
+that must not overwrite curated data, temporary files left behind (Dask, ahead-of-time build),
+settings refused before work in the words of the option that set them."""
 
 from __future__ import annotations
 
@@ -270,3 +271,64 @@ def test_anneal_refuses_steps_that_cannot_fit(tmp_path, capsys, packing_file):
     assert main(["anneal", str(packing_file), "--to", "2", "--dalpha", "1e-13", "--out", str(tmp_path / "a.h5")]) == EXIT_USER
     line = one_line(capsys.readouterr().err)
     assert "--dalpha" in line and "1,000,000" in line
+
+
+def test_refine_refuses_a_pressure_no_box_reaches_before_work(packing_file, capsys, tmp_path, monkeypatch):
+    import jamflow.protocols.refine as refine
+
+    monkeypatch.setattr(refine, "balance", lambda *a, **k: pytest.fail("the refinement started"))
+    assert main(["refine", str(packing_file), "--pressure", "10", "--out", str(tmp_path / "r.h5")]) == EXIT_USER
+    line = one_line(capsys.readouterr().err)
+    assert "--pressure 10 is above" in line and "smaller --pressure" in line
+    assert not list(tmp_path.iterdir())
+
+
+def test_refine_reaches_a_pressure_near_the_densest_box(packing_file, tmp_path):
+    from jamflow.io.packing_file import load_packing
+    from jamflow.mechanics.reference import energy_forces_pressure
+
+    out = tmp_path / "r.h5"  # 0.5: two thirds of what these 16 disks carry in their densest box, ~0.75
+    assert main(["refine", str(packing_file), "--pressure", "0.5", "--out", str(out)]) == 0
+    assert energy_forces_pressure(load_packing(out)).pressure == pytest.approx(0.5, rel=1e-3)
+
+
+def test_jam_refuses_a_pressure_no_box_reaches_before_work(capsys, tmp_path, monkeypatch):
+    import jamflow.protocols.pressure as pressure
+
+    monkeypatch.setattr(pressure, "jam_at_pressure", lambda *a, **k: pytest.fail("the jam started"))
+    assert main(["jam", "--n", "16", "--pressure", "1000", "--out", str(tmp_path / "j.h5"), "--quiet"]) == EXIT_USER
+    assert "--pressure 1000 is above" in one_line(capsys.readouterr().err)
+
+
+def test_the_fast_protocol_runs_a_large_vtol(tmp_path):
+    from jamflow.io.packing_file import load_packing
+    from jamflow.protocols.settings import CompressionSettings, fast_protocol
+
+    assert fast_protocol(v_tol=1e-3).coarse_v_min is None and fast_protocol().coarse_v_min == 1e-10
+    with pytest.raises(ValueError, match="coarse_v_min"):
+        CompressionSettings(v_tol=1e-3, coarse_v_min=1e-10)
+    assert main(["jam", "--n", "16", "--vtol", "1e-3", "--out", str(tmp_path / "j.h5"), "--quiet"]) == 0
+    import h5py
+
+    with h5py.File(tmp_path / "j.h5") as f:
+        v = float(f.attrs["energy_per_particle"])
+    assert 1e-3 < v < 2e-3 and load_packing(tmp_path / "j.h5").n == 16
+
+
+@pytest.mark.parametrize("command, option", [
+    (["jam", "--n", "16", "--ftol", "-1"], "--ftol"),
+    (["jam", "--n", "16", "--minimizer", "md", "--damping", "-1"], "--damping"),
+    (["jam", "--n", "16", "--gravity", "1e-3", "--walls", "y", "--vtol", "1e-3"], "--vtol"),
+    (["jam", "--n", "16", "--gamma", "1e300"], "--gamma"),
+    (["refine", "PACKING", "--pressure", "1e-3", "--force-tol", "2"], "--force-tol"),
+    (["refine", "PACKING", "--pressure", "-1"], "--pressure"),
+    (["shear", "PACKING", "--dgamma", "1e-3", "--to", "2e-3", "--dphi0", "0.5"], "--dphi0"),
+    (["moduli", "PACKING", "--linear-tol", "2", "--no-figure"], "--linear-tol"),
+])
+def test_bad_settings_are_named_by_their_option(packing_file, capsys, tmp_path, command, option):
+    argv = [str(packing_file) if w == "PACKING" else w for w in command]
+    out = [] if command[0] == "moduli" else ["--out", str(tmp_path / ("o" if command[0] == "shear" else "o.h5"))]
+    assert main(argv + out) == EXIT_USER
+    line = one_line(capsys.readouterr().err)
+    assert line.startswith(f"jamflow {command[0]}: error: {option} "), line
+    assert not list(tmp_path.iterdir())

@@ -94,11 +94,12 @@ def chosen_command(argv) -> str:
 
 def main(argv=None) -> int:
     previous = signal.signal(signal.SIGTERM, _terminate)
-    name, stdout = "jamflow", sys.stdout
+    name, stdout, options = "jamflow", sys.stdout, {}
     sys.stdout = _PipeSafe(stdout)
     try:
-        args = build_parser(chosen_command(argv)).parse_args(argv)
-        name = f"jamflow {args.command}"
+        parser = build_parser(chosen_command(argv))
+        args = parser.parse_args(argv)
+        name, options = f"jamflow {args.command}", _options(parser, args.command)
         from jamflow.engines.compiled import aot  # noqa: F401 -- registers the built cell list with the pair search
 
         with _one_line_warnings(name):
@@ -110,7 +111,7 @@ def main(argv=None) -> int:
         print(f"{name}: terminated; earlier outputs are untouched and temporary files removed", file=sys.stderr)
         return EXIT_TERMINATED
     except Exception as err:
-        code, message = _classify(err)
+        code, message = _classify(_named_by_option(err, options))
         if code is None:
             raise
         print(f"{name}: {message}", file=sys.stderr)
@@ -119,6 +120,29 @@ def main(argv=None) -> int:
         sys.stdout.flush()
         sys.stdout = stdout
         signal.signal(signal.SIGTERM, previous)
+
+
+FIELD_OPTIONS = {"v_tol": "vtol", "force_tol": "ftol"}  # settings fields that options of other names set
+
+
+def _options(parser: argparse.ArgumentParser, command: str) -> dict:
+    """{destination: option string} of the subcommand ``command`` (``force_tol``: ``--force-tol``)."""
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction)).choices[command]
+    return {a.dest: a.option_strings[-1] for a in sub._actions if a.option_strings}
+
+
+def _named_by_option(err: Exception, options: dict) -> Exception:
+    """A ``SettingError`` of a field that an option of this command set, reworded to name the
+    option (``force_tol must be ...`` -> ``--ftol must be ...``); any other error as it is."""
+    from jamflow.support.settings_errors import SettingError
+
+    if not isinstance(err, SettingError):
+        return err
+    option = options.get(err.field) or options.get(FIELD_OPTIONS.get(err.field, ""))
+    if option is None:
+        return err
+    named = ValueError(err.naming(option))
+    return named.with_traceback(err.__traceback__)
 
 
 def _classify(err: Exception) -> tuple[int | None, str]:

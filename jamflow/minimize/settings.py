@@ -8,6 +8,7 @@ from dataclasses import asdict, dataclass
 from jamflow.mechanics.force_floor import FORCE_TOL_BASE, force_floor
 from jamflow.model.box import STRESS_MODES
 from jamflow.support.reprs import changed_fields_repr
+from jamflow.support.settings_errors import SettingError
 
 METHODS = ("fire", "cg", "md")
 
@@ -65,9 +66,9 @@ class MinimizerSettings:
         for name in ("delta", "v_min", "timestep", "md_timestep", "damping", "rotating_damping"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"minimizer {name} must be a finite positive number, got {value}")
+                raise SettingError(name, f"must be a finite positive number, got {value} (minimizer)")
         if self.force_tol is not None and not (math.isfinite(self.force_tol) and self.force_tol > 0):
-            raise ValueError(f"force_tol must be a finite positive number, got {self.force_tol}")
+            raise SettingError("force_tol", f"must be a finite positive number, got {self.force_tol}")
         if self.creep not in CREEP_METHODS:
             raise ValueError(f"unknown creep method {self.creep!r}; use one of {', '.join(CREEP_METHODS)}")
         if self.creep_after is not None and self.creep_after < 1:

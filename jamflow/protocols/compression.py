@@ -108,11 +108,19 @@ def jam(n: int = 64, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | P
     return result if gamma is None else with_accumulated_strain(result, gamma)
 
 
+MAX_STRAIN = 1e6  # float64 keeps a strain's fractional part (its lattice, chapter Figure 2.4) to ulp(1e6) = 1.2e-10
+
+
 def check_strain(gamma, name: str = "shear strain gamma") -> float:
-    """A finite shear strain as a float; ValueError (naming the value as ``name``) otherwise."""
+    """A finite shear strain of magnitude at most ``MAX_STRAIN`` as a float; ValueError (naming
+    the value as ``name``) otherwise."""
     if isinstance(gamma, bool) or not isinstance(gamma, (int, float, np.integer, np.floating)) \
             or not math.isfinite(gamma):
         raise ValueError(f"{name} must be a finite number, got {gamma!r}")
+    if abs(gamma) > MAX_STRAIN:
+        raise ValueError(f"{name} {gamma:g} is beyond +-{MAX_STRAIN:g}, where float64 no longer resolves the "
+                         f"strain's fractional part (the lattice repeats at every integer strain); give a strain within "
+                         f"+-{MAX_STRAIN:g}")
     return float(gamma)
 
 

@@ -20,6 +20,13 @@ force tolerance (base max(1, L/20) k, base the shape's: 1e-14 for disks, 5e-13 f
 force balance is no longer resolved against the contact forces. For 2D bidisperse disks
 (mean diameter 1.2) that is P = 8.3e-12 up to L = 20 (N ~ 300), 1.6e-11 at N = 1024 and
 3.2e-11 at N = 4096: it grows with L.
+
+The highest target (``pressure_ceiling``): the box cannot shrink below twice the largest contact
+distance (``model.packing.fits_cell``: a unique minimum image), and the pressure the particles carry
+in that densest box, relaxed there by FIRE, bounds what a periodic box of them reaches: 0.74 for
+2D bidisperse disks at N = 16, 12 at N = 64, 200 at N = 256 (linear spring; about 0.14 phi^2 in 2D
+and 0.19 phi^2 in 3D, phi that box's packing fraction). Targets above it are refused before any
+work; it is measured only for targets above ``CEILING_SCREEN`` phi^2 eps / diameter^d.
 """
 
 from __future__ import annotations
@@ -40,8 +47,12 @@ from jamflow.model.packing import Packing
 from jamflow.protocols.compression import RLJ_MIN_START_RATIO, deepest_overlap, remove_overlaps
 from jamflow.support import hooks
 from jamflow.support.reprs import changed_fields_repr
+from jamflow.support.settings_errors import SettingError
 
 FLOOR_MARGIN = 1000.0
+CEILING_SCREEN = 1e-3  # targets below this x phi^2 (densest box) are not probed: far below the measured 0.14 phi^2
+CEILING_GAP = 1e-3  # the probe's box is this much (relative) wider than the densest one
+CEILING_FORCE_TOL = 1e-8  # eps / diameter: the probe's forces are ~0.1-10, its pressure needs no better
 DEFAULT_START_PRESSURE = 1e-4  # from a random start; starting higher raises phi_J (docs/notes/walls-gravity-pressure.md)
 PRESSURE_COLUMNS = ("target_pressure", "phi", "pressure", "shear_stress", "energy_per_particle", "iterations",
                     "max_force", "max_box_force", "converged")  # max_box_force: largest box (or torque) force component
@@ -60,7 +71,7 @@ def pressure_sequence(target: float, start: float = DEFAULT_START_PRESSURE) -> t
 
 def _check_pressure(p) -> None:
     if not (isinstance(p, (int, float, np.floating)) and math.isfinite(p) and p > 0):
-        raise ValueError(f"target pressure must be a finite positive number (eps/diameter^d), got {p!r}")
+        raise SettingError("pressure", f"must be a finite positive number (eps/diameter^d), got {p!r}")
 
 
 @dataclass(frozen=True)
@@ -97,6 +108,41 @@ def pressure_floor(packing: Packing, minimizer: MinimizerSettings) -> float:
     return FLOOR_MARGIN * ftol / a ** (packing.dim - 1)
 
 
+def densest_phi(packing: Packing) -> float:
+    """The largest packing fraction of ``packing``'s particles in a box of its shape with a unique
+    minimum image: the smallest width twice the largest contact distance (``fits_cell``)."""
+    reach = float(packing.shape.reach(packing.diameters).max())
+    return packing.phi * (float(packing.box.widths.min()) / (4.0 * reach)) ** packing.dim
+
+
+def pressure_ceiling(packing: Packing) -> tuple[float, float]:
+    """(P, phi): the pressure (eps / diameter^d) of ``packing`` compressed affinely to just above its
+    densest box (``densest_phi``, ``CEILING_GAP``) and relaxed there by FIRE at that box, and that
+    box's packing fraction. The pressure grows as the box shrinks, so no periodic box of these
+    particles carries much more."""
+    phi = densest_phi(packing) / (1.0 + CEILING_GAP) ** packing.dim
+    dense = packing.scaled_to_phi(phi)
+    with open_engine(dense, "fire") as sim:
+        minimize(sim, MinimizerSettings(v_min=1e-300, force_tol=CEILING_FORCE_TOL))  # balance, no V_min stop
+        return sim.state().pressure, phi
+
+
+def check_pressure_ceiling(packing: Packing, target: float, what: str = "--pressure") -> None:
+    """Refuse, before any work, a target pressure above ``pressure_ceiling`` (measured only for
+    targets above ``CEILING_SCREEN`` phi^2 eps / diameter^d, phi the densest box's); ``what``
+    names the target in the message."""
+    phi = densest_phi(packing)
+    unit = packing.potential.epsilon / float(np.mean(packing.diameters)) ** packing.dim
+    if target < CEILING_SCREEN * phi**2 * unit:
+        return
+    ceiling, phi = pressure_ceiling(packing)
+    if target >= ceiling:
+        raise ValueError(f"{what} {target:g} is above what {packing.n} {packing.shape.name(packing.dim)} particles "
+                         f"carry in a periodic box: about {ceiling:.3g} at phi = {phi:.3g}, where the box side is "
+                         "twice the largest contact distance (no smaller box has a unique minimum image); use a "
+                         "smaller --pressure, or more particles")
+
+
 def check_pressure_start(packing: Packing, settings: PressureSettings) -> None:
     """Refuse what the constant-pressure protocol cannot run, before any work."""
     if packing.box.walls or packing.gravity > 0 or packing.fixed is not None:
@@ -108,6 +154,7 @@ def check_pressure_start(packing: Packing, settings: PressureSettings) -> None:
                          f"{packing.n} (box side {packing.box.lengths.max():.3g}): contact forces ~ P a^(d-1) must "
                          f"stay {FLOOR_MARGIN:g}x above the force round-off floor {ftol:.1e}, so P >= {floor:.1e}; "
                          "choose a larger target pressure, or --precision double-double (jamflow refine) to go below")
+    check_pressure_ceiling(packing, max(settings.pressures))
 
 
 def extrapolate_phi_j(pressures, phis, onset_exponent: float) -> float:

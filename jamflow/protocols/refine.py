@@ -63,11 +63,12 @@ from jamflow.minimize.rules import minimize
 from jamflow.minimize.settings import MinimizerSettings
 from jamflow.model import ddouble as dd
 from jamflow.model.box import Box
-from jamflow.model.packing import Packing
+from jamflow.model.packing import Packing, fits_cell
 from jamflow.model.pairs import candidate_pairs
 from jamflow.protocols.outcome import JammingFailed
-from jamflow.protocols.pressure import _check_pressure, pressure_floor, pressure_sequence
+from jamflow.protocols.pressure import _check_pressure, check_pressure_ceiling, pressure_floor, pressure_sequence
 from jamflow.support import hooks
+from jamflow.support.settings_errors import SettingError
 
 PAIR_SKIN = 0.05  # candidate pairs within the largest diameter + this (diameters)
 STEP_HALVINGS = 12
@@ -99,7 +100,7 @@ class RefineSettings:
         for name in ("force_tol", "pressure_tol"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and 0 < value < 1):
-                raise ValueError(f"{name} must be a number in (0, 1), got {value!r}")
+                raise SettingError(name, f"must be a number in (0, 1), got {value!r}")
 
     def as_dict(self) -> dict:
         window = {} if self.v_tol is None else {"v_tol": self.v_tol}
@@ -128,6 +129,8 @@ def check_refine(packing: Packing, settings: RefineSettings) -> None:
                          f"{packing.n} (box side {packing.box.lengths.max():.3g}): contact forces ~ P a^(d-1) must "
                          f"stay 1/force_tol = {1 / settings.force_tol:.0e} times above the double-double force "
                          f"round-off {dd_force_floor(packing):.1e}, so P >= {floor:.1e}; choose a larger target pressure")
+    what = "--pressure" if settings.v_tol is None else f"the pressure for --vtol {settings.v_tol:g},"
+    check_pressure_ceiling(packing, settings.pressure, what)
 
 
 def dd_vtol_floor(packing: Packing, force_tol: float = 1e-12) -> float:
@@ -824,6 +827,12 @@ def _targets(start: float, target: float) -> tuple:
     return tuple(seq) + (target,)
 
 
+def _fits(packing: Packing, st: _State, mu: float) -> bool:
+    """Whether the box of ``st`` scaled by 1 + ``mu`` keeps a unique minimum image (``fits_cell``)."""
+    reach = float(packing.shape.reach(packing.diameters).max())
+    return 1.0 + mu > 0 and fits_cell(Box(np.diag(st.lh * (1.0 + mu))), reach)
+
+
 def _walk(packing: Packing, st: _State, net: Network, target: float, tol: float, settings: RefineSettings, record,
           slope: float):
     """Secant in the box length until |p / target - 1| <= tol, from the guess ``slope`` = dp/du;
@@ -837,6 +846,9 @@ def _walk(packing: Packing, st: _State, net: Network, target: float, tol: float,
             slope = (pb - pa) / (ub - ua) if ub != ua and pb != pa else slope
         u_next = u0 + (target - p0) / slope
         for _ in range(STEP_HALVINGS):  # from the last balanced state, keeping its non-affine relaxation
+            if not _fits(packing, st, (u_next - u0) / (1.0 + u0)):  # a secant past the densest box: back off
+                u_next = 0.5 * (u0 + u_next)
+                continue
             try:
                 trial, new, steps = balance(packing, st.scaled((u_next - u0) / (1.0 + u0)), settings,
                                             _network(net))

@@ -8,6 +8,7 @@ from dataclasses import asdict, dataclass, field
 from jamflow.minimize.settings import MinimizerSettings
 from jamflow.model.shapes.parse import parse_shape
 from jamflow.support.reprs import changed_fields_repr
+from jamflow.support.settings_errors import SettingError
 
 DEFAULT_PHI0 = {2: 0.80, 3: 0.55}
 
@@ -48,22 +49,23 @@ class CompressionSettings:
             if name == "phi0" and value is None:
                 continue
             if not (isinstance(value, (int, float)) and math.isfinite(value)):
-                raise ValueError(f"{name} must be a finite number, got {value!r}")
+                raise SettingError(name, f"must be a finite number, got {value!r}")
         if self.phi0 is not None and not 0.0 < self.phi0 < 1.0:
-            raise ValueError(f"phi0 must lie in (0, 1), got {self.phi0}")
+            raise SettingError("phi0", f"must lie in (0, 1), got {self.phi0}")
         if not 0.0 < self.dphi0 < 0.1:
-            raise ValueError(f"dphi0 must lie in (0, 0.1), got {self.dphi0}; the chapter uses 1e-4")
+            raise SettingError("dphi0", f"must lie in (0, 0.1), got {self.dphi0}; the chapter uses 1e-4")
         if not self.v_tol > 0:
-            raise ValueError(f"vtol must be positive, got {self.v_tol}; the chapter uses 1e-16")
+            raise SettingError("v_tol", f"must be positive, got {self.v_tol}; the chapter uses 1e-16")
         if not (math.isfinite(self.dphi_growth) and self.dphi_growth >= 1.0):
-            raise ValueError(f"dphi_growth must be >= 1 (1 = the chapter's constant increment), got {self.dphi_growth}")
+            raise SettingError("dphi_growth", f"must be >= 1 (1 = the chapter's constant increment), got {self.dphi_growth}")
         if not (math.isfinite(self.dphi_max) and self.dphi_max > 0):
-            raise ValueError(f"dphi_max must be a finite positive number, got {self.dphi_max}")
+            raise SettingError("dphi_max", f"must be a finite positive number, got {self.dphi_max}")
         if self.minimizer.v_min > self.v_tol:
             raise ValueError(f"minimizer v_min = {self.minimizer.v_min:g} is above v_tol = {self.v_tol:g}: every "
                              "state in the window would be stopped as unjammed; set MinimizerSettings(v_min=v_tol)")
         if self.coarse_v_min is not None and not (math.isfinite(self.coarse_v_min) and self.coarse_v_min > 2 * self.v_tol):
-            raise ValueError(f"coarse_v_min must be a finite number above 2 V_tol, got {self.coarse_v_min}")
+            raise ValueError(f"coarse_v_min must be a finite number above 2 v_tol = {2 * self.v_tol:g}, got "
+                             f"{self.coarse_v_min}; or None (no coarse stage)")
         for name in ("newton_ratio", "large_n_newton_ratio"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 1):
@@ -105,8 +107,14 @@ seed_protocol = chapter_protocol  # its old name, kept as an alias of ``--protoc
 
 
 def fast_protocol(**overrides) -> CompressionSettings:
-    """Same stopping rule, fewer and cheaper minimisations (docs/notes/speed.md measures its bias)."""
-    return CompressionSettings(**{**FAST_PROTOCOL, **overrides})
+    """Same stopping rule, fewer and cheaper minimisations (docs/notes/speed.md measures its bias).
+    The coarse stage (``coarse_v_min``, above 2 V_tol) is left out for a ``v_tol`` that is not below
+    half of it, unless ``coarse_v_min`` is given."""
+    settings = {**FAST_PROTOCOL, **overrides}
+    v_tol = settings.get("v_tol", CompressionSettings.v_tol)
+    if "coarse_v_min" not in overrides and isinstance(v_tol, (int, float)) and 2 * v_tol >= settings["coarse_v_min"]:
+        settings["coarse_v_min"] = None
+    return CompressionSettings(**settings)
 
 
 PROTOCOLS = {"chapter": chapter_protocol, "fast": fast_protocol}

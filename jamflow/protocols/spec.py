@@ -25,6 +25,7 @@ from jamflow.protocols.above import check_dphi
 from jamflow.protocols.compression import (
     at_shear_strain,
     check_resolution,
+    check_strain,
     initial_packing,
     jam,
     with_accumulated_strain,
@@ -105,7 +106,7 @@ class JamSpec:
 
 def compression_settings(spec: JamSpec) -> CompressionSettings:
     """The compression protocol and minimiser of a spec; refuses bad numbers and combinations."""
-    for name in ("phi0", "dphi0", "vtol"):
+    for name in ("phi0", "dphi0", "vtol", "ftol", "damping"):
         value = getattr(spec, name)
         if value is not None and (not math.isfinite(value) or value <= 0):
             raise ValueError(f"--{name} must be a finite positive number, got {value}")
@@ -143,6 +144,8 @@ def check_boundaries(spec: JamSpec) -> None:
         if spec.pressure is not None or spec.gravity:
             raise ValueError("--above compresses the onset packing at a fixed box: it does not combine with "
                              "--pressure, --gravity or --emit-deck")
+    if spec.gamma is not None:
+        check_strain(spec.gamma, "--gamma")
     if spec.gamma is not None and spec.pressure is not None:
         raise ValueError("--gamma fixes the shear strain, --pressure relaxes the box: use one of them")
     check_partners(spec)
@@ -157,6 +160,8 @@ PARTNERS = {
     "md_damping": (lambda s: s.minimizer == "md", "--minimizer md", "the drag of damped dynamics"),
     "dphi0": (lambda s: s.pressure is None and not s.gravity, "a compression run",
               "the first step of phi; --pressure and --gravity runs do not compress"),
+    "vtol": (lambda s: s.pressure is None and not s.gravity, "a compression run",
+             "the energy window of the onset; a pile under --gravity and a box at --pressure have none"),
 }
 
 

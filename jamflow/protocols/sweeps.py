@@ -41,6 +41,7 @@ from jamflow.mechanics.contacts import Contacts
 from jamflow.mechanics.strains import Strain
 from jamflow.minimize.rules import minimize
 from jamflow.support.reprs import changed_fields_repr
+from jamflow.support.settings_errors import SettingError
 
 DEFAULT_AMPLITUDES = tuple(float(a) for a in np.logspace(-9, -3, 13))  # two per decade, 1e-9 .. 1e-3
 LINEAR_TOL = 1e-4  # relative deviation of a central slope from M that still counts as linear
@@ -87,9 +88,9 @@ class SweepSettings:
         for name in ("linear_tol", "jump_tol"):
             value = getattr(self, name)
             if not (math.isfinite(value) and 0 < value < 1):
-                raise ValueError(f"{name} must lie in (0, 1), got {value!r}")
+                raise SettingError(name, f"must lie in (0, 1), got {value!r}")
         if not (isinstance(self.past_yield, (int, np.integer)) and self.past_yield >= 0):
-            raise ValueError(f"past_yield must be an integer >= 0, got {self.past_yield!r}")
+            raise SettingError("past_yield", f"must be an integer >= 0, got {self.past_yield!r}")
         if self.minimizer is not None and self.minimizer.pressure is not None:
             raise ValueError("the sweeps relax at fixed strain; the minimiser takes no target pressure")
         object.__setattr__(self, "amplitudes", tuple(float(a) for a in amps))
