@@ -332,3 +332,40 @@ def test_bad_settings_are_named_by_their_option(packing_file, capsys, tmp_path, 
     line = one_line(capsys.readouterr().err)
     assert line.startswith(f"jamflow {command[0]}: error: {option} "), line
     assert not list(tmp_path.iterdir())
+
+
+def test_a_cut_density_of_states_says_which_fraction_it_holds(packing_file, tmp_path, capsys):
+    import csv
+
+    import numpy as np
+
+    from jamflow.analysis.modes import Spectrum
+    from jamflow.io.packing_file import load_packing
+
+    omegas = np.sort(Spectrum().compute(load_packing(packing_file)).frequencies)
+    top = 0.5 * (omegas[len(omegas) // 2] + omegas[len(omegas) // 2 + 1])  # between two modes: half of them in range
+    figure = tmp_path / "f.png"
+    assert main(["modes", str(packing_file), "--figure", str(figure), "--omega-max", repr(float(top)), "--bins", "8"]) == 0
+    err = capsys.readouterr().err
+    inside = int(np.sum(omegas <= top))
+    assert "--omega-max" in err and f"leaves {len(omegas) - inside} of {len(omegas)} nonzero modes" in err
+    rows = list(csv.DictReader(open(tmp_path / "f-dos.csv")))
+    widths = np.array([float(r["omega_high"]) - float(r["omega_low"]) for r in rows])
+    d = np.array([float(r["D"]) for r in rows])
+    counts = np.histogram(omegas, np.linspace(0.0, top, 9))[0]
+    assert np.allclose(d, counts / widths / len(omegas), rtol=1e-12)  # normalised over all modes
+    assert {float(r["fraction_in_range"]) for r in rows} == {inside / len(omegas)}
+    assert np.sum(d * widths) == pytest.approx(inside / len(omegas), rel=1e-12)
+
+
+def test_an_uncut_density_of_states_integrates_to_one_without_a_warning(packing_file, tmp_path, capsys):
+    import csv
+
+    assert main(["modes", str(packing_file), "--figure", str(tmp_path / "f.png")]) == 0
+    assert "warning" not in capsys.readouterr().err
+    assert {r["fraction_in_range"] for r in csv.DictReader(open(tmp_path / "f-dos.csv"))} == {"1.0"}
+
+
+def test_the_density_of_states_options_are_named(packing_file, capsys):
+    assert main(["modes", str(packing_file), "--omega-max", "nan", "--no-figure"]) == EXIT_USER
+    assert one_line(capsys.readouterr().err).startswith("jamflow modes: error: --omega-max ")

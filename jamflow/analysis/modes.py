@@ -25,6 +25,7 @@ share of each eigenvector in the centre coordinates (the mode character; 1 - it 
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -37,6 +38,7 @@ from jamflow.mechanics.deformation import energy_change, network_amplitudes, ope
 from jamflow.mechanics.dynamical_matrix import DynamicalMatrix, DynamicalMatrixResult
 from jamflow.mechanics.eigen import lowest_eigenpairs
 from jamflow.support.machine import check_bins
+from jamflow.support.settings_errors import SettingError
 
 DENSE_MAX_DOF = 4096  # above this many degrees of freedom "auto" uses the sparse solver
 
@@ -242,20 +244,33 @@ class DensityOfStatesResult:
     @property
     def normalized(self) -> np.ndarray:
         """(bins,) D(omega) as a probability density over omega: ``density`` / (modes per packing),
-        so that sum(normalized * bin widths) = 1 (nan without modes)."""
+        all nonzero modes counted, so that sum(normalized * bin widths) = ``fraction_in_range``
+        (1 when the bins cover every mode; nan without modes)."""
         return self.density * self.n_packings / self.n_modes if self.n_modes else np.full(len(self.density), np.nan)
+
+    @property
+    def n_in_range(self) -> int:
+        """Nonzero modes, over all packings, inside the bins [0, omega_max]."""
+        return int(round(float(np.sum(self.density * np.diff(self.edges))) * self.n_packings))
+
+    @property
+    def fraction_in_range(self) -> float:
+        """Share of all nonzero modes inside the bins: the integral of ``normalized`` (nan without modes)."""
+        return self.n_in_range / self.n_modes if self.n_modes else math.nan
 
 
 class DensityOfStates:
     """Histogram D(omega) of the nonzero frequencies of complete spectra, averaged.
-    ``bins``: number of equal-width bins on [0, ``omega_max``] (default: largest omega)."""
+    ``bins``: number of equal-width bins on [0, ``omega_max``] (default: largest omega). An
+    ``omega_max`` below the largest omega leaves modes out of the bins, with a warning: D stays
+    normalised over all modes and integrates to ``fraction_in_range``."""
 
     def __init__(self, bins: int = 40, omega_max: float | None = None):
         if not (isinstance(bins, (int, np.integer)) and bins >= 1):
-            raise ValueError(f"bins must be a positive integer, got {bins!r}")
+            raise SettingError("bins", f"must be a positive integer, got {bins!r}")
         check_bins(bins, f"--bins {bins}", "give fewer")
         if omega_max is not None and not (math.isfinite(omega_max) and omega_max > 0):
-            raise ValueError(f"omega_max must be a finite positive number or None, got {omega_max!r}")
+            raise SettingError("omega_max", f"must be a finite positive number or None, got {omega_max!r}")
         self.bins, self.omega_max = int(bins), omega_max
 
     def compute(self, spectra) -> DensityOfStatesResult:
@@ -273,7 +288,13 @@ class DensityOfStates:
         if all(s.translational_fraction is not None for s in spectra):
             weights = np.concatenate([s.translational_fraction[s.eigenvalues > s.e_min] for s in spectra])
             translational = np.histogram(omegas, edges, weights=weights)[0] / norm
-        return DensityOfStatesResult(edges, counts / norm, len(spectra), len(omegas), translational)
+        result = DensityOfStatesResult(edges, counts / norm, len(spectra), len(omegas), translational)
+        if result.n_in_range < result.n_modes:
+            warnings.warn(f"omega_max (--omega-max) {top:g} leaves {result.n_modes - result.n_in_range} of "
+                          f"{result.n_modes} nonzero modes out of D(omega) (the largest omega is {omegas.max():.4g}): "
+                          f"D, normalised over all modes, integrates to {result.fraction_in_range:.4g} over [0, "
+                          f"{top:g}]; a larger omega_max covers them", stacklevel=2)
+        return result
 
 
 # --- stability along the lowest nontrivial modes ---------------------------------------------

@@ -88,7 +88,7 @@ def read_modes(path) -> dict:
 
 # --- data pooled over the packings of one `jamflow modes` run, beside its figure ----------------
 
-DOS_COLUMNS = ("omega_low", "omega_high", "D", "D_per_packing", "D_translational_per_packing")
+DOS_COLUMNS = ("omega_low", "omega_high", "D", "D_per_packing", "D_translational_per_packing", "fraction_in_range")
 PACKING_COLUMNS = ("file", "n", "n_kept", "n_floaters", "floater_fraction", "n_contacts", "isostatic_count",
                    "mean_z", "n_zero", "n_negative", "lowest_nonzero", "mass")
 
@@ -96,11 +96,14 @@ PACKING_COLUMNS = ("file", "n", "n_kept", "n_floaters", "floater_fraction", "n_c
 def save_pooled_dos(path, dos) -> Path:
     """D(omega) of a ``DensityOfStatesResult`` as CSV, one row per bin (columns ``DOS_COLUMNS``):
     omega = sqrt(e / M) in units of sqrt(eps / (m diameter^2)), M the spectra's ``mass`` (N m by
-    default, the chapter's); ``D`` normalised to integral 1 over omega; ``D_per_packing`` modes per unit omega per packing (the chapter's
-    D(omega), section 3); its translational part (empty without eigenvectors)."""
+    default, the chapter's); ``D`` normalised over all nonzero modes, so that it integrates to
+    ``fraction_in_range`` (1 unless ``omega_max`` leaves modes out; the same value in every row);
+    ``D_per_packing`` modes per unit omega per packing (the chapter's D(omega), section 3); its
+    translational part (empty without eigenvectors)."""
     translational = dos.translational if dos.translational is not None else [""] * len(dos.density)
     rows = [dict(zip(DOS_COLUMNS, values)) for values in
-            zip(dos.edges[:-1], dos.edges[1:], dos.normalized, dos.density, translational)]
+            zip(dos.edges[:-1], dos.edges[1:], dos.normalized, dos.density, translational,
+                [dos.fraction_in_range] * len(dos.density))]
     return write_csv(path, rows, DOS_COLUMNS)
 
 

@@ -138,8 +138,10 @@ def sorted_modes_by_branch(ax, spectra):
 
 
 def _density_of_states(ax, dos, spectra=()):
-    """D(omega) normalised to integral 1 (``DensityOfStatesResult.normalized``), and its translational part."""
-    ax.set(xlabel=omega_label(spectra), ylabel=r"$D(\omega)$, normalised: $\int D\,d\omega = 1$",
+    """D(omega) normalised over all modes (``DensityOfStatesResult.normalized``: integral 1, or the
+    fraction of modes in range when omega_max leaves some out), and its translational part."""
+    integral = "1" if dos is None or dos.n_in_range == dos.n_modes else f"{dos.fraction_in_range:.3g}"
+    ax.set(xlabel=omega_label(spectra), ylabel=rf"$D(\omega)$, normalised: $\int D\,d\omega = {integral}$",
            title="(b) density of states")
     if dos is None:
         ax.text(0.5, 0.5, "needs complete spectra", ha="center", transform=ax.transAxes)
@@ -149,7 +151,8 @@ def _density_of_states(ax, dos, spectra=()):
         ax.stairs(dos.translational * dos.n_packings / dos.n_modes, dos.edges, color=BRANCH_COLOURS[3],
                   label="translational part")
         ax.legend(loc="upper left", fontsize=8)
-    ax.text(0.98, 0.95, f"{dos.n_packings} packing(s), {dos.n_modes} modes", ha="right", va="top",
+    shown = "" if dos.n_in_range == dos.n_modes else f" ({dos.n_in_range} in range)"
+    ax.text(0.98, 0.95, f"{dos.n_packings} packing(s), {dos.n_modes} modes{shown}", ha="right", va="top",
             transform=ax.transAxes)
 
 
