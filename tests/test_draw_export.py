@@ -78,7 +78,7 @@ def test_extended_xyz_columns_and_lattice(disks, tmp_path):
     assert np.array_equal(np.reshape(lattice, (3, 3))[:2, :2], disks.box.h.T) and 'pbc="T T F"' in lines[1]
     assert "Properties=species:S:1:pos:R:3:radius:R:1" in lines[1]
     rows = np.array([[float(v) for v in line.split()[1:]] for line in lines[2:]])
-    assert np.array_equal(rows[:, :2], disks.box.wrap(disks.positions)) and np.all(rows[:, 2] == 0)
+    assert np.array_equal(rows[:, :2], disks.box.images(disks.positions)[0]) and np.all(rows[:, 2] == 0)
     assert np.array_equal(rows[:, 3], disks.diameters / 2)
 
 
@@ -127,7 +127,8 @@ def test_export_ellipsoids_axes_and_quaternions(dim, tmp_path):
 
 @pytest.mark.parametrize("dim", [2, 3])
 def test_export_rigid_bodies_one_row_per_site(dim, tmp_path):
-    """Sites at the body's world positions (whole about the wrapped centre), site radii, body ids."""
+    """Sites inside the box, at the body's world positions (whole about the wrapped centre) once their
+    image flags are applied; site radii, body ids."""
     from jamflow.model.shapes import RigidBody
 
     sites = [[0, 0], [0.5, 0]] if dim == 2 else [[0, 0, 0], [0.5, 0, 0], [0.5, 0.4, 0]]
@@ -136,7 +137,10 @@ def test_export_rigid_bodies_one_row_per_site(dim, tmp_path):
     world = p.shape.world_sites(p.positions, p.orientations, p.diameters)
     shift = (p.box.wrap(p.positions) - p.positions)[:, None, :]
     pos = np.column_stack([t[c] for c in "xyz"[:dim]])
-    assert np.allclose(pos, (world + shift).reshape(-1, dim), atol=1e-12)
+    image = np.column_stack([t[c] for c in ("ix", "iy", "iz")[:dim]])
+    s = p.box.to_fractional(pos)
+    assert np.all(s >= 0) and np.all(s < 1) and np.any(image != 0)
+    assert np.allclose(pos + image @ p.box.h.T, (world + shift).reshape(-1, dim), atol=1e-12)
     assert np.array_equal(t["mol"], np.repeat(np.arange(1, p.n + 1), p.shape.n_sites))
     assert np.array_equal(t["radius"], (0.5 * p.diameters[:, None] * p.shape.site_diameters).ravel())
     assert "molecule:I:1" in export_packing(p, tmp_path / "b.xyz", "xyz").read_text().splitlines()[1]

@@ -231,8 +231,10 @@ def test_gsd_export_rigid_bodies_as_centres_and_sites(tmp_path):
     assert frame.particles.N == 15 and np.array_equal(body, np.concatenate([np.arange(5), np.repeat(np.arange(5), 2)]))
     assert frame.particles.types == ["A", "site"] and np.array_equal(frame.particles.typeid, [0] * 5 + [1] * 10)
     pos = frame.particles.position.astype(float)[:, :2]
+    unwrapped = pos + frame.particles.image[:, :2] @ p.box.h.T  # HOOMD's box is h, centred on the origin
     world = p.shape.world_sites(p.positions, p.orientations, p.diameters) - p.positions[:, None, :]
-    assert np.allclose(pos[5:] - pos[body[5:]], world.reshape(-1, 2), atol=1e-5)
+    assert np.allclose(unwrapped[5:] - unwrapped[body[5:]], world.reshape(-1, 2), atol=1e-5)
+    assert np.all(np.abs(pos) < 5.0 + 1e-6)
     assert np.allclose(frame.particles.diameter[5:], np.tile([1.0, 0.7], 5))
 
 

@@ -369,3 +369,86 @@ def test_an_uncut_density_of_states_integrates_to_one_without_a_warning(packing_
 def test_the_density_of_states_options_are_named(packing_file, capsys):
     assert main(["modes", str(packing_file), "--omega-max", "nan", "--no-figure"]) == EXIT_USER
     assert one_line(capsys.readouterr().err).startswith("jamflow modes: error: --omega-max ")
+
+
+@pytest.fixture(scope="module")
+def exported_scenes(tmp_path_factory):
+    """A jammed packing of 16 dimers (sites stick out of the cell) and 16 disks jammed at a shear
+    strain of 2.5 (positions kept in the reduced cell, the file's box tilted by 2.5 L)."""
+    from jamflow.io.packing_file import load_packing
+
+    root = tmp_path_factory.mktemp("scenes")
+    for name, extra in (("dimers", ["--shape", "dimer:1.5:1"]), ("sheared", ["--gamma", "2.5"])):
+        assert main(["jam", "--n", "16", "--seed", "1", *extra, "--out", str(root / f"{name}.h5"), "--quiet"]) == 0
+    return {name: load_packing(root / f"{name}.h5") for name in ("dimers", "sheared")}
+
+
+def _gsd_box(path):
+    import gsd.hoomd
+    import numpy as np
+
+    with gsd.hoomd.open(str(path)) as f:
+        frame = f[0]
+    lx, ly, lz, xy, xz, yz = (float(v) for v in frame.configuration.box)
+    h = np.array([[lx, xy * ly, xz * lz], [0.0, ly, yz * lz], [0.0, 0.0, lz or 1.0]])
+    origin = -0.5 * h.sum(axis=1)  # HOOMD's cell is centred on the origin
+    return h, origin, frame.particles.position.astype(float), frame.particles.image.astype(float)
+
+
+def _dump_box(path):
+    import numpy as np
+
+    lines = path.read_text().splitlines()
+    k = lines.index(next(line for line in lines if line.startswith("ITEM: BOX BOUNDS")))
+    bounds = np.array([[float(v) for v in line.split()] for line in lines[k + 1:k + 4]])
+    xy, xz, yz = bounds[:, 2] if bounds.shape[1] == 3 else (0.0, 0.0, 0.0)
+    lo = bounds[:, 0] - [min(0.0, xy, xz, xy + xz), min(0.0, yz), 0.0]
+    hi = bounds[:, 1] - [max(0.0, xy, xz, xy + xz), max(0.0, yz), 0.0]
+    h = np.array([[hi[0] - lo[0], xy, xz], [0.0, hi[1] - lo[1], yz], [0.0, 0.0, hi[2] - lo[2]]])
+    names = lines[k + 4].split()[2:]
+    rows = np.array([[float(v) for v in line.split()] for line in lines[k + 5:]])
+    column = {name: rows[:, c] for c, name in enumerate(names)}
+    image = np.column_stack([column[c] for c in ("ix", "iy", "iz")]) if "ix" in column else None
+    return h, lo, np.column_stack([column[c] for c in "xyz"]), image
+
+
+def _xyz_box(path):
+    import numpy as np
+
+    lines = path.read_text().splitlines()
+    h = np.reshape([float(v) for v in lines[1].split('Lattice="')[1].split('"')[0].split()], (3, 3)).T
+    props = lines[1].split("Properties=")[1].split()[0].split(":")
+    widths = {props[k]: int(props[k + 2]) for k in range(0, len(props), 3)}
+    start = {}
+    at = 0
+    for name, width in widths.items():
+        start[name] = at
+        at += width
+    rows = np.array([[float(v) for v in line.split()[1:]] for line in lines[2:]])
+    image = rows[:, start["image"] - 1:start["image"] + 2] if "image" in start else None
+    return h, np.zeros(3), rows[:, start["pos"] - 1:start["pos"] + 2], image
+
+
+@pytest.mark.parametrize("scene", ["dimers", "sheared"])
+@pytest.mark.parametrize("fmt, read", [("gsd", _gsd_box), ("lammps-dump", _dump_box), ("xyz", _xyz_box)])
+def test_every_exported_position_is_in_its_box_and_image_flags_restore_it(exported_scenes, tmp_path, scene, fmt, read):
+    import numpy as np
+
+    from jamflow.io.export import SUFFIXES, export_packing
+
+    packing = exported_scenes[scene]
+    h, origin, position, image = read(export_packing(packing, tmp_path / f"x{SUFFIXES[fmt]}", fmt))
+    d = packing.dim
+    s = np.linalg.solve(h, (position - origin).T).T[:, :d]
+    assert np.all(s >= -1e-6) and np.all(s < 1 + 1e-6), f"{np.sum(np.any((s < -1e-6) | (s >= 1 + 1e-6), axis=1))} outside"
+    assert image is not None, "no image flags"
+    unwrapped = (position + image @ h.T)[:, :d]
+    if packing.shape.kind == "rigid":  # the sites about their centre's wrapped position, each body whole
+        centres = packing.box.images(packing.positions)[0]
+        expected = packing.shape.world_sites(centres, packing.orientations, packing.diameters).reshape(-1, d)
+        unwrapped = unwrapped[packing.n:] if fmt == "gsd" else unwrapped  # GSD: centres first, then sites
+    else:
+        expected = packing.positions
+    shift = origin[:d] if fmt == "gsd" else 0.0
+    assert np.abs(unwrapped - (expected + shift)).max() < (1e-5 if fmt == "gsd" else 1e-12)
+    assert np.any(image != 0)

@@ -12,7 +12,10 @@ shapes and orientations; and the LAMMPS data file a simulation starts from.
 - HOOMD-blue GSD (``gsd``): ``jamflow.io.gsd_file.write_gsd`` (needs the ``gsd`` package).
 
 Ellipses/spheroids add their axes and quaternions (``_rows``); rigid bodies are written one row
-per site with the body as molecule id. Measured with OVITO 3.17.2 (``ovito.io.import_file``):
+per site with the body as molecule id. Every position lies in the box the file describes (``h``'s
+own cell, ``Box.images``), the last columns being its image flags (dump ``ix iy iz``, XYZ
+``image:I:3``): a site of a body about its wrapped centre that sticks out of the box is written
+wrapped, and position + image @ h.T puts the body back together. Measured with OVITO 3.17.2 (``ovito.io.import_file``):
 dump ``shapex..z`` are read as full axes and halved into Aspherical Shape, XYZ
 ``aspherical_shape`` is taken as semi-axes; dump ``quatw quati quatj quatk`` and XYZ
 ``orientation`` (x, y, z, w) both give Orientation; ``mol`` / ``molecule`` give Molecule
@@ -78,26 +81,31 @@ def _rows(packing: Packing) -> tuple[np.ndarray, np.ndarray, list[_Column]]:
     its full axes (dump ``shapex..z``, which OVITO halves) or semi-axes (XYZ ``aspherical_shape``)
     and its quaternion (dump ``quatw..k``, XYZ ``orientation`` in OVITO's x, y, z, w order); a 2D
     ellipse's third axis is its minor one. Rigid bodies: one row per site (radius, ``mol`` = body),
-    sites placed about the wrapped body centre so a body stays whole across the cell edge.
+    sites placed about the wrapped body centre and wrapped into the box themselves, with image flags
+    that put the body back together. Last, every row's image flags (``_in_box``).
     """
-    h, centres = _cell(packing)
     types, kind = _types(packing), packing.shape.kind
     if kind == "rigid":
-        sites = packing.shape.world_sites(packing.positions, packing.orientations, packing.diameters)
-        offsets = np.zeros(sites.shape[:2] + (3,))
-        offsets[..., : packing.dim] = sites - packing.positions[:, None, :]
+        centres = packing.box.images(packing.positions)[0]
+        sites = packing.shape.world_sites(centres, packing.orientations, packing.diameters)
+        pos, image = _in_box(packing, sites.reshape(-1, packing.dim))
         n_sites = sites.shape[1]
         radius = 0.5 * packing.diameters[:, None] * packing.shape.site_diameters[None, :]
         body = np.repeat(np.arange(1, packing.n + 1), n_sites)
-        return ((centres[:, None, :] + offsets).reshape(-1, 3), np.repeat(types, n_sites),
-                [_Column(("radius",), "radius", radius.reshape(-1, 1)),
-                 _Column(("mol",), "molecule", body[:, None], "I")])
+        return pos, np.repeat(types, n_sites), [_Column(("radius",), "radius", radius.reshape(-1, 1)),
+                                                _Column(("mol",), "molecule", body[:, None], "I"), _images(image)]
+    pos, image = _in_box(packing, packing.positions)
     columns = [_Column(("radius",), "radius", (0.5 * packing.diameters)[:, None])]
     if kind == "ellipsoid":
         a, b = packing.shape.axes(packing.diameters).T
         columns += [_Column(("shapex", "shapey", "shapez"), "aspherical_shape", np.column_stack([a, b, b])),
                     _Column(("quatw", "quati", "quatj", "quatk"), "orientation", _quaternions(packing))]
-    return centres, types, columns
+    return pos, types, [*columns, _images(image)]
+
+
+def _images(image: np.ndarray) -> _Column:
+    """The image flags column: dump ``ix iy iz`` (LAMMPS's names, OVITO's Periodic Image), XYZ ``image``."""
+    return _Column(("ix", "iy", "iz"), "image", image, "I")
 
 
 def _xyz_values(column: _Column) -> np.ndarray:
@@ -122,17 +130,24 @@ def _types(packing: Packing) -> np.ndarray:
     return index + 1 if len(values) <= MAX_TYPES else np.ones(packing.n, int)
 
 
-def _cell(packing: Packing) -> tuple[np.ndarray, np.ndarray]:
-    """3x3 cell (columns = cell vectors) and positions (N, 3), 2D padded with z = 0."""
+def _cell(packing: Packing) -> np.ndarray:
+    """3x3 cell (columns = cell vectors), 2D padded with (0, 0, 1)."""
     h = np.eye(3)
     h[: packing.dim, : packing.dim] = packing.box.h
-    pos = np.zeros((packing.n, 3))
-    pos[:, : packing.dim] = packing.box.wrap(packing.positions)
-    return h, pos
+    return h
+
+
+def _in_box(packing: Packing, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(M, 3) ``positions`` in the cell of ``_cell`` and their (M, 3) image flags (``Box.images``),
+    2D padded with z = 0 and image 0."""
+    inside, image = packing.box.images(positions)
+    pos, flags = np.zeros((len(inside), 3)), np.zeros((len(inside), 3), np.int64)
+    pos[:, : packing.dim], flags[:, : packing.dim] = inside, image
+    return pos, flags
 
 
 def _lammps_dump(packing: Packing) -> str:
-    h, _ = _cell(packing)
+    h = _cell(packing)
     lx, ly, lz = np.diag(h)
     xy, xz, yz = h[0, 1], h[0, 2], h[1, 2]
     zlo = -0.5 if packing.dim == 2 else 0.0
@@ -151,7 +166,7 @@ def _lammps_dump(packing: Packing) -> str:
 
 
 def _extended_xyz(packing: Packing) -> str:
-    h, _ = _cell(packing)
+    h = _cell(packing)
     lattice = " ".join(repr(float(v)) for v in h.T.ravel())  # a, b, c in turn
     pos, types, columns = _rows(packing)
     props = "species:S:1:pos:R:3:" + ":".join(f"{c.xyz}:{c.kind}:{c.values.shape[1]}" for c in columns)

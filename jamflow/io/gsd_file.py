@@ -10,7 +10,10 @@ float32 too), ``orientation`` unit quaternions (w, x, y, z) as jamflow's (2D ang
 ``typeid`` the distinct sizes in increasing order (types ``A``, ``B``, ...; one type ``A`` beyond
 ``MAX_TYPES`` sizes), ``type_shapes`` ``Ellipsoid`` semi-axes for ellipses/spheroids. Rigid bodies
 follow HOOMD's layout: the N body centres (``body`` = own index, diameter 0) and then their sites
-(type ``site``, ``body`` = the centre's index). Lengths in small diameters.
+(type ``site``, ``body`` = the centre's index). Every position lies in the box, ``particles.image``
+counting the box vectors it was moved by: a site about its wrapped centre that sticks out of the
+box is written wrapped, and position + image @ h.T puts the body back together. Lengths in
+small diameters.
 """
 
 from __future__ import annotations
@@ -43,14 +46,15 @@ def hoomd_box(packing: Packing) -> list[float]:
     return [lx, ly, lz, h[0, 1] / ly, h[0, 2] / lz if lz else 0.0, h[1, 2] / lz if lz else 0.0]
 
 
-def hoomd_positions(packing: Packing, positions=None) -> np.ndarray:
-    """(M, 3) positions in HOOMD's origin-centred cell (``positions``: default the particles')."""
+def hoomd_positions(packing: Packing, positions=None) -> tuple[np.ndarray, np.ndarray]:
+    """(M, 3) positions in HOOMD's origin-centred cell and their (M, 3) image flags
+    (``Box.images``; walled axes stay as they are); ``positions``: default the particles'."""
     box = packing.box
-    s = box.to_fractional(packing.positions if positions is None else positions)
-    s = s - np.floor(s) * np.array(box.periodic, float)  # walled axes stay as they are
-    out = np.zeros((len(s), 3))
-    out[:, : packing.dim] = box.to_cartesian(s - 0.5)
-    return out
+    inside, image = box.images(packing.positions if positions is None else positions)
+    out, flags = np.zeros((len(inside), 3)), np.zeros((len(inside), 3), np.int32)
+    out[:, : packing.dim] = inside - box.to_cartesian(np.full(packing.dim, 0.5))
+    flags[:, : packing.dim] = image
+    return out, flags
 
 
 def quaternions(packing: Packing) -> np.ndarray:
@@ -76,7 +80,7 @@ def gsd_frame(packing: Packing):
     frame.configuration.dimensions = packing.dim
     frame.configuration.box = hoomd_box(packing)
     types, typeid = _types(packing)
-    position, orientation = hoomd_positions(packing), quaternions(packing)
+    (position, image), orientation = hoomd_positions(packing), quaternions(packing)
     diameter, body = packing.diameters.astype(float), np.full(packing.n, -1)
     shapes = None
     if packing.shape.kind == "ellipsoid":
@@ -84,21 +88,19 @@ def gsd_frame(packing: Packing):
         first = [int(np.flatnonzero(typeid == t)[0]) for t in range(len(types))]
         shapes = [{"type": "Ellipsoid", "a": 0.5 * a[k], "b": 0.5 * b[k], "c": 0.5 * b[k]} for k in first]
     if packing.shape.kind == "rigid":
-        sites = packing.shape.world_sites(packing.positions, packing.orientations, packing.diameters)
-        n_sites = sites.shape[1]
-        offsets = np.zeros((packing.n * n_sites, 3))
-        offsets[:, : packing.dim] = (sites - packing.positions[:, None, :]).reshape(-1, packing.dim)
-        centres = np.repeat(position, n_sites, axis=0)  # sites about the wrapped centre: a body stays whole
+        centres = packing.box.images(packing.positions)[0]
+        sites = packing.shape.world_sites(centres, packing.orientations, packing.diameters)  # about the wrapped centre
+        site_position, site_image = hoomd_positions(packing, sites.reshape(-1, packing.dim))
         site_d = (packing.diameters[:, None] * packing.shape.site_diameters[None, :]).reshape(-1)
-        position = np.concatenate([position, centres + offsets])
+        position, image = np.concatenate([position, site_position]), np.concatenate([image, site_image])
         orientation = np.concatenate([orientation, np.tile([1.0, 0.0, 0.0, 0.0], (len(site_d), 1))])
         typeid = np.concatenate([typeid, np.full(len(site_d), len(types))])
         types = [*types, "site"]
         diameter = np.concatenate([np.zeros(packing.n), site_d])
-        body = np.concatenate([np.arange(packing.n), np.repeat(np.arange(packing.n), n_sites)])
+        body = np.concatenate([np.arange(packing.n), np.repeat(np.arange(packing.n), sites.shape[1])])
     p = frame.particles
     p.N, p.types, p.typeid = len(position), types, typeid
-    p.position, p.orientation, p.diameter, p.body = position, orientation, diameter, body
+    p.position, p.image, p.orientation, p.diameter, p.body = position, image, orientation, diameter, body
     if shapes is not None:
         p.type_shapes = shapes
     return frame

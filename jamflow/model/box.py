@@ -198,6 +198,14 @@ class Box:
         s = cell.to_fractional(positions)
         return cell.to_cartesian(s - np.floor(s) * self._periodic_mask)
 
+    def images(self, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(inside, image): ``positions`` (M, d) mapped into this cell, ``h``'s own (not the
+        reduced one): fractional coordinates in [0, 1) along the periodic axes, walled axes left as
+        they are; and the (M, d) integer image flags, so that positions = inside + image @ h.T.
+        The image flags of LAMMPS data files, dumps and GSD files."""
+        image = np.floor(self.to_fractional(positions)) * self._periodic_mask
+        return np.asarray(positions, float) - self.to_cartesian(image), image.astype(np.int64)
+
     @property
     def _periodic_mask(self) -> np.ndarray:
         return np.array(self.periodic, float)

@@ -58,9 +58,8 @@ def write_lammps_data(path, packing: Packing) -> Path:
     else:
         shape, cell = packing.shape, packing.box.reduced()  # image flags count cells of the box LAMMPS holds
         sites = shape.world_sites(packing.box.wrap(packing.positions), packing.orientations, packing.diameters)
-        flat = sites.reshape(-1, packing.dim)
-        image = np.floor(cell.to_fractional(flat)).astype(int)
-        inside = _xyz(flat - cell.to_cartesian(image))
+        inside, image = cell.images(sites.reshape(-1, packing.dim))
+        inside = _xyz(inside)
         image = image if packing.dim == 3 else np.column_stack([image, np.zeros(len(image), int)])
         mass = np.tile(shape.site_masses, n)
         density = mass / (np.pi * site_d.ravel() ** 3 / 6.0)
