@@ -720,6 +720,8 @@ PARTNERLESS = [  # (options, the option, its partner): was exit 0, the option si
     (["--md-damping", "pairwise"], "--md-damping pairwise", "--minimizer md"),
     (["--dphi0", "1e-3", "--pressure", "1e-3"], "--dphi0 0.001", "a compression run"),
     (["--dphi0", "1e-3", "--gravity", "1e-3", "--walls", "y"], "--dphi0 0.001", "a compression run"),
+    (["--vtol", "1e-3", "--gravity", "1e-3", "--walls", "y"], "--vtol 0.001", "a compression run"),
+    (["--vtol", "1e-10", "--pressure", "1e-3"], "--vtol 1e-10", "a compression run"),
 ]
 
 
@@ -736,12 +738,12 @@ def test_an_option_without_its_partner_is_refused_before_work(tmp_path, capsys, 
 def test_library_refuses_a_non_default_value_without_its_partner():
     from jamflow.protocols.spec import PARTNERS, JamSpec, check_boundaries
 
-    values = dict(stress="tri", wall_type="rough", damping=3.0, md_damping="pairwise", dphi0=2e-4)
+    values = dict(stress="tri", wall_type="rough", damping=3.0, md_damping="pairwise", dphi0=2e-4, vtol=1e-10)
     assert set(values) == set(PARTNERS)
     for name, value in values.items():
         check_boundaries(JamSpec(**{name: getattr(JamSpec(), name)}))  # the default alone: accepted
         with pytest.raises(ValueError, match=f"--{name.replace('_', '-')} .* applies to"):
-            check_boundaries(JamSpec(**{name: value}, pressure=1e-3 if name == "dphi0" else None))
+            check_boundaries(JamSpec(**{name: value}, pressure=1e-3 if name in ("dphi0", "vtol") else None))
     check_boundaries(JamSpec(stress="tri", pressure=1e-3))  # with the partner: accepted
     check_boundaries(JamSpec(wall_type="rough", walls="y"))
     check_boundaries(JamSpec(damping=3.0, md_damping="pairwise", minimizer="md"))
