@@ -452,3 +452,48 @@ def test_every_exported_position_is_in_its_box_and_image_flags_restore_it(export
     shift = origin[:d] if fmt == "gsd" else 0.0
     assert np.abs(unwrapped - (expected + shift)).max() < (1e-5 if fmt == "gsd" else 1e-12)
     assert np.any(image != 0)
+
+
+@pytest.mark.parametrize("phi0", [[], ["--phi0", "0.05"]])
+def test_repulsive_lj_piles_settle_under_gravity(tmp_path, phi0):
+    """The start's overlaps are removed without the weights, which pressed any start into overlaps;
+    a written packing passed its checks (one that fails them is not written)."""
+    from jamflow.io.packing_file import load_packing
+
+    out = tmp_path / "pile.h5"
+    assert main(["jam", "--n", "32", "--potential", "rlj", "--gravity", "1e-3", "--walls", "y", *phi0,
+                 "--out", str(out), "--quiet"]) == 0
+    pile = load_packing(out)
+    assert pile.potential.name == "rlj" and pile.gravity == 1e-3 and pile.n == 32
+
+
+@pytest.mark.parametrize("gravity, pressure, v_tol, option", [(1e-3, None, None, "--gravity"),
+                                                             (0.0, 1e-3, None, "--pressure"),
+                                                             (0.0, None, 1e-16, "--vtol")])
+@pytest.mark.parametrize("balanced", [True, False])
+def test_failed_checks_advise_the_option_of_the_scene(monkeypatch, gravity, pressure, v_tol, option, balanced):
+    import dataclasses
+
+    import numpy as np
+
+    import jamflow.protocols.spec as spec
+    from jamflow.model.box import Box
+    from jamflow.model.packing import Packing
+    from jamflow.protocols.outcome import JammingFailed
+
+    class Failed:
+        passed, force_balanced = False, balanced
+
+        def problems(self):
+            return ["not at an energy minimum"]
+
+    box = Box(6.0 * np.eye(2), periodic=(True, gravity == 0))  # a pile needs its floor
+    packing = Packing(np.array([[1.0, 1.0], [3.0, 3.0]]), np.ones(2), box, gravity=gravity)
+    result = type("R", (), {"packing": packing, "phi_j": float("nan"), "energy_per_particle": 0.0,
+                            "history": {"reason": np.array([b"force"])}})()
+    monkeypatch.setattr(spec, "check_packing", lambda *a, **k: Failed())
+    with pytest.raises(JammingFailed) as err:
+        spec.checked(result, dataclasses.replace(spec.MinimizerSettings()), v_tol)
+    others = {"--gravity", "--pressure", "--vtol"} - {option}
+    assert option in str(err.value) and not any(o in str(err.value) for o in others)
+    assert ("--minimizer" in str(err.value)) != balanced

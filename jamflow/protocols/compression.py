@@ -208,15 +208,17 @@ def _check_memory(n: int) -> None:
 def remove_overlaps(packing: Packing, minimizer: MinimizerSettings, engine: str = "auto") -> Packing:
     """Relax a random start with the linear spring until V < V_min, so that a potential
     that diverges at r -> 0 (repulsive LJ) starts without significant overlaps (chapter step 1;
-    from a raw random start RLJ forces reach ~1e13 and LAMMPS loses atoms)."""
-    soft = replace(packing, potential=Spring())
+    from a raw random start RLJ forces reach ~1e13 and LAMMPS loses atoms). Without gravity: the
+    weights would press the pile into overlaps (and add m g h to V) whatever phi0 is; the pile
+    settles afterwards, with the packing's own potential."""
+    soft = replace(packing, potential=Spring(), gravity=0.0)
     with open_engine(soft, minimizer.method, engine) as sim:
         result = minimize(sim, minimizer)
         relaxed = sim.packing()
     if result.energy_per_particle >= minimizer.v_min:
         raise JammingFailed(f"the random start at phi0 = {packing.phi:.4f} does not relax to zero overlap "
                             f"(V = {result.energy_per_particle:.2e}): phi0 is above jamming; use a lower phi0")
-    return replace(relaxed, potential=packing.potential)
+    return replace(relaxed, potential=packing.potential, gravity=packing.gravity)
 
 
 def compress(packing: Packing, settings: CompressionSettings, *, observers=(), engine: str = "auto",

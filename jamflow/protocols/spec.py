@@ -301,6 +301,21 @@ def run_jam(spec: JamSpec, observers=(), engine_options=None, prepared=None, des
     return result, checked(result, settings.minimizer, window, destination)
 
 
+def failed_checks_remedy(packing, force_balanced: bool, v_tol: float | None) -> str:
+    """What helps a packing that failed its checks: stronger contacts, set by the option that sets
+    them in this scene (--vtol in a compression, --gravity for a pile, --pressure for a box at a
+    pressure), and, when force balance failed, another minimiser."""
+    if v_tol is not None:
+        stronger = "a larger --vtol"
+    elif packing.gravity > 0:
+        stronger = "a larger --gravity (the weights set the contact forces of a pile)"
+    else:
+        stronger = "a larger --pressure"
+    if not force_balanced:
+        return f"another --minimizer, or {stronger} (stronger contacts)"
+    return f"{stronger}: the contacts at this one are near round-off"
+
+
 def checked(result, minimizer: MinimizerSettings, v_tol: float | None, destination=None):
     """The packing checks of a result; ``JammingFailed`` if any fails (naming ``destination``,
     the file not written). ``v_tol`` None skips the energy-window check (piles under gravity,
@@ -309,8 +324,7 @@ def checked(result, minimizer: MinimizerSettings, v_tol: float | None, destinati
     checks = check_packing(packing, result.energy_per_particle, None, v_tol, minimizer.force_tol_for(packing))
     if not checks.passed:
         reason = result.history["reason"][-1].decode()
-        remedy = ("a larger --vtol (stronger contacts) or another --minimizer" if not checks.force_balanced else
-                  "a larger --vtol: the contacts at this one are near round-off")
+        remedy = failed_checks_remedy(packing, checks.force_balanced, v_tol)
         at = f"phi_J = {result.phi_j:.10f}" if math.isfinite(result.phi_j) else f"phi = {packing.phi:.10f}"
         raise JammingFailed(f"the packing at {at} failed its checks: "
                             f"{'; '.join(checks.problems())} (final minimisation stopped by '{reason}'). "
