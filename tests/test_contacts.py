@@ -93,6 +93,47 @@ def test_positive_span_3d_agrees_with_the_lp():
             assert positively_spanning(v) == positively_spanning_lp(v) == spans
 
 
+@pytest.mark.parametrize("dim", [2, 3])
+def test_positive_span_of_many_sets_at_once_is_the_single_answer(dim):
+    """``spanning_stack`` answers each set as ``positively_spanning`` does, degenerate sets included
+    (coplanar, antiparallel, a contact on the boundary plane)."""
+    from jamflow.mechanics.contacts import spanning_stack
+
+    rng = np.random.default_rng(4)
+    for k in range(1, 13):
+        v = rng.normal(size=(60, k, dim))
+        v[1::4, :, -1] = np.abs(v[1::4, :, -1])  # half-spaces
+        v[2::4, :, -1] = 0.0 if dim == 3 else v[2::4, :, -1]  # coplanar
+        if k > 1:
+            v[3::4, 1] = -2.5 * v[3::4, 0]  # antiparallel pairs
+        v[1::8, 0, -1] = 0.0  # on the boundary plane of the half-space
+        assert spanning_stack(v).tolist() == [positively_spanning(s) for s in v]
+
+
+def test_the_floater_search_tests_a_contact_set_again_only_after_it_changed(monkeypatch):
+    """A 3D onset with floaters: each particle's directions are tested once, and again only
+    after a partner became a floater (the search used to test every candidate each round)."""
+    import jamflow.mechanics.contacts as contacts
+    from jamflow import jam
+
+    packing = jam(n=64, dim=3, seed=1).packing
+    tested = []
+    real = contacts.spanning_mask
+
+    def recording(n, i, j, unit, which):
+        z = np.bincount(i, minlength=n) + np.bincount(j, minlength=n)
+        tested.append((which.copy(), z))
+        return real(n, i, j, unit, which)
+
+    monkeypatch.setattr(contacts, "spanning_mask", recording)
+    result = Contacts().compute(packing)
+    assert result.n_floaters > 0 and tested  # floaters: the search takes more than one round
+    for later, (which, z) in enumerate(tested):
+        for before, z_before in ((w, zb) for w, zb in tested[:later]):
+            again = which & before
+            assert np.all(z[again] < z_before[again]), np.flatnonzero(again & (z == z_before))
+
+
 def test_positive_span_3d_cases():
     tetra = np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]]) / np.sqrt(3)
     assert positively_spanning(tetra)

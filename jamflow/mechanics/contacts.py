@@ -47,6 +47,7 @@
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -347,6 +348,7 @@ def find_floaters(n: int, i, j, unit, need: int, half_space: bool = True, anchor
     """
     floater = np.zeros(n, bool)
     free = np.ones(n, bool) if anchored is None else ~np.asarray(anchored, bool)
+    spans, stale = np.zeros(n, bool), np.ones(n, bool)  # the spanning verdicts, and whose contacts changed since
     while True:
         live = ~floater[i] & ~floater[j]
         z = np.bincount(i[live], minlength=n) + np.bincount(j[live], minlength=n)
@@ -356,14 +358,21 @@ def find_floaters(n: int, i, j, unit, need: int, half_space: bool = True, anchor
             bad &= ~((z >= fewest) & balanced_mask(n, i[live], j[live], live_wrenches))
         if half_space:
             candidates = ~floater & ~bad & free & (z > 0)
-            bad |= candidates & ~spanning_mask(n, i[live], j[live], unit[live], candidates)
+            todo = candidates & stale  # the others keep their contacts, in the same order: the same verdict
+            if todo.any():
+                spans[todo] = spanning_mask(n, i[live], j[live], unit[live], todo)[todo]
+            stale &= ~todo
+            bad |= candidates & ~spans
         if not bad.any():
             return floater
+        stale[i[live & bad[j]]] = True  # partners of new floaters lose contacts
+        stale[j[live & bad[i]]] = True
         floater |= bad
 
 
 def spanning_mask(n: int, i, j, unit, which) -> np.ndarray:
-    """For each particle in ``which``: do its contact directions positively span R^d?"""
+    """For each particle in ``which``: do its contact directions positively span R^d? (2D: the
+    angular gap; 3D: ``spanning_stack`` on the particles with the same number of contacts at once.)"""
     owner = np.concatenate([i, j])
     vectors = np.concatenate([-unit, unit])  # from each particle towards its partner
     out = np.zeros(n, bool)
@@ -373,8 +382,11 @@ def spanning_mask(n: int, i, j, unit, which) -> np.ndarray:
     order = np.argsort(owner, kind="stable")
     owner, vectors = owner[order], vectors[order]
     starts = np.searchsorted(owner, np.arange(n + 1))
-    for p in np.flatnonzero(which):
-        out[p] = positively_spanning(vectors[starts[p]:starts[p + 1]])
+    count = np.diff(starts)
+    for k in np.unique(count[which]):
+        group = np.flatnonzero(which & (count == k))
+        rows = starts[group][:, None] + np.arange(k)[None, :]
+        out[group] = spanning_stack(vectors[rows])
     return out
 
 
@@ -411,23 +423,40 @@ def positively_spanning(vectors: np.ndarray) -> bool:
     strictly on both of its sides. Products within ``SPAN_TOL`` of zero count as on the plane
     (not spanning: the boundary case, which an exact sum of contact forces cannot balance). ~10x
     faster than the LP feasibility problem sum_k l_k v_k = 0, l_k >= 1 it replaces (HiGHS: 1.3 ms
-    against 0.14 ms per set of 4-8 vectors; tests/test_contacts.py compares the two)."""
+    against 0.14 ms per set of 4-8 vectors; tests/test_contacts.py compares the two); many sets
+    of k vectors at once: ``spanning_stack``."""
     v = np.asarray(vectors, float)
-    k, d = v.shape
-    if d not in (2, 3):
+    if v.ndim != 2 or v.shape[1] not in (2, 3):
         raise ValueError(f"positively_spanning needs 2D or 3D vectors, got shape {v.shape}")
-    if k <= d or np.linalg.matrix_rank(v) < d:
-        return False
-    v = v / np.linalg.norm(v, axis=1)[:, None]
+    return bool(spanning_stack(v[None])[0])
+
+
+def spanning_stack(vectors: np.ndarray) -> np.ndarray:
+    """``positively_spanning`` of each of m sets of k vectors (m, k, d), d = 2 or 3, at once: (m,)
+    bool, the same arithmetic per set (stacked SVD for the rank, cross products and products)."""
+    v = np.asarray(vectors, float)
+    m, k, d = v.shape
+    if k <= d or m == 0:
+        return np.zeros(m, bool)
+    full = np.linalg.matrix_rank(v) == d
+    v = v / np.linalg.norm(v, axis=2)[..., None]
     if d == 2:
-        w = np.column_stack([-v[:, 1], v[:, 0]])
+        w = np.stack([-v[..., 1], v[..., 0]], axis=2)
     else:
-        a, b = np.triu_indices(k, 1)
-        w = np.cross(v[a], v[b])
-    norm = np.linalg.norm(w, axis=1)
+        a, b = _pairs(k)
+        w = np.cross(v[:, a], v[:, b])
+    norm = np.linalg.norm(w, axis=2)
     keep = norm > 1e-12  # (anti)parallel pairs define no plane
-    side = v @ (w[keep] / norm[keep, None]).T  # (k, candidates)
-    return not np.any(np.all(side >= -SPAN_TOL, axis=0) | np.all(side <= SPAN_TOL, axis=0))
+    unit = w / np.where(keep, norm, 1.0)[..., None]
+    side = v @ unit.transpose(0, 2, 1)  # (m, k, candidates)
+    one_sided = (np.all(side >= -SPAN_TOL, axis=1) | np.all(side <= SPAN_TOL, axis=1)) & keep
+    return full & ~np.any(one_sided, axis=1)
+
+
+@functools.lru_cache(maxsize=None)
+def _pairs(k: int) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs a < b of k vectors (``np.triu_indices(k, 1)``), computed once per k."""
+    return np.triu_indices(k, 1)
 
 
 def near_contact_count(packing: Packing, near_tol: float) -> int:
