@@ -497,3 +497,21 @@ def test_failed_checks_advise_the_option_of_the_scene(monkeypatch, gravity, pres
     others = {"--gravity", "--pressure", "--vtol"} - {option}
     assert option in str(err.value) and not any(o in str(err.value) for o in others)
     assert ("--minimizer" in str(err.value)) != balanced
+
+
+@pytest.mark.parametrize("dim, vtol, remedy", [(2, "0.05", "--pressure for denser states"), (3, "0.01", "more particles")])
+def test_jam_refuses_a_vtol_no_state_reaches_before_work(tmp_path, capsys, monkeypatch, dim, vtol, remedy):
+    """The compression stops at phi = 1 (or where 16 spheres' box loses its unique minimum image):
+    a window above the energy there was a whole compression and a misleading 'use a larger vtol'."""
+    import jamflow.protocols.compression as compression
+
+    monkeypatch.setattr(compression, "bisect", lambda *a, **k: pytest.fail("the compression started"))
+    out = tmp_path / "j.h5"
+    assert main(["jam", "--n", "16", "--dim", str(dim), "--vtol", vtol, "--out", str(out), "--quiet"]) == EXIT_USER
+    line = one_line(capsys.readouterr().err)
+    assert f"--vtol {vtol} is above the energy" in line and "use --vtol below" in line and remedy in line
+    assert not out.exists()
+
+
+def test_a_vtol_below_the_densest_energy_still_jams(tmp_path):
+    assert main(["jam", "--n", "16", "--dim", "3", "--vtol", "1e-7", "--out", str(tmp_path / "j.h5"), "--quiet"]) == 0

@@ -81,6 +81,13 @@ def fits_cell(box: Box, reach: float) -> bool:
     return 4.0 * reach < float(box.widths.min())
 
 
+def densest_phi(packing: "Packing") -> float:
+    """The largest packing fraction of ``packing``'s particles in a box of its shape with a unique
+    minimum image: the smallest width twice the largest contact distance (``fits_cell``)."""
+    reach = float(packing.shape.reach(packing.diameters).max())
+    return packing.phi * (float(packing.box.widths.min()) / (4.0 * reach)) ** packing.dim
+
+
 def particle_volumes(diameters: np.ndarray, dim: int) -> np.ndarray:
     """Area (2D) or volume (3D) of disks/spheres with the given diameters."""
     return SPHERE.volumes(diameters, dim)

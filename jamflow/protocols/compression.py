@@ -22,7 +22,7 @@ import numpy as np
 from jamflow.engines.choose import check_engine, open_engine
 from jamflow.minimize.rules import minimize
 from jamflow.minimize.settings import MinimizerSettings
-from jamflow.model.packing import DENSEST_PHI, Packing, SeparationFailed, random_packing
+from jamflow.model.packing import DENSEST_PHI, Packing, SeparationFailed, densest_phi, random_packing
 from jamflow.model.potentials import POTENTIALS, Potential, Spring, parse_potential
 from jamflow.model.shapes.parse import parse_shape
 from jamflow.model.shapes.rotations import check_start
@@ -229,6 +229,7 @@ def compress(packing: Packing, settings: CompressionSettings, *, observers=(), e
     if packing.gravity > 0:
         raise ValueError("a packing under gravity is settled, not compressed: use jam(..., gravity=g) or "
                          "jamflow.protocols.gravity.settle")
+    check_window_reachable(packing, settings, engine)
     with open_engine(packing, settings.minimizer.method, engine, **(engine_options or {})) as sim:
         return bisect(sim, settings, observers=observers)
 
@@ -333,6 +334,30 @@ def check_resolution(packing: Packing, settings: CompressionSettings) -> None:
         raise ValueError(f"{problem} (N = {packing.n}, potential {pot.spec}, box side {packing.box.lengths.max():.3g})")
 
 
+WINDOW_PROBE_VTOL = 1e-8  # from this V_tol on the window's reach is measured before work
+WINDOW_PROBE_GAP = 1e-3  # the probe's box is this much (relative) wider than the densest one with a unique minimum image
+
+
+def check_window_reachable(packing: Packing, settings: CompressionSettings, engine: str = "auto") -> None:
+    """Refuse, before any work, a V_tol above the energy the compression can reach: it stops at
+    phi = 1 (``PhiStepper``) or where the box would lose its unique minimum image (``densest_phi``),
+    so the window needs V > V_tol there. Measured from V_tol >= ``WINDOW_PROBE_VTOL`` (disks and
+    spheres reach V ~ 1e-2 per particle at phi = 1): ``packing`` compressed affinely to that
+    densest state and minimised there."""
+    if settings.v_tol < WINDOW_PROBE_VTOL or packing.gravity:
+        return
+    phi = min(1.0 - 1e-6, densest_phi(packing) / (1.0 + WINDOW_PROBE_GAP) ** packing.dim)
+    with open_engine(packing.scaled_to_phi(phi), settings.minimizer.method, engine) as sim:
+        top = minimize(sim, replace(settings.minimizer, v_min=1e-300)).energy_per_particle
+    if top <= settings.v_tol:
+        boxed = phi < 1.0 - 1e-6
+        limit = (f"at phi = {phi:.3g}, where the box side reaches twice the largest contact distance" if boxed
+                 else "at phi = 1")
+        raise ValueError(f"--vtol {settings.v_tol:g} is above the energy these particles reach before the compression "
+                         f"stops {limit} (V = {top:.3g} per particle there): no state lands in the window; use "
+                         f"--vtol below {top:.2g}, or {'more particles' if boxed else '--pressure for denser states'}")
+
+
 def _check_contact_range(packing: Packing) -> None:
     """sigma_ij depends on the direction r_hat = r_ij / |r_ij|, known to ~1e-16 L / |r_ij| in a box of
     side L; at r_ij = 0 it is undefined (the contact-distance solver would return NaN)."""
@@ -423,7 +448,7 @@ class PhiStepper:
         if target is None:
             self.final_approach = self.crossed
             target = phi + self.dphi if side == "below" else phi - self.dphi
-        self._check(phi, target)
+        self._check(phi, target, v)
         self.last_step = abs(target - phi)
         return target
 
@@ -438,12 +463,15 @@ class PhiStepper:
         self.dphi = width - stop_at  # a jump that lands below is then halved by the chapter rule
         return phi - self.dphi
 
-    def _check(self, phi, target):
+    def _check(self, phi, target, v):
+        """Refuse a step to phi >= 1, a negative phi or one float64 cannot resolve (``v``: the
+        energy per particle of the state at ``phi``)."""
         if target >= 1.0:
             raise JammingFailed(f"the compression reached phi = {phi:.4f} without any minimisation ending above "
-                                f"V_tol = {self.s.v_tol:g}: the minimiser's stops cannot see jamming with this "
-                                "potential and tolerances; use a larger vtol, a smaller force tolerance, or the "
-                                "chapter protocol")
+                                f"V_tol = {self.s.v_tol:g} (the last: V = {v:.3g}): either the window lies beyond "
+                                "phi = 1, where the compression stops (use a smaller vtol, or a target pressure for "
+                                "denser states), or the minimiser's stops cannot see jamming with this potential and "
+                                "tolerances (use a larger vtol, a smaller force tolerance, or the chapter protocol)")
         if target <= 0.0:
             raise JammingFailed(f"the decompression reached phi = {phi:.4f} without any minimisation ending below "
                                 f"2 V_tol = {2 * self.s.v_tol:g}: the minimiser never removes the overlaps; use a "

@@ -43,7 +43,7 @@ from jamflow.minimize.rules import minimize
 from jamflow.protocols.outcome import engine_label
 from jamflow.minimize.settings import MinimizerSettings
 from jamflow.model.box import STRESS_MODES
-from jamflow.model.packing import Packing
+from jamflow.model.packing import Packing, densest_phi
 from jamflow.protocols.compression import RLJ_MIN_START_RATIO, deepest_overlap, remove_overlaps
 from jamflow.support import hooks
 from jamflow.support.reprs import changed_fields_repr
@@ -108,13 +108,6 @@ def pressure_floor(packing: Packing, minimizer: MinimizerSettings) -> float:
     return FLOOR_MARGIN * ftol / a ** (packing.dim - 1)
 
 
-def densest_phi(packing: Packing) -> float:
-    """The largest packing fraction of ``packing``'s particles in a box of its shape with a unique
-    minimum image: the smallest width twice the largest contact distance (``fits_cell``)."""
-    reach = float(packing.shape.reach(packing.diameters).max())
-    return packing.phi * (float(packing.box.widths.min()) / (4.0 * reach)) ** packing.dim
-
-
 def pressure_ceiling(packing: Packing) -> tuple[float, float]:
     """(P, phi): the pressure (eps / diameter^d) of ``packing`` compressed affinely to just above its
     densest box (``densest_phi``, ``CEILING_GAP``) and relaxed there by FIRE at that box, and that
@@ -127,20 +120,20 @@ def pressure_ceiling(packing: Packing) -> tuple[float, float]:
         return sim.state().pressure, phi
 
 
-def check_pressure_ceiling(packing: Packing, target: float, what: str = "--pressure") -> None:
+def check_pressure_ceiling(packing: Packing, target: float, option: str = "--pressure", what: str | None = None) -> None:
     """Refuse, before any work, a target pressure above ``pressure_ceiling`` (measured only for
-    targets above ``CEILING_SCREEN`` phi^2 eps / diameter^d, phi the densest box's); ``what``
-    names the target in the message."""
+    targets above ``CEILING_SCREEN`` phi^2 eps / diameter^d, phi the densest box's); ``option``
+    chose the target, ``what`` names it in the message (default: the option and the target)."""
     phi = densest_phi(packing)
     unit = packing.potential.epsilon / float(np.mean(packing.diameters)) ** packing.dim
     if target < CEILING_SCREEN * phi**2 * unit:
         return
     ceiling, phi = pressure_ceiling(packing)
     if target >= ceiling:
-        raise ValueError(f"{what} {target:g} is above what {packing.n} {packing.shape.name(packing.dim)} particles "
-                         f"carry in a periodic box: about {ceiling:.3g} at phi = {phi:.3g}, where the box side is "
-                         "twice the largest contact distance (no smaller box has a unique minimum image); use a "
-                         "smaller --pressure, or more particles")
+        raise ValueError(f"{what or option} {target:g} is above what {packing.n} {packing.shape.name(packing.dim)} "
+                         f"particles carry in a periodic box: about {ceiling:.3g} at phi = {phi:.3g}, where the box "
+                         "side is twice the largest contact distance (no smaller box has a unique minimum image); "
+                         f"use a smaller {option}, or more particles")
 
 
 def check_pressure_start(packing: Packing, settings: PressureSettings) -> None:

@@ -129,8 +129,10 @@ def check_refine(packing: Packing, settings: RefineSettings) -> None:
                          f"{packing.n} (box side {packing.box.lengths.max():.3g}): contact forces ~ P a^(d-1) must "
                          f"stay 1/force_tol = {1 / settings.force_tol:.0e} times above the double-double force "
                          f"round-off {dd_force_floor(packing):.1e}, so P >= {floor:.1e}; choose a larger target pressure")
-    what = "--pressure" if settings.v_tol is None else f"the pressure for --vtol {settings.v_tol:g},"
-    check_pressure_ceiling(packing, settings.pressure, what)
+    if settings.v_tol is None:
+        check_pressure_ceiling(packing, settings.pressure)
+    else:
+        check_pressure_ceiling(packing, settings.pressure, "--vtol", f"the pressure for --vtol {settings.v_tol:g},")
 
 
 def dd_vtol_floor(packing: Packing, force_tol: float = 1e-12) -> float:
