@@ -324,10 +324,15 @@ def test_the_fast_protocol_runs_a_large_vtol(tmp_path):
     (["refine", "PACKING", "--pressure", "-1"], "--pressure"),
     (["shear", "PACKING", "--dgamma", "1e-3", "--to", "2e-3", "--dphi0", "0.5"], "--dphi0"),
     (["moduli", "PACKING", "--linear-tol", "2", "--no-figure"], "--linear-tol"),
+    (["modes", "PACKING", "--e-min", "-1", "--no-figure"], "--e-min"),
+    (["modes", "PACKING", "--mass", "-1", "--no-figure"], "--mass"),
+    (["draw", "PACKING", "--slice", "2"], "--slice"),
+    (["families", "--n", "16", "--starts", "0"], "--starts"),
 ])
 def test_bad_settings_are_named_by_their_option(packing_file, capsys, tmp_path, command, option):
     argv = [str(packing_file) if w == "PACKING" else w for w in command]
-    out = [] if command[0] == "moduli" else ["--out", str(tmp_path / ("o" if command[0] == "shear" else "o.h5"))]
+    suffix = {"shear": "", "families": "", "draw": ".png"}.get(command[0], ".h5")
+    out = [] if command[0] in ("moduli", "modes") else ["--out", str(tmp_path / f"o{suffix}")]
     assert main(argv + out) == EXIT_USER
     line = one_line(capsys.readouterr().err)
     assert line.startswith(f"jamflow {command[0]}: error: {option} "), line
@@ -515,3 +520,14 @@ def test_jam_refuses_a_vtol_no_state_reaches_before_work(tmp_path, capsys, monke
 
 def test_a_vtol_below_the_densest_energy_still_jams(tmp_path):
     assert main(["jam", "--n", "16", "--dim", "3", "--vtol", "1e-7", "--out", str(tmp_path / "j.h5"), "--quiet"]) == 0
+
+
+@pytest.mark.parametrize("command", [["shear", "PACKING", "--dgamma", "1e-3", "--to", "2e-3", "--out", "OUT"],
+                                     ["anneal", "PACKING", "--to", "1.5", "--dalpha", "0.05", "--out", "OUT.h5"]])
+def test_commands_without_pressure_refuse_an_unreachable_vtol_naming_only_their_options(packing_file, tmp_path, capsys,
+                                                                                       command):
+    argv = [str(packing_file) if w == "PACKING" else str(tmp_path / w) if w.startswith("OUT") else w for w in command]
+    assert main(argv + ["--vtol", "0.05", "--quiet"]) == EXIT_USER
+    line = one_line(capsys.readouterr().err)
+    assert "--vtol 0.05 is above the energy" in line and "--pressure" not in line
+    assert not list(tmp_path.iterdir())

@@ -182,9 +182,9 @@ class Spectrum:
     def __init__(self, e_min: float = 1e-6, mass: float | None = None, method: str = "auto",
                  n_modes: int = 32, vectors: bool = True, dynamical: DynamicalMatrix | None = None):
         if not (math.isfinite(e_min) and e_min > 0):
-            raise ValueError(f"e_min must be a finite positive number (eps/diameter^2), got {e_min!r}")
+            raise SettingError("e_min", f"must be a finite positive number (eps/diameter^2), got {e_min!r}")
         if mass is not None and not (math.isfinite(mass) and mass > 0):
-            raise ValueError(f"mass must be a finite positive number or None (M = N m), got {mass!r}")
+            raise SettingError("mass", f"must be a finite positive number or None (M = N m), got {mass!r}")
         if method not in ("auto", "dense", "sparse"):
             raise ValueError(f"method must be 'auto', 'dense' or 'sparse', got {method!r}")
         if not (isinstance(n_modes, (int, np.integer)) and n_modes >= 1):

@@ -122,7 +122,7 @@ def main(argv=None) -> int:
         signal.signal(signal.SIGTERM, previous)
 
 
-FIELD_OPTIONS = {"v_tol": "vtol", "force_tol": "ftol"}  # settings fields that options of other names set
+FIELD_OPTIONS = {"v_tol": "vtol", "force_tol": "ftol", "slice_at": "slice"}  # fields that options of other names set
 
 
 def _options(parser: argparse.ArgumentParser, command: str) -> dict:

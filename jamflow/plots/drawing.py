@@ -38,6 +38,7 @@ from jamflow.mechanics.contacts import Contacts
 from jamflow.model.packing import Packing
 from jamflow.model.pairs import overlapping_pairs, overlapping_sites, site_packing
 from jamflow.plots.figure import save_figure
+from jamflow.support.settings_errors import SettingError
 
 COLOR_BY = ("z", "q6", "orientation")
 MAX_LINE_WIDTH = 3.0  # points, for the largest contact force
@@ -96,7 +97,7 @@ def check_options(packing: Packing, color_by: str, slice_at: float) -> None:
         raise ValueError("color_by 'orientation' needs particles that turn (rigid bodies, ellipses); "
                          f"these are {packing.shape.name(packing.dim)}: use z or q6")
     if not 0.0 <= slice_at < 1.0:
-        raise ValueError(f"slice_at must lie in [0, 1) (a fraction of the cell height), got {slice_at}")
+        raise SettingError("slice_at", f"must lie in [0, 1) (a fraction of the cell height), got {slice_at}")
     if packing.shape.kind not in DRAWERS:
         raise ValueError(f"jamflow draw cannot draw {packing.shape.kind} particles yet; it draws {', '.join(DRAWERS)}")
     if packing.shape.kind == "ellipsoid" and packing.dim == 3:

@@ -25,7 +25,7 @@ from jamflow.model.shapes.rotations import check_start, start_orientations
 from jamflow.model.shapes.shape import SPHERE, Ellipsoid
 from jamflow.protocols.settings import DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings
 from jamflow.protocols.outcome import JammingFailed, JamResult
-from jamflow.protocols.compression import check_resolution, jam
+from jamflow.protocols.compression import check_resolution, check_window_reachable, jam
 
 STEP_COLUMNS = ("alpha", "phi_j", "mean_z", "n_contacts", "n_floaters", "p2", "energy_per_particle", "max_force",
                 "checks_passed", "minimizations", "iterations", "seconds")
@@ -132,6 +132,7 @@ def anneal(start: Packing, target: float, dalpha: float, settings: CompressionSe
     alphas = anneal_alphas(alpha0, float(target), float(dalpha))
     packing = _grown(start, alphas[0], contact, rng, orientations)
     check_resolution(packing, settings)
+    check_window_reachable(packing, settings, engine, denser=None)  # before the first step, without --pressure
     rows = {c: [] for c in STEP_COLUMNS}
     _append(rows, alpha0, start, check_packing(start), None, 0.0)
     result = checks = None

@@ -338,12 +338,13 @@ WINDOW_PROBE_VTOL = 1e-8  # from this V_tol on the window's reach is measured be
 WINDOW_PROBE_GAP = 1e-3  # the probe's box is this much (relative) wider than the densest one with a unique minimum image
 
 
-def check_window_reachable(packing: Packing, settings: CompressionSettings, engine: str = "auto") -> None:
+def check_window_reachable(packing: Packing, settings: CompressionSettings, engine: str = "auto",
+                           denser: str | None = "--pressure for denser states") -> None:
     """Refuse, before any work, a V_tol above the energy the compression can reach: it stops at
     phi = 1 (``PhiStepper``) or where the box would lose its unique minimum image (``densest_phi``),
     so the window needs V > V_tol there. Measured from V_tol >= ``WINDOW_PROBE_VTOL`` (disks and
     spheres reach V ~ 1e-2 per particle at phi = 1): ``packing`` compressed affinely to that
-    densest state and minimised there."""
+    densest state and minimised there. ``denser``: what else the caller offers for denser states."""
     if settings.v_tol < WINDOW_PROBE_VTOL or packing.gravity:
         return
     phi = min(1.0 - 1e-6, densest_phi(packing) / (1.0 + WINDOW_PROBE_GAP) ** packing.dim)
@@ -353,9 +354,10 @@ def check_window_reachable(packing: Packing, settings: CompressionSettings, engi
         boxed = phi < 1.0 - 1e-6
         limit = (f"at phi = {phi:.3g}, where the box side reaches twice the largest contact distance" if boxed
                  else "at phi = 1")
+        other = "more particles" if boxed else denser
         raise ValueError(f"--vtol {settings.v_tol:g} is above the energy these particles reach before the compression "
                          f"stops {limit} (V = {top:.3g} per particle there): no state lands in the window; use "
-                         f"--vtol below {top:.2g}, or {'more particles' if boxed else '--pressure for denser states'}")
+                         f"--vtol below {top:.2g}{f', or {other}' if other else ''}")
 
 
 def _check_contact_range(packing: Packing) -> None:

@@ -28,6 +28,7 @@ from jamflow.model.sizes import parse_sizes
 from jamflow.protocols.compression import check_strain, jam
 from jamflow.protocols.outcome import JammingFailed
 from jamflow.protocols.shear import shear, shear_protocol
+from jamflow.support.settings_errors import SettingError
 
 SEED_STRIDE = 100_000
 MAX_GRID = 100_000  # grid strains: each is jammed once per start
@@ -71,7 +72,7 @@ class FamilySampling:
         for name in ("n", "substeps", "starts"):
             value = getattr(self, name)
             if not isinstance(value, (int, np.integer)) or value < 1:
-                raise ValueError(f"{name} must be a positive integer, got {value!r}")
+                raise SettingError(name, f"must be a positive integer, got {value!r}")
         if self.starts > SEED_STRIDE:
             raise ValueError(f"at most {SEED_STRIDE} starts per grid point")
         self._check_cell()

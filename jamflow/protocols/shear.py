@@ -30,7 +30,7 @@ from jamflow.model.packing import Packing
 from jamflow.model.pairs import separations
 from jamflow.protocols.settings import CompressionSettings, fast_protocol
 from jamflow.protocols.outcome import JamResult, engine_label
-from jamflow.protocols.compression import bisect, check_resolution, check_strain
+from jamflow.protocols.compression import bisect, check_resolution, check_strain, check_window_reachable
 
 MAX_STEPS = 1_000_000
 REARRANGED_FRACTION = 0.5  # a first step that removes more than this fraction of the contacts is warned about
@@ -194,6 +194,7 @@ def shear(packing: Packing, dgamma: float, to: float, settings: CompressionSetti
     packing.box.with_shear_strain(strains[1])  # a box that cannot be sheared (walls) is refused here, before work
     settings = settings or shear_protocol()
     check_resolution(packing, settings)
+    check_window_reachable(packing, settings, engine, denser=None)
     sigma = _contact_distance(packing)
     start = time.perf_counter()
     with open_engine(packing, settings.minimizer.method, engine, **(engine_options or {})) as sim:
