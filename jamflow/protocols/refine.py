@@ -30,7 +30,10 @@ contact force, with no floater in contact.
 
 Pressure walk: the box and all positions are scaled by 1 + mu (in double-double) and the state
 balanced again; mu is chosen by the secant on p(L) (linear in L for the spring near onset),
-one decade of pressure at a time from the start pressure down (or up) to the target.
+one decade of pressure at a time from the start pressure down (or up) to the target. A step that
+would make the box narrower than twice the largest contact distance (no unique minimum image) is
+halved; a target above what the particles carry in that densest box (``pressure.pressure_ceiling``)
+is refused before any work.
 
 Resolution (``dd_pressure_floor``): float64 refuses targets below ``pressure.pressure_floor``,
 FLOOR_MARGIN = 1000 times the force round-off floor f_64 (the minimiser's base force tolerance,
