@@ -122,8 +122,12 @@ def pressure_ceiling(packing: Packing) -> tuple[float, float]:
 
 def check_pressure_ceiling(packing: Packing, target: float, option: str = "--pressure", what: str | None = None) -> None:
     """Refuse, before any work, a target pressure above ``pressure_ceiling`` (measured only for
-    targets above ``CEILING_SCREEN`` phi^2 eps / diameter^d, phi the densest box's); ``option``
-    chose the target, ``what`` names it in the message (default: the option and the target)."""
+    targets above ``CEILING_SCREEN`` phi^2 eps / diameter^d, phi the densest box's; not for a
+    potential that diverges at contact, repulsive LJ, whose random start FIRE cannot relax in that
+    box); ``option`` chose the target, ``what`` names it in the message (default: the option and the
+    target)."""
+    if packing.potential.soft_start:
+        return
     phi = densest_phi(packing)
     unit = packing.potential.epsilon / float(np.mean(packing.diameters)) ** packing.dim
     if target < CEILING_SCREEN * phi**2 * unit:
