@@ -531,3 +531,16 @@ def test_commands_without_pressure_refuse_an_unreachable_vtol_naming_only_their_
     line = one_line(capsys.readouterr().err)
     assert "--vtol 0.05 is above the energy" in line and "--pressure" not in line
     assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("vtol", ["1e-3", "0.05"])
+def test_repulsive_lj_jams_into_a_large_window(tmp_path, vtol):
+    """The start's overlaps are removed to V < 1e-16 whatever the window: with the window's V_min
+    the relaxation stopped at once, and the deep overlaps left ended in a ZeroDivisionError or a
+    refusal advising a function a command-line user cannot call."""
+    from jamflow.io.packing_file import load_packing
+
+    out = tmp_path / "j.h5"
+    assert main(["jam", "--n", "16", "--potential", "rlj", "--phi0", "0.7", "--vtol", vtol, "--out", str(out),
+                 "--quiet"]) == 0
+    assert load_packing(out).potential.name == "rlj"

@@ -210,7 +210,9 @@ def remove_overlaps(packing: Packing, minimizer: MinimizerSettings, engine: str 
     that diverges at r -> 0 (repulsive LJ) starts without significant overlaps (chapter step 1;
     from a raw random start RLJ forces reach ~1e13 and LAMMPS loses atoms). Without gravity: the
     weights would press the pile into overlaps (and add m g h to V) whatever phi0 is; the pile
-    settles afterwards, with the packing's own potential."""
+    settles afterwards, with the packing's own potential. V_min is the chapter's (1e-16) unless the
+    minimiser's is smaller: a large V_tol (the minimiser's V_min) would stop at once, overlaps kept."""
+    minimizer = replace(minimizer, v_min=min(minimizer.v_min, MinimizerSettings.v_min))
     soft = replace(packing, potential=Spring(), gravity=0.0)
     with open_engine(soft, minimizer.method, engine) as sim:
         result = minimize(sim, minimizer)
@@ -344,8 +346,10 @@ def check_window_reachable(packing: Packing, settings: CompressionSettings, engi
     phi = 1 (``PhiStepper``) or where the box would lose its unique minimum image (``densest_phi``),
     so the window needs V > V_tol there. Measured from V_tol >= ``WINDOW_PROBE_VTOL`` (disks and
     spheres reach V ~ 1e-2 per particle at phi = 1): ``packing`` compressed affinely to that
-    densest state and minimised there. ``denser``: what else the caller offers for denser states."""
-    if settings.v_tol < WINDOW_PROBE_VTOL or packing.gravity:
+    densest state and minimised there (not for repulsive LJ, whose energy diverges at contact and
+    whose start may not be compressed affinely into deep overlaps). ``denser``: what else the
+    caller offers for denser states."""
+    if settings.v_tol < WINDOW_PROBE_VTOL or packing.gravity or packing.potential.soft_start:
         return
     phi = min(1.0 - 1e-6, densest_phi(packing) / (1.0 + WINDOW_PROBE_GAP) ** packing.dim)
     with open_engine(packing.scaled_to_phi(phi), settings.minimizer.method, engine) as sim:
