@@ -350,7 +350,8 @@ def test_a_cut_density_of_states_says_which_fraction_it_holds(packing_file, tmp_
     omegas = np.sort(Spectrum().compute(load_packing(packing_file)).frequencies)
     top = 0.5 * (omegas[len(omegas) // 2] + omegas[len(omegas) // 2 + 1])  # between two modes: half of them in range
     figure = tmp_path / "f.png"
-    assert main(["modes", str(packing_file), "--figure", str(figure), "--omega-max", repr(float(top)), "--bins", "8"]) == 0
+    argv = ["modes", str(packing_file), "--figure", str(figure), "--omega-max", repr(float(top)), "--bins", "8"]
+    assert main(argv) == 0
     err = capsys.readouterr().err
     inside = int(np.sum(omegas <= top))
     assert "--omega-max" in err and f"leaves {len(omegas) - inside} of {len(omegas)} nonzero modes" in err
@@ -445,7 +446,8 @@ def test_every_exported_position_is_in_its_box_and_image_flags_restore_it(export
     h, origin, position, image = read(export_packing(packing, tmp_path / f"x{SUFFIXES[fmt]}", fmt))
     d = packing.dim
     s = np.linalg.solve(h, (position - origin).T).T[:, :d]
-    assert np.all(s >= -1e-6) and np.all(s < 1 + 1e-6), f"{np.sum(np.any((s < -1e-6) | (s >= 1 + 1e-6), axis=1))} outside"
+    outside = np.any((s < -1e-6) | (s >= 1 + 1e-6), axis=1)
+    assert not outside.any(), f"{outside.sum()} outside"
     assert image is not None, "no image flags"
     unwrapped = (position + image @ h.T)[:, :d]
     if packing.shape.kind == "rigid":  # the sites about their centre's wrapped position, each body whole
@@ -504,7 +506,8 @@ def test_failed_checks_advise_the_option_of_the_scene(monkeypatch, gravity, pres
     assert ("--minimizer" in str(err.value)) != balanced
 
 
-@pytest.mark.parametrize("dim, vtol, remedy", [(2, "0.05", "--pressure for denser states"), (3, "0.01", "more particles")])
+@pytest.mark.parametrize("dim, vtol, remedy", [(2, "0.05", "--pressure for denser states"),
+                                               (3, "0.01", "more particles")])
 def test_jam_refuses_a_vtol_no_state_reaches_before_work(tmp_path, capsys, monkeypatch, dim, vtol, remedy):
     """The compression stops at phi = 1 (or where 16 spheres' box loses its unique minimum image):
     a window above the energy there was a whole compression and a misleading 'use a larger vtol'."""

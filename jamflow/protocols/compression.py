@@ -119,8 +119,8 @@ def check_strain(gamma, name: str = "shear strain gamma") -> float:
         raise ValueError(f"{name} must be a finite number, got {gamma!r}")
     if abs(gamma) > MAX_STRAIN:
         raise ValueError(f"{name} {gamma:g} is beyond +-{MAX_STRAIN:g}, where float64 no longer resolves the "
-                         f"strain's fractional part (the lattice repeats at every integer strain); give a strain within "
-                         f"+-{MAX_STRAIN:g}")
+                         f"strain's fractional part (the lattice repeats at every integer strain); give a strain "
+                         f"within +-{MAX_STRAIN:g}")
     return float(gamma)
 
 
@@ -337,7 +337,7 @@ def check_resolution(packing: Packing, settings: CompressionSettings) -> None:
 
 
 WINDOW_PROBE_VTOL = 1e-8  # from this V_tol on the window's reach is measured before work
-WINDOW_PROBE_GAP = 1e-3  # the probe's box is this much (relative) wider than the densest one with a unique minimum image
+WINDOW_PROBE_GAP = 1e-3  # the probe's box is this much (relative) wider than the densest with a unique minimum image
 
 
 def check_window_reachable(packing: Packing, settings: CompressionSettings, engine: str = "auto",

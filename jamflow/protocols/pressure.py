@@ -120,7 +120,8 @@ def pressure_ceiling(packing: Packing) -> tuple[float, float]:
         return sim.state().pressure, phi
 
 
-def check_pressure_ceiling(packing: Packing, target: float, option: str = "--pressure", what: str | None = None) -> None:
+def check_pressure_ceiling(packing: Packing, target: float, option: str = "--pressure",
+                           what: str | None = None) -> None:
     """Refuse, before any work, a target pressure above ``pressure_ceiling`` (measured only for
     targets above ``CEILING_SCREEN`` phi^2 eps / diameter^d, phi the densest box's; not for a
     potential that diverges at contact, repulsive LJ, whose random start FIRE cannot relax in that

@@ -57,7 +57,8 @@ class CompressionSettings:
         if not self.v_tol > 0:
             raise SettingError("v_tol", f"must be positive, got {self.v_tol}; the chapter uses 1e-16")
         if not (math.isfinite(self.dphi_growth) and self.dphi_growth >= 1.0):
-            raise SettingError("dphi_growth", f"must be >= 1 (1 = the chapter's constant increment), got {self.dphi_growth}")
+            raise SettingError("dphi_growth", f"must be >= 1 (1 = the chapter's constant increment), got "
+                                              f"{self.dphi_growth}")
         if not (math.isfinite(self.dphi_max) and self.dphi_max > 0):
             raise SettingError("dphi_max", f"must be a finite positive number, got {self.dphi_max}")
         if self.minimizer.v_min > self.v_tol:
