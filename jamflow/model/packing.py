@@ -90,16 +90,19 @@ def particle_volumes(diameters: np.ndarray, dim: int) -> np.ndarray:
 class Packing:
     """N particles of one shape in a periodic box, with their pair potential."""
 
-    positions: np.ndarray
+    positions: np.ndarray  #: (N, d) centres, in diameters (the small diameter is 1)
+    #: (N,) each particle's size scale: the diameter of disks and spheres, the width b of ellipsoids
     diameters: np.ndarray
-    box: Box
-    potential: Potential = field(default_factory=Spring)
+    box: Box  #: the cell (``Box``): periodic, tilted, or with walls
+    potential: Potential = field(default_factory=Spring)  #: the pair law (``Spring`` or ``RepulsiveLJ``)
+    #: free-form values carried with the packing (written to files as attributes)
     metadata: dict = field(default_factory=dict)
-    shape: object = SPHERE
+    shape: object = SPHERE  #: the particle shape (``jamflow.parse_shape``); disks/spheres by default
+    #: (N,) angles (2D) or (N, 4) unit quaternions (w, x, y, z) (3D); None for disks, spheres
     orientations: np.ndarray | None = None
-    fixed: np.ndarray | None = None  # (N,) bool: held in place (rough-wall particles); None: none
-    gravity: float = 0.0  # g: force per (unit-mass) mobile particle along -e_(d-1), eps/diameter
-    extended: Extended | None = None  # double-double low parts (``Extended``); None: float64 exactly
+    fixed: np.ndarray | None = None  #: (N,) bool: held in place (rough-wall particles); None: none
+    gravity: float = 0.0  #: g: force per (unit-mass) mobile particle along -e_(d-1), eps / diameter
+    extended: Extended | None = None  #: double-double low parts (``Extended``); None: float64 exactly
 
     def __post_init__(self):
         pos = np.array(self.positions, dtype=float)
@@ -188,6 +191,7 @@ class Packing:
 
     @property
     def n(self) -> int:
+        """Number of particles N."""
         return len(self.diameters)
 
     @property
@@ -202,6 +206,7 @@ class Packing:
 
     @property
     def dim(self) -> int:
+        """Dimension d, 2 or 3."""
         return self.box.dim
 
     @property

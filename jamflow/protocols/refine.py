@@ -86,13 +86,14 @@ MAX_VTOL_REFINES = 6  # refinements (secant steps in log p, log V) to land V in 
 class RefineSettings:
     """Target pressure (eps / diameter^d) and the tolerances of the refinement."""
 
-    pressure: float
-    force_tol: float = 1e-12  # largest backbone net force / mean contact force
-    pressure_tol: float = 1e-4  # |p / target - 1| at the target
-    max_newton: int = 60  # Newton steps per balanced state
-    max_secant: int = 30  # box rescalings per decade of pressure
-    max_network_updates: int = 10  # Newton solves with a new contact network per balanced state
-    v_tol: float | None = None  # energy window V_tol < V < 2 V_tol per particle this pressure was chosen for
+    pressure: float  #: target pressure, eps / diameter^d
+    force_tol: float = 1e-12  #: largest net force on a non-floater over the mean contact force, at balance
+    pressure_tol: float = 1e-4  #: relative pressure error |p / target - 1| accepted at the target
+    max_newton: int = 60  #: Newton steps per balanced state
+    max_secant: int = 30  #: box rescalings per decade of pressure
+    max_network_updates: int = 10  #: Newton solves with a new contact network per balanced state
+    #: V_tol of the energy window V_tol < V < 2 V_tol (per particle, eps) this pressure was chosen for; None: none
+    v_tol: float | None = None
 
     def __post_init__(self):
         _check_pressure(self.pressure)
@@ -102,6 +103,7 @@ class RefineSettings:
                 raise ValueError(f"{name} must be a number in (0, 1), got {value!r}")
 
     def as_dict(self) -> dict:
+        """The settings as the packing file's protocol attributes."""
         window = {} if self.v_tol is None else {"v_tol": self.v_tol}
         return {"precision": "double-double", "target_pressure": self.pressure, "force_tol": self.force_tol,
                 "pressure_tol": self.pressure_tol, **window}
@@ -615,21 +617,23 @@ def _affine_slope(packing: Packing, st: _State, net: Network) -> float:
 class RefineResult:
     """A packing balanced in double-double at the target pressure, and how it got there."""
 
-    packing: Packing  # with ``extended`` (positions_lo, box_lo)
-    network: Network
-    settings: RefineSettings
-    history: dict  # per balanced state: target_pressure, pressure, phi + phi_lo, contacts, floaters, newton_steps
-    start_contacts: set
-    seconds: float
-    onset: object = None  # the float64 JamResult refined (``jamflow jam --precision double-double``), if any
-    refines: int = 1  # refinements made (``refine_to_vtol``: secant steps to the energy window)
+    packing: Packing  #: the refined packing, with ``extended`` (positions_lo, box_lo): the double-double low parts
+    network: Network  #: the double-double contact network: overlaps, forces, floaters, energy, pressure
+    settings: RefineSettings  #: the target pressure and tolerances
+    history: dict  #: per balanced state: target_pressure, pressure, phi + phi_lo, contacts, floaters, newton_steps
+    start_contacts: set  #: backbone contacts (i, j) of the start, for ``contact_changes``
+    seconds: float  #: wall-clock time of the refinement, s
+    onset: object = None  #: the float64 ``JamResult`` refined (``jamflow jam --precision double-double``), if any
+    refines: int = 1  #: refinements made (``refine_to_vtol``: secant steps to the energy window)
 
     @property
     def pressure(self) -> float:
+        """P = tr P_ab / d from the double-double forces, eps / diameter^d."""
         return self.network.pressure
 
     @property
     def pressure_tensor(self) -> np.ndarray:
+        """(d, d) virial pressure tensor (chapter eq. 2.34) from the double-double forces, eps / diameter^d."""
         return self.network.pressure_tensor
 
     @property
@@ -658,6 +662,7 @@ class RefineResult:
 
     @property
     def n_floaters(self) -> int:
+        """Particles removed as floaters."""
         return int(self.network.floater.sum())
 
     @property
@@ -673,6 +678,7 @@ class RefineResult:
 
     @property
     def energy_per_particle(self) -> float:
+        """V = U / N from the double-double overlaps, eps."""
         return float(self.network.energy[0] / self.packing.n)
 
     @property
@@ -711,6 +717,8 @@ class RefineResult:
         return self.start_contacts - now, now - self.start_contacts
 
     def summary(self) -> str:
+        """The lines ``jamflow jam --precision double-double`` prints: onset, pressure, phi, contacts, force balance,
+        time."""
         opened, closed = self.contact_changes()
         target = self.settings.pressure
         onset = "" if self.onset is None else f"float64 onset {self.onset.summary()}\n"
