@@ -626,6 +626,15 @@ class RefineResult:
     onset: object = None  #: the float64 ``JamResult`` refined (``jamflow jam --precision double-double``), if any
     refines: int = 1  #: refinements made (``refine_to_vtol``: secant steps to the energy window)
 
+    def __repr__(self) -> str:
+        """One line: N, dim, target and reached pressure, phi, contacts against the isostatic count,
+        floaters, force balance, V, refinements, time; ``summary()`` is the CLI's lines."""
+        p = self.packing
+        return (f"RefineResult(N={p.n}, dim={p.dim}, P_target={self.settings.pressure:.3e}, P={self.pressure:.6e}, "
+                f"phi={self.phi[0]:.12f}, N_c={self.n_contacts}, isostatic={self.isostatic_contacts}, "
+                f"floaters={self.n_floaters}, force_balance={self.force_balance:.1e}, "
+                f"V={self.energy_per_particle:.3e}, refines={self.refines}, seconds={self.seconds:.2f})")
+
     @property
     def pressure(self) -> float:
         """P = tr P_ab / d from the double-double forces, eps / diameter^d."""

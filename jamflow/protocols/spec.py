@@ -31,6 +31,7 @@ from jamflow.protocols.compression import (
 )
 from jamflow.protocols.outcome import JammingFailed
 from jamflow.protocols.settings import DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, protocol_name
+from jamflow.support.reprs import changed_fields_repr
 
 
 PRECISIONS = ("double", "double-double")  # --precision: float64, or a float64 onset refined by jamflow.refine
@@ -79,6 +80,8 @@ class JamSpec:
     precision: str = "double"
     #: start orientations of particles with an axis: ``random``, ``aligned`` or ``nematic:S``
     orientations: str = "random"
+
+    __repr__ = changed_fields_repr  # only the options that differ from ``jamflow jam``'s defaults
 
     @classmethod
     def from_options(cls, **options) -> "JamSpec":
