@@ -39,10 +39,10 @@ class Extended:
     float64 parts they were made with: a Packing whose positions or box differ (any operation that
     moves the particles in float64) drops them, so a stale low part never survives a move."""
 
-    positions_hi: np.ndarray  # (N, d)
-    positions_lo: np.ndarray  # (N, d)
-    lengths_hi: np.ndarray  # (d,)
-    lengths_lo: np.ndarray  # (d,)
+    positions_hi: np.ndarray  #: (N, d)
+    positions_lo: np.ndarray  #: (N, d)
+    lengths_hi: np.ndarray  #: (d,)
+    lengths_lo: np.ndarray  #: (d,)
 
     def matches(self, positions: np.ndarray, box: Box) -> bool:
         return (self.positions_hi.shape == positions.shape and bool(np.array_equal(self.positions_hi, positions))
