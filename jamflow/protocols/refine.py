@@ -218,14 +218,14 @@ class _State:
 class Network:
     """The double-double evaluation of a state and its contact network."""
 
-    i: np.ndarray  # (C,) contacts (overlap > 0 in double-double)
+    i: np.ndarray  #: (C,) contacts (overlap > 0 in double-double)
     j: np.ndarray
-    overlap: np.ndarray  # (C,) sigma - r (float64 value of the double-double overlap)
-    floater: np.ndarray  # (N,) bool
-    forces: np.ndarray  # (N, d) net forces, hi + lo rounded to float64
-    energy: tuple  # (hi, lo)
+    overlap: np.ndarray  #: (C,) sigma - r (float64 value of the double-double overlap)
+    floater: np.ndarray  #: (N,) bool
+    forces: np.ndarray  #: (N, d) net forces, hi + lo rounded to float64
+    energy: tuple  #: (hi, lo)
     pressure: float
-    pressure_tensor: np.ndarray  # (d, d)
+    pressure_tensor: np.ndarray  #: (d, d)
 
     @property
     def backbone(self) -> np.ndarray:
