@@ -7,8 +7,10 @@ import dataclasses
 import importlib.util
 import inspect
 import io
-import time
+import os
+import sys
 import textwrap
+import time
 import tokenize
 from pathlib import Path
 
@@ -60,6 +62,8 @@ def test_every_public_method_of_the_top_level_names_has_a_docstring():
 
 def _conf(monkeypatch):
     monkeypatch.setenv("JAMFLOW_DOCS_OFFLINE", "1")
+    monkeypatch.setenv("COLUMNS", os.environ.get("COLUMNS", "100"))  # conf.py sets it: restored after the test
+    monkeypatch.setattr(sys, "path", list(sys.path))  # and extends the path
     spec = importlib.util.spec_from_file_location("jamflow_docs_conf", ROOT / "docs" / "conf.py")
     conf = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(conf)
