@@ -8,7 +8,7 @@ import h5py
 import numpy as np
 import pytest
 
-from jamflow.cli.commands.onsets import write_table
+from jamflow.cli.commands.onsets import report_text, write_table
 from jamflow.ensemble import Store, run_ensemble
 from jamflow.ensemble.onsets import onset_statistics, width_chi2
 
@@ -66,6 +66,18 @@ def test_widths_command_draws_two_tables_on_one_plot(tmp_path):
         chi2 = float(row["nu_chi2_dof"])  # the table's, from onset_statistics; the command refits the rows
         assert f"chi2/dof = {chi2:.2f}" in done.stdout and 0 < chi2 < 4
     assert "N = 64, 128, 256;" in done.stdout and fig.stat().st_size > 10_000
+
+
+def test_onsets_report_says_what_one_or_two_sizes_cannot_give():
+    one = report_text(onset_statistics(synthetic_rows(sizes=(64,), count=50), n_bootstrap=20))
+    assert "nan" not in one
+    assert "nu needs packings at two or more N, this store has 1 (N = 64)" in one
+    assert "phi_inf needs three or more N" in one
+    two = report_text(onset_statistics(synthetic_rows(sizes=(64, 128), count=50), n_bootstrap=20))
+    assert "nan" not in two and "nu = " in two and "chi2/dof of the power law = none (needs three or more N)" in two
+    assert "phi_inf needs three or more N, this store has 2 (N = 64, 128)" in two
+    many = report_text(onset_statistics(synthetic_rows(count=50), n_bootstrap=20))
+    assert "nan" not in many and "nu = " in many and "phi_inf = " in many
 
 
 def test_widths_command_refuses_what_is_not_an_onsets_table(tmp_path):

@@ -431,3 +431,64 @@ def test_slice_contact_lines_stay_in_their_cross_sections():
     owner = np.array([np.argmin(np.linalg.norm(view.xy - s, axis=1)) for s in starts])
     assert np.allclose(view.xy[owner], starts)
     assert np.all(np.linalg.norm(ends, axis=1) <= radius[owner] + 1e-12)  # inside its own cross-section
+
+
+@pytest.mark.parametrize("spec,dim", [("disk", 2), ("ellipse:1.5", 2), ("spheroid:0.5", 3)])
+def test_gsd_files_that_export_writes_read_back(tmp_path, spec, dim):
+    """``packings_from_gsd`` inverts ``export --format gsd`` to float32 precision: box (with tilt),
+    positions, diameters, shape and orientations."""
+    from conftest import random_config, tilted
+    from jamflow.io.export import export_packing
+    from jamflow.io.gsd_file import packings_from_gsd
+    from jamflow.model.box import Box
+    from jamflow.model.packing import Packing
+    from jamflow.model.shapes import parse_shape
+    from jamflow.model.shapes.rotations import random_orientations
+
+    rng = np.random.default_rng(4)
+    if spec == "disk":
+        p = tilted(random_config(24, 2, 0.8, seed=3, diameters=np.repeat([1.0, 1.4], 12)), 0.3)
+    else:
+        p = Packing(rng.uniform(0, 12.0, (6, dim)), np.array([1.0, 1.4, 1.0, 1.4, 1.4, 1.0]), Box(12.0 * np.eye(dim)),
+                    shape=parse_shape(spec, dim), orientations=random_orientations(6, dim, rng))
+    (q,) = packings_from_gsd(export_packing(p, tmp_path / "p.gsd", "gsd"))
+    assert q.dim == dim and q.shape.spec(dim) == p.shape.spec(dim) and q.n == p.n
+    assert np.allclose(q.box.h, p.box.h, rtol=1e-6, atol=1e-6)
+    assert np.abs(p.box.minimum_image(q.positions - p.positions)).max() < 1e-5
+    assert np.allclose(q.diameters, p.diameters, rtol=1e-6)
+    if dim == 2 and p.orientations is not None:
+        turn = np.asarray(q.orientations) - np.asarray(p.orientations)
+        assert np.abs(np.angle(np.exp(1j * turn))).max() < 1e-6
+    elif p.orientations is not None:
+        dots = np.abs(np.sum(np.asarray(q.orientations) * np.asarray(p.orientations), axis=1))
+        assert np.allclose(dots, 1.0, atol=1e-6)  # q and -q are one rotation
+
+
+def test_modes_analyze_and_draw_read_the_gsd_file_export_wrote(above, tmp_path, capsys):
+    gsd = tmp_path / "p.gsd"
+    assert main(["export", str(above), "--format", "gsd", "-o", str(gsd)]) == 0
+    assert main(["modes", str(gsd), "--no-figure"]) == 0
+    out = capsys.readouterr().out
+    assert "1 packing(s)" in out and (tmp_path / "p.modes.h5").is_file()
+    assert main(["draw", str(gsd), "-o", str(tmp_path / "p.png")]) == 0 and (tmp_path / "p.png").stat().st_size > 0
+    from jamflow.cli.inputs import load_input
+
+    assert load_input(gsd).metadata["coordinate_precision"] == "float32 (GSD)"
+
+
+def test_a_gsd_file_of_rigid_bodies_is_refused_with_the_reason(tmp_path):
+    from jamflow.io.export import export_packing
+    from jamflow.io.gsd_file import packings_from_gsd
+    from jamflow.model.box import Box
+    from jamflow.model.packing import Packing
+    from jamflow.model.shapes import RigidBody
+    from jamflow.model.shapes.rotations import random_orientations
+
+    rng = np.random.default_rng(2)
+    p = Packing(rng.uniform(0, 10.0, (5, 2)), np.ones(5), Box(10.0 * np.eye(2)), shape=RigidBody([[0, 0], [0.5, 0]],
+                [1.0, 0.7]), orientations=random_orientations(5, 2, rng))
+    with pytest.raises(ValueError, match="rigid bodies in a GSD file are not read back"):
+        packings_from_gsd(export_packing(p, tmp_path / "b.gsd", "gsd"))
+    (tmp_path / "x.gsd").write_bytes(b"not a gsd file")
+    with pytest.raises(ValueError, match="is not a GSD file"):
+        packings_from_gsd(tmp_path / "x.gsd")

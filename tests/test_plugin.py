@@ -238,9 +238,11 @@ def test_python_helpers_reject_bad_input():
 
 # build and cache -------------------------------------------------------------------------------------
 @needs_compiler
-def test_cache_is_reused(tmp_path, monkeypatch):
+def test_cache_is_reused(tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("JAMFLOW_CACHE_DIR", str(tmp_path))
     first = plugin_library()
+    said = capsys.readouterr().err  # the build says so before it starts, the reuse says nothing
+    assert said.startswith("jamflow: compiling the LAMMPS plugin pair styles once (~5 s) into ") and said.count("\n") == 1
     assert first.is_file() and first.is_relative_to(tmp_path / "plugins")
     assert first.parent.name == plugin_build.source_digest()
     stamp = first.stat().st_mtime_ns
@@ -252,6 +254,7 @@ def test_cache_is_reused(tmp_path, monkeypatch):
     assert plugin_library() == first
     assert first.stat().st_mtime_ns == stamp
     assert [p.name for p in first.parent.iterdir()] == ["jamflow_pairs.so"]  # no temporaries left
+    assert capsys.readouterr().err == ""
 
 
 def test_no_compiler_warns_and_returns_none(tmp_path, monkeypatch):

@@ -75,6 +75,13 @@ def test_reprs_are_one_short_informative_line(result):
     _one_short_line(DensityOfStates(bins=30).compute([spectrum]), "bins=30", "n_packings=1", f"n_modes={n_dof - 2}")
 
 
+def test_jam_spec_repr_shows_the_options_that_differ_from_the_defaults():
+    assert repr(JamSpec()) == "JamSpec()"
+    spec = JamSpec(n=128, shape="ellipse:1.6", sizes="mono", seed=2, pressure=1e-3)
+    assert repr(spec) == "JamSpec(n=128, sizes='mono', shape='ellipse:1.6', seed=2, pressure=0.001)"
+    assert eval(repr(spec), {"JamSpec": JamSpec}) == spec
+
+
 def test_reprs_of_shapes_and_walls():
     ellipses = jamflow.load_packing(ELLIPSES)
     _one_short_line(ellipses, "Packing(N=16", "shape='ellipse:1.5'")

@@ -37,6 +37,12 @@ def refined32(onset32):
     return refine(onset32, 1e-14)
 
 
+def test_refine_result_repr_is_one_short_line(refined32):
+    text = repr(refined32)
+    assert "\n" not in text and len(text) < 300, text
+    assert text.startswith("RefineResult(N=32, dim=2, P_target=1.000e-14") and f"N_c={refined32.n_contacts}" in text
+
+
 def test_refined_packing_at_1e_14_is_balanced_isostatic_and_at_its_pressure(refined32):
     r = refined32
     assert r.packing.precision == "double-double" and np.abs(r.packing.positions_lo).max() > 0

@@ -186,6 +186,9 @@ def test_shear_path_file_round_trip(path_seed1, tmp_path):
     out = save_shear_path(tmp_path / "s.shear.h5", path, source="x.h5")
     f = ShearFile(out)
     assert len(f) == 16 and f.attrs["n_changes"] == 1 and f.attrs["steps"] == 15
+    text = repr(f)
+    assert "\n" not in text and len(text) < 200, text
+    assert text.startswith(f"ShearFile({str(out)!r}, dim=2, N=") and "steps=15, changes=1)" in text
     assert np.array_equal(f.columns["phi_j"], path.phi_j) and np.array_equal(f.columns["changed"], path.changed)
     k = int(np.flatnonzero(path.changed)[0])
     assert {tuple(r[1:]) for r in f.removed if r[0] == k} == set(path.steps[k].removed)

@@ -107,15 +107,15 @@ class BondCorrelationResult:
     """q_l spatial correlations on bins of r / <sigma^2>^(1/2), pooled over packings."""
 
     edges: np.ndarray
-    complex_corr: np.ndarray  # <Re Q_i . conj(Q_j)> per bin (NaN where no pairs)
-    magnitude_corr: np.ndarray  # <|Q_i| |Q_j|> per bin
-    complex_stderr: np.ndarray  # standard error of complex_corr (pairs treated as independent)
-    counts: np.ndarray  # pairs per bin
-    baseline: float  # <Re Q_i . conj(Q_j)> over all distinct pairs: the r -> inf value
-    r_min: float  # neighbour cutoff used for Q_i
+    complex_corr: np.ndarray  #: <Re Q_i . conj(Q_j)> per bin (NaN where no pairs)
+    magnitude_corr: np.ndarray  #: <|Q_i| |Q_j|> per bin
+    complex_stderr: np.ndarray  #: standard error of complex_corr (pairs treated as independent)
+    counts: np.ndarray  #: pairs per bin
+    baseline: float  #: <Re Q_i . conj(Q_j)> over all distinct pairs: the r -> inf value
+    r_min: float  #: neighbour cutoff used for Q_i
     l: int
     n_packings: int
-    fit: ExponentialFit  # xi from the local maxima of C(r)
+    fit: ExponentialFit  #: xi from the local maxima of C(r)
 
     def __repr__(self) -> str:
         """One line: l, bins, r range, packings, baseline, the fitted length."""

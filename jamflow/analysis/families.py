@@ -100,7 +100,7 @@ class Families:
 
     points: dict
     family: np.ndarray
-    step: float  # delta gamma of the lattice
+    step: float  #: delta gamma of the lattice
     gamma_min: float
 
     @property
@@ -191,9 +191,9 @@ def mirrored(points: dict, step: float, gamma_min: float = 0.0, center: float = 
 class MirrorCheck:
     """Which families map onto a family under gamma -> 1 - gamma."""
 
-    partner: dict  # family -> set of families its mirror image lands on
-    worst_phi: float  # largest |phi_J(gamma) - phi_J'(1 - gamma)| over all matched points
-    worst_mu: float  # largest |mu(gamma) + mu'(1 - gamma)| over all matched points
+    partner: dict  #: family -> set of families its mirror image lands on
+    worst_phi: float  #: largest |phi_J(gamma) - phi_J'(1 - gamma)| over all matched points
+    worst_mu: float  #: largest |mu(gamma) + mu'(1 - gamma)| over all matched points
 
     def matched(self, among=None) -> int:
         """Families (of ``among``, default all) whose mirror image lands on a family."""

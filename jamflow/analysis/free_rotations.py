@@ -61,11 +61,11 @@ def free_rotation_vectors(packing: Packing, coords: Coordinates | None = None) -
 class ZeroModes:
     """The zero modes of a spectrum against the d translations and the free rotations."""
 
-    n_zero: int  # eigenvalues with |e| <= e_min
-    n_trivial: int  # d
-    n_free: int  # independent free rotations of one-site bodies
-    residual: float  # largest distance of a (unit) known zero vector from the zero-mode space
-    unexplained: int  # zero modes beyond the trivial ones and the free rotations
+    n_zero: int  #: eigenvalues with |e| <= e_min
+    n_trivial: int  #: d
+    n_free: int  #: independent free rotations of one-site bodies
+    residual: float  #: largest distance of a (unit) known zero vector from the zero-mode space
+    unexplained: int  #: zero modes beyond the trivial ones and the free rotations
 
     @property
     def exactly_trivial(self) -> bool:

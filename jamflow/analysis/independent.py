@@ -100,11 +100,11 @@ def _angular_derivatives(sigma_of, vecs, k, axes):
 class IndependentCheck:
     """Energy, forces, torques and generalized torques of a packing by the brute-force sigma."""
 
-    energy: float  # total, eps
-    forces: np.ndarray  # (N, d)
-    torques: np.ndarray  # (N,) 2D, (N, 3) 3D, world frame
-    generalized_torques: np.ndarray  # (N, r) body frame tau_a / d_k on the rotational degrees of freedom
-    contacts: tuple  # (i, j) of the pairs with r < sigma
+    energy: float  #: total, eps
+    forces: np.ndarray  #: (N, d)
+    torques: np.ndarray  #: (N,) 2D, (N, 3) 3D, world frame
+    generalized_torques: np.ndarray  #: (N, r) body frame tau_a / d_k on the rotational degrees of freedom
+    contacts: tuple  #: (i, j) of the pairs with r < sigma
 
     @property
     def energy_per_particle(self) -> float:

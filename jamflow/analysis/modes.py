@@ -47,12 +47,12 @@ DENSE_MAX_DOF = 4096  # above this many degrees of freedom "auto" uses the spars
 class SpectrumResult:
     """Eigen-decomposition of one packing's dynamical matrix (ascending eigenvalues)."""
 
-    eigenvalues: np.ndarray  # (m,), eps / diameter^2; all d N' of them when complete
-    eigenvectors: np.ndarray | None  # (d N', m) orthonormal columns (signs: ``model.frames.canonical_signs``), or None
+    eigenvalues: np.ndarray  #: (m,), eps / diameter^2; all d N' of them when complete
+    eigenvectors: np.ndarray | None  #: (d N', m) orthonormal columns (signs: ``model.frames.canonical_signs``), or None
     dynamical: DynamicalMatrixResult
     e_min: float
-    mass: float  # M in omega = sqrt(e / M)
-    complete: bool  # False: only the lowest m modes (sparse solver)
+    mass: float  #: M in omega = sqrt(e / M)
+    complete: bool  #: False: only the lowest m modes (sparse solver)
     # the translational fractions kept by ``without_vectors`` (not compared, not in the repr)
     kept_fraction: np.ndarray | None = field(default=None, repr=False, compare=False)
 
@@ -220,11 +220,11 @@ def _dense(matrix, vectors: bool):
 class DensityOfStatesResult:
     """D(omega) in modes per unit omega per packing, on bins ``edges``."""
 
-    edges: np.ndarray  # (bins + 1,)
-    density: np.ndarray  # (bins,)
+    edges: np.ndarray  #: (bins + 1,)
+    density: np.ndarray  #: (bins,)
     n_packings: int
-    n_modes: int  # nonzero modes over all packings
-    translational: np.ndarray | None = None  # (bins,) part of D carried by centre motion; None without vectors
+    n_modes: int  #: nonzero modes over all packings
+    translational: np.ndarray | None = None  #: (bins,) part of D carried by centre motion; None without vectors
 
     def __repr__(self) -> str:
         """One line: bins and their range, packings, modes, whether the translational part is known."""
@@ -308,19 +308,19 @@ HARMONIC, BEYOND_OPENING = "harmonic", "beyond opening"  # the amplitude ranges 
 class ModeProfile:
     """Energy profile Delta V(delta) along one nontrivial mode."""
 
-    eigenvalue: float  # Rayleigh quotient of the mode, eps / diameter^2
-    mode: np.ndarray  # (d_f N',) unit vector orthogonal to the translations (sign: ``model.frames.canonical_signs``)
-    deltas: np.ndarray  # amplitudes delta (diameters)
-    delta_v_plus: np.ndarray  # V(xi_0 + delta e) - V(xi_0), total, eps
-    delta_v_minus: np.ndarray  # V(xi_0 - delta e) - V(xi_0)
-    power: float  # slope of log|symmetric part| vs log delta (zero modes: of the part beyond e delta^2/2; nan when flat)
-    flat: bool  # symmetric part below e_min delta^2 / 2 at every delta
-    sign: int  # sign of the symmetric part at the largest delta (-1: energy decreases)
-    regime: str  # HARMONIC (below the first contact opening) or BEYOND_OPENING (zero modes)
-    translational_fraction: float  # share of |e|^2 in the centre coordinates
-    participation: float  # 1 / sum_k w_k^2, w_k particle k's share of |e|^2: particles taking part (1 to N')
-    quartic_straight: float = float("nan")  # zero modes: fourth-order coefficient along the line (``quartic``)
-    quartic_relaxed: float = float("nan")  # ... and its minimum over curved paths; nan: not computed
+    eigenvalue: float  #: Rayleigh quotient of the mode, eps / diameter^2
+    mode: np.ndarray  #: (d_f N',) unit vector orthogonal to the translations (sign: ``model.frames.canonical_signs``)
+    deltas: np.ndarray  #: amplitudes delta (diameters)
+    delta_v_plus: np.ndarray  #: V(xi_0 + delta e) - V(xi_0), total, eps
+    delta_v_minus: np.ndarray  #: V(xi_0 - delta e) - V(xi_0)
+    power: float  #: slope of log|symmetric part| vs log delta (zero modes: the part beyond e delta^2/2; nan if flat)
+    flat: bool  #: symmetric part below e_min delta^2 / 2 at every delta
+    sign: int  #: sign of the symmetric part at the largest delta (-1: energy decreases)
+    regime: str  #: HARMONIC (below the first contact opening) or BEYOND_OPENING (zero modes)
+    translational_fraction: float  #: share of |e|^2 in the centre coordinates
+    participation: float  #: 1 / sum_k w_k^2, w_k particle k's share of |e|^2: particles taking part (1 to N')
+    quartic_straight: float = float("nan")  #: zero modes: fourth-order coefficient along the line (``quartic``)
+    quartic_relaxed: float = float("nan")  #: ... and its minimum over curved paths; nan: not computed
 
     def __repr__(self) -> str:
         """One line: eigenvalue, behaviour, power, character, participation, amplitudes."""
@@ -353,9 +353,9 @@ class StabilityResult:
     """Class of a packing and the energy profiles along its lowest nontrivial modes; the
     fields ``mode_eigenvalue`` ... ``sign`` describe the lowest one (``profiles[0]``)."""
 
-    label: str  # STABLE | QUARTIC_STABLE | LOCALLY_STABLE | UNSTABLE
-    n_zero: int  # |e| <= e_min, d trivial ones included
-    n_negative: int  # e < -e_min
+    label: str  #: STABLE | QUARTIC_STABLE | LOCALLY_STABLE | UNSTABLE
+    n_zero: int  #: |e| <= e_min, d trivial ones included
+    n_negative: int  #: e < -e_min
     mode_eigenvalue: float
     mode: np.ndarray
     deltas: np.ndarray
@@ -364,7 +364,7 @@ class StabilityResult:
     power: float
     flat: bool
     sign: int
-    profiles: tuple = ()  # ModeProfile per profiled mode, ascending eigenvalue
+    profiles: tuple = ()  #: ModeProfile per profiled mode, ascending eigenvalue
 
     def __repr__(self) -> str:
         """One line: class, zero and negative modes, the lowest mode's eigenvalue and behaviour, profiles."""

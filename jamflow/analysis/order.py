@@ -88,8 +88,8 @@ class TranslationalOrderResult:
     G: float
     r_min: float
     r_max: float
-    g_min: float  # smoothed g at r_min (a broad feature: smoothing removes noise, not signal)
-    g_max: float  # raw height of the first peak (near-singular: smoothing would bias it)
+    g_min: float  #: smoothed g at r_min (a broad feature: smoothing removes noise, not signal)
+    g_max: float  #: raw height of the first peak (near-singular: smoothing would bias it)
 
 
 def translational_order(rdf: RDFResult, r_min: float | None = None, smooth: float = 0.05) -> TranslationalOrderResult:
@@ -156,11 +156,11 @@ class BondOrderResult:
 
     global_order: float
     local_order: float
-    r_min: float  # neighbour cutoff, units of <sigma^2>^(1/2)
+    r_min: float  #: neighbour cutoff, units of <sigma^2>^(1/2)
     l: int
     dim: int
-    particle_order: np.ndarray  # (N, 1) or (N, 2l+1) complex Q_i (zero rows: isolated)
-    n_neighbours: np.ndarray  # (N,)
+    particle_order: np.ndarray  #: (N, 1) or (N, 2l+1) complex Q_i (zero rows: isolated)
+    n_neighbours: np.ndarray  #: (N,)
 
     def __repr__(self) -> str:
         """One line: l, dim, Q_l global and local, r_min, N, isolated particles."""

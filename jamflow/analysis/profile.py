@@ -24,11 +24,11 @@ from jamflow.model.pairs import overlapping_pairs
 
 @dataclass(frozen=True)
 class ProfileResult:
-    heights: np.ndarray  # (B,) plane heights (sigma_zz, weight) = slab centres (sigma_xx)
-    sigma_zz: np.ndarray  # (B,) force across each plane per area
-    weight_above: np.ndarray  # (B,) g N(z > plane) / A
-    sigma_xx: np.ndarray  # (B,) slab virial stress along the first axis
-    top: float  # height of the highest particle top
+    heights: np.ndarray  #: (B,) plane heights (sigma_zz, weight) = slab centres (sigma_xx)
+    sigma_zz: np.ndarray  #: (B,) force across each plane per area
+    weight_above: np.ndarray  #: (B,) g N(z > plane) / A
+    sigma_xx: np.ndarray  #: (B,) slab virial stress along the first axis
+    top: float  #: height of the highest particle top
 
 
 class PressureProfile:

@@ -125,13 +125,13 @@ def check_r_max(r_max, packings: Sequence[Packing]) -> float:
 class RDFResult:
     """g(r) on bins of r / <sigma^2>^(1/2); ``partial[a, b]`` for discrete species."""
 
-    edges: np.ndarray  # (nbins + 1,) reduced units
-    g: np.ndarray  # (nbins,)
-    counts: np.ndarray  # (nbins,) pair counts (i < j) pooled over packings
-    ideal: np.ndarray  # (nbins,) expected counts for an ideal gas at the same densities
-    species: np.ndarray  # distinct diameters (empty when partials were not computed)
-    partial: np.ndarray  # (ns, ns, nbins) g_ab, symmetric; shape (0, 0, nbins) if not computed
-    scales: np.ndarray  # <sigma^2>^(1/2) of each packing (diameters)
+    edges: np.ndarray  #: (nbins + 1,) reduced units
+    g: np.ndarray  #: (nbins,)
+    counts: np.ndarray  #: (nbins,) pair counts (i < j) pooled over packings
+    ideal: np.ndarray  #: (nbins,) expected counts for an ideal gas at the same densities
+    species: np.ndarray  #: distinct diameters (empty when partials were not computed)
+    partial: np.ndarray  #: (ns, ns, nbins) g_ab, symmetric; shape (0, 0, nbins) if not computed
+    scales: np.ndarray  #: <sigma^2>^(1/2) of each packing (diameters)
     n_packings: int
 
     def __repr__(self) -> str:
@@ -295,9 +295,9 @@ def _positive_half(n: np.ndarray) -> np.ndarray:
 class StructureFactorResult:
     """Shell-averaged S(k); k in units of 1/<sigma^2>^(1/2); only non-empty shells."""
 
-    k: np.ndarray  # mean |k| of the vectors in each shell
-    s: np.ndarray  # mean S over the shell's vectors (pooled over packings)
-    n_vectors: np.ndarray  # vectors per shell (one of each +-k pair), summed over packings
+    k: np.ndarray  #: mean |k| of the vectors in each shell
+    s: np.ndarray  #: mean S over the shell's vectors (pooled over packings)
+    n_vectors: np.ndarray  #: vectors per shell (one of each +-k pair), summed over packings
     dk: float
     n_packings: int
 

@@ -35,8 +35,8 @@ class CrossCheck:
     contacts_both: int
     contacts_only_controller: int
     contacts_only_deck: int
-    max_displacement: float  # largest minimum-image distance between a particle's two positions
-    first_difference: int | None  # first minimisation whose phi, V, iterations or reason differ
+    max_displacement: float  #: largest minimum-image distance between a particle's two positions
+    first_difference: int | None  #: first minimisation whose phi, V, iterations or reason differ
     tolerance: float
 
     @property
@@ -147,13 +147,13 @@ def _same(x, y) -> bool:
 class ShearCrossCheck:
     """Controller (``protocols.shear.shear`` on LAMMPS) against the shear deck from one start."""
 
-    controller: object  # ShearPath
-    deck: object  # ShearDeckResult
-    contacts_both: int  # last step
+    controller: object  #: ShearPath
+    deck: object  #: ShearDeckResult
+    contacts_both: int  #: last step
     contacts_only_controller: int
     contacts_only_deck: int
-    max_displacement: float  # last step
-    first_difference: tuple | None  # (shear step, minimisation) where the histories first differ
+    max_displacement: float  #: last step
+    first_difference: tuple | None  #: (shear step, minimisation) where the histories first differ
     tolerance: float
 
     @property

@@ -186,9 +186,9 @@ class DeckResult:
     energy_per_particle: float
     pressure: float
     max_force: float
-    history: dict  # PROTOCOL_COLUMNS -> np.ndarray, one entry per minimisation
-    seconds: float  # wall time of the lmp process
-    prefix: Path  # PREFIX.data, PREFIX.protocol.txt, PREFIX.lammps.log
+    history: dict  #: PROTOCOL_COLUMNS -> np.ndarray, one entry per minimisation
+    seconds: float  #: wall time of the lmp process
+    prefix: Path  #: PREFIX.data, PREFIX.protocol.txt, PREFIX.lammps.log
 
     @property
     def minimizations(self) -> int:

@@ -104,8 +104,8 @@ class ShearDeckResult:
     shear step), the minimisation history of each step and the last packing."""
 
     static: dict
-    histories: list  # per step: PROTOCOL_COLUMNS -> np.ndarray
-    packing: Packing  # the last step, its box carrying the accumulated strain
+    histories: list  #: per step: PROTOCOL_COLUMNS -> np.ndarray
+    packing: Packing  #: the last step, its box carrying the accumulated strain
     seconds: float
     prefix: Path
 

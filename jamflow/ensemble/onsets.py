@@ -29,11 +29,11 @@ class SizeStats:
     """Onset statistics at one N (phi_J dimensionless, <z> contacts per non-floater)."""
 
     n: int
-    phi: np.ndarray  # phi_J of every packing
-    z: np.ndarray  # <z> of every packing (non-floaters)
-    isostatic: np.ndarray  # bool per packing
+    phi: np.ndarray  #: phi_J of every packing
+    z: np.ndarray  #: <z> of every packing (non-floaters)
+    isostatic: np.ndarray  #: bool per packing
     failed: int
-    width_err: float  # bootstrap standard error of W
+    width_err: float  #: bootstrap standard error of W
 
     @property
     def count(self) -> int:
@@ -63,11 +63,11 @@ class Fit:
 @dataclass(frozen=True)
 class OnsetResult:
     dim: int
-    sizes: list  # SizeStats, ascending N
-    nu: Fit  # W ~ N^-nu
-    amplitude: float  # W = amplitude * N^-nu
-    phi_inf: Fit  # <phi_J>(N -> infinity)
-    shift: float  # a in <phi_J>(N) = phi_inf - a N^-nu
+    sizes: list  #: SizeStats, ascending N
+    nu: Fit  #: W ~ N^-nu
+    amplitude: float  #: W = amplitude * N^-nu
+    phi_inf: Fit  #: <phi_J>(N -> infinity)
+    shift: float  #: a in <phi_J>(N) = phi_inf - a N^-nu
     n_bootstrap: int
 
     @property
@@ -262,7 +262,7 @@ class WidthCurve:
     n: np.ndarray
     width: np.ndarray
     width_err: np.ndarray
-    nu: Fit  # as the table states it (its error is the table's bootstrap error)
+    nu: Fit  #: as the table states it (its error is the table's bootstrap error)
     amplitude: float
 
     @property

@@ -37,12 +37,12 @@ class EnsembleReport:
     requested: int
     done_before: int = 0
     made: int = 0
-    failed: int = 0  # recorded failures (JammingFailed or a task that killed its workers), new and old
-    errors: list = field(default_factory=list)  # exceptions not recorded (the task is retried by a rerun)
-    corrupt: list = field(default_factory=list)  # unreadable files moved aside and redone
+    failed: int = 0  #: recorded failures (JammingFailed or a task that killed its workers), new and old
+    errors: list = field(default_factory=list)  #: exceptions not recorded (the task is retried by a rerun)
+    corrupt: list = field(default_factory=list)  #: unreadable files moved aside and redone
     workers_lost: int = 0
     interrupted: bool = False
-    stopped: str = ""  # why the run stopped early (disk full, broken set-up)
+    stopped: str = ""  #: why the run stopped early (disk full, broken set-up)
     rows: dict = field(default_factory=dict)
 
 

@@ -14,6 +14,12 @@ follow HOOMD's layout: the N body centres (``body`` = own index, diameter 0) and
 counting the box vectors it was moved by: a site about its wrapped centre that sticks out of the
 box is written wrapped, and position + image @ h.T puts the body back together. Lengths in
 small diameters.
+
+``packings_from_gsd`` reads such files back (disks, spheres, ellipses, spheroids; every frame),
+as ``jamflow analyze``, ``modes`` and ``draw`` do: with GSD's float32 coordinates, so like LAMMPS
+files read through MDAnalysis (``jamflow.io.readers``) they carry ~1e-7 relative round-off, harmless
+for structure and pictures but not for contact-level quantities of near-jamming packings (use
+jamflow's HDF5 file there). The potential is unknown to a GSD file: the linear spring.
 """
 
 from __future__ import annotations
@@ -23,7 +29,9 @@ from pathlib import Path
 
 import numpy as np
 
+from jamflow.model.box import Box
 from jamflow.model.packing import Packing
+from jamflow.model.shapes.parse import parse_shape
 from jamflow.support.files import atomic_path
 
 MAX_TYPES = 8
@@ -112,3 +120,49 @@ def write_gsd(path, packing: Packing) -> Path:
     with atomic_path(path) as tmp, gsd_module().open(name=str(tmp), mode="w") as f:
         f.append(frame)
     return Path(path)
+
+
+GSD_SUFFIXES = (".gsd",)
+
+
+def packings_from_gsd(path) -> list[Packing]:
+    """Every frame of a GSD file as a Packing (module docstring): the box from HOOMD's
+    [Lx, Ly, Lz, xy, xz, yz], positions wrapped into jamflow's cell, ``diameter`` as the
+    diameters, ``Ellipsoid`` type shapes as ellipses (2D) or spheroids (3D) with their
+    orientations. Rigid bodies (``body`` set) are refused: read them from the jamflow file."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no GSD file {path}")
+    hoomd = gsd_module()
+    try:
+        with hoomd.open(name=str(path), mode="r") as f:
+            frames = list(f)
+    except Exception as err:  # gsd raises RuntimeError or OSError for files that are not GSD
+        raise ValueError(f"{path} is not a GSD file gsd can read ({err})") from None
+    if not frames:
+        raise ValueError(f"{path} has no frame")
+    return [_packing_of_frame(frame, path, k) for k, frame in enumerate(frames)]
+
+
+def _packing_of_frame(frame, path: Path, k: int) -> Packing:
+    dim = int(frame.configuration.dimensions)
+    p = frame.particles
+    if p.body is not None and np.any(np.asarray(p.body) >= 0):
+        raise ValueError(f"{path}: rigid bodies in a GSD file are not read back; use the jamflow packing file "
+                         "(jamflow export wrote the GSD file from it)")
+    lx, ly, lz, xy, xz, yz = (float(v) for v in frame.configuration.box)
+    h = np.array([[lx, xy * ly, xz * lz], [0.0, ly, yz * lz], [0.0, 0.0, lz]])[:dim, :dim]
+    box = Box(h)
+    position = np.asarray(p.position, float)[:, :dim]
+    s = box.to_fractional(position) + 0.5  # HOOMD's cell is centred on the origin
+    positions = box.wrap(box.to_cartesian(s))
+    diameters = np.asarray(p.diameter, float)
+    shape, orientations = parse_shape("disk", dim), None
+    shapes = p.type_shapes or []
+    if shapes and shapes[0].get("type") == "Ellipsoid":
+        alpha = float(f"{float(shapes[0]['a']) / float(shapes[0]['b']):.7g}")  # float32 semi-axes
+        shape = parse_shape(f"{'ellipse' if dim == 2 else 'spheroid'}:{alpha!r}", dim)
+        q = np.asarray(p.orientation, float)
+        orientations = 2.0 * np.arctan2(q[:, 3], q[:, 0]) if dim == 2 else q / np.linalg.norm(q, axis=1)[:, None]
+    meta = {"source": str(path), "frame": k, "coordinate_precision": "float32 (GSD)"}
+    return Packing(positions, diameters, box, metadata=meta, shape=shape, orientations=orientations)

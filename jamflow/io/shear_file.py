@@ -156,6 +156,13 @@ class ShearFile:
             self.removed, self.added = f["changes/removed"][...], f["changes/added"][...]
         self.source = path
 
+    def __repr__(self) -> str:
+        """One line: the file, dim, N, the strain range, steps and the steps whose contacts changed."""
+        a, gamma = self.attrs, self.columns["gamma"]
+        changed = len(np.union1d(self.removed[:, 0], self.added[:, 0]))
+        return (f"ShearFile({str(self.source)!r}, dim={int(a['dim'])}, N={len(self.diameters)}, "
+                f"gamma={float(gamma[0]):.6g} -> {float(gamma[-1]):.6g}, steps={len(self) - 1}, changes={changed})")
+
     def __len__(self) -> int:
         return len(self.columns["gamma"])
 

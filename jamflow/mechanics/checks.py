@@ -42,18 +42,18 @@ class PackingChecks:
     energy_per_particle: float
     v_tol: float | None
     in_window: bool | None
-    max_force: float  # largest net force component, eps/diameter (refine: largest norm |F|)
-    force_tol: float | None  # the minimiser's tolerance, for the record
-    mean_contact_force: float  # mean |dV/dr| over overlapping pairs (nan without any)
-    force_ratio: float  # max_force / mean_contact_force
+    max_force: float  #: largest net force component, eps/diameter (refine: largest norm |F|)
+    force_tol: float | None  #: the minimiser's tolerance, for the record
+    mean_contact_force: float  #: mean |dV/dr| over overlapping pairs (nan without any)
+    force_ratio: float  #: max_force / mean_contact_force
     force_balanced: bool
-    n_contacts: int  # N_c among non-floaters
-    isostatic_count: int  # N_c,iso
-    excess_contacts: int  # N_c - N_c,iso
+    n_contacts: int  #: N_c among non-floaters
+    isostatic_count: int  #: N_c,iso
+    excess_contacts: int  #: N_c - N_c,iso
     n_floaters: int
     n_kept: int
     mean_z: float
-    jammed: bool  # N_c >= N_c,iso with at least one non-floater
+    jammed: bool  #: N_c >= N_c,iso with at least one non-floater
 
     @property
     def passed(self) -> bool:

@@ -61,22 +61,22 @@ from jamflow.model.pairs import (candidate_pairs, contact_distances, overlapping
 class ContactsResult:
     """Contacts among non-floaters. ``i < j`` index the original packing."""
 
-    i: np.ndarray  # (N_c,) first particle of each contact
-    j: np.ndarray  # (N_c,) second particle
-    floater: np.ndarray  # (N,) bool
-    z: np.ndarray  # (N,) contacts per particle among non-floaters; 0 for floaters
+    i: np.ndarray  #: (N_c,) first particle of each contact
+    j: np.ndarray  #: (N_c,) second particle
+    floater: np.ndarray  #: (N,) bool
+    z: np.ndarray  #: (N,) contacts per particle among non-floaters; 0 for floaters
     dim: int
-    n_overlapping: int  # overlapping pairs before floater removal
-    n_near_contact: int  # pairs with |r/sigma - 1| < near_tol (diagnostic)
-    dof: int | None = None  # d_f, degrees of freedom per particle (None: d, disks and spheres)
-    wall_contacts: np.ndarray | None = None  # (N_w, 2): particle, face (2 a + side) of each smooth-wall contact
-    fixed: np.ndarray | None = None  # (N,) bool: fixed (wall) particles, never floaters, no degrees of freedom
-    trivial: int | None = None  # trivial translations (None: d, a periodic box)
-    loaded: bool = False  # under gravity: no +1 in the isostatic count
-    balanced: np.ndarray | None = None  # (N,) bool: kept by the Figure 2.19 exception (None: not tested)
-    n_site_contacts: int | None = None  # rigid bodies: overlapping site pairs among non-floaters
-    n_body_contacts: int | None = None  # rigid bodies: touching pairs of non-floater bodies
-    one_site: np.ndarray | None = None  # rigid bodies (N,) bool: a non-floater whose contacts all touch one site
+    n_overlapping: int  #: overlapping pairs before floater removal
+    n_near_contact: int  #: pairs with |r/sigma - 1| < near_tol (diagnostic)
+    dof: int | None = None  #: d_f, degrees of freedom per particle (None: d, disks and spheres)
+    wall_contacts: np.ndarray | None = None  #: (N_w, 2): particle, face (2 a + side) of each smooth-wall contact
+    fixed: np.ndarray | None = None  #: (N,) bool: fixed (wall) particles, never floaters, no degrees of freedom
+    trivial: int | None = None  #: trivial translations (None: d, a periodic box)
+    loaded: bool = False  #: under gravity: no +1 in the isostatic count
+    balanced: np.ndarray | None = None  #: (N,) bool: kept by the Figure 2.19 exception (None: not tested)
+    n_site_contacts: int | None = None  #: rigid bodies: overlapping site pairs among non-floaters
+    n_body_contacts: int | None = None  #: rigid bodies: touching pairs of non-floater bodies
+    one_site: np.ndarray | None = None  #: rigid bodies (N,) bool: a non-floater whose contacts all touch one site
 
     def __repr__(self) -> str:
         """One line: N, N', floaters, N_c against isostatic, <z>; the arrays are the fields."""

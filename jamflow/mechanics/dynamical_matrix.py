@@ -16,11 +16,11 @@ from jamflow.model.packing import Packing
 class DynamicalMatrixResult:
     """Dynamical matrix over the non-floaters (unit masses: equal to the Hessian)."""
 
-    matrix: sp.csr_matrix  # (d_f N', d_f N'), eps / diameter^2
-    particles: np.ndarray  # (N',) indices of the rows' particles in the original packing
-    packing: Packing  # the packing the matrix belongs to (floaters removed)
-    contacts: ContactsResult | None  # None when floaters were kept
-    n_total: int  # N, particles in the original packing
+    matrix: sp.csr_matrix  #: (d_f N', d_f N'), eps / diameter^2
+    particles: np.ndarray  #: (N',) indices of the rows' particles in the original packing
+    packing: Packing  #: the packing the matrix belongs to (floaters removed)
+    contacts: ContactsResult | None  #: None when floaters were kept
+    n_total: int  #: N, particles in the original packing
 
     def __repr__(self) -> str:
         """One line: matrix shape and stored entries, N' of N, dim, shape."""

@@ -45,11 +45,11 @@ class StrainTerms:
     (``hessian.pair_terms``), where those coordinates sit in the dynamical matrix, and the
     separation of the two particles' centres."""
 
-    rows: np.ndarray  # (P, L) global rows of each pair's local coordinates
-    gradient: np.ndarray  # (P, L) eps / diameter
-    blocks: np.ndarray  # (P, L, L) eps / diameter^2
-    separations: np.ndarray  # (P, d) centre separations r_i - r_j, diameters
-    size: int  # rows of the dynamical matrix
+    rows: np.ndarray  #: (P, L) global rows of each pair's local coordinates
+    gradient: np.ndarray  #: (P, L) eps / diameter
+    blocks: np.ndarray  #: (P, L, L) eps / diameter^2
+    separations: np.ndarray  #: (P, d) centre separations r_i - r_j, diameters
+    size: int  #: rows of the dynamical matrix
 
     @classmethod
     def of(cls, packing: Packing) -> "StrainTerms":
@@ -91,16 +91,16 @@ def affine_terms(terms: StrainTerms, strain: Strain) -> tuple[float, np.ndarray]
 class HessianModuliResult:
     """G and B from the Hessian, with their affine parts and what the spectrum looked like."""
 
-    G: float  # eps / diameter^d
+    G: float  #: eps / diameter^d
     B: float
-    G_affine: float  # without the non-affine relaxation (upper bounds)
+    G_affine: float  #: without the non-affine relaxation (upper bounds)
     B_affine: float
-    pressure_tensor: np.ndarray  # (d, d) of the floater-free packing, from the same pair terms
-    n_kept: int  # particles after floater removal
+    pressure_tensor: np.ndarray  #: (d, d) of the floater-free packing, from the same pair terms
+    n_kept: int  #: particles after floater removal
     n_contacts: int
-    n_extra_zero: int  # zero modes beyond the d translations
-    n_negative: int  # eigenvalues below -zero_tol max e
-    lowest_eigenvalue: float  # smallest non-trivial eigenvalue
+    n_extra_zero: int  #: zero modes beyond the d translations
+    n_negative: int  #: eigenvalues below -zero_tol max e
+    lowest_eigenvalue: float  #: smallest non-trivial eigenvalue
     zero_tol: float
 
     def __repr__(self) -> str:
@@ -164,11 +164,11 @@ def _check_zero_modes(coeff, live, dim, strain) -> None:
 class ContactModuli:
     """G and B of disks/spheres by the Hessian route over a contact network the caller found."""
 
-    G: float  # eps / diameter^d
+    G: float  #: eps / diameter^d
     B: float
     G_affine: float
     B_affine: float
-    pressure_tensor: np.ndarray  # (d, d) from the same contacts
+    pressure_tensor: np.ndarray  #: (d, d) from the same contacts
     n_kept: int
     n_contacts: int
 

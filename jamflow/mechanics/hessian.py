@@ -60,8 +60,8 @@ class Coordinates:
 
     n: int
     dim: int
-    axes: tuple  # body axes (0 = x, the director, ...) whose rotations are degrees of freedom
-    lengths: np.ndarray  # (N, r) d_k of those axes, diameters
+    axes: tuple  #: body axes (0 = x, the director, ...) whose rotations are degrees of freedom
+    lengths: np.ndarray  #: (N, r) d_k of those axes, diameters
 
     @classmethod
     def of(cls, packing: Packing) -> "Coordinates":
@@ -124,12 +124,12 @@ class ReducedDistances(NamedTuple):
     first and second derivatives in the pair's local coordinates [x_i (d), x_j (d), rot_i (r),
     rot_j (r)] (``_local_index``); every pair energy is V(s), so these carry all the geometry."""
 
-    i: np.ndarray  # (P,) first particle
-    j: np.ndarray  # (P,) second particle
-    s: np.ndarray  # (P,) < 1
-    ds: np.ndarray  # (P, L)
-    d2s: np.ndarray  # (P, L, L)
-    delta: np.ndarray | None = None  # (P,) 1 - s = overlap / sigma from double-double overlaps (None: from s)
+    i: np.ndarray  #: (P,) first particle
+    j: np.ndarray  #: (P,) second particle
+    s: np.ndarray  #: (P,) < 1
+    ds: np.ndarray  #: (P, L)
+    d2s: np.ndarray  #: (P, L, L)
+    delta: np.ndarray | None = None  #: (P,) 1 - s = overlap / sigma from double-double overlaps (None: from s)
 
 
 def reduced_distances(packing: Packing, skin: float = 0.0) -> ReducedDistances:
@@ -144,10 +144,10 @@ def reduced_distances(packing: Packing, skin: float = 0.0) -> ReducedDistances:
 class PairTerms(NamedTuple):
     """Derivatives of each contact's energy V(s) in its local coordinates."""
 
-    i: np.ndarray  # (P,) first particle
-    j: np.ndarray  # (P,) second particle
-    gradient: np.ndarray  # (P, L) dV/dxi: minus the generalized forces of the pair on i and j
-    hessian: np.ndarray  # (P, L, L)
+    i: np.ndarray  #: (P,) first particle
+    j: np.ndarray  #: (P,) second particle
+    gradient: np.ndarray  #: (P, L) dV/dxi: minus the generalized forces of the pair on i and j
+    hessian: np.ndarray  #: (P, L, L)
 
 
 def law_derivatives(potential, s: np.ndarray, delta: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -272,9 +272,9 @@ class _PairFrame:
 
     d: int
     r: int
-    axes_i: np.ndarray  # (P, r, 3)
+    axes_i: np.ndarray  #: (P, r, 3)
     axes_j: np.ndarray
-    inv_i: np.ndarray  # (P, r) 1 / d_k
+    inv_i: np.ndarray  #: (P, r) 1 / d_k
     inv_j: np.ndarray
 
     @classmethod

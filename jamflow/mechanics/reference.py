@@ -40,12 +40,12 @@ from jamflow.model.walls import face_loads, gravity_terms, smooth_wall_terms
 
 @dataclass(frozen=True)
 class ReferenceResult:
-    energy: float  # total potential energy, sum over distinct pairs
-    forces: np.ndarray  # (N, d)
-    pressure_tensor: np.ndarray  # (d, d), virial only (athermal)
-    torques: np.ndarray | None = None  # (N,) in 2D, (N, 3) in 3D, world frame; None for spheres
-    wall_forces: np.ndarray | None = None  # (d, 2, d): force of the particles on each face (walled axes)
-    contact_forces: np.ndarray | None = None  # |f| of every overlapping pair (of sites, for rigid bodies)
+    energy: float  #: total potential energy, sum over distinct pairs
+    forces: np.ndarray  #: (N, d)
+    pressure_tensor: np.ndarray  #: (d, d), virial only (athermal)
+    torques: np.ndarray | None = None  #: (N,) in 2D, (N, 3) in 3D, world frame; None for spheres
+    wall_forces: np.ndarray | None = None  #: (d, 2, d): force of the particles on each face (walled axes)
+    contact_forces: np.ndarray | None = None  #: |f| of every overlapping pair (of sites, for rigid bodies)
 
     def __repr__(self) -> str:
         """One line: N, dim, energy, P, max|F|, which optional arrays are there."""

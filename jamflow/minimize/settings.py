@@ -24,27 +24,29 @@ CREEP_FORCE = 1e-9  # max force (eps/diameter) below which a minimisation that h
 class MinimizerSettings:
     """Parameters of one minimisation. Energies per particle in eps; forces in eps/diameter."""
 
-    method: str = "fire"
-    force_tol: float | None = None  # None: base * max(1, L / 20) * k, L the longest box side, k the contact
-    # stiffness, base the shape's ``force_tol_base`` (1e-14; 5e-13 for ellipses/spheroids)
-    delta: float = 1e-16  # the chapter's relative energy change threshold
-    v_min: float = 1e-16  # the chapter's V_min (per particle)
-    max_iterations: int = 500_000
-    window: int = 10000  # iterations per LAMMPS call between rule checks
+    method: str = "fire"  #: ``fire``, ``cg`` or ``md``
+    #: largest force component at convergence, eps / diameter; None: the force floor base x max(1, L / 20) x k,
+    #: L the longest box side, k the contact stiffness, base the shape's ``force_tol_base`` (1e-14; 5e-13 for
+    #: ellipses and spheroids)
+    force_tol: float | None = None
+    delta: float = 1e-16  #: the chapter's relative energy change threshold (V_t+1 - V_t) / V_t
+    v_min: float = 1e-16  #: the chapter's V_min: below it (energy per particle, eps) the state counts as unjammed
+    max_iterations: int = 500_000  #: most iterations of one minimisation
+    window: int = 10000  #: iterations per LAMMPS call between checks of the stopping rules
     # FIRE initial step (0.1 diverges: docs/notes/failure-modes.md), in sqrt(m diameter^2 / eps); the compiled
     # FIRE takes it in units of sqrt(m l^2 / eps), l the shape's smallest unit-scale contact distance
     # (``engines.compiled.fire.time_unit``: 1 but for oblate spheroids and dimers of unequal sites)
-    timestep: float = 0.05
-    md_timestep: float = 0.1  # damped-MD step
-    damping: float = 0.3  # md only: damping coefficient b, in sqrt(m eps) / diameter
-    md_damping: str = "viscous"  # md only: "viscous" (-b v on every particle) or "pairwise" (chapter eq. 2.3)
-    md_sample_every: int = 10  # md only: steps between the energy samples of the energy-steady rule
-    pressure: float | None = None  # target pressure (eps / diameter^d): the box relaxes to it; None: fixed box
-    stress: str = "iso"  # with pressure: iso | aniso (each P_aa) | tri (also the shear stresses -> 0)
+    timestep: float = 0.05  #: FIRE's initial step, sqrt(m diameter^2 / eps)
+    md_timestep: float = 0.1  #: step of damped MD, sqrt(m diameter^2 / eps)
+    damping: float = 0.3  #: ``md`` only: damping coefficient b, sqrt(m eps) / diameter
+    md_damping: str = "viscous"  #: ``md`` only: ``viscous`` (-b v on every particle) or ``pairwise`` (chapter eq. 2.3)
+    md_sample_every: int = 10  #: ``md`` only: steps between the energy samples of the energy-steady rule
+    pressure: float | None = None  #: target pressure (eps / diameter^d): the box relaxes to it; None: fixed box
+    stress: str = "iso"  #: with ``pressure``: ``iso``, ``aniso`` (each P_aa) or ``tri`` (also the shear stresses to 0)
     # md of particles that turn (LAMMPS ellipsoids: fix langevin at T = 0, drag rate b / m on translations
     # and rotations). Near onset 0.01 reached the force tolerance where 0.3 was 500x off after 3e5 steps
     # (docs/notes/ellipses.md)
-    rotating_damping: float = 0.01
+    rotating_damping: float = 0.01  #: ``md`` of particles that turn: drag rate b / m on translations and rotations
     # what a creeping minimisation (not converged, max force below 1e-9; 1e-6 for the polish of rigid bodies)
     # does between FIRE windows at a fixed box:
     # "soft-modes": Newton steps along its softest modes (``jamflow.minimize.soft_modes``), "polish": Gauss-Newton
@@ -55,8 +57,9 @@ class MinimizerSettings:
     # 2D disks (once) with the linear spring, soft modes for the other shapes that turn (ellipses, spheroids,
     # rigid bodies with other laws) (docs/notes/nmers.md, docs/notes/soft-modes.md, docs/notes/speed-2.md section 8), nothing
     # otherwise
+    #: between FIRE windows of a creeping minimisation: ``auto``, ``soft-modes``, ``polish``, ``newton`` or ``off``
     creep: str = "auto"
-    creep_after: int | None = None  # iterations before the first attempt; None: the method's measured value
+    creep_after: int | None = None  #: iterations before the first creep attempt; None: the method's measured value
 
     __repr__ = changed_fields_repr  # only the fields that differ from their defaults
 
@@ -119,6 +122,7 @@ class MinimizerSettings:
                                        packing.shape.force_tol_base)
 
     def as_dict(self) -> dict:
+        """The settings as plain values (JSON-serialisable)."""
         return {f"minimizer_{k}": v for k, v in asdict(self).items()}
 
 

@@ -40,7 +40,9 @@ class Box:
     """An upper-triangular cell; ``h`` columns are the cell vectors; ``periodic`` per axis
     (None: every axis periodic; False: walls at both faces of that axis)."""
 
+    #: (d, d) upper-triangular cell matrix, cell vectors as columns: [[lx, xy, xz], [0, ly, yz], [0, 0, lz]], diameters
     h: np.ndarray
+    #: one flag per axis; None: every axis periodic; False: walls at both faces of that axis
     periodic: tuple | None = None
 
     def __post_init__(self):
@@ -86,6 +88,7 @@ class Box:
     # properties -------------------------------------------------------------------
     @property
     def dim(self) -> int:
+        """Dimension d, 2 or 3."""
         return self.h.shape[0]
 
     @property
@@ -116,6 +119,7 @@ class Box:
 
     @property
     def is_triclinic(self) -> bool:
+        """True when some tilt (xy, xz, yz) is nonzero."""
         return bool(np.any(self.tilts))
 
     @property
@@ -185,9 +189,11 @@ class Box:
         return replace(self, h=h)
 
     def to_fractional(self, positions: np.ndarray) -> np.ndarray:
+        """(N, d) positions in cell coordinates, h^-1 r (0..1 inside the cell)."""
         return np.linalg.solve(self.h, np.asarray(positions, float).T).T
 
     def to_cartesian(self, fractional: np.ndarray) -> np.ndarray:
+        """(N, d) cell coordinates back to positions, h s."""
         return np.asarray(fractional, float) @ self.h.T
 
     def wrap(self, positions: np.ndarray) -> np.ndarray:

@@ -39,10 +39,10 @@ class Extended:
     float64 parts they were made with: a Packing whose positions or box differ (any operation that
     moves the particles in float64) drops them, so a stale low part never survives a move."""
 
-    positions_hi: np.ndarray  # (N, d)
-    positions_lo: np.ndarray  # (N, d)
-    lengths_hi: np.ndarray  # (d,)
-    lengths_lo: np.ndarray  # (d,)
+    positions_hi: np.ndarray  #: (N, d)
+    positions_lo: np.ndarray  #: (N, d)
+    lengths_hi: np.ndarray  #: (d,)
+    lengths_lo: np.ndarray  #: (d,)
 
     def matches(self, positions: np.ndarray, box: Box) -> bool:
         return (self.positions_hi.shape == positions.shape and bool(np.array_equal(self.positions_hi, positions))
@@ -97,16 +97,19 @@ def particle_volumes(diameters: np.ndarray, dim: int) -> np.ndarray:
 class Packing:
     """N particles of one shape in a periodic box, with their pair potential."""
 
-    positions: np.ndarray
+    positions: np.ndarray  #: (N, d) centres, in diameters (the small diameter is 1)
+    #: (N,) each particle's size scale: the diameter of disks and spheres, the width b of ellipsoids
     diameters: np.ndarray
-    box: Box
-    potential: Potential = field(default_factory=Spring)
+    box: Box  #: the cell (``Box``): periodic, tilted, or with walls
+    potential: Potential = field(default_factory=Spring)  #: the pair law (``Spring`` or ``RepulsiveLJ``)
+    #: free-form values carried with the packing (written to files as attributes)
     metadata: dict = field(default_factory=dict)
-    shape: object = SPHERE
+    shape: object = SPHERE  #: the particle shape (``jamflow.parse_shape``); disks/spheres by default
+    #: (N,) angles (2D) or (N, 4) unit quaternions (w, x, y, z) (3D); None for disks, spheres
     orientations: np.ndarray | None = None
-    fixed: np.ndarray | None = None  # (N,) bool: held in place (rough-wall particles); None: none
-    gravity: float = 0.0  # g: force per (unit-mass) mobile particle along -e_(d-1), eps/diameter
-    extended: Extended | None = None  # double-double low parts (``Extended``); None: float64 exactly
+    fixed: np.ndarray | None = None  #: (N,) bool: held in place (rough-wall particles); None: none
+    gravity: float = 0.0  #: g: force per (unit-mass) mobile particle along -e_(d-1), eps / diameter
+    extended: Extended | None = None  #: double-double low parts (``Extended``); None: float64 exactly
 
     def __post_init__(self):
         pos = np.array(self.positions, dtype=float)
@@ -195,6 +198,7 @@ class Packing:
 
     @property
     def n(self) -> int:
+        """Number of particles N."""
         return len(self.diameters)
 
     @property
@@ -209,6 +213,7 @@ class Packing:
 
     @property
     def dim(self) -> int:
+        """Dimension d, 2 or 3."""
         return self.box.dim
 
     @property

@@ -159,12 +159,12 @@ def contact_distances(packing: Packing, i: np.ndarray, j: np.ndarray, dr: np.nda
 class PairGeometry(NamedTuple):
     """Pairs within reach and their geometry (``pair_geometry``), diameters."""
 
-    i: np.ndarray  # (P,)
-    j: np.ndarray  # (P,)
-    dr: np.ndarray  # (P, d) minimum-image r_i - r_j
-    r: np.ndarray  # (P,) |dr|
-    sigma: np.ndarray  # (P,) contact distances
-    overlap: np.ndarray | None  # (P,) sigma - r from double-double positions (None: float64, sigma - r)
+    i: np.ndarray  #: (P,)
+    j: np.ndarray  #: (P,)
+    dr: np.ndarray  #: (P, d) minimum-image r_i - r_j
+    r: np.ndarray  #: (P,) |dr|
+    sigma: np.ndarray  #: (P,) contact distances
+    overlap: np.ndarray | None  #: (P,) sigma - r from double-double positions (None: float64, sigma - r)
 
 
 def pair_geometry(packing: Packing, skin: float = 0.0) -> PairGeometry:

@@ -117,11 +117,11 @@ class _Law:
 class Spring(_Law):
     """Repulsive spring V = eps/alpha (1 - r/sigma)^alpha for r < sigma (chapter eq. 2.1)."""
 
-    alpha: float = 2.0
-    epsilon: float = 1.0
+    alpha: float = 2.0  #: exponent: 2 the linear spring, 5/2 Hertzian
+    epsilon: float = 1.0  #: energy scale eps
 
-    name = "spring"
-    soft_start = False  # finite forces at any overlap: random starts need no relaxation
+    name = "spring"  #: the law's name in files and on the command line
+    soft_start = False  #: False: finite forces at any overlap, so random starts need no relaxation
     Params = SpringParams
     energy_force = staticmethod(spring_energy_force)
     curvature = staticmethod(spring_curvature)
@@ -133,10 +133,12 @@ class Spring(_Law):
 
     @property
     def params(self) -> SpringParams:
+        """(alpha, epsilon) as the compiled kernels take them."""
         return SpringParams(float(self.alpha), float(self.epsilon))
 
     @property
     def spec(self) -> str:
+        """The ``--potential`` string: ``spring``, ``hertz`` or ``spring:ALPHA``."""
         return "hertz" if self.alpha == 2.5 else ("spring" if self.alpha == 2.0 else f"spring:{self.alpha:g}")
 
     @property
@@ -164,22 +166,23 @@ class Spring(_Law):
 class RepulsiveLJ(_Law):
     """Repulsive Lennard-Jones V = eps[(s/r)^12 - 2(s/r)^6 + 1] for r < s (chapter eq. 2.2)."""
 
-    epsilon: float = 1.0
+    epsilon: float = 1.0  #: energy scale eps
 
-    name = "rlj"
-    spec = "rlj"
-    alpha = math.nan  # no spring exponent (stored as NaN in packing files)
-    soft_start = True  # forces diverge as r -> 0: random starts are relaxed first (chapter step 1)
+    name = "rlj"  #: the law's name in files and on the command line
+    spec = "rlj"  #: the ``--potential`` string
+    alpha = math.nan  #: NaN: no spring exponent (stored as NaN in packing files)
+    soft_start = True  #: True: forces diverge as r -> 0, so random starts are relaxed first (the chapter's step 1)
     Params = RLJParams
     energy_force = staticmethod(rlj_energy_force)
     curvature = staticmethod(rlj_curvature)
-    onset_exponent = 2.0  # harmonic at small overlap: V ~ 36 eps (1 - s)^2
+    onset_exponent = 2.0  #: V ~ (phi - phi_J)^2 just above jamming: harmonic at small overlap, V ~ 36 eps (1 - s)^2
 
     def __post_init__(self):
         _check_epsilon(self.epsilon)
 
     @property
     def params(self) -> RLJParams:
+        """(epsilon,) as the compiled kernels take it."""
         return RLJParams(float(self.epsilon))
 
     @property
@@ -189,9 +192,11 @@ class RepulsiveLJ(_Law):
 
     @property
     def lepton(self) -> str:
+        """``lepton/sphere`` expression of the law for LAMMPS."""
         return f"E*(max(1,(radi+radj)/r)^6-1)^2; E={float(self.epsilon)!r}"
 
     def plugin_style(self, cutoff: float) -> str:
+        """Arguments of ``pair_style`` for jamflow's C++ plugin."""
         return f"jamflow/rlj {float(cutoff)!r}"
 
 

@@ -21,7 +21,7 @@ import numpy as np
 
 @dataclass(frozen=True)
 class SizeSpec:
-    kind: str  # mono | bi | poly-uniform | poly-normal | poly-lognormal
+    kind: str  #: mono | bi | poly-uniform | poly-normal | poly-lognormal
     params: tuple[float, ...] = ()
 
     @property

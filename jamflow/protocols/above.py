@@ -35,12 +35,12 @@ class AboveResult:
     packing: Packing
     phi_onset: float
     dphi: float
-    energy_per_particle: float  # eps
-    pressure_tensor: np.ndarray  # (d, d), eps / diameter^d
+    energy_per_particle: float  #: eps
+    pressure_tensor: np.ndarray  #: (d, d), eps / diameter^d
     minimization: MinimizeResult
     engine: str
     seconds: float
-    kernels: str = ""  # the engine's ``kernels`` (summary line only)
+    kernels: str = ""  #: the engine's ``kernels`` (summary line only)
 
     def __repr__(self) -> str:
         """One line: N, dim, shape, phi, dphi, V, P, max|F|, the stop, engine."""

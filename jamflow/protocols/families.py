@@ -48,9 +48,9 @@ class FamilySampling:
     sizes: str = "bi:1.4:0.5"
     gamma_min: float = 0.0
     gamma_max: float = 1.0
-    spacing: float = 0.01  # Delta gamma between grid points (the chapter's example)
-    substeps: int = 10  # n shear steps between grid points: delta gamma = spacing / substeps
-    starts: int = 20  # random starts per grid point
+    spacing: float = 0.01  #: Delta gamma between grid points (the chapter's example)
+    substeps: int = 10  #: n shear steps between grid points: delta gamma = spacing / substeps
+    starts: int = 20  #: random starts per grid point
     seed: int = 0
     engine: str = "auto"
 

@@ -41,9 +41,9 @@ class ModuliResult:
     shear: SweepResult
     bulk: SweepResult
     hessian: HessianModuliResult
-    roundoff: dict  # modulus name -> round-off amplitude of its sweep
+    roundoff: dict  #: modulus name -> round-off amplitude of its sweep
     phi: float
-    energy_per_particle: float  # eps, of the input packing
+    energy_per_particle: float  #: eps, of the input packing
     n_contacts: int
     n_floaters: int
 

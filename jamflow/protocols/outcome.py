@@ -19,20 +19,22 @@ HISTORY_COLUMNS = ("phi", "energy_per_particle", "pressure", "dphi", "iterations
 class JamResult:
     """A packing at jamming onset and how it was found."""
 
-    packing: Packing
-    phi_j: float
-    energy_per_particle: float
-    pressure_tensor: np.ndarray
-    max_force: float
-    history: dict  # column name -> np.ndarray, one entry per minimisation
-    settings: CompressionSettings
-    seconds: float
-    lammps_version: int
-    engine: str = "lammps"  # which engine minimised: "lammps" or "numba" (the files' engine attribute)
-    max_torque: float = 0.0  # largest generalized torque component tau / d_k (0 for disks, spheres)
-    wall_forces: np.ndarray | None = None  # (d, 2, d) force of the particles on each face (walled boxes)
-    counters: dict = field(default_factory=dict)  # what the engine's kernel counted (ellipsoids: fallbacks, ...)
-    kernels: str = ""  # the engine's ``kernels``: "ahead-of-time" / "numba" (compiled) or "lammps"
+    packing: Packing  #: the packing at the onset (or above it, with ``above``)
+    phi_j: float  #: packing fraction phi_J of ``packing``
+    energy_per_particle: float  #: V = U / N at the last minimum, eps
+    pressure_tensor: np.ndarray  #: (d, d) virial pressure tensor P_ab (chapter eq. 2.34), eps / diameter^d
+    max_force: float  #: largest force component on a mobile particle, eps / diameter
+    history: dict  #: column name -> np.ndarray, one entry per minimisation (phi, V, iterations, ...)
+    settings: CompressionSettings  #: the compression protocol and minimiser that ran
+    seconds: float  #: wall-clock time of the run, s
+    lammps_version: int  #: LAMMPS version number (e.g. 20240829); 0 when LAMMPS did not run
+    engine: str = "lammps"  #: which engine minimised: ``lammps`` or ``numba`` (the files' engine attribute)
+    max_torque: float = 0.0  #: largest generalized torque component tau / d_k, eps / diameter (0 for disks, spheres)
+    #: (d, 2, d) force of the particles on each face, eps / diameter (walled boxes); None without walls
+    wall_forces: np.ndarray | None = None
+    #: what the engine's kernel counted (ellipsoids: contact-distance fallbacks, ...)
+    counters: dict = field(default_factory=dict)
+    kernels: str = ""  #: the engine's kernels: ``ahead-of-time`` or ``numba`` (compiled), or ``lammps``
 
     def __repr__(self) -> str:
         """One line: N, dim, shape, phi_J, V, P, max|F|, minimisations, engine; ``summary()`` is the
@@ -52,14 +54,17 @@ class JamResult:
 
     @property
     def pressure(self) -> float:
+        """P = tr P_ab / d, eps / diameter^d."""
         return float(np.trace(self.pressure_tensor) / self.packing.dim)
 
     @property
     def minimizations(self) -> int:
+        """Number of minimisations the protocol ran."""
         return len(self.history["phi"])
 
     @property
     def iterations(self) -> int:
+        """Minimiser iterations over all minimisations."""
         return int(np.sum(self.history["iterations"]))
 
     @property
@@ -70,6 +75,7 @@ class JamResult:
         return face_pressures(self.packing.box, self.wall_forces) if self.wall_forces is not None else np.empty((0, 2))
 
     def summary(self) -> str:
+        """The one line ``jamflow jam`` prints: phi_J, V, P, max force, minimisations, kernels, time."""
         torque = f"  max|tau/d| = {self.max_torque:.1e}" if self.packing.shape.oriented else ""
         walls = "".join(f"  P_wall {AXES[a]} = {lo:.3e} {hi:.3e}"
                         for a, (lo, hi) in zip(self.packing.box.walls, self.wall_pressures))

@@ -172,13 +172,13 @@ class PressureResult:
     """The packing at the lowest pressure and one history row per target pressure."""
 
     packing: Packing
-    pressure_tensor: np.ndarray  # (d, d) at the last pressure
-    history: dict  # PRESSURE_COLUMNS (+ reason) -> array, one entry per target pressure
+    pressure_tensor: np.ndarray  #: (d, d) at the last pressure
+    history: dict  #: PRESSURE_COLUMNS (+ reason) -> array, one entry per target pressure
     settings: PressureSettings
     seconds: float
     engine: str
     lammps_version: int
-    kernels: str = ""  # the engine's ``kernels`` (summary line only)
+    kernels: str = ""  #: the engine's ``kernels`` (summary line only)
 
     def __repr__(self) -> str:
         """One line: N, dim, shape, phi and pressure at the last target, targets, engine."""

@@ -90,13 +90,14 @@ MAX_VTOL_REFINES = 6  # refinements (secant steps in log p, log V) to land V in 
 class RefineSettings:
     """Target pressure (eps / diameter^d) and the tolerances of the refinement."""
 
-    pressure: float
-    force_tol: float = 1e-12  # largest backbone net force / mean contact force
-    pressure_tol: float = 1e-4  # |p / target - 1| at the target
-    max_newton: int = 60  # Newton steps per balanced state
-    max_secant: int = 30  # box rescalings per decade of pressure
-    max_network_updates: int = 10  # Newton solves with a new contact network per balanced state
-    v_tol: float | None = None  # energy window V_tol < V < 2 V_tol per particle this pressure was chosen for
+    pressure: float  #: target pressure, eps / diameter^d
+    force_tol: float = 1e-12  #: largest net force on a non-floater over the mean contact force, at balance
+    pressure_tol: float = 1e-4  #: relative pressure error |p / target - 1| accepted at the target
+    max_newton: int = 60  #: Newton steps per balanced state
+    max_secant: int = 30  #: box rescalings per decade of pressure
+    max_network_updates: int = 10  #: Newton solves with a new contact network per balanced state
+    #: V_tol of the energy window V_tol < V < 2 V_tol (per particle, eps) this pressure was chosen for; None: none
+    v_tol: float | None = None
 
     def __post_init__(self):
         _check_pressure(self.pressure)
@@ -106,6 +107,7 @@ class RefineSettings:
                 raise SettingError(name, f"must be a number in (0, 1), got {value!r}")
 
     def as_dict(self) -> dict:
+        """The settings as the packing file's protocol attributes."""
         window = {} if self.v_tol is None else {"v_tol": self.v_tol}
         return {"precision": "double-double", "target_pressure": self.pressure, "force_tol": self.force_tol,
                 "pressure_tol": self.pressure_tol, **window}
@@ -224,14 +226,14 @@ class _State:
 class Network:
     """The double-double evaluation of a state and its contact network."""
 
-    i: np.ndarray  # (C,) contacts (overlap > 0 in double-double)
+    i: np.ndarray  #: (C,) contacts (overlap > 0 in double-double)
     j: np.ndarray
-    overlap: np.ndarray  # (C,) sigma - r (float64 value of the double-double overlap)
-    floater: np.ndarray  # (N,) bool
-    forces: np.ndarray  # (N, d) net forces, hi + lo rounded to float64
-    energy: tuple  # (hi, lo)
+    overlap: np.ndarray  #: (C,) sigma - r (float64 value of the double-double overlap)
+    floater: np.ndarray  #: (N,) bool
+    forces: np.ndarray  #: (N, d) net forces, hi + lo rounded to float64
+    energy: tuple  #: (hi, lo)
     pressure: float
-    pressure_tensor: np.ndarray  # (d, d)
+    pressure_tensor: np.ndarray  #: (d, d)
 
     @property
     def backbone(self) -> np.ndarray:
@@ -623,21 +625,32 @@ def _affine_slope(packing: Packing, st: _State, net: Network) -> float:
 class RefineResult:
     """A packing balanced in double-double at the target pressure, and how it got there."""
 
-    packing: Packing  # with ``extended`` (positions_lo, box_lo)
-    network: Network
-    settings: RefineSettings
-    history: dict  # per balanced state: target_pressure, pressure, phi + phi_lo, contacts, floaters, newton_steps
-    start_contacts: set
-    seconds: float
-    onset: object = None  # the float64 JamResult refined (``jamflow jam --precision double-double``), if any
-    refines: int = 1  # refinements made (``refine_to_vtol``: secant steps to the energy window)
+    packing: Packing  #: the refined packing, with ``extended`` (positions_lo, box_lo): the double-double low parts
+    network: Network  #: the double-double contact network: overlaps, forces, floaters, energy, pressure
+    settings: RefineSettings  #: the target pressure and tolerances
+    history: dict  #: per balanced state: target_pressure, pressure, phi + phi_lo, contacts, floaters, newton_steps
+    start_contacts: set  #: backbone contacts (i, j) of the start, for ``contact_changes``
+    seconds: float  #: wall-clock time of the refinement, s
+    onset: object = None  #: the float64 ``JamResult`` refined (``jamflow jam --precision double-double``), if any
+    refines: int = 1  #: refinements made (``refine_to_vtol``: secant steps to the energy window)
+
+    def __repr__(self) -> str:
+        """One line: N, dim, target and reached pressure, phi, contacts against the isostatic count,
+        floaters, force balance, V, refinements, time; ``summary()`` is the CLI's lines."""
+        p = self.packing
+        return (f"RefineResult(N={p.n}, dim={p.dim}, P_target={self.settings.pressure:.3e}, P={self.pressure:.6e}, "
+                f"phi={self.phi[0]:.12f}, N_c={self.n_contacts}, isostatic={self.isostatic_contacts}, "
+                f"floaters={self.n_floaters}, force_balance={self.force_balance:.1e}, "
+                f"V={self.energy_per_particle:.3e}, refines={self.refines}, seconds={self.seconds:.2f})")
 
     @property
     def pressure(self) -> float:
+        """P = tr P_ab / d from the double-double forces, eps / diameter^d."""
         return self.network.pressure
 
     @property
     def pressure_tensor(self) -> np.ndarray:
+        """(d, d) virial pressure tensor (chapter eq. 2.34) from the double-double forces, eps / diameter^d."""
         return self.network.pressure_tensor
 
     @property
@@ -666,6 +679,7 @@ class RefineResult:
 
     @property
     def n_floaters(self) -> int:
+        """Particles removed as floaters."""
         return int(self.network.floater.sum())
 
     @property
@@ -681,6 +695,7 @@ class RefineResult:
 
     @property
     def energy_per_particle(self) -> float:
+        """V = U / N from the double-double overlaps, eps."""
         return float(self.network.energy[0] / self.packing.n)
 
     @property
@@ -719,6 +734,8 @@ class RefineResult:
         return self.start_contacts - now, now - self.start_contacts
 
     def summary(self) -> str:
+        """The lines ``jamflow jam --precision double-double`` prints: onset, pressure, phi, contacts, force balance,
+        time."""
         opened, closed = self.contact_changes()
         target = self.settings.pressure
         onset = "" if self.onset is None else f"float64 onset {self.onset.summary()}\n"

@@ -24,22 +24,26 @@ class CompressionSettings:
     """Parameters of the compression protocol (dimensionless packing fractions;
     energies per particle in eps)."""
 
-    phi0: float | None = None  # None: DEFAULT_PHI0[dim], well below phi_J
-    dphi0: float = 1e-4
-    v_tol: float = 1e-16
-    max_steps: int = 100_000
-    dphi_growth: float = 1.0  # >1: grow dphi below jamming until the first crossing (speed-up)
-    dphi_max: float = 1e-3  # cap on the grown increment
-    newton: bool = False  # above jamming, jump to the predicted window from V and P (speed-up)
-    newton_ratio: float = 20.0  # a Newton jump shrinks phi - phi_J at most by this factor (stays jammed)
+    phi0: float | None = None  #: initial packing fraction; None: ``DEFAULT_PHI0[dim]``, well below phi_J
+    dphi0: float = 1e-4  #: initial packing-fraction increment Delta phi
+    v_tol: float = 1e-16  #: V_tol of the window V_tol < V < 2 V_tol, energy per particle in eps
+    max_steps: int = 100_000  #: most compression or decompression steps before the protocol gives up
+    #: factor by which Delta phi grows below jamming until the first crossing; 1: the chapter's constant increment
+    dphi_growth: float = 1.0
+    dphi_max: float = 1e-3  #: cap on the grown increment
+    newton: bool = False  #: above jamming, jump to the predicted window from V and P (the fast protocol)
+    newton_ratio: float = 20.0  #: a Newton jump shrinks phi - phi_J by at most this factor (so it stays jammed)
     # ... and at most by this one from large_n particles on: a long jump from a jammed state of many particles
     # ends in an avalanche that FIRE follows for 1e5 iterations (docs/notes/newton-krylov.md, jump ratio)
-    large_n_newton_ratio: float = 3.0
-    large_n: int = 2048
-    coarse_v_min: float | None = None  # before the first crossing, V below this counts as unjammed (speed-up)
-    approach_force_rtol: float | None = None  # before the final approach: force tol = this x pressure (speed-up)
-    coarse_force_tol: float = 1e-10  # force tolerance before the first crossing when approach_force_rtol is set
-    minimizer: MinimizerSettings = field(default_factory=MinimizerSettings)
+    large_n_newton_ratio: float = 3.0  #: the same cap from ``large_n`` particles on
+    large_n: int = 2048  #: number of particles from which ``large_n_newton_ratio`` applies
+    #: before the first crossing, V below this (eps) counts as unjammed; None: the minimiser's v_min
+    coarse_v_min: float | None = None
+    #: before the final approach the force tolerance is this times the pressure; None: the minimiser's
+    approach_force_rtol: float | None = None
+    #: force tolerance before the first crossing when ``approach_force_rtol`` is set, eps / diameter
+    coarse_force_tol: float = 1e-10
+    minimizer: MinimizerSettings = field(default_factory=MinimizerSettings)  #: settings of each minimisation
 
     __repr__ = changed_fields_repr  # only the fields that differ from their defaults
 
@@ -91,6 +95,7 @@ class CompressionSettings:
         return (BODY_PHI0 if rigid else DEFAULT_PHI0).get(dim, math.nan)
 
     def as_dict(self) -> dict:
+        """The settings as plain values (JSON-serialisable), the minimiser's nested."""
         out = {k: v for k, v in asdict(self).items() if k != "minimizer"}
         return {**out, **self.minimizer.as_dict()}
 

@@ -87,10 +87,10 @@ class ShearStep:
     """One static packing on the path, at accumulated strain ``gamma``."""
 
     gamma: float
-    jam: JamResult  # the bisection at this strain (packing, phi_J, V, pressure tensor, history)
+    jam: JamResult  #: the bisection at this strain (packing, phi_J, V, pressure tensor, history)
     network: Network
-    removed: list = field(default_factory=list)  # contacts of the previous step that are gone
-    added: list = field(default_factory=list)  # contacts that were not there
+    removed: list = field(default_factory=list)  #: contacts of the previous step that are gone
+    added: list = field(default_factory=list)  #: contacts that were not there
 
     def __repr__(self) -> str:
         """One line: gamma, N, phi_J, Sigma, P, contacts and their changes; ``steps[k].jam`` holds the rest."""
@@ -125,7 +125,7 @@ class ShearPath:
     settings: CompressionSettings
     engine: str
     seconds: float
-    kernels: str = ""  # the engine's ``kernels`` (summary line only)
+    kernels: str = ""  #: the engine's ``kernels`` (summary line only)
 
     def __repr__(self) -> str:
         """One line: N, dim, shape, steps, the gamma range, phi_J range, contact changes, engine."""

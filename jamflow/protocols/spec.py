@@ -32,6 +32,7 @@ from jamflow.protocols.compression import (
 )
 from jamflow.protocols.outcome import JammingFailed
 from jamflow.protocols.settings import DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, protocol_name
+from jamflow.support.reprs import changed_fields_repr
 
 
 PRECISIONS = ("double", "double-double")  # --precision: float64, or a float64 onset refined by jamflow.refine
@@ -43,32 +44,45 @@ class JamSpec:
     """One packing to jam: the options of ``jamflow jam`` (same names, same defaults), without
     the command's own (``--out``, ``--force``, ``--quiet``, ``--emit-deck``)."""
 
-    dim: int = 2
-    n: int = 64
-    sizes: str = "bi:1.4:0.5"  # jamflow.model.sizes.parse_sizes
-    potential: str = "spring"  # spring | hertz | spring:ALPHA | rlj
-    shape: str = "disk"  # jamflow.model.shapes.parse.parse_shape
-    contact: str = "exact"  # contact distance of ellipses/spheroids
-    protocol: str | None = None  # chapter | fast (seed: the old name of chapter, kept as given); None: fast
-    minimizer: str = "fire"  # fire | cg | md
-    damping: float = MinimizerSettings.damping  # md only, sqrt(m eps)/diameter
-    md_damping: str = "viscous"  # viscous | pairwise (md only)
-    creep: str = "auto"  # MinimizerSettings.creep
-    engine: str = "auto"  # auto | lammps | numba
-    phi0: float | None = None  # initial packing fraction; None: the dimension's default
-    dphi0: float = 1e-4  # initial packing-fraction increment
-    vtol: float = 1e-16  # energy window V_tol < V < 2 V_tol, per particle
-    ftol: float | None = None  # max force component; None: the force floor
-    seed: int = 0
-    above: float | None = None  # compress the onset packing by this dphi and minimise again
-    walls: str | None = None  # walled axes, e.g. "y" or "x,y"
-    wall_type: str = "smooth"  # smooth | rough
-    gravity: float = 0.0  # force per particle along -y (2D) / -z (3D); needs walls on that axis
-    pressure: float | None = None  # target pressure: the box relaxes (eps / diameter^d)
-    stress: str = "iso"  # with pressure: iso | aniso | tri
-    gamma: float | None = None  # fixed Lees-Edwards shear strain
-    precision: str = "double"  # double | double-double (float64 onset, then jamflow.refine to pressure or vtol)
-    orientations: str = "random"  # start orientations of particles with an axis: random | aligned | nematic:S
+    dim: int = 2  #: dimension: 2 or 3
+    n: int = 64  #: number of particles N
+    #: size distribution, ``mono``, ``bi:RATIO:FRACTION_SMALL``, ``poly-uniform:WIDTH``, ... (``jamflow.parse_sizes``)
+    sizes: str = "bi:1.4:0.5"
+    #: pair law: ``spring`` (alpha = 2), ``hertz`` (alpha = 5/2), ``spring:ALPHA`` or ``rlj``
+    #: (``jamflow.parse_potential``)
+    potential: str = "spring"
+    #: particle shape: ``disk`` (disks/spheres), ``ellipse:ALPHA``, ``spheroid:ALPHA``, ``dimer:...``, ...
+    #: (``jamflow.parse_shape``)
+    shape: str = "disk"
+    contact: str = "exact"  #: contact distance of ellipses and spheroids: ``exact`` or an approximation of Table 2.1
+    protocol: str | None = None  #: the protocol, ``chapter`` or ``fast``; None: ``fast``
+    minimizer: str = "fire"  #: ``fire``, ``cg`` or ``md`` (damped molecular dynamics)
+    damping: float = MinimizerSettings.damping  #: damping coefficient b of ``md``, in sqrt(m eps) / diameter
+    #: ``viscous`` (-b v on each particle) or ``pairwise`` (the chapter's eq. 2.3); ``md`` only
+    md_damping: str = "viscous"
+    #: what a creeping minimisation does between windows: ``auto``, ``soft-modes``, ``polish``, ``newton``, ``off``
+    #: (``MinimizerSettings.creep``)
+    creep: str = "auto"
+    engine: str = "auto"  #: ``auto``, ``lammps`` or ``numba`` (the compiled kernels)
+    phi0: float | None = None  #: initial packing fraction; None: the dimension's default, well below phi_J
+    dphi0: float = 1e-4  #: initial packing-fraction increment Delta phi
+    vtol: float = 1e-16  #: V_tol of the energy window V_tol < V < 2 V_tol, energy per particle in eps
+    ftol: float | None = None  #: force tolerance (largest force component, eps / diameter); None: the force floor
+    seed: int = 0  #: random seed of the initial configuration
+    #: after the onset, compress by this Delta phi and minimise again; None: stop at the onset
+    above: float | None = None
+    walls: str | None = None  #: walled axes, e.g. ``"y"`` or ``"x,y"``; None: periodic in every axis
+    wall_type: str = "smooth"  #: ``smooth`` or ``rough`` (walls of fixed particles)
+    gravity: float = 0.0  #: force per particle along -y (2D) or -z (3D), eps / diameter; needs walls on that axis
+    pressure: float | None = None  #: target pressure (eps / diameter^d): the box relaxes to it; None: jam at the onset
+    stress: str = "iso"  #: with ``pressure``: ``iso``, ``aniso`` (each P_aa) or ``tri`` (also the shear stresses to 0)
+    gamma: float | None = None  #: fixed Lees-Edwards shear strain gamma = xy / ly; None: 0
+    #: ``double``, or ``double-double`` (float64 onset, then refined to ``pressure`` or ``vtol``)
+    precision: str = "double"
+    #: start orientations of particles with an axis: ``random``, ``aligned`` or ``nematic:S``
+    orientations: str = "random"
+
+    __repr__ = changed_fields_repr  # only the options that differ from ``jamflow jam``'s defaults
 
     @classmethod
     def from_options(cls, **options) -> "JamSpec":
@@ -82,6 +96,7 @@ class JamSpec:
 
     @classmethod
     def option_names(cls) -> tuple[str, ...]:
+        """The field names, which are the options of ``jamflow jam`` (``--wall-type`` is ``wall_type``)."""
         return tuple(f.name for f in fields(cls))
 
     def as_dict(self) -> dict:

@@ -73,7 +73,7 @@ class SweepSettings:
     linear_tol: float = LINEAR_TOL
     jump_tol: float = JUMP_TOL
     past_yield: int = PAST_YIELD
-    minimizer: MinimizerSettings | None = None  # None: ``sweep_minimizer`` (FIRE to the round-off floor)
+    minimizer: MinimizerSettings | None = None  #: None: ``sweep_minimizer`` (FIRE to the round-off floor)
 
     __repr__ = changed_fields_repr  # only the fields that differ from their defaults
 
@@ -101,25 +101,25 @@ class SweepResult:
     """One strain's sweep: every relaxed point and the fit."""
 
     strain: Strain
-    strains: np.ndarray  # (M,) signed amplitudes measured, ascending, with 0 (the base state)
-    responses: np.ndarray  # (M,) R: Sigma or P, eps / diameter^d
-    energies: np.ndarray  # (M,) energy per particle, eps
-    iterations: np.ndarray  # (M,) minimiser iterations
-    max_forces: np.ndarray  # (M,) largest force component after relaxation
-    reasons: np.ndarray  # (M,) minimiser stop reasons
-    added: np.ndarray  # (M,) backbone contacts present that the base state does not have
-    removed: np.ndarray  # (M,) backbone contacts of the base state that are gone
-    rattler_changes: np.ndarray  # (M,) contacts of base-state floaters that appeared or went
-    amplitudes: np.ndarray  # (K,) positive amplitudes measured
-    central_slopes: np.ndarray  # (K,)
+    strains: np.ndarray  #: (M,) signed amplitudes measured, ascending, with 0 (the base state)
+    responses: np.ndarray  #: (M,) R: Sigma or P, eps / diameter^d
+    energies: np.ndarray  #: (M,) energy per particle, eps
+    iterations: np.ndarray  #: (M,) minimiser iterations
+    max_forces: np.ndarray  #: (M,) largest force component after relaxation
+    reasons: np.ndarray  #: (M,) minimiser stop reasons
+    added: np.ndarray  #: (M,) backbone contacts present that the base state does not have
+    removed: np.ndarray  #: (M,) backbone contacts of the base state that are gone
+    rattler_changes: np.ndarray  #: (M,) contacts of base-state floaters that appeared or went
+    amplitudes: np.ndarray  #: (K,) positive amplitudes measured
+    central_slopes: np.ndarray  #: (K,)
     reference_slope: float
-    linear: np.ndarray  # (K,) bool: in the linear regime
-    modulus: float  # NaN without a linear regime
-    error: float  # standard error of the modulus (NaN with one amplitude)
-    curvature: float  # kappa of c(a) = M + kappa a^2 (0 with fewer than three linear amplitudes)
-    yield_strain: float  # NaN if none seen
-    yield_reason: str  # "contacts", "stress" or ""
-    base: Packing  # the base state: the input relaxed at zero strain by the sweep's minimiser
+    linear: np.ndarray  #: (K,) bool: in the linear regime
+    modulus: float  #: NaN without a linear regime
+    error: float  #: standard error of the modulus (NaN with one amplitude)
+    curvature: float  #: kappa of c(a) = M + kappa a^2 (0 with fewer than three linear amplitudes)
+    yield_strain: float  #: NaN if none seen
+    yield_reason: str  #: "contacts", "stress" or ""
+    base: Packing  #: the base state: the input relaxed at zero strain by the sweep's minimiser
 
     def __repr__(self) -> str:
         """One line: strain, points, modulus and error, linear range, the yield."""

@@ -68,8 +68,19 @@ def report_text(result, published=None) -> str:
     for r in result.table():
         lines.append(f"{r['n']:>6} {r['packings']:>8} {r['failed']:>6} {r['mean_phi_j']:.5f} +- {r['mean_phi_j_err']:.5f} "
                      f"{r['width']:.5f} +- {r['width_err']:.5f} {r['mean_z']:8.4f} {r['isostatic_fraction']:9.3f}")
-    lines.append(f"W ~ N^-nu: nu = {result.nu.value:.3f} +- {result.nu.err:.3f} (bootstrap, {result.n_bootstrap} replicates); "
-                 f"chi2/dof of the power law = {result.width_chi2:.2f}")
-    lines.append(f"<phi_J>(N) = phi_inf - a N^-nu: phi_inf = {result.phi_inf.value:.4f} +- {result.phi_inf.err:.4f}"
-                 + (f" (published large-N value about {published})" if published else ""))
+    sizes = len(result.sizes)
+    have = f"this store has {sizes} (N = {', '.join(str(s.n) for s in result.sizes)})"
+    if sizes < 2:  # a width exponent is a slope against N: one N gives none
+        lines.append(f"W ~ N^-nu: nu needs packings at two or more N, {have}; "
+                     "add sizes with `jamflow ensemble --n ...` into the same store")
+    else:
+        lines.append(f"W ~ N^-nu: nu = {result.nu.value:.3f} +- {result.nu.err:.3f} (bootstrap, {result.n_bootstrap} "
+                     "replicates); chi2/dof of the power law = "
+                     + (f"{result.width_chi2:.2f}" if sizes > 2 else "none (needs three or more N)"))
+    if sizes < 3:
+        lines.append(f"<phi_J>(N) = phi_inf - a N^-nu: phi_inf needs three or more N, {have}"
+                     + (f" (published large-N value about {published})" if published else ""))
+    else:
+        lines.append(f"<phi_J>(N) = phi_inf - a N^-nu: phi_inf = {result.phi_inf.value:.4f} +- {result.phi_inf.err:.4f}"
+                     + (f" (published large-N value about {published})" if published else ""))
     return "\n".join(lines)

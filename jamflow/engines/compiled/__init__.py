@@ -21,6 +21,10 @@ Kernels are cached on disk (numba ``cache=True``) under ``<jamflow cache>/numba/
 the digest covering this package's sources, ``jamflow/model/potentials.py`` and
 ``jamflow/model/shapes/contact_distance.py``: numba's own cache check looks only at the file of the
 cached function, not at the laws and formulas it inlines from other files, so a changed law would otherwise run stale machine code.
+
+A kernel that is about to be compiled (no machine code for its argument types in this process nor
+in the cache) says so first, in one line on stderr (``announce_compile``): a first run of a shape
+takes tens of seconds, and should not be silent.
 """
 
 from __future__ import annotations
@@ -157,3 +161,44 @@ def start_numba() -> None:
     for register in _REGISTRATIONS:
         register()
     _REGISTRATIONS.clear()
+
+
+_checked: set = set()  # (kernel, argument types) already looked up in this process
+_announced: set = set()  # what's compile notices already printed
+
+
+def will_compile(dispatcher, args) -> bool:
+    """Whether calling the numba ``dispatcher`` with ``args`` compiles: no machine code for their
+    types in this process, nor in its disk cache. False when that cannot be told (numba's cache
+    internals differ): better no notice than a wrong one."""
+    try:
+        sig = tuple(dispatcher.typeof_pyval(a) for a in args)
+        if sig in dispatcher.overloads:
+            return False
+        cache = getattr(dispatcher, "_cache", None)
+        index = cache._cache_file._load_index() if cache is not None and hasattr(cache, "_cache_file") else {}
+        magic = dispatcher.targetctx.codegen().magic_tuple()
+        return not any(key[0] == sig and key[1] == magic for key in index)
+    except Exception:
+        return False
+
+
+def announce_compile(what: str, seconds: float, kernel, args) -> None:
+    """Before calling a compiled ``kernel`` with ``args``: if that compiles (``will_compile``), one
+    line on stderr, once per ``what`` and process: ``jamflow: compiling the ellipse kernels once
+    (~40 s) into DIR``. ``seconds``: the measured cold compile time of those kernels."""
+    if what in _announced:
+        return
+    start_numba()
+    dispatcher = getattr(kernel, "dispatcher", None) or kernel  # a Deferred's dispatcher, once numba started
+    try:
+        key = (dispatcher.py_func, tuple(dispatcher.typeof_pyval(a) for a in args))
+    except Exception:
+        return
+    if key in _checked:
+        return
+    _checked.add(key)
+    if will_compile(dispatcher, args):
+        _announced.add(what)
+        print(f"jamflow: compiling the {what} kernels once (~{seconds:.0f} s) into {cache_dir()}", file=sys.stderr,
+              flush=True)

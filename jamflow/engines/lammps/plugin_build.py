@@ -166,6 +166,9 @@ def compile_plugin(compiler: list[str], target: Path, source: Path | None = None
     return target
 
 
+PLUGIN_COMPILE_SECONDS = 5  # g++ -O2 of the plugin's sources: 3.4 s wall on the development machine
+
+
 def plugin_library() -> Path | None:
     """Path of the compiled plugin, building it on first use; None (with a warning)
     when no C++ compiler is available."""
@@ -182,6 +185,8 @@ def plugin_library() -> Path | None:
                       "which is exact but about 10x slower. Install one, e.g. `apt-get install g++`, "
                       "or set CXX.", RuntimeWarning, stacklevel=2)
         return None
+    print(f"jamflow: compiling the LAMMPS plugin pair styles once (~{PLUGIN_COMPILE_SECONDS} s) into {target.parent}",
+          file=sys.stderr, flush=True)
     compile_plugin(compiler, target)
     if not intact_shared_object(target):
         raise PluginBuildError(f"the compiler wrote no complete shared library to {target}; delete "

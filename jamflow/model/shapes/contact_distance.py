@@ -75,10 +75,10 @@ class _Pair:
     b_i: np.ndarray
     a_j: np.ndarray
     b_j: np.ndarray
-    r: np.ndarray  # (n, d) unit
-    u_i: np.ndarray  # (n, d) unit
-    u_j: np.ndarray  # (n, d) unit
-    shape: tuple  # leading (batch) shape of the result
+    r: np.ndarray  #: (n, d) unit
+    u_i: np.ndarray  #: (n, d) unit
+    u_j: np.ndarray  #: (n, d) unit
+    shape: tuple  #: leading (batch) shape of the result
 
     @property
     def dim(self) -> int:
