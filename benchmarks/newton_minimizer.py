@@ -7,6 +7,9 @@ iterations or Newton steps, CG iterations, factorisations, the energy reached, C
 minimisations, FIRE iterations, CPU seconds, the packing checks.
 ``watch``: minimisation STEP of a default jam run again by FIRE alone, window by window (energy,
 max force, pressure, contacts and how many changed): what a creeping minimisation is doing.
+``replay``: minimisations STEPS of a default jam run again from their recorded starts and settings
+with each creep method (``auto`` is what the jam ran; ``off`` is FIRE alone; ``newton:2000`` sets
+``creep_after``): which minimiser a costly near-onset minimisation needs.
 
     python benchmarks/newton_minimizer.py single --n 1024 4096 --seeds 1 --dphi 1e-7 1e-6 1e-5 1e-4 --out docs/notes/newton-single.csv
     python benchmarks/newton_minimizer.py jam --n 1024 --seeds 1 2 3 --creep auto newton --out docs/notes/newton-jam.csv
@@ -14,6 +17,8 @@ max force, pressure, contacts and how many changed): what a creeping minimisatio
     timeout 3000 python benchmarks/newton_minimizer.py jam --n 16384 --seeds 1 --creep newton --out /tmp/newton-jam.csv \
         --trace docs/notes/newton-trace-n16384.csv
     python benchmarks/newton_minimizer.py watch --n 4096 --seeds 2 --step 45 --windows 30 --out docs/notes/newton-watch.csv
+    timeout 6000 python benchmarks/newton_minimizer.py replay --n 16384 --seeds 1 --steps 51 52 \
+        --creep auto off newton:2000 --out docs/notes/newton-replay.csv
 
 Rows are appended (CPU seconds of this process: ``time.process_time``).
 """
@@ -42,6 +47,8 @@ SINGLE = ["n", "dim", "seed", "dphi", "method", "converged", "iterations", "cg_i
           "energy_per_particle", "max_force", "cpu_s"]
 WATCH = ["n", "dim", "seed", "step", "phi", "iterations", "energy_per_particle", "max_force", "pressure", "contacts",
          "contacts_changed"]
+REPLAY = ["n", "dim", "seed", "step", "creep", "iterations", "reason", "energy_per_particle", "max_force",
+          "creep_steps", "cpu_s"]
 JAM = ["n", "dim", "seed", "creep", "phi_j", "minimisations", "iterations", "energy_per_particle", "checks", "cpu_s"]
 
 
@@ -110,6 +117,14 @@ def jam_row(n: int, dim: int, seed: int, creep: str, trace: Path | None = None) 
 def start_of_step(n: int, dim: int, seed: int, step: int):
     """The configuration (at its box) that minimisation ``step`` of the default jam starts from, and
     that minimisation's settings (the protocol's ``minimize`` wrapped for the one run)."""
+    starts = starts_of_jam(n, dim, seed)
+    if not 0 <= step < len(starts):
+        raise SystemExit(f"error: --step {step}: the jam ran {len(starts)} minimisations (0 .. {len(starts) - 1})")
+    return starts[step]
+
+
+def starts_of_jam(n: int, dim: int, seed: int) -> list:
+    """(packing, settings) of every minimisation of the default jam, as each started."""
     import jamflow.protocols.compression as compression
 
     starts = []
@@ -124,9 +139,27 @@ def start_of_step(n: int, dim: int, seed: int, step: int):
         jamflow.jam(n=n, dim=dim, sizes=sizes_of(dim), seed=seed)
     finally:
         compression.minimize = plain
-    if not 0 <= step < len(starts):
-        raise SystemExit(f"error: --step {step}: the jam ran {len(starts)} minimisations (0 .. {len(starts) - 1})")
-    return starts[step]
+    return starts
+
+
+def replay_rows(n: int, dim: int, seed: int, steps, creeps):
+    """Minimisations ``steps`` of the default jam again, from their starts, with each creep method
+    ("METHOD" or "METHOD:AFTER", AFTER the FIRE iterations before its first attempt)."""
+    starts = starts_of_jam(n, dim, seed)
+    for step in steps:
+        if not 0 <= step < len(starts):
+            raise SystemExit(f"error: --steps {step}: the jam ran {len(starts)} minimisations")
+        packing, settings = starts[step]
+        for creep in creeps:
+            method, _, after = creep.partition(":")
+            run = replace(settings, creep=method, creep_after=int(after) if after else settings.creep_after)
+            with CompiledEngine(packing) as eng:
+                c0 = time.process_time()
+                res = minimize(eng, run)
+                cpu = time.process_time() - c0
+            yield dict(n=n, dim=dim, seed=seed, step=step, creep=creep, iterations=res.iterations, reason=res.reason,
+                       energy_per_particle=f"{res.energy_per_particle:.12e}", max_force=f"{res.max_force:.3e}",
+                       creep_steps=res.creep_steps, cpu_s=f"{cpu:.2f}")
 
 
 def contacts_of(packing) -> set:
@@ -160,14 +193,24 @@ def watch_rows(n: int, dim: int, seed: int, step: int, windows: int):
                     break
 
 
+def creep_choice(text: str) -> str:
+    """A creep method, or METHOD:AFTER (replay)."""
+    method, _, after = text.partition(":")
+    if method not in CREEP_METHODS or (after and not after.isdigit()):
+        raise argparse.ArgumentTypeError(f"{text!r}: use one of {', '.join(CREEP_METHODS)}, optionally :ITERATIONS")
+    return text
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("mode", choices=("single", "jam", "watch"))
+    ap.add_argument("mode", choices=("single", "jam", "watch", "replay"))
     ap.add_argument("--dim", type=int, default=2)
     ap.add_argument("--n", type=int, nargs="+", default=[1024])
     ap.add_argument("--seeds", type=int, nargs="+", default=[1])
     ap.add_argument("--dphi", type=float, nargs="+", default=[1e-7, 1e-6, 1e-5, 1e-4], help="single: compressions")
-    ap.add_argument("--creep", nargs="+", default=["auto", "newton"], choices=CREEP_METHODS, help="jam: creep methods")
+    ap.add_argument("--creep", nargs="+", default=["auto", "newton"], type=creep_choice,
+                    help="jam, replay: creep methods (replay also METHOD:AFTER)")
+    ap.add_argument("--steps", type=int, nargs="+", default=[0], help="replay: which minimisations of the default jam")
     ap.add_argument("--step", type=int, default=0, help="watch: which minimisation of the default jam")
     ap.add_argument("--windows", type=int, default=30, help="watch: FIRE windows to run at most")
     ap.add_argument("--trace", type=Path, default=None, metavar="CSV",
@@ -183,6 +226,11 @@ def main(argv=None):
             if args.mode == "watch":
                 for row in watch_rows(n, args.dim, seed, args.step, args.windows):
                     append_row(args.out, WATCH, row)
+                    print(row, flush=True)
+                continue
+            if args.mode == "replay":
+                for row in replay_rows(n, args.dim, seed, args.steps, args.creep):
+                    append_row(args.out, REPLAY, row)
                     print(row, flush=True)
                 continue
             if args.mode == "single":
