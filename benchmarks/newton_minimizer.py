@@ -18,7 +18,7 @@ with each creep method (``auto`` is what the jam ran; ``off`` is FIRE alone; ``n
         --trace docs/notes/newton-trace-n16384.csv
     python benchmarks/newton_minimizer.py watch --n 4096 --seeds 2 --step 45 --windows 30 --out docs/notes/newton-watch.csv
     timeout 6000 python benchmarks/newton_minimizer.py replay --n 16384 --seeds 1 --steps 51 52 \
-        --creep auto off newton:2000 --out docs/notes/newton-replay.csv
+        --creep auto off newton:2000 --out /tmp/newton-replay.csv
 
 Rows are appended (CPU seconds of this process: ``time.process_time``).
 """

@@ -547,3 +547,14 @@ def test_repulsive_lj_jams_into_a_large_window(tmp_path, vtol):
     assert main(["jam", "--n", "16", "--potential", "rlj", "--phi0", "0.7", "--vtol", vtol, "--out", str(out),
                  "--quiet"]) == 0
     assert load_packing(out).potential.name == "rlj"
+
+
+def test_a_pressure_whose_box_runs_away_fails_in_one_line_with_what_helps():
+    """Repulsive LJ at P = 100: FIRE's box steps overshoot and the cell inverts or grows without
+    bound within a window (it ended in "negative dimensions not allowed" or "Box side lengths must
+    be positive"); the compiled engine reports it as blown-up and the protocol says what helps."""
+    from jamflow import JamSpec, run_jam
+    from jamflow.protocols.outcome import JammingFailed
+
+    with pytest.raises(JammingFailed, match=r"P = 100 diverged.*--engine lammps --minimizer cg"):
+        run_jam(JamSpec(n=64, potential="rlj", pressure=100.0))

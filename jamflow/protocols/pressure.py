@@ -40,7 +40,7 @@ import numpy as np
 
 from jamflow.engines.choose import open_engine
 from jamflow.minimize.rules import minimize
-from jamflow.protocols.outcome import engine_label
+from jamflow.protocols.outcome import JammingFailed, engine_label
 from jamflow.minimize.settings import MinimizerSettings
 from jamflow.model.box import STRESS_MODES
 from jamflow.model.packing import Packing, densest_phi
@@ -273,7 +273,11 @@ def jam_at_pressure(start: Packing, settings: PressureSettings | None = None, *,
             for observe in observers:
                 observe({"step": step, "phi": packing.phi, "dphi": 0.0, "result": result})
             if result.reason == "blown-up":
-                raise RuntimeError(f"the minimisation at P = {target:g} diverged: lower the timestep")
+                other = ("the LAMMPS engine's CG box relaxation (--engine lammps --minimizer cg), or "
+                         if sim.name != "lammps" else "")
+                raise JammingFailed(f"the minimisation at P = {target:g} diverged (the box coordinates ran away "
+                                    f"within a window of FIRE steps): use {other}a lower target pressure, or a "
+                                    "smaller FIRE timestep (MinimizerSettings.timestep)")
             if not result.converged:
                 warnings.warn(f"the minimisation at P = {target:g} stopped by '{result.reason}' (max force "
                               f"{result.max_force:.2e}, box force {result.max_torque:.2e})", stacklevel=2)

@@ -12,6 +12,8 @@ numba start-up). The interface is ``jamflow.engines.base.Engine``.
 
 from __future__ import annotations
 
+import math
+
 from contextlib import contextmanager
 
 import numpy as np
@@ -36,6 +38,9 @@ def _orientation_array(packing: Packing) -> np.ndarray:
         return np.zeros((packing.n, 0))
     o = np.array(packing.orientations, dtype=float)
     return o.reshape(packing.n, -1).copy()
+
+
+CELL_GROWTH_LIMIT = 1e6  # a cell that grew by more than this within a minimisation has diverged
 
 
 class CompiledEngine:
@@ -71,6 +76,7 @@ class CompiledEngine:
         self._time_unit = fire.time_unit(packing.shape)
         self._field = make_field(packing)
         self._gb = np.zeros(0)  # box-coordinate forces (constant stress only)
+        self._session_volume = packing.box.volume  # the cell's volume when the minimisation started
         self._energy = None
         self._pairs = None
         self._built_at = self._x.copy()
@@ -201,6 +207,7 @@ class CompiledEngine:
         pressure = settings.pressure
         halt = -np.inf if pressure is not None else settings.v_min * self.template.n_mobile
         half_skin_sq = (self.skin / 2) ** 2
+        self._session_volume = self.box.volume
         if pressure is not None:
             self._field = make_field(self.packing(), pressure, settings.stress)
             self._gb = np.zeros(len(self._field.basis))
@@ -218,6 +225,8 @@ class CompiledEngine:
                 ran, reason, energy = self._kernels.fire(*args)
                 done += ran
                 self._energy = energy
+                if not self._cell_valid():  # the box coordinates diverged: what the rules call "blown-up"
+                    return Window(done, math.inf, math.inf, math.inf)
                 self._sync_box()
                 if reason != fire.REBUILD or done >= steps:
                     break
@@ -237,6 +246,16 @@ class CompiledEngine:
             if pressure is not None:  # back to a fixed box
                 self._field = make_field(self.packing())
                 self._gb = np.zeros(0)
+
+    def _cell_valid(self) -> bool:
+        """The field's cell matrix is finite with positive side lengths (a target pressure that
+        FIRE's box steps overshoot collapses or inverts it within a window)."""
+        if not len(self._field.basis):
+            return True
+        h = self._field.h
+        if not (np.all(np.isfinite(h)) and np.all(np.diag(h) > 0)):
+            return False
+        return float(np.prod(np.diag(h))) < CELL_GROWTH_LIMIT * self._session_volume
 
     def _sync_box(self) -> None:
         """After box steps: the Box follows the field's cell matrix."""
