@@ -21,7 +21,7 @@ release = jamflow.__version__
 version = release
 
 extensions = [
-    "myst_nb",  # MyST Markdown (myst_parser) and notebooks: docs/tutorial.ipynb, shown as stored (not executed)
+    "myst_nb",  # MyST Markdown (myst_parser) and notebooks: docs/tutorial.ipynb, shown with its stored outputs
     "sphinx.ext.autodoc",
     "sphinx.ext.napoleon",
     "sphinx.ext.mathjax",
@@ -32,7 +32,10 @@ extensions = [
 
 root_doc = "index"  # myst_nb registers .md and .ipynb; Sphinx adds .rst
 exclude_patterns = ["_build", "Thumbs.db", ".DS_Store", "**/.ipynb_checkpoints", "tutorial-output"]
-nb_execution_mode = "off"  # the tutorial is executed by tests/test_tutorial.py, not by the site build
+# The tutorial's outputs (numbers and figures of every code cell) are stored in docs/tutorial.ipynb and
+# shown as stored: the build does not run it. tests/test_tutorial.py runs it again and fails when what
+# it prints differs from what is stored; `python tests/test_tutorial.py` stores the outputs anew.
+nb_execution_mode = "off"
 
 myst_enable_extensions = ["colon_fence", "deflist", "dollarmath"]
 myst_heading_anchors = 3
