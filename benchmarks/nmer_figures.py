@@ -358,7 +358,7 @@ def plot_acceptance(ens_rows, stab_rows, path: Path) -> None:
     axes[1].set_ylabel("zero modes - d")
     axes[1].set_title("zero modes beyond the d translations", fontsize=9)
     axes[1].legend(fontsize=7)
-    fig.suptitle("Issue 14 acceptance sets, N = 128 dimers", fontsize=9)
+    fig.suptitle("Acceptance sets, N = 128 dimers", fontsize=9)
     fig.tight_layout()
     save(fig, path)
 

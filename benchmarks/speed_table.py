@@ -12,7 +12,7 @@ Baseline: the chapter's protocol written directly on the LAMMPS Python module --
     python benchmarks/speed_table.py --dim 3 --sizes mono --n 512 --seeds 1 2 3 --handwritten 512 --out docs/notes/speed-table.csv
     python benchmarks/speed_table.py --chart docs/notes/speed-table.csv --png docs/notes/speed-2.png
     python benchmarks/speed_table.py --summary docs/notes/speed-table.csv    # the markdown rows of docs/notes/speed-2.md
-    timeout 6000 python benchmarks/speed_table.py --n 16384 --seeds 1 --process-max 0 --out docs/notes/speed-table-s11.csv \
+    timeout 6000 python benchmarks/speed_table.py --n 16384 --seeds 1 --process-max 0 --out docs/notes/speed-table-goals.csv \
         --trace docs/notes/speed-trace-n16384.csv    # a row per minimisation as it ends: the path of a run that is stopped
 
 Whole process: ``python -m jamflow.cli jam ...`` wall and CPU (user + sys) seconds, imports
