@@ -76,7 +76,6 @@ class CompiledEngine:
         self._time_unit = fire.time_unit(packing.shape)
         self._field = make_field(packing)
         self._gb = np.zeros(0)  # box-coordinate forces (constant stress only)
-        self._session_volume = packing.box.volume  # the cell's volume when the minimisation started
         self._energy = None
         self._pairs = None
         self._built_at = self._x.copy()
@@ -207,7 +206,7 @@ class CompiledEngine:
         pressure = settings.pressure
         halt = -np.inf if pressure is not None else settings.v_min * self.template.n_mobile
         half_skin_sq = (self.skin / 2) ** 2
-        self._session_volume = self.box.volume
+        self._session_volume = self.box.volume  # the cell's volume as the minimisation starts (``_cell_valid``)
         if pressure is not None:
             self._field = make_field(self.packing(), pressure, settings.stress)
             self._gb = np.zeros(len(self._field.basis))
@@ -248,8 +247,9 @@ class CompiledEngine:
                 self._gb = np.zeros(0)
 
     def _cell_valid(self) -> bool:
-        """The field's cell matrix is finite with positive side lengths (a target pressure that
-        FIRE's box steps overshoot collapses or inverts it within a window)."""
+        """The field's cell matrix is finite, with positive side lengths and a volume below
+        ``CELL_GROWTH_LIMIT`` times the minimisation's start (a target pressure that FIRE's box steps
+        overshoot inverts the cell or blows it up within a window)."""
         if not len(self._field.basis):
             return True
         h = self._field.h
