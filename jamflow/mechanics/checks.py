@@ -104,6 +104,26 @@ def check_packing(packing: Packing, energy_per_particle: float | None = None, ma
 
     ``energy_per_particle`` and ``max_force`` (the engine's values) are recomputed from the
     packing when None; ``v_tol`` None skips the window check; ``ftol`` is recorded only.
+
+    Parameters
+    ----------
+    packing : Packing
+        The packing to check (lengths in diameters).
+    energy_per_particle : float, optional
+        V in eps, as the engine reported it; None: recomputed from the packing.
+    max_force : float, optional
+        The largest force (and generalised torque) component, eps / diameter; None: recomputed.
+    v_tol : float, optional
+        The energy window's V_tol (eps): ``in_window`` is V_tol < V < 2 V_tol; None: not checked.
+    ftol : float, optional
+        The minimiser's force tolerance (eps / diameter), recorded in the result only.
+
+    Returns
+    -------
+    PackingChecks
+        The window, force balance (max force / mean contact force, or below the packing's force
+        floor), contact count against the isostatic count, floaters and mean contact number;
+        ``passed`` and ``problems()`` summarise them.
     """
     from jamflow.mechanics.reference import energy_forces_pressure
 

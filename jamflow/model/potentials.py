@@ -219,7 +219,24 @@ def potential_from_attrs(name: str, alpha: float, epsilon: float) -> Potential:
 
 
 def parse_potential(spec: str) -> Potential:
-    """``spring`` | ``hertz`` | ``spring:ALPHA`` | ``rlj`` -> a potential object."""
+    """``spring`` | ``hertz`` | ``spring:ALPHA`` | ``rlj`` -> a potential object.
+
+    Parameters
+    ----------
+    spec : str
+        ``spring`` (harmonic, alpha = 2), ``hertz`` (alpha = 5/2), ``spring:ALPHA`` (any
+        exponent) or ``rlj`` (repulsive Lennard-Jones); case and surrounding blanks are ignored.
+
+    Returns
+    -------
+    Spring or RepulsiveLJ
+        The pair law with energy scale eps = 1.
+
+    Raises
+    ------
+    ValueError
+        Not a string, an unknown name, or an ALPHA that is not a number.
+    """
     if not isinstance(spec, str):
         raise ValueError(f"potential must be a spec string such as 'spring' or a Spring/RepulsiveLJ object, "
                          f"got {spec!r}")

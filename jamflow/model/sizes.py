@@ -54,7 +54,25 @@ class SizeSpec:
 
 
 def parse_sizes(spec: str) -> SizeSpec:
-    """Parse a ``--sizes`` spec (see module docstring); errors say what to write instead."""
+    """Parse a ``--sizes`` spec (see module docstring); errors say what to write instead.
+
+    Parameters
+    ----------
+    spec : str
+        ``mono``, ``bi:RATIO:FRACTION_SMALL`` (RATIO >= 1, the large / small diameter;
+        FRACTION_SMALL in [0, 1]), ``poly-uniform:WIDTH``, ``poly-normal:WIDTH[:MEAN]`` (WIDTH
+        <= MEAN / 2) or ``poly-lognormal:WIDTH[:MEAN]``; WIDTH >= 0 and MEAN > 0 in diameters.
+
+    Returns
+    -------
+    SizeSpec
+        The distribution; ``SizeSpec.draw`` gives N diameters (the small diameter = 1).
+
+    Raises
+    ------
+    ValueError
+        An unknown kind, the wrong number of parameters, or parameters out of range.
+    """
     text = str(spec).strip().lower()
     kind, *fields = text.split(":")
     usage = "use mono | bi:RATIO:FRACTION_SMALL | poly-uniform:WIDTH | poly-normal:WIDTH[:MEAN] | poly-lognormal:WIDTH[:MEAN]"

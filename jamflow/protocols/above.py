@@ -79,7 +79,37 @@ def check_dphi(dphi, phi: float) -> float:
 def compress_above(packing: Packing, dphi: float, minimizer: MinimizerSettings | None = None,
                    engine: str = "auto", engine_options: dict | None = None) -> AboveResult:
     """``packing`` (an onset packing) compressed affinely to phi + ``dphi`` and minimised at that
-    box. Raises ValueError on a bad step or a packing under gravity (settled, not compressed)."""
+    box. Raises ValueError on a bad step or a packing under gravity (settled, not compressed).
+
+    Parameters
+    ----------
+    packing : Packing
+        A packing at its onset phi_J (``jamflow.jam``, ``load_packing``), without gravity.
+    dphi : float
+        The compression step in packing fraction (dimensionless, > 0, phi_J + dphi < 1).
+    minimizer : MinimizerSettings, optional
+        How the compressed packing is minimised (default ``MinimizerSettings()``); no target
+        pressure (the box is fixed).
+    engine : {"auto", "numba", "lammps"}, default "auto"
+        The engine (auto: the compiled engine when it runs the scene, else LAMMPS).
+    engine_options : dict, optional
+        Options for the engine's constructor (LAMMPS: skin, comm, args; compiled: skin).
+
+    Returns
+    -------
+    AboveResult
+        The minimised packing at phi_J + dphi with its V (eps), pressure tensor
+        (eps / diameter^d), the minimisation and the engine.
+
+    Raises
+    ------
+    ValueError
+        A bad ``dphi``, a packing under gravity or a minimiser with a target pressure.
+    RuntimeError
+        The minimisation diverged (blown up).
+    JammingFailed
+        The packing relaxed below V_min: it is not jammed at phi_J + dphi.
+    """
     minimizer = minimizer or MinimizerSettings()
     phi = packing.phi
     check_dphi(dphi, phi)
