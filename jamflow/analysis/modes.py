@@ -53,7 +53,7 @@ class SpectrumResult:
     e_min: float  #: zero-mode threshold, eps / diameter^2
     mass: float  #: M in omega = sqrt(e / M): N m (N with floaters, m = 1) unless ``Spectrum(mass=...)``
     complete: bool  #: False: only the lowest m modes (sparse solver)
-    # the translational fractions kept by ``without_vectors`` (not compared, not in the repr)
+    #: the translational fractions kept by ``without_vectors`` (not compared, not in the repr)
     kept_fraction: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     def __repr__(self) -> str:

@@ -148,6 +148,7 @@ class RDFResult:
 
     @property
     def dr(self) -> float:
+        """Bin width, units of <sigma^2>^(1/2)."""
         return float(self.edges[1] - self.edges[0])
 
     @property

@@ -31,8 +31,10 @@ import numpy as np
 
 # --- the laws: plain functions of s = r / sigma (s < 1) and a NamedTuple of parameters ---------
 class SpringParams(NamedTuple):
-    alpha: float
-    epsilon: float
+    """The numbers of the spring law, as the compiled kernels take them."""
+
+    alpha: float  #: exponent (2 the linear spring, 5/2 Hertzian)
+    epsilon: float  #: energy scale eps
 
 
 def spring_energy_force(s, p: SpringParams):
@@ -71,7 +73,9 @@ def overlap_law_params(potential) -> SpringParams:
 
 
 class RLJParams(NamedTuple):
-    epsilon: float
+    """The number of the repulsive Lennard-Jones law, as the compiled kernels take it."""
+
+    epsilon: float  #: energy scale eps
 
 
 def rlj_energy_force(s, p: RLJParams):

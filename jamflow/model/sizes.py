@@ -21,11 +21,14 @@ import numpy as np
 
 @dataclass(frozen=True)
 class SizeSpec:
+    """A size distribution (``parse_sizes``): its kind and parameters, diameters in units of the small one."""
+
     kind: str  #: mono | bi | poly-uniform | poly-normal | poly-lognormal
-    params: tuple[float, ...] = ()
+    params: tuple[float, ...] = ()  #: bi: (RATIO, FRACTION_SMALL); poly-uniform: (WIDTH,); poly-normal, poly-lognormal: (WIDTH, MEAN)
 
     @property
     def spec(self) -> str:
+        """The spec string, e.g. ``bi:1.4:0.5``."""
         return ":".join([self.kind, *(f"{p:g}" for p in self.params)])
 
     @property
