@@ -32,14 +32,14 @@ from jamflow.minimize.rules import minimize
 class AboveResult:
     """A packing at phi_onset + dphi, minimised."""
 
-    packing: Packing
-    phi_onset: float
-    dphi: float
+    packing: Packing  #: the minimised packing at phi_onset + dphi (diameters)
+    phi_onset: float  #: the input packing's packing fraction
+    dphi: float  #: the compression step
     energy_per_particle: float  #: eps
     pressure_tensor: np.ndarray  #: (d, d), eps / diameter^d
-    minimization: MinimizeResult
-    engine: str
-    seconds: float
+    minimization: MinimizeResult  #: the minimisation at the compressed box (stop reason, iterations, max force)
+    engine: str  #: "numba" or "lammps"
+    seconds: float  #: wall time of the run
     kernels: str = ""  #: the engine's ``kernels`` (summary line only)
 
     def __repr__(self) -> str:
@@ -51,9 +51,11 @@ class AboveResult:
 
     @property
     def pressure(self) -> float:
+        """P = trace / d of the pressure tensor, eps / diameter^d."""
         return float(np.trace(self.pressure_tensor) / self.packing.dim)
 
     def summary(self) -> str:
+        """The line ``jamflow jam --above`` prints: phi, V, P, max|F|, the stop, the engine, seconds."""
         m = self.minimization
         return (f"above onset by {self.dphi:g}: phi = {self.packing.phi:.10f}  V = {self.energy_per_particle:.3e}  "
                 f"P = {self.pressure:.3e}  max|F| = {m.max_force:.1e}  stop: {m.reason}, {m.iterations} iterations "

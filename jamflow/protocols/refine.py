@@ -227,12 +227,12 @@ class Network:
     """The double-double evaluation of a state and its contact network."""
 
     i: np.ndarray  #: (C,) contacts (overlap > 0 in double-double)
-    j: np.ndarray
+    j: np.ndarray  #: (C,) their partners, i < j
     overlap: np.ndarray  #: (C,) sigma - r (float64 value of the double-double overlap)
     floater: np.ndarray  #: (N,) bool
     forces: np.ndarray  #: (N, d) net forces, hi + lo rounded to float64
     energy: tuple  #: (hi, lo)
-    pressure: float
+    pressure: float  #: P, eps / diameter^d
     pressure_tensor: np.ndarray  #: (d, d)
 
     @property
@@ -242,6 +242,7 @@ class Network:
 
     @property
     def n_contacts(self) -> int:
+        """N_c, the backbone contacts."""
         return int(self.backbone.sum())
 
     def contact_forces(self, diameters, epsilon) -> np.ndarray:
@@ -259,6 +260,7 @@ class Network:
 
     @property
     def floater_overlaps(self) -> bool:
+        """True when a floater overlaps a particle (a contact outside the backbone)."""
         return bool(len(self.i) and (~self.backbone).any())
 
 
