@@ -53,6 +53,7 @@ class StrainTerms:
 
     @classmethod
     def of(cls, packing: Packing) -> "StrainTerms":
+        """The terms of every contact of ``packing`` (``pair_terms``), indexed into its coordinates."""
         terms = pair_terms(packing)
         coords = Coordinates.of(packing)
         return cls(_local_index(coords, terms.i, terms.j), terms.gradient, terms.hessian,
@@ -191,13 +192,13 @@ def _check_zero_modes(coeff, live, dim, strain) -> None:
 class ContactModuli:
     """G and B of disks/spheres by the Hessian route over a contact network the caller found."""
 
-    G: float  #: eps / diameter^d
-    B: float
-    G_affine: float
-    B_affine: float
+    G: float  #: shear modulus, eps / diameter^d
+    B: float  #: bulk modulus, eps / diameter^d
+    G_affine: float  #: without the non-affine relaxation
+    B_affine: float  #: without the non-affine relaxation
     pressure_tensor: np.ndarray  #: (d, d) from the same contacts
-    n_kept: int
-    n_contacts: int
+    n_kept: int  #: particles kept (non-floaters)
+    n_contacts: int  #: contacts given
 
 
 def contact_moduli(packing: Packing, i, j, dr, sigma, overlap, kept) -> ContactModuli:
