@@ -222,7 +222,7 @@ class Spectrum:
 
         Parameters
         ----------
-        packing : Packing
+        packing : jamflow.Packing
             A packing at an energy minimum (lengths in diameters, energies in eps).
 
         Returns
@@ -525,7 +525,7 @@ class Stability:
 
         Parameters
         ----------
-        packing : Packing
+        packing : jamflow.Packing
             A packing at an energy minimum (lengths in diameters).
         spectrum : SpectrumResult, optional
             Its spectrum with eigenvectors, if already computed; None: computed here.

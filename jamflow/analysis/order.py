@@ -129,7 +129,7 @@ class TranslationalOrder:
 
         Parameters
         ----------
-        packing : Packing
+        packing : jamflow.Packing
             Any packing of round particles (lengths in diameters).
 
         Returns
@@ -255,7 +255,7 @@ class BondOrder:
 
         Parameters
         ----------
-        packing : Packing
+        packing : jamflow.Packing
             Any packing (lengths in diameters).
 
         Returns

@@ -196,7 +196,7 @@ class RDF:
 
         Parameters
         ----------
-        packings : Packing or iterable of Packing
+        packings : jamflow.Packing or iterable of jamflow.Packing
             One packing or a non-empty ensemble of the same dimension.
 
         Returns
@@ -386,7 +386,7 @@ class StructureFactor:
 
         Parameters
         ----------
-        packings : Packing or iterable of Packing
+        packings : jamflow.Packing or iterable of jamflow.Packing
             One packing or a non-empty ensemble of the same dimension; ``dk``'s default comes
             from the first.
 

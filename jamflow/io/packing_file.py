@@ -120,7 +120,7 @@ def save_packing(path, packing: Packing, *, energy_per_particle=None, pressure_t
     ----------
     path : str or os.PathLike
         The file to write (replaced atomically when it exists).
-    packing : Packing
+    packing : jamflow.Packing
         Positions, diameters and box in diameters; wrapped into the cell once when outside it.
     energy_per_particle : float, optional
         V, in eps.
@@ -251,7 +251,7 @@ def save_result(result, path, checks=None, *, force: bool = False) -> Path:
 
     Parameters
     ----------
-    result : JamResult or PressureResult
+    result : jamflow.JamResult or PressureResult
         The run to write.
     path : str or os.PathLike
         The packing file to write.
@@ -269,7 +269,7 @@ def save_result(result, path, checks=None, *, force: bool = False) -> Path:
     ------
     ValueError
         ``path`` cannot be written (checked before any work: ``support.files.check_writable``).
-    JammingFailed
+    jamflow.JammingFailed
         The packing fails its checks (nothing is written).
     """
     from jamflow.protocols.outcome import JammingFailed
@@ -369,7 +369,7 @@ def load_packing(path) -> Packing:
 
     Returns
     -------
-    Packing
+    jamflow.Packing
         Positions and box in diameters, with the potential, shape, orientations, fixed
         particles and gravity the file holds, double-double low parts when it has them;
         ``metadata`` has ``seed``, ``sizes`` and ``source`` (the path).

@@ -108,7 +108,7 @@ def check_packing(packing: Packing, energy_per_particle: float | None = None, ma
 
     Parameters
     ----------
-    packing : Packing
+    packing : jamflow.Packing
         The packing to check (lengths in diameters).
     energy_per_particle : float, optional
         V in eps, as the engine reported it; None: recomputed from the packing.

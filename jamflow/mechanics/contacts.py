@@ -239,7 +239,7 @@ class Contacts:
 
         Parameters
         ----------
-        packing : Packing
+        packing : jamflow.Packing
             Any packing; a contact is an overlap r < sigma, strictly (double-double overlaps for
             disks and spheres carrying low parts), walls and weights count as contacts.
 

@@ -147,7 +147,7 @@ class HessianModuli:
 
         Parameters
         ----------
-        packing : Packing
+        packing : jamflow.Packing
             A packing in a periodic box, without walls, gravity or fixed particles.
 
         Returns

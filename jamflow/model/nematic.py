@@ -38,7 +38,7 @@ class Nematic:
 
         Parameters
         ----------
-        orientations : array_like or Packing
+        orientations : array_like or jamflow.Packing
             (N, d) axis vectors (normalised here; non-zero), (N,) 2D angles in radians, or a
             packing of particles with an axis (its directors).
 

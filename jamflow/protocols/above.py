@@ -85,11 +85,11 @@ def compress_above(packing: Packing, dphi: float, minimizer: MinimizerSettings |
 
     Parameters
     ----------
-    packing : Packing
+    packing : jamflow.Packing
         A packing at its onset phi_J (``jamflow.jam``, ``load_packing``), without gravity.
     dphi : float
         The compression step in packing fraction (dimensionless, > 0, phi_J + dphi < 1).
-    minimizer : MinimizerSettings, optional
+    minimizer : jamflow.MinimizerSettings, optional
         How the compressed packing is minimised (default ``MinimizerSettings()``); no target
         pressure (the box is fixed).
     engine : {"auto", "numba", "lammps"}, default "auto"
@@ -109,7 +109,7 @@ def compress_above(packing: Packing, dphi: float, minimizer: MinimizerSettings |
         A bad ``dphi``, a packing under gravity or a minimiser with a target pressure.
     RuntimeError
         The minimisation diverged (blown up).
-    JammingFailed
+    jamflow.JammingFailed
         The packing relaxed below V_min: it is not jammed at phi_J + dphi.
     """
     minimizer = minimizer or MinimizerSettings()

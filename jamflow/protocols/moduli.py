@@ -169,7 +169,7 @@ class Moduli:
 
         Parameters
         ----------
-        packing : Packing
+        packing : jamflow.Packing
             A jammed packing above onset in a periodic box (no walls, fixed particles or gravity).
         observers : iterable of callable, optional
             Each called with a dict (strain, amplitude, point) after every relaxation.

@@ -767,7 +767,7 @@ def refine(packing: Packing, pressure: float, *, settings: RefineSettings | None
 
     Parameters
     ----------
-    packing : Packing
+    packing : jamflow.Packing
         A jammed packing of disks or spheres with the linear spring, in an orthogonal periodic
         box without walls, gravity or fixed particles (lengths in diameters).
     pressure : float
@@ -790,7 +790,7 @@ def refine(packing: Packing, pressure: float, *, settings: RefineSettings | None
     ------
     ValueError
         A scene the refinement is not written for, or a target below the double-double floor.
-    JammingFailed
+    jamflow.JammingFailed
         The refinement does not converge, or the packing carries no pressure.
     """
     settings = settings or RefineSettings(pressure)
@@ -840,7 +840,7 @@ def refine_to_vtol(packing: Packing, v_tol: float, *, force_tol: float = 1e-12, 
 
     Parameters
     ----------
-    packing : Packing
+    packing : jamflow.Packing
         A jammed packing ``refine`` accepts (disks or spheres, linear spring, periodic box).
     v_tol : float
         V_tol of the energy window, eps (> 0, above what double-double resolves at this N).
@@ -860,7 +860,7 @@ def refine_to_vtol(packing: Packing, v_tol: float, *, force_tol: float = 1e-12, 
     ------
     ValueError
         A bad ``v_tol`` or a scene ``refine`` is not written for.
-    JammingFailed
+    jamflow.JammingFailed
         The packing carries no pressure, a refinement fails, or V is still outside the window
         after ``MAX_VTOL_REFINES`` refinements.
     """

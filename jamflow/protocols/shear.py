@@ -203,13 +203,13 @@ def shear(packing: Packing, dgamma: float, to: float, settings: CompressionSetti
 
     Parameters
     ----------
-    packing : Packing
+    packing : jamflow.Packing
         The start, in a periodic box (Lees-Edwards tilt = its strain gamma_0).
     dgamma : float
         The strain step (dimensionless, either sign, towards ``to``; ~1e-3 in the chapter).
     to : float
         The final strain, reached exactly (the last step may be shorter).
-    settings : CompressionSettings, optional
+    settings : jamflow.CompressionSettings, optional
         The bisection to the energy window after each step (default ``shear_protocol()``).
     engine : {"auto", "numba", "lammps"}, default "auto"
         The engine.

@@ -310,7 +310,7 @@ def run_jam(spec: JamSpec, observers=(), engine_options=None, prepared=None, des
 
     Raises
     ------
-    JammingFailed
+    jamflow.JammingFailed
         The protocol fails, or the packing fails its checks.
     """
     settings, start = prepared or prepare(spec)

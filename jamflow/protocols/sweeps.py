@@ -165,7 +165,7 @@ class StrainSweep:
 
         Parameters
         ----------
-        packing : Packing
+        packing : jamflow.Packing
             A jammed packing in a periodic box.
         strain : Strain
             ``SHEAR`` (R = Sigma, modulus G) or ``BULK`` (R = P, modulus B).

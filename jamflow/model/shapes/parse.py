@@ -17,7 +17,7 @@ def parse_shape(spec, dim: int, contact: str = "exact"):
 
     Parameters
     ----------
-    spec : str or shape
+    spec : str or Sphere, Ellipsoid, RigidBody
         ``disk`` | ``sphere`` | ``ellipse:ALPHA`` (2D) | ``spheroid:ALPHA`` (3D) |
         ``nmer:N:ALPHA`` | ``dimer:ALPHA:S`` | ``trimer:ALPHA:C``; ALPHA (> 0) is the aspect
         ratio a / b. A shape object is checked for ``dim`` and returned as it is.
@@ -29,7 +29,7 @@ def parse_shape(spec, dim: int, contact: str = "exact"):
 
     Returns
     -------
-    shape
+    Sphere, Ellipsoid or RigidBody
         The sphere shape (disk in 2D) for disks, spheres and ALPHA = 1, an ``Ellipsoid`` or a
         rigid body.
 
