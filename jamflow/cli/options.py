@@ -40,8 +40,7 @@ def add_spec_arguments(p, skip=()) -> None:
     add("--protocol", choices=PROTOCOL_NAMES, default=None, metavar="{" + ",".join(sorted(PROTOCOLS)) + "}",
         help=f"chapter: the chapter's constant-increment bisection; fast: the same stopping rule with "
              f"growing increments and Newton jumps (docs/notes/speed.md). Default {DEFAULT_PROTOCOL}; "
-             "chapter with --emit-deck (decks run the chapter's protocol). 'seed' is accepted as the "
-             "old name of chapter")
+             "chapter with --emit-deck (decks run the chapter's protocol)")
     add("--minimizer", choices=METHODS, default="fire",
         help="energy minimiser; ellipses/spheroids: fire (compiled engine, over positions and "
              "orientations) or md (LAMMPS damped dynamics with rotations; no LAMMPS minimiser turns them); "
