@@ -286,7 +286,34 @@ def random_packing(n: int, dim: int, sizes: SizeSpec, phi: float, seed: int,
     bodies): orientations first, then positions by random sequential addition, so that no two
     bodies overlap (``separated_positions``). From ``SPATIAL_ORDER_FROM`` particles on, the
     particles (with their sizes and orientations) are then numbered along a space-filling curve
-    (``ordering.morton_order``): the same start, labelled so that neighbours are near in memory."""
+    (``ordering.morton_order``): the same start, labelled so that neighbours are near in memory.
+
+    Parameters
+    ----------
+    n : int
+        Number of particles.
+    dim : int
+        Dimension, 2 or 3.
+    sizes : jamflow.model.sizes.SizeSpec
+        The size distribution (``jamflow.parse_sizes``); diameters in units of the small one.
+    phi : float
+        Packing fraction of the start (the box side follows from it), dimensionless.
+    seed : int
+        Seed of the generator (``numpy.random.default_rng``).
+    potential : Potential, optional
+        The pair law; None: the linear spring.
+    shape : shape object
+        The particle shape (``jamflow.parse_shape``); disks/spheres by default.
+    separated : bool
+        Place the particles without overlaps (random sequential addition; rigid bodies).
+    orientations : str
+        ``random``, ``aligned`` or ``nematic:S`` (particles with an axis).
+
+    Returns
+    -------
+    jamflow.Packing
+        The start, in a square/cubic periodic box, its metadata holding the seed and sizes.
+    """
     rng = np.random.default_rng(seed)
     diameters = sizes.draw(n, rng)
     length = (shape.volumes(diameters, dim).sum() / phi) ** (1.0 / dim)

@@ -65,6 +65,59 @@ def jam(n: int = 64, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | P
     ``observers`` are callables ``f(step: dict)`` called after every minimisation
     (progress bars, writers). ``engine``: "auto" (the compiled engine wherever it runs the
     scene, else LAMMPS), "lammps" or "numba" (``jamflow.engines.base``).
+
+    Parameters
+    ----------
+    n : int
+        Number of particles N (>= 2).
+    dim : int
+        Dimension, 2 or 3.
+    sizes : str or jamflow.model.sizes.SizeSpec
+        Size distribution (``mono``, ``bi:RATIO:FRACTION_SMALL``, ``poly-uniform:WIDTH``, ...);
+        the small diameter is the unit of length.
+    potential : str or Potential
+        Pair law: ``spring`` (alpha = 2), ``hertz``, ``spring:ALPHA`` or ``rlj``; energies in eps.
+    seed : int
+        Random seed of the start (0 <= seed < 2^63).
+    settings : jamflow.CompressionSettings, optional
+        The protocol (``fast_protocol()``, the default, or ``chapter_protocol()``): V_tol (eps per
+        particle), dphi0, phi0 and the minimiser's settings.
+    start : jamflow.Packing, optional
+        Start from this packing instead of a random one (its box and phi).
+    observers : sequence of callables, optional
+        Each called as ``f(step)`` after every minimisation.
+    engine : str
+        ``auto``, ``lammps`` or ``numba``.
+    engine_options : dict, optional
+        Options of the engine's constructor (e.g. ``skin``); an option the engine does not take
+        is refused.
+    shape : str or shape object
+        ``disk`` (disks/spheres), ``ellipse:ALPHA``, ``spheroid:ALPHA``, ``nmer:N:ALPHA``, ...
+    walls : str, optional
+        Walled axes, e.g. ``"y"``; None: periodic in every axis.
+    wall_type : str
+        ``smooth`` or ``rough``.
+    gravity : float
+        g, force per particle in eps / diameter; > 0 settles the packing instead.
+    contact : str
+        Contact distance of ellipses/spheroids: ``exact``, ``gaussian`` or ``cleaver``.
+    gamma : float, optional
+        Fixed Lees-Edwards shear strain (dimensionless).
+    orientations : str
+        ``random``, ``aligned`` or ``nematic:S``.
+
+    Returns
+    -------
+    jamflow.JamResult
+        The packing at onset with phi_J, V per particle (eps), the pressure tensor
+        (eps / diameter^d), the max force (eps / diameter) and the history of every minimisation.
+
+    Raises
+    ------
+    ValueError, TypeError
+        A bad argument, before any work.
+    jamflow.JammingFailed
+        No packing landed in the window (the message says what to change).
     """
     if settings is None:
         settings = PROTOCOLS[DEFAULT_PROTOCOL]()
