@@ -1,14 +1,18 @@
 """Shared fixtures: small random packings in orthogonal and tilted boxes; eigen-solvers that
 return the other sign of every eigenvector (``flipped_eigen_solvers``, and the whole run with
-JAMFLOW_FLIP_EIGENVECTORS=1)."""
+JAMFLOW_FLIP_EIGENVECTORS=1); a jammed packing file (``packing_file``, one per test module) and
+the helpers of tests that run the command line as a user does (``run_jam``, ``no_traceback``,
+``JAMFLOW``)."""
 
 import os
+import sys
 
 import numpy as np
 import pytest
 import scipy.linalg
 import scipy.sparse.linalg
 
+from jamflow.cli.app import main
 from jamflow.model.box import Box
 from jamflow.model.packing import Packing
 from jamflow.model.potentials import Spring
@@ -42,6 +46,26 @@ def tilted(packing, tilt: float):
 def rel(a, b) -> float:
     """Largest absolute difference over the largest |b|."""
     return float(np.max(np.abs(np.asarray(a) - np.asarray(b))) / np.max(np.abs(b)))
+
+
+# --- the command line, run as a user runs it ------------------------------------------------
+JAMFLOW = [sys.executable, "-m", "jamflow.cli"]
+
+
+def no_traceback(err: str) -> bool:
+    return "Traceback" not in err and len(err.strip().splitlines()) >= 1
+
+
+@pytest.fixture(scope="module")
+def packing_file(tmp_path_factory):
+    out = tmp_path_factory.mktemp("packing") / "p.h5"
+    assert main(["jam", "--n", "32", "--seed", "3", "--out", str(out), "--quiet"]) == 0
+    return out
+
+
+def run_jam(tmp_path, capsys, *args):
+    code = main(["jam", "--quiet", *args])
+    return code, capsys.readouterr().err
 
 
 # --- eigen-solvers of another machine ----------------------------------------------------------

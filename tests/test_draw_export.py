@@ -1,7 +1,9 @@
-"""jamflow draw (pictures) and jamflow export (LAMMPS dump, extended XYZ for OVITO)."""
+"""jamflow draw (pictures, in the format their suffix names) and jamflow export (LAMMPS dump,
+extended XYZ for OVITO)."""
 
 import numpy as np
 import pytest
+from conftest import no_traceback
 
 from jamflow.io.readers import packings_from_lammps
 from jamflow.cli.app import main
@@ -193,3 +195,18 @@ def test_draw_command_reads_lammps_files(fmt, disks, tmp_path, capsys):
     assert main(["draw", str(src), "-o", str(tmp_path / "p.png")]) == 0
     assert (tmp_path / "p.png").read_bytes()[:8] == PNG
     assert f"{src}: {disks.n} " in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("suffix, magic", [(".svg", b"<?xml"), (".pdf", b"%PDF"), (".png", b"\x89PNG")])
+def test_draw_writes_the_format_its_suffix_asks_for(tmp_path, packing_file, suffix, magic):
+    # was: PNG bytes in pic.svg and pic.pdf
+    out = tmp_path / f"pic{suffix}"
+    assert main(["draw", str(packing_file), "-o", str(out)]) == 0
+    assert out.read_bytes().startswith(magic)
+
+
+def test_draw_refuses_a_suffix_it_cannot_write(tmp_path, capsys, packing_file, monkeypatch):
+    monkeypatch.setattr("jamflow.cli.commands.draw.load_input", lambda *a: pytest.fail("work started"))
+    code = main(["draw", str(packing_file), "-o", str(tmp_path / "pic.jpg")])
+    err = capsys.readouterr().err
+    assert code == 2 and no_traceback(err) and "not .jpg" in err and list(tmp_path.iterdir()) == []

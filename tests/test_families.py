@@ -1,8 +1,14 @@
 """Geometric families: joining segments (closed cases on hand-made points), the mirror map, the
-richness estimate, and a small real sampling end to end."""
+richness estimate, and a small real sampling end to end; a second run into one --out refused while
+the first holds its lock, and --resume of a damaged points file."""
 
+import subprocess
+import time
+
+import h5py
 import numpy as np
 import pytest
+from conftest import JAMFLOW, no_traceback
 
 from jamflow.analysis.families import (
     by_starts,
@@ -274,3 +280,61 @@ def test_families_command_mirrors_about_the_middle_of_a_symmetric_range(tmp_path
     assert main(argv) == 0
     out = capsys.readouterr().out
     assert "mirror gamma -> 0 - gamma" in out and "families met in [0, 0.01] by how many" in out
+
+
+FAMILIES = ["families", "--n", "10", "--spacing", "0.5", "--starts", "1", "--quiet"]
+
+
+def test_families_resume_of_a_damaged_points_file(tmp_path, capsys, monkeypatch):
+    """Was: OSError traceback 'Unable to synchronously open file (truncated file ...)', no advice."""
+    monkeypatch.setattr("jamflow.cli.commands.families.sample", lambda *a, **k: pytest.fail("work started"))
+    out = tmp_path / "fam"
+    out.mkdir()
+    with h5py.File(out / "whole.h5", "w") as f:
+        f["points/gamma"] = np.zeros(4000)
+    (out / "points.h5").write_bytes((out / "whole.h5").read_bytes()[:3000])
+    (out / "whole.h5").unlink()
+    code = main([*FAMILIES, "--out", str(out), "--resume"])
+    err = capsys.readouterr().err
+    assert code == 2 and no_traceback(err) and len(err.strip().splitlines()) == 1, err
+    assert f"{out / 'points.h5'} is truncated or damaged" in err and "cannot --resume it: delete" in err
+
+
+def test_two_families_runs_into_one_out(tmp_path, capsys, monkeypatch):
+    """Was: both exited 0 and the later one's files replaced the other's. Now the directory is
+    locked (support.files.lock_directory, the ensemble store's lock); a new directory that a
+    failed run made is removed, its lock file with it."""
+    from jamflow.support.files import lock_directory
+
+    monkeypatch.setattr("jamflow.cli.commands.families.sample", lambda *a, **k: pytest.fail("work started"))
+    out = tmp_path / "fam"
+    out.mkdir()
+    with lock_directory(out, "held by the test"):  # as a first run still sampling
+        code = main([*FAMILIES, "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and no_traceback(err) and f"another jamflow families run is writing {out}" in err, err
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("injected")
+
+    monkeypatch.setattr("jamflow.cli.commands.families.sample", broken)
+    with pytest.raises(RuntimeError, match="injected"):
+        main([*FAMILIES, "--out", str(tmp_path / "new")])
+    assert not (tmp_path / "new").exists()
+
+
+def test_families_lock_between_processes(tmp_path):
+    """Two real runs into one new --out: the second is refused while the first samples."""
+    out = tmp_path / "fam"
+    first = subprocess.Popen([*JAMFLOW, *FAMILIES, "--starts", "2", "--out", str(out)], stdout=subprocess.DEVNULL,
+                             stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.time() + 60
+        while not (out / ".lock").exists() and time.time() < deadline:
+            time.sleep(0.05)
+        second = subprocess.run([*JAMFLOW, *FAMILIES, "--starts", "2", "--out", str(out)], capture_output=True,
+                                text=True, timeout=120)
+    finally:
+        assert first.wait(timeout=300) == 0, first.stderr.read()
+    assert second.returncode == 2 and "another jamflow families run is writing" in second.stderr, second.stderr
+    assert (out / "families.h5").exists()
