@@ -15,7 +15,26 @@ round, an orientation (``jamflow.model.shapes.rotations``). A shape provides:
   turns rotations into lengths (d_k theta) and torques into forces (tau / d_k);
 - ``reach(scale)``: the radius of the smallest centred sphere that holds the particle (pair
   search and neighbour-list skin); ``smallest_contact(scale)``: the smallest contact distance;
-- ``attrs()`` / ``shape_from_attrs``: the ``shape`` attribute of packing files.
+- ``attrs()`` / ``from_attrs`` (``shape_from_attrs``): the ``shape`` attribute of packing files;
+  ``datasets(positions, orientations, scale)``: the shape's datasets in packing files;
+- ``contact_distances(packing, i, j, dr)``: sigma_ij of particle pairs (not for bodies of sites).
+
+What a shape can do is declared once, on its class, and read by every layer (no layer tests
+the ``kind`` string; per-kind code in a higher layer sits in one table per layer keyed by
+``kind``, as ``engines.compiled.kernels.MODULES``):
+
+- ``oriented``: particles carry an orientation;
+- ``round``: a disk/sphere, the contact distance (a_i + a_j)/2 along the centre line (the
+  Newton minimiser, the polish's disk/sphere pair list, gap closing, rough walls, half-space floaters);
+- ``elliptic``: an ellipse/spheroid with ``axes`` and a contact-distance method (``contact``);
+- ``made_of_sites``: a rigid body of spherical sites (``world_sites``, ``n_sites``), which
+  touches site by site (``model.pairs.overlapping_sites``) and starts without overlaps;
+- ``sphere_contacts``: every contact is between two spheres (particles or sites), the
+  least-squares model of the Gauss-Newton polish;
+- ``bounded``: walls, gravity and fixed particles are written for it;
+- ``double_double``: double-double coordinates (``Packing.extended``, refinement) are written for it;
+- ``aspect_ratio``: the ALPHA of shape annealing (1 for disks/spheres, None where it has none).
+``SHAPES`` registers every class by its ``kind``.
 The trivial zero modes of a periodic packing of any shape are the d uniform translations.
 
 Contact laws (how two particles of a shape overlap) live in the engines and the numpy
@@ -52,7 +71,18 @@ class Sphere:
 
     kind = "sphere"
     oriented = False
+    round = True
+    elliptic = False
+    made_of_sites = False
+    sphere_contacts = True
+    bounded = True
+    double_double = True
+    aspect_ratio = 1.0
     force_tol_base = FORCE_TOL_BASE  # default force tolerance before box scaling (mechanics.force_floor)
+
+    @classmethod
+    def from_attrs(cls, attrs: dict):
+        return SPHERE
 
     def name(self, dim: int) -> str:
         return "disk" if dim == 2 else "sphere"
@@ -89,6 +119,13 @@ class Sphere:
     def attrs(self) -> dict:
         return {"kind": self.kind}
 
+    def datasets(self, positions, orientations, scale) -> dict:
+        return {}
+
+    def contact_distances(self, packing, i, j, dr=None) -> np.ndarray:
+        """(a_i + a_j) / 2 (``dr`` is not needed)."""
+        return 0.5 * (packing.diameters[i] + packing.diameters[j])
+
 
 @dataclass(frozen=True)
 class Ellipsoid:
@@ -101,7 +138,21 @@ class Ellipsoid:
 
     kind = "ellipsoid"
     oriented = True
+    round = False
+    elliptic = True
+    made_of_sites = False
+    sphere_contacts = False
+    bounded = False
+    double_double = False
     force_tol_base = ELLIPSOID_FORCE_TOL_BASE
+
+    @classmethod
+    def from_attrs(cls, attrs: dict):
+        return cls(float(attrs["alpha"]), str(attrs.get("contact", "exact")))
+
+    @property
+    def aspect_ratio(self) -> float:
+        return float(self.alpha)
 
     def __post_init__(self):
         from jamflow.model.shapes.contact_distance import METHODS
@@ -170,6 +221,19 @@ class Ellipsoid:
     def attrs(self) -> dict:
         return {"kind": self.kind, "alpha": float(self.alpha), "contact": self.contact}
 
+    def datasets(self, positions, orientations, scale) -> dict:
+        return {"axes": self.axes(scale)}
+
+    def contact_distances(self, packing, i, j, dr) -> np.ndarray:
+        """The contact distance of the shape's method (``shapes.contact_distance``) along the
+        separations ``dr`` (P, d) = r_i - r_j."""
+        from jamflow.model.shapes.contact_distance import contact_distance
+
+        axes, u = self.axes(packing.diameters), packing.directors
+        r_hat = dr / np.linalg.norm(dr, axis=1)[:, None]
+        return contact_distance(axes[i, 0], axes[i, 1], axes[j, 0], axes[j, 1], r_hat, u[i], u[j],
+                                method=self.contact)
+
 
 @dataclass(frozen=True, eq=False)
 class RigidBody:
@@ -195,7 +259,19 @@ class RigidBody:
 
     kind = "rigid"
     oriented = True
+    round = False
+    elliptic = False
+    made_of_sites = True
+    sphere_contacts = True
+    bounded = False
+    double_double = False
+    aspect_ratio = None
     force_tol_base = FORCE_TOL_BASE
+
+    @classmethod
+    def from_attrs(cls, attrs: dict):
+        return cls(np.array(json.loads(attrs["sites"])), np.array(json.loads(attrs["site_diameters"])),
+                   str(attrs.get("label", "rigid")), body_frame=True)
 
     def __post_init__(self):
         sites = np.array(self.sites, dtype=float)
@@ -315,6 +391,14 @@ class RigidBody:
         return {"kind": self.kind, "label": self.label, "sites": json.dumps(self.sites.tolist()),
                 "site_diameters": json.dumps(self.site_diameters.tolist())}
 
+    def datasets(self, positions, orientations, scale) -> dict:
+        """World sites (N, S, d) and site diameters (N, S)."""
+        return {"sites": self.world_sites(positions, orientations, scale),
+                "site_diameters": _scale(scale)[:, None] * self.site_diameters[None, :]}
+
+    def contact_distances(self, packing, i, j, dr=None) -> np.ndarray:
+        raise ValueError(f"{self.name(packing.dim)} particles touch site by site; use overlapping_sites")
+
 
 def _check_fused(sites: np.ndarray, diam: np.ndarray) -> None:
     """Sites of a fused body must overlap (or touch) into one connected piece and must not
@@ -340,18 +424,13 @@ def _check_fused(sites: np.ndarray, diam: np.ndarray) -> None:
 SPHERE = Sphere()
 
 
+SHAPES = {cls.kind: cls for cls in (Sphere, Ellipsoid, RigidBody)}  # every shape class by its kind
+
+
 def shape_from_attrs(attrs: dict):
     """The shape a packing file's ``shape`` attributes describe."""
     kind = attrs.get("kind", "sphere")
-    if kind == "sphere":
-        return SPHERE
-    if kind == "ellipsoid":
-        return Ellipsoid(float(attrs["alpha"]), str(attrs.get("contact", "exact")))
-    if kind == "rigid":
-        return RigidBody(np.array(json.loads(attrs["sites"])), np.array(json.loads(attrs["site_diameters"])),
-                         str(attrs.get("label", "rigid")), body_frame=True)
-    raise ValueError(f"unknown particle shape kind {kind!r} in packing file")
-
-
-
-
+    cls = SHAPES.get(kind)
+    if cls is None:
+        raise ValueError(f"unknown particle shape kind {kind!r} in packing file")
+    return cls.from_attrs(attrs)
