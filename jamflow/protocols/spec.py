@@ -217,7 +217,7 @@ def check_contact(spec: JamSpec) -> None:
     if spec.contact == "exact":
         return
     shape = parse_shape(spec.shape, spec.dim)
-    if shape.kind != "ellipsoid":
+    if not shape.elliptic:
         raise ValueError(f"--contact {spec.contact} applies to ellipses/spheroids (--shape ellipse:ALPHA or "
                          f"spheroid:ALPHA, ALPHA != 1), not to {shape.name(spec.dim)} particles: leave --contact out")
     if spec.contact not in HESSIAN_CONTACTS:  # the checks of every jammed packing would fail after the whole jam
@@ -260,7 +260,7 @@ def prepare(spec: JamSpec):
         engine_name(start, spec.minimizer, spec.engine, pressure=True)
         return psettings, start
     engine_name(start, spec.minimizer, spec.engine)  # refuse an engine that cannot run the scene, before work
-    if start.shape.kind == "rigid" and settings.minimizer.md_damping != "viscous":
+    if start.shape.made_of_sites and settings.minimizer.md_damping != "viscous":
         raise ValueError(f"--md-damping {settings.minimizer.md_damping} is for disks and spheres: rigid bodies are "
                          "damped by fix rigid langevin (set its rate with --damping)")
     check_float64_resolution(start, settings)
@@ -274,7 +274,7 @@ def check_float64_resolution(start, settings) -> None:
         check_resolution(start, settings)
     except ValueError as err:
         pot = start.potential
-        refinable = (start.shape.kind == "sphere" and pot.name == "spring" and getattr(pot, "alpha", None) == 2.0
+        refinable = (start.shape.double_double and pot.name == "spring" and getattr(pot, "alpha", None) == 2.0
                      and not start.box.walls and not start.gravity)
         if not refinable or "vtol" not in str(err):
             raise
