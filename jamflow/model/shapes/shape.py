@@ -15,6 +15,7 @@ round, an orientation (``jamflow.model.shapes.rotations``). A shape provides:
   turns rotations into lengths (d_k theta) and torques into forces (tau / d_k);
 - ``reach(scale)``: the radius of the smallest centred sphere that holds the particle (pair
   search and neighbour-list skin); ``smallest_contact(scale)``: the smallest contact distance;
+- ``spec_words``, ``spec_usage`` and ``from_spec``: its ``--shape`` specs (``shapes.parse``);
 - ``attrs()`` / ``from_attrs`` (``shape_from_attrs``): the ``shape`` attribute of packing files;
   ``datasets(positions, orientations, scale)``: the shape's datasets in packing files;
 - ``contact_distances(packing, i, j, dr)``: sigma_ij of particle pairs (not for bodies of sites).
@@ -79,6 +80,14 @@ class Sphere:
     double_double = True
     aspect_ratio = 1.0
     force_tol_base = FORCE_TOL_BASE  # default force tolerance before box scaling (mechanics.force_floor)
+
+    spec_words = ("disk", "sphere")  # the first words of its --shape specs (model.shapes.parse)
+    spec_usage = "disk | sphere"
+
+    @classmethod
+    def from_spec(cls, spec: str, word: str, rest: str, dim: int, contact: str):
+        """The shape of a --shape spec ``word[:rest]`` (None: not a spec of this shape)."""
+        return None if rest else SPHERE
 
     @classmethod
     def from_attrs(cls, attrs: dict):
@@ -145,6 +154,28 @@ class Ellipsoid:
     bounded = False
     double_double = False
     force_tol_base = ELLIPSOID_FORCE_TOL_BASE
+
+    spec_words = ("ellipse", "spheroid")
+    spec_usage = "ellipse:ALPHA (2D) | spheroid:ALPHA (3D)"
+
+    @classmethod
+    def from_spec(cls, spec: str, word: str, rest: str, dim: int, contact: str):
+        """``ellipse:ALPHA`` (2D) or ``spheroid:ALPHA`` (3D); ALPHA = 1 gives the disk/sphere."""
+        wanted = {"ellipse": 2, "spheroid": 3}[word]
+        if dim != wanted:
+            raise ValueError(f"shape {spec!r}: '{word}' is {wanted}D, the packing is {dim}D; use "
+                             f"{'spheroid' if dim == 3 else 'ellipse'}:ALPHA")
+        try:
+            alpha = float(rest)
+        except ValueError:
+            raise ValueError(f"shape {spec!r}: ALPHA in {word}:ALPHA must be a number, e.g. {word}:1.5") from None
+        if not (math.isfinite(alpha) and alpha > 0):
+            raise ValueError(f"shape {spec!r}: ALPHA must be a finite number > 0")
+        if alpha == 1.0:
+            return SPHERE
+        shape = cls(alpha, contact)
+        shape.check(dim)
+        return shape
 
     @classmethod
     def from_attrs(cls, attrs: dict):
@@ -267,6 +298,8 @@ class RigidBody:
     double_double = False
     aspect_ratio = None
     force_tol_base = FORCE_TOL_BASE
+    spec_words = ()  # its specs name the body: nmer, dimer, trimer (model.shapes.nmers, parse.BODY_SPECS)
+    spec_usage = "nmer:N:ALPHA | dimer:ALPHA:S | trimer:ALPHA:C"
 
     @classmethod
     def from_attrs(cls, attrs: dict):
@@ -425,6 +458,8 @@ SPHERE = Sphere()
 
 
 SHAPES = {cls.kind: cls for cls in (Sphere, Ellipsoid, RigidBody)}  # every shape class by its kind
+# what every shape class declares (True or False; module docstring)
+CAPABILITIES = ("oriented", "round", "elliptic", "made_of_sites", "sphere_contacts", "bounded", "double_double")
 
 
 def shape_from_attrs(attrs: dict):
