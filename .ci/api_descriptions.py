@@ -5,9 +5,10 @@ Reads the HTML Sphinx wrote for docs/reference/api/ (build it first:
 class, method, attribute, property, exception, data): an entry has a description when its body
 has text of its own, not counting the entries nested in it. Prints the share over all entries
 and over the names in ``jamflow.__all__`` and their members, and lists the entries without one
-(``--list``).
+(``--list``). ``--min PERCENT``: exit 1 when the share over all entries is below PERCENT (CI
+runs it with the share reached, so that it cannot fall back).
 
-    python .ci/api_descriptions.py [docs/_build/html] [--list]
+    python .ci/api_descriptions.py [docs/_build/html] [--list] [--min PERCENT]
 """
 
 from __future__ import annotations
@@ -75,6 +76,11 @@ def entries(html_dir: Path) -> list[tuple[str, str, bool]]:
 
 
 def main(argv: list[str]) -> int:
+    minimum = None
+    if "--min" in argv:
+        k = argv.index("--min")
+        minimum = float(argv[k + 1])
+        argv = argv[:k] + argv[k + 2:]
     html_dir = Path(next((a for a in argv if not a.startswith("-")), "docs/_build/html"))
     found = entries(html_dir)
     if not found:
@@ -95,6 +101,11 @@ def main(argv: list[str]) -> int:
         for ident, kind, described in found:
             if not described:
                 print(f"  none: {kind} {ident}{'  (__all__)' if in_all(ident) else ''}")
+    share = 100 * sum(d for _, _, d in found) / len(found)
+    if minimum is not None and share < minimum:
+        print(f"the share of API entries with a description, {share:.1f} %, is below {minimum:g} %: describe the "
+              "new entries (--list names them)", file=sys.stderr)
+        return 1
     return 0
 
 

@@ -1,9 +1,10 @@
 """The compiled kernel against its floor (docs/notes/speed-2.md): microseconds per FIRE iteration
-and per bare force loop over the same pairs, at N = 256, 1024, 4096 (2D, 50:50 bidisperse,
+and per bare force loop over the same pairs, at N = 256 to 65536 (2D, 50:50 bidisperse,
 a relaxed state at phi = 0.85, as near jamming), with the particles in their random order
 and reordered along a Morton (Z-order) curve, and the FIRE iteration cost for several skins.
 
     python benchmarks/kernel.py --sizes 256 1024 4096 --out docs/notes/kernel.csv
+    python benchmarks/kernel.py --sizes 16384 65536 --skins 0.3 --repeats 3 --out docs/notes/kernel-large-n.csv
 
 ``floor``: the disk kernel (``compiled.spheres.forces``) called in a compiled loop, i.e. the
 pair loop alone, no integration, no Python. ``fire``: ``CompiledEngine`` FIRE iterations
@@ -30,6 +31,7 @@ from jamflow.engines.compiled.engine import CompiledEngine
 from jamflow.minimize.settings import MinimizerSettings
 from jamflow.protocols.compression import initial_packing
 from jamflow.minimize.rules import minimize
+from jamflow.model import ordering
 
 start_numba()  # spheres.forces as a numba dispatcher (it is Deferred until numba starts), for _repeat
 
@@ -51,14 +53,9 @@ def near_jamming_state(n: int, seed: int = 0, dim: int = 2, phi: float = 0.85):
 
 
 def morton_order(packing) -> np.ndarray:
-    """Particle order along a Z-order curve of the cell (16 bits per axis)."""
-    s = packing.box.to_fractional(packing.box.wrap(packing.positions))
-    q = np.clip((s * 65536).astype(np.int64), 0, 65535)
-    key = np.zeros(len(q), np.int64)
-    for bit in range(16):
-        for a in range(packing.dim):
-            key |= ((q[:, a] >> bit) & 1) << (packing.dim * bit + a)
-    return np.argsort(key, kind="stable")
+    """Particle order along the Morton (Z-order) curve of the cell, as large random starts are
+    numbered (``jamflow.model.ordering``)."""
+    return ordering.morton_order(packing.box.to_fractional(packing.box.wrap(packing.positions)))
 
 
 def floor_us(packing, skin: float, reps: int, repeats: int) -> float:
@@ -94,10 +91,11 @@ def main(argv=None):
     args = ap.parse_args(argv)
     rows = []
     for n in args.sizes:
-        state = near_jamming_state(n)
+        state = near_jamming_state(n)  # (numbered along the curve from ordering.SPATIAL_ORDER_FROM on)
+        shuffled = state.subset(np.random.default_rng(0).permutation(n))  # as a random start is drawn
         ordered = state.subset(morton_order(state))
         iterations, reps = max(2000, 2_000_000 // n), max(200, 4_000_000 // n)
-        for order, packing in (("random", state), ("morton", ordered)):
+        for order, packing in (("random", shuffled), ("morton", ordered)):
             for skin in args.skins:
                 row = {"n": n, "order": order, "skin": skin,
                        "floor_us": round(floor_us(packing, skin, reps, args.repeats), 3),

@@ -161,6 +161,18 @@ def _make_gallery(app):
         raise ConfigError(message)
 
 
+# napoleon reads the text before the first colon of an attribute's or property's description as its
+# type ("Type: ..."), once per style it parses (numpy, then google). jamflow's types are the
+# annotations, and its descriptions (the ``#:`` comments) use colons in prose ("None: not checked"):
+# one leading ": " per style gives napoleon an empty type each time, so the whole text stays the
+# description. Connected before napoleon (priority 400 < 500).
+def _keep_attribute_text(app, what, name, obj, options, lines):
+    if what in ("attribute", "data", "property") and lines and lines[0].strip():
+        passes = int(bool(app.config.napoleon_numpy_docstring)) + int(bool(app.config.napoleon_google_docstring))
+        lines[0] = ": " * passes + lines[0]
+
+
 def setup(app):
+    app.connect("autodoc-process-docstring", _keep_attribute_text, priority=400)
     app.connect("autodoc-process-docstring", _plain_text_docstring)
     app.connect("builder-inited", _make_gallery)

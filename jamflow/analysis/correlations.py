@@ -39,12 +39,12 @@ class ExponentialFit:
     ``xi`` is inf when the maxima do not decay (a crystal) and NaN with fewer than 3
     significant maxima (then ``reason`` says why)."""
 
-    xi: float
-    xi_stderr: float
-    amplitude: float
-    r_points: np.ndarray
-    y_points: np.ndarray
-    reason: str = ""
+    xi: float  #: correlation length, in the units of r (<sigma^2>^(1/2)); inf: no decay, nan: no fit
+    xi_stderr: float  #: its standard error from the least-squares line (nan without a fit)
+    amplitude: float  #: y at r = 0 of the fitted exponential
+    r_points: np.ndarray  #: positions of the maxima fitted
+    y_points: np.ndarray  #: their heights
+    reason: str = ""  #: why there is no finite xi ("" when there is one)
 
     def __repr__(self) -> str:
         """One line: xi, its error, amplitude, points, the reason (if any)."""
@@ -91,13 +91,25 @@ def rdf_correlation_length(rdf: RDFResult, r_min: float | None = None, smooth: f
 
 
 class PairCorrelationLength:
-    """``compute(packings)``: xi from the g(r) - 1 envelope of a packing or an ensemble."""
+    """``compute(packings)``: xi from the g(r) - 1 envelope of a packing or an ensemble.
+
+    Parameters
+    ----------
+    dr : float, default 0.02
+        Bin width of g(r), units of <sigma^2>^(1/2).
+    r_min : float, optional
+        Where the fitted maxima start (same units); None: the first minimum of g(r).
+    smooth : float, default 0.05
+        Width of the Gaussian that smooths g(r) before its maxima are located (same units).
+    """
 
     def __init__(self, dr: float = 0.02, r_min: float | None = None, smooth: float = 0.05):
         self.rdf, self.smooth = RDF(dr=dr), positive("smooth", smooth, UNITS_R)
         self.r_min = None if r_min is None else positive("r_min", r_min, UNITS_R)
 
     def compute(self, packings: Packing | Iterable[Packing]) -> ExponentialFit:
+        """xi of ``packings`` (one or an ensemble): an exponential through the maxima of g(r) - 1 beyond r_min
+        that stand 3 statistical errors above zero (``rdf_correlation_length``)."""
         return rdf_correlation_length(self.rdf.compute(packings), self.r_min, self.smooth)
 
 
@@ -106,15 +118,15 @@ class PairCorrelationLength:
 class BondCorrelationResult:
     """q_l spatial correlations on bins of r / <sigma^2>^(1/2), pooled over packings."""
 
-    edges: np.ndarray
+    edges: np.ndarray  #: (nbins + 1,) bin edges, units of <sigma^2>^(1/2)
     complex_corr: np.ndarray  #: <Re Q_i . conj(Q_j)> per bin (NaN where no pairs)
     magnitude_corr: np.ndarray  #: <|Q_i| |Q_j|> per bin
     complex_stderr: np.ndarray  #: standard error of complex_corr (pairs treated as independent)
     counts: np.ndarray  #: pairs per bin
     baseline: float  #: <Re Q_i . conj(Q_j)> over all distinct pairs: the r -> inf value
     r_min: float  #: neighbour cutoff used for Q_i
-    l: int
-    n_packings: int
+    l: int  #: the degree of q_l (even)
+    n_packings: int  #: packings pooled
     fit: ExponentialFit  #: xi from the local maxima of C(r)
 
     def __repr__(self) -> str:
@@ -125,6 +137,7 @@ class BondCorrelationResult:
 
     @property
     def r(self) -> np.ndarray:
+        """(nbins,) bin centres, units of <sigma^2>^(1/2)."""
         return 0.5 * (self.edges[1:] + self.edges[:-1])
 
     @property
@@ -139,6 +152,17 @@ class BondCorrelation:
     ``r_min`` (neighbour cutoff, units of <sigma^2>^(1/2)): None = first minimum of the
     ensemble's g(r). ``dr``, ``r_max``: binning of the correlation functions (same units;
     r_max defaults to half the shortest box width).
+
+    Parameters
+    ----------
+    l : int, default 6
+        The degree (even, >= 0).
+    r_min : float, optional
+        Neighbour cutoff of q_l, units of <sigma^2>^(1/2); None: the first minimum of g(r).
+    dr : float, default 0.1
+        Bin width of the correlation functions, same units.
+    r_max : float, optional
+        Their largest r, at most half the shortest box width (the default).
     """
 
     def __init__(self, l: int = 6, r_min: float | None = None, dr: float = 0.1, r_max: float | None = None):
@@ -147,6 +171,14 @@ class BondCorrelation:
         self.r_max = None if r_max is None else positive("r_max", r_max, UNITS_R)
 
     def compute(self, packings: Packing | Iterable[Packing]) -> BondCorrelationResult:
+        """The correlation functions of ``packings`` (one or an ensemble, pooled) and the length
+        fitted to the maxima of C(r) beyond r_min.
+
+        Raises
+        ------
+        ValueError
+            No packings, mixed dimensions, ``r_max`` beyond half the box, or no first minimum of g(r).
+        """
         items = as_packings(packings)
         edges = radial_edges(check_r_max(self.r_max, items), self.dr)
         r_min = self.r_min

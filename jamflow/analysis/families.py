@@ -98,16 +98,18 @@ class Families:
     """Families of the sampled points: ``family`` (one id per point, 0.. in order of first
     strain), and the table rows from ``table()``."""
 
-    points: dict
-    family: np.ndarray
+    points: dict  #: the sampled points, columns by name (``protocols.families.sample``)
+    family: np.ndarray  #: (P,) the family of each point, 0.. in order of first strain
     step: float  #: delta gamma of the lattice
-    gamma_min: float
+    gamma_min: float  #: the strain of lattice point 0
 
     @property
     def count(self) -> int:
+        """Distinct families."""
         return int(self.family.max()) + 1 if len(self.family) else 0
 
     def members(self, f: int) -> np.ndarray:
+        """Indices of the points of family ``f``."""
         return np.flatnonzero(self.family == f)
 
     def curve(self, f: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -140,6 +142,7 @@ class Families:
                 and row["gamma_min"] <= hi + 1e-12 and row["strains"] >= min_strains]
 
     def count_in(self, lo: float, hi: float, min_strains: int = 1) -> int:
+        """How many families ``met_in(lo, hi, min_strains)``."""
         return len(self.met_in(lo, hi, min_strains))
 
     def sightings(self) -> np.ndarray:

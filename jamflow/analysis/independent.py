@@ -101,20 +101,23 @@ class IndependentCheck:
     """Energy, forces, torques and generalized torques of a packing by the brute-force sigma."""
 
     energy: float  #: total, eps
-    forces: np.ndarray  #: (N, d)
+    forces: np.ndarray  #: (N, d), eps / diameter
     torques: np.ndarray  #: (N,) 2D, (N, 3) 3D, world frame
     generalized_torques: np.ndarray  #: (N, r) body frame tau_a / d_k on the rotational degrees of freedom
     contacts: tuple  #: (i, j) of the pairs with r < sigma
 
     @property
     def energy_per_particle(self) -> float:
+        """V = energy / N, eps."""
         return self.energy / len(self.forces)
 
     def max_force(self, keep=None) -> float:
+        """Largest force component (eps / diameter), of the particles ``keep`` (indices or mask) if given."""
         f = self.forces if keep is None else self.forces[keep]
         return float(np.abs(f).max()) if f.size else 0.0
 
     def max_generalized_torque(self, keep=None) -> float:
+        """Largest generalized torque tau_a / d_k (eps / diameter), of the particles ``keep`` if given."""
         g = self.generalized_torques if keep is None else self.generalized_torques[keep]
         return float(np.abs(g).max()) if g.size else 0.0
 

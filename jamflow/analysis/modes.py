@@ -49,11 +49,11 @@ class SpectrumResult:
 
     eigenvalues: np.ndarray  #: (m,), eps / diameter^2; all d N' of them when complete
     eigenvectors: np.ndarray | None  #: (d N', m) orthonormal columns (signs: ``model.frames.canonical_signs``), or None
-    dynamical: DynamicalMatrixResult
-    e_min: float
-    mass: float  #: M in omega = sqrt(e / M)
+    dynamical: DynamicalMatrixResult  #: the matrix and the packing it was built from
+    e_min: float  #: zero-mode threshold, eps / diameter^2
+    mass: float  #: M in omega = sqrt(e / M): N m (N with floaters, m = 1) unless ``Spectrum(mass=...)``
     complete: bool  #: False: only the lowest m modes (sparse solver)
-    # the translational fractions kept by ``without_vectors`` (not compared, not in the repr)
+    #: the translational fractions kept by ``without_vectors`` (not compared, not in the repr)
     kept_fraction: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     def __repr__(self) -> str:
@@ -70,6 +70,7 @@ class SpectrumResult:
 
     @property
     def dim(self) -> int:
+        """d, the packing's dimension (and the number of trivial translations)."""
         return self.dynamical.dim
 
     @property
@@ -84,6 +85,7 @@ class SpectrumResult:
 
     @property
     def n_negative(self) -> int:
+        """Modes with e < -e_min: the packing is not at an energy minimum when there are any."""
         return int(np.sum(self.eigenvalues < -self.e_min))
 
     @property
@@ -98,6 +100,7 @@ class SpectrumResult:
 
     @property
     def lowest_nonzero(self) -> float:
+        """The smallest eigenvalue above e_min, eps / diameter^2 (nan when there is none)."""
         values = self.nonzero
         return float(values[0]) if len(values) else float("nan")
 
@@ -127,11 +130,11 @@ class Branch:
     """One branch of the sorted spectrum: its modes' count, frequency range sqrt(|e| / M) and
     mean translational fraction."""
 
-    name: str
-    count: int
-    omega_low: float
-    omega_high: float
-    translational: float
+    name: str  #: "1 zero", "2 rotational" or "3 translational" (``BRANCH_NAMES``)
+    count: int  #: modes in the branch
+    omega_low: float  #: lowest sqrt(|e| / M) in the branch (nan when empty)
+    omega_high: float  #: highest sqrt(|e| / M) in the branch (nan when empty)
+    translational: float  #: mean translational fraction of its modes (nan when empty)
 
 
 BRANCH_NAMES = ("1 zero", "2 rotational", "3 translational")
@@ -177,6 +180,27 @@ class Spectrum:
     or "sparse" (shift-invert about -e_min for the ``n_modes`` lowest modes, enlarged until
     the zero modes are bracketed; eigenvalues far below -e_min can be missed there).
     ``vectors``: keep eigenvectors. ``dynamical``: how to build the matrix.
+
+    Parameters
+    ----------
+    e_min : float, default 1e-6
+        Eigenvalues with |e| <= e_min are zero modes, eps / diameter^2 (> 0).
+    mass : float, optional
+        M in omega = sqrt(e / M); None: M = N m with m = 1 and N counting floaters (the
+        chapter's convention); 1.0: the per-particle omega = sqrt(e).
+    method : {"auto", "dense", "sparse"}, default "auto"
+        Dense (all d_f N' modes) up to 4096 degrees of freedom under "auto", else sparse.
+    n_modes : int, default 32
+        Modes the sparse solver starts with (>= 1); enlarged until the zero modes are bracketed.
+    vectors : bool, default True
+        Keep the eigenvectors (needed for branches, translational fractions and mode profiles).
+    dynamical : DynamicalMatrix, optional
+        How the matrix is built (default ``DynamicalMatrix()``).
+
+    Raises
+    ------
+    ValueError
+        A bad ``e_min``, ``mass`` (``SettingError``), ``method`` or ``n_modes``.
     """
 
     def __init__(self, e_min: float = 1e-6, mass: float | None = None, method: str = "auto",
@@ -194,9 +218,22 @@ class Spectrum:
         self.dynamical = dynamical or DynamicalMatrix()
 
     def compute(self, packing: Packing) -> SpectrumResult:
+        """The spectrum of ``packing``'s dynamical matrix (floaters removed, rotations as d_k theta).
+
+        Parameters
+        ----------
+        packing : jamflow.Packing
+            A packing at an energy minimum (lengths in diameters, energies in eps).
+
+        Returns
+        -------
+        SpectrumResult
+            Ascending eigenvalues (eps / diameter^2), eigenvectors when kept, and M.
+        """
         return self.from_matrix(self.dynamical.compute(packing))
 
     def from_matrix(self, dyn: DynamicalMatrixResult) -> SpectrumResult:
+        """The spectrum of a dynamical matrix already built (``DynamicalMatrix.compute``)."""
         mass = float(dyn.n_total) if self.mass is None else self.mass
         dense = self.method == "dense" or (self.method == "auto" and dyn.n_dof <= DENSE_MAX_DOF)
         if dense or dyn.n_dof <= self.n_modes + 1:
@@ -221,8 +258,8 @@ class DensityOfStatesResult:
     """D(omega) in modes per unit omega per packing, on bins ``edges``."""
 
     edges: np.ndarray  #: (bins + 1,)
-    density: np.ndarray  #: (bins,)
-    n_packings: int
+    density: np.ndarray  #: (bins,) modes per unit omega per packing
+    n_packings: int  #: spectra pooled
     n_modes: int  #: nonzero modes over all packings
     translational: np.ndarray | None = None  #: (bins,) part of D carried by centre motion; None without vectors
 
@@ -239,6 +276,7 @@ class DensityOfStatesResult:
 
     @property
     def centers(self) -> np.ndarray:
+        """(bins,) omega at the middle of each bin."""
         return 0.5 * (self.edges[1:] + self.edges[:-1])
 
     @property
@@ -263,7 +301,22 @@ class DensityOfStates:
     """Histogram D(omega) of the nonzero frequencies of complete spectra, averaged.
     ``bins``: number of equal-width bins on [0, ``omega_max``] (default: largest omega). An
     ``omega_max`` below the largest omega leaves modes out of the bins, with a warning: D stays
-    normalised over all modes and integrates to ``fraction_in_range``."""
+    normalised over all modes and integrates to ``fraction_in_range``.
+
+    Parameters
+    ----------
+    bins : int, default 40
+        Number of equal-width bins (>= 1).
+    omega_max : float, optional
+        Upper edge of the bins, in the units of omega = sqrt(e / M) (M = N m by default); None:
+        the largest omega.
+
+    Raises
+    ------
+    ValueError
+        A ``bins`` that is not a positive integer or too many, or a bad ``omega_max``
+        (``SettingError``).
+    """
 
     def __init__(self, bins: int = 40, omega_max: float | None = None):
         if not (isinstance(bins, (int, np.integer)) and bins >= 1):
@@ -274,6 +327,24 @@ class DensityOfStates:
         self.bins, self.omega_max = int(bins), omega_max
 
     def compute(self, spectra) -> DensityOfStatesResult:
+        """D(omega) over ``spectra``: histogram of their nonzero omega / (bin width x number of spectra).
+
+        Parameters
+        ----------
+        spectra : iterable of SpectrumResult
+            Complete spectra (dense), one per packing; omega = sqrt(e / M) with each spectrum's M.
+
+        Returns
+        -------
+        DensityOfStatesResult
+            D(omega) in modes per unit omega per packing, with its translational part when
+            every spectrum has eigenvectors.
+
+        Raises
+        ------
+        ValueError
+            No spectra, or a spectrum that is not complete.
+        """
         spectra = list(spectra)
         if not spectra:
             raise ValueError("DensityOfStates needs at least one spectrum")
@@ -312,7 +383,7 @@ class ModeProfile:
     mode: np.ndarray  #: (d_f N',) unit vector orthogonal to the translations (sign: ``model.frames.canonical_signs``)
     deltas: np.ndarray  #: amplitudes delta (diameters)
     delta_v_plus: np.ndarray  #: V(xi_0 + delta e) - V(xi_0), total, eps
-    delta_v_minus: np.ndarray  #: V(xi_0 - delta e) - V(xi_0)
+    delta_v_minus: np.ndarray  #: V(xi_0 - delta e) - V(xi_0), eps
     power: float  #: slope of log|symmetric part| vs log delta (zero modes: the part beyond e delta^2/2; nan if flat)
     flat: bool  #: symmetric part below e_min delta^2 / 2 at every delta
     sign: int  #: sign of the symmetric part at the largest delta (-1: energy decreases)
@@ -356,14 +427,14 @@ class StabilityResult:
     label: str  #: STABLE | QUARTIC_STABLE | LOCALLY_STABLE | UNSTABLE
     n_zero: int  #: |e| <= e_min, d trivial ones included
     n_negative: int  #: e < -e_min
-    mode_eigenvalue: float
-    mode: np.ndarray
-    deltas: np.ndarray
-    delta_v_plus: np.ndarray
-    delta_v_minus: np.ndarray
-    power: float
-    flat: bool
-    sign: int
+    mode_eigenvalue: float  #: the lowest nontrivial mode's Rayleigh quotient, eps / diameter^2
+    mode: np.ndarray  #: (d_f N',) that mode, a unit vector orthogonal to the translations
+    deltas: np.ndarray  #: amplitudes delta along it (diameters)
+    delta_v_plus: np.ndarray  #: V(xi_0 + delta e) - V(xi_0), total, eps
+    delta_v_minus: np.ndarray  #: V(xi_0 - delta e) - V(xi_0), eps
+    power: float  #: fitted power of its energy profile (``ModeProfile.power``; nan if flat)
+    flat: bool  #: its energy profile is flat (``ModeProfile.flat``)
+    sign: int  #: sign of its symmetric energy change at the largest delta (-1: the energy decreases)
     profiles: tuple = ()  #: ModeProfile per profiled mode, ascending eigenvalue
 
     def __repr__(self) -> str:
@@ -375,14 +446,17 @@ class StabilityResult:
 
     @property
     def delta_v(self) -> np.ndarray:
+        """Symmetric part of the lowest mode's energy change, (delta_v_plus + delta_v_minus) / 2, eps."""
         return 0.5 * (self.delta_v_plus + self.delta_v_minus)
 
     @property
     def behaviour(self) -> str:
+        """The lowest profiled mode's behaviour (``ModeProfile.behaviour``)."""
         return self.profiles[0].behaviour
 
     @property
     def behaviours(self) -> list[str]:
+        """The behaviour of every profiled mode, ascending eigenvalue."""
         return [p.behaviour for p in self.profiles]
 
     @property
@@ -414,6 +488,24 @@ class Stability:
     delta (d_k theta) / d_k. Class: unstable if any e < -e_min; mechanically stable if exactly
     d zero modes; stable at quartic order if every extra zero mode was profiled and is quartic;
     locally stable otherwise. ``spectrum``: the ``Spectrum`` used (its e_min is the threshold).
+
+    Parameters
+    ----------
+    deltas : array_like, optional
+        At least two positive amplitudes (diameters), the same for every mode; None: per mode.
+    spectrum : Spectrum, optional
+        How spectra are computed (default ``Spectrum()``); it must keep eigenvectors.
+    n_modes : int or "zero", default "zero"
+        Lowest nontrivial modes to profile (>= 1), or every nontrivial zero mode and the
+        lowest nonzero one.
+    relaxed : bool, default True
+        Compute the fourth-order coefficients of zero modes (``analysis.quartic``), which
+        decide "quartic" and "flat".
+
+    Raises
+    ------
+    ValueError
+        Bad ``deltas`` or ``n_modes``.
     """
 
     def __init__(self, deltas=None, spectrum: Spectrum | None = None, n_modes="zero", relaxed: bool = True):
@@ -429,6 +521,26 @@ class Stability:
         self.relaxed = bool(relaxed)
 
     def compute(self, packing: Packing, spectrum: SpectrumResult | None = None) -> StabilityResult:
+        """Class of ``packing`` and the energy profiles along its lowest nontrivial modes.
+
+        Parameters
+        ----------
+        packing : jamflow.Packing
+            A packing at an energy minimum (lengths in diameters).
+        spectrum : SpectrumResult, optional
+            Its spectrum with eigenvectors, if already computed; None: computed here.
+
+        Returns
+        -------
+        StabilityResult
+            The label (mechanically stable, stable at quartic order, locally stable or
+            unstable) and one ``ModeProfile`` per profiled mode.
+
+        Raises
+        ------
+        ValueError
+            The spectrum has no eigenvectors.
+        """
         spec = spectrum or self.spectrum.compute(packing)
         if spec.eigenvectors is None:
             raise ValueError("Stability needs eigenvectors: use Spectrum(vectors=True)")
@@ -442,6 +554,7 @@ class Stability:
 
     @staticmethod
     def classify(spec: SpectrumResult, profiles) -> str:
+        """The class label of a spectrum and its mode profiles (the rule in the class docstring)."""
         if spec.n_negative:
             return UNSTABLE
         if spec.n_zero <= spec.dim:
@@ -452,6 +565,7 @@ class Stability:
         return LOCALLY_STABLE
 
     def profile(self, spec: SpectrumResult, value: float, mode: np.ndarray) -> ModeProfile:
+        """Delta V(delta) along ``mode`` (eigenvalue ``value``, eps / diameter^2) at this object's amplitudes."""
         dyn = spec.dynamical
         u, w = dyn.coordinates.split(mode)
         zero = abs(value) <= spec.e_min

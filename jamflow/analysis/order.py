@@ -85,9 +85,9 @@ def neighbour_rdf(packing: Packing, dr: float = 0.02, r_max: float = 3.0) -> RDF
 class TranslationalOrderResult:
     """G = g(r_min) / g(r_max) (chapter section 4.3); r in units of <sigma^2>^(1/2)."""
 
-    G: float
-    r_min: float
-    r_max: float
+    G: float  #: g(r_min) / g(r_max), dimensionless: 0 for a perfect crystal
+    r_min: float  #: the first minimum of g(r)
+    r_max: float  #: the first peak of g(r), below r_min
     g_min: float  #: smoothed g at r_min (a broad feature: smoothing removes noise, not signal)
     g_max: float  #: raw height of the first peak (near-singular: smoothing would bias it)
 
@@ -103,13 +103,45 @@ def translational_order(rdf: RDFResult, r_min: float | None = None, smooth: floa
 
 
 class TranslationalOrder:
-    """``TranslationalOrder(dr).compute(packing)``: G from that packing's own g(r)."""
+    """``TranslationalOrder(dr).compute(packing)``: G from that packing's own g(r).
+
+    Parameters
+    ----------
+    dr : float, default 0.02
+        Bin width of g(r), units of <sigma^2>^(1/2) (> 0).
+    r_min : float, optional
+        The first minimum of g(r) in the same units; None: found in g(r) (``first_minimum``).
+    smooth : float, default 0.05
+        Width of the Gaussian that smooths g(r) before its minimum is read, same units.
+
+    Raises
+    ------
+    ValueError
+        A ``dr``, ``r_min`` or ``smooth`` that is not a finite positive number.
+    """
 
     def __init__(self, dr: float = 0.02, r_min: float | None = None, smooth: float = 0.05):
         self.dr, self.smooth = positive("dr", dr, UNITS_R), positive("smooth", smooth, UNITS_R)
         self.r_min = None if r_min is None else positive("r_min", r_min, UNITS_R)
 
     def compute(self, packing: Packing) -> TranslationalOrderResult:
+        """G of ``packing`` from its g(r) up to r = 3 (or half the box width).
+
+        Parameters
+        ----------
+        packing : jamflow.Packing
+            Any packing of round particles (lengths in diameters).
+
+        Returns
+        -------
+        TranslationalOrderResult
+            G = g(r_min) / g(r_max), r in units of <sigma^2>^(1/2).
+
+        Raises
+        ------
+        ValueError
+            ``r_min`` None and no significant first minimum in g(r) (gas-like, or too few pairs).
+        """
         return translational_order(neighbour_rdf(packing, self.dr), self.r_min, self.smooth)
 
 
@@ -134,6 +166,7 @@ def particle_bond_order(packing: Packing, r_cut: float, l: int = 6) -> tuple[np.
 
 
 def even_degree(l) -> int:
+    """``l`` as an int if it is an even non-negative integer (bond directions are unsigned), else a ValueError."""
     if not (isinstance(l, (int, np.integer)) and not isinstance(l, bool) and l >= 0 and l % 2 == 0):
         raise ValueError(f"l must be an even non-negative integer (bond directions are unsigned), got {l!r}")
     return int(l)
@@ -154,13 +187,13 @@ def _bond_harmonics(dr: np.ndarray, l: int) -> np.ndarray:
 class BondOrderResult:
     """Q_l global and local (chapter eqs. 2.30-2.33) and the per-particle values behind them."""
 
-    global_order: float
-    local_order: float
+    global_order: float  #: Q_l^g (chapter eqs. 2.30, 2.32; 2D: |<psi_l>|), dimensionless
+    local_order: float  #: Q_l^l (chapter eqs. 2.31, 2.33; 2D: <|psi_l|>, 3D: rms of q_l(i))
     r_min: float  #: neighbour cutoff, units of <sigma^2>^(1/2)
-    l: int
-    dim: int
+    l: int  #: the degree (even; 6 by default)
+    dim: int  #: 2 or 3
     particle_order: np.ndarray  #: (N, 1) or (N, 2l+1) complex Q_i (zero rows: isolated)
-    n_neighbours: np.ndarray  #: (N,)
+    n_neighbours: np.ndarray  #: (N,) neighbours within r_min of each particle
 
     def __repr__(self) -> str:
         """One line: l, dim, Q_l global and local, r_min, N, isolated particles."""
@@ -197,6 +230,20 @@ class BondOrder:
 
     ``r_min`` in units of <sigma^2>^(1/2); None: the first minimum of this packing's g(r)
     (bin ``dr``). Pass the ensemble's r_min for a set of packings.
+
+    Parameters
+    ----------
+    l : int, default 6
+        The degree: even and >= 0.
+    r_min : float, optional
+        Neighbour cutoff in units of <sigma^2>^(1/2); None: the first minimum of g(r).
+    dr : float, default 0.02
+        Bin width of the g(r) that locates r_min, same units.
+
+    Raises
+    ------
+    ValueError
+        An odd or negative ``l``, or a ``dr`` or ``r_min`` that is not a finite positive number.
     """
 
     def __init__(self, l: int = 6, r_min: float | None = None, dr: float = 0.02):
@@ -204,6 +251,23 @@ class BondOrder:
         self.r_min = None if r_min is None else positive("r_min", r_min, UNITS_R)
 
     def compute(self, packing: Packing) -> BondOrderResult:
+        """Q_l of ``packing``: 2D the hexatic psi_l, 3D Steinhardt's q_l.
+
+        Parameters
+        ----------
+        packing : jamflow.Packing
+            Any packing (lengths in diameters).
+
+        Returns
+        -------
+        BondOrderResult
+            Q_l global and local, with the per-particle values and neighbour counts.
+
+        Raises
+        ------
+        ValueError
+            No significant first minimum of g(r) (pass ``r_min``), or no particle has a neighbour.
+        """
         r_min = self.r_min if self.r_min is not None else first_minimum(neighbour_rdf(packing, self.dr))
         q, n = particle_bond_order(packing, r_min * rms_contact_distance(packing.diameters), self.l)
         g, loc = bond_order_parameters(q, n, packing.dim)

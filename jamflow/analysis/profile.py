@@ -24,6 +24,8 @@ from jamflow.model.pairs import overlapping_pairs
 
 @dataclass(frozen=True)
 class ProfileResult:
+    """Stresses against height (diameters from the floor), eps / diameter^d."""
+
     heights: np.ndarray  #: (B,) plane heights (sigma_zz, weight) = slab centres (sigma_xx)
     sigma_zz: np.ndarray  #: (B,) force across each plane per area
     weight_above: np.ndarray  #: (B,) g N(z > plane) / A
@@ -32,7 +34,13 @@ class ProfileResult:
 
 
 class PressureProfile:
-    """``bins`` planes between the floor and the top of the pile."""
+    """``bins`` planes between the floor and the top of the pile.
+
+    Parameters
+    ----------
+    bins : int, default 40
+        Planes (>= 2).
+    """
 
     def __init__(self, bins: int = 40):
         if not (isinstance(bins, (int, np.integer)) and bins >= 2):
@@ -40,6 +48,14 @@ class PressureProfile:
         self.bins = int(bins)
 
     def compute(self, packing: Packing) -> ProfileResult:
+        """sigma_zz across each plane, the weight of the particles above it per unit area, and the
+        slab stress sigma_xx of a pile on a floor, all in eps / diameter^d.
+
+        Raises
+        ------
+        ValueError
+            The packing has no walls on its last axis (no floor).
+        """
         if packing.box.periodic[-1]:
             raise ValueError("a pressure profile needs a floor: walls on the last axis (y in 2D, z in 3D)")
         i, j, dr, r, sigma = overlapping_pairs(packing)

@@ -126,13 +126,13 @@ class RDFResult:
     """g(r) on bins of r / <sigma^2>^(1/2); ``partial[a, b]`` for discrete species."""
 
     edges: np.ndarray  #: (nbins + 1,) reduced units
-    g: np.ndarray  #: (nbins,)
+    g: np.ndarray  #: (nbins,) g(r), 1 for an ideal gas
     counts: np.ndarray  #: (nbins,) pair counts (i < j) pooled over packings
     ideal: np.ndarray  #: (nbins,) expected counts for an ideal gas at the same densities
     species: np.ndarray  #: distinct diameters (empty when partials were not computed)
     partial: np.ndarray  #: (ns, ns, nbins) g_ab, symmetric; shape (0, 0, nbins) if not computed
     scales: np.ndarray  #: <sigma^2>^(1/2) of each packing (diameters)
-    n_packings: int
+    n_packings: int  #: packings pooled
 
     def __repr__(self) -> str:
         """One line: bins, r range, packings, species with partials, the first peak."""
@@ -148,6 +148,7 @@ class RDFResult:
 
     @property
     def dr(self) -> float:
+        """Bin width, units of <sigma^2>^(1/2)."""
         return float(self.edges[1] - self.edges[0])
 
     @property
@@ -169,6 +170,20 @@ class RDF:
     ``dr`` and ``r_max`` are in units of <sigma^2>^(1/2); ``r_max`` defaults to half the
     shortest box width. ``partial=True`` also returns g_ab for discrete species (at most
     8 distinct diameters, the same in every packing of the ensemble).
+
+    Parameters
+    ----------
+    dr : float, default 0.01
+        Bin width in units of <sigma^2>^(1/2) (> 0).
+    r_max : float, optional
+        The largest r in units of <sigma^2>^(1/2), at most half the shortest box width (the default).
+    partial : bool, default False
+        Also compute the partial g_ab of each pair of species.
+
+    Raises
+    ------
+    ValueError
+        A ``dr`` or ``r_max`` that is not a finite positive number.
     """
 
     def __init__(self, dr: float = 0.01, r_max: float | None = None, partial: bool = False):
@@ -177,6 +192,24 @@ class RDF:
         self.partial = bool(partial)
 
     def compute(self, packings: Packing | Iterable[Packing]) -> RDFResult:
+        """g(r) of one packing, or pooled over an ensemble (pair counts and ideal-gas counts summed).
+
+        Parameters
+        ----------
+        packings : jamflow.Packing or iterable of jamflow.Packing
+            One packing or a non-empty ensemble of the same dimension.
+
+        Returns
+        -------
+        RDFResult
+            g(r) (and g_ab) on bins of r / <sigma^2>^(1/2), normalised by N (N - 1).
+
+        Raises
+        ------
+        ValueError
+            No packings, mixed dimensions, ``r_max`` beyond half the shortest box width, or
+            ``partial`` with more than 8 diameters or different species across the ensemble.
+        """
         items = as_packings(packings)
         edges = radial_edges(check_r_max(self.r_max, items), self.dr)
         species = _common_species(items) if self.partial else np.empty(0)
@@ -298,8 +331,8 @@ class StructureFactorResult:
     k: np.ndarray  #: mean |k| of the vectors in each shell
     s: np.ndarray  #: mean S over the shell's vectors (pooled over packings)
     n_vectors: np.ndarray  #: vectors per shell (one of each +-k pair), summed over packings
-    dk: float
-    n_packings: int
+    dk: float  #: shell width, units of 1/<sigma^2>^(1/2)
+    n_packings: int  #: packings pooled
 
     def __repr__(self) -> str:
         """One line: shells, k range, dk, packings, the largest S(k) and where."""
@@ -321,6 +354,18 @@ class StructureFactor:
     ``k_max`` and ``dk`` are in units of 1/<sigma^2>^(1/2). Shell m collects
     |k| in [(m - 1/2) dk, (m + 1/2) dk); ``dk`` defaults to 2 pi / (longest box side), the
     reciprocal-lattice spacing, so the lowest allowed |k| values each get their own shell.
+
+    Parameters
+    ----------
+    k_max : float, default 20.0
+        The largest |k| in units of 1/<sigma^2>^(1/2) (> 0).
+    dk : float, optional
+        Shell width in the same units (0 < dk < k_max); default 2 pi / (longest box side).
+
+    Raises
+    ------
+    ValueError
+        A ``k_max`` or ``dk`` that is not a finite positive number, or ``dk >= k_max``.
     """
 
     def __init__(self, k_max: float = 20.0, dk: float | None = None):
@@ -337,6 +382,25 @@ class StructureFactor:
             check_grid_memory(packing, self.k_max / scale, "k_max (--k-max)", scale)
 
     def compute(self, packings: Packing | Iterable[Packing]) -> StructureFactorResult:
+        """S(k) of one packing, or pooled over an ensemble (shell sums over every packing's vectors).
+
+        Parameters
+        ----------
+        packings : jamflow.Packing or iterable of jamflow.Packing
+            One packing or a non-empty ensemble of the same dimension; ``dk``'s default comes
+            from the first.
+
+        Returns
+        -------
+        StructureFactorResult
+            Shell-averaged S(k), S = |sum_j exp(i k.r_j)|^2 / N, k in units of 1/<sigma^2>^(1/2).
+
+        Raises
+        ------
+        ValueError
+            No packings, mixed dimensions, or a ``k_max`` whose wavevector grid does not fit
+            in memory (checked before any work).
+        """
         items = as_packings(packings)
         scales = [rms_contact_distance(p.diameters) for p in items]
         dk = self.dk or 2 * math.pi * scales[0] / float(items[0].box.lengths.max())

@@ -30,14 +30,14 @@ from jamflow.protocols.settings import CompressionSettings
 class CrossCheck:
     """Controller against deck; lengths in small diameters."""
 
-    controller: JamResult
-    deck: DeckResult
-    contacts_both: int
-    contacts_only_controller: int
-    contacts_only_deck: int
+    controller: JamResult  #: the jam run by jamflow's controller (LAMMPS engine)
+    deck: DeckResult  #: the same jam run by the deck in lmp alone
+    contacts_both: int  #: contacts found in both packings
+    contacts_only_controller: int  #: contacts only in the controller's packing
+    contacts_only_deck: int  #: contacts only in the deck's packing
     max_displacement: float  #: largest minimum-image distance between a particle's two positions
     first_difference: int | None  #: first minimisation whose phi, V, iterations or reason differ
-    tolerance: float
+    tolerance: float  #: the largest phi_J difference that counts as agreement
 
     @property
     def phi_j_difference(self) -> float:
@@ -46,13 +46,16 @@ class CrossCheck:
 
     @property
     def same_contacts(self) -> bool:
+        """Both packings have the same contacts."""
         return self.contacts_only_controller == 0 and self.contacts_only_deck == 0
 
     @property
     def agree(self) -> bool:
+        """phi_J within ``tolerance`` and the same contacts."""
         return abs(self.phi_j_difference) <= self.tolerance and self.same_contacts
 
     def report(self) -> str:
+        """The comparison as lines of text: both runs, the phi_J difference, contacts, displacement, histories, verdict."""
         c, d = self.controller, self.deck
         history = ("identical (phi, V, iterations, stop reason) over all "
                    f"{c.minimizations} minimisations" if self.first_difference is None
@@ -122,6 +125,7 @@ def contact_set(packing: Packing) -> set:
 
 
 def max_displacement(a: Packing, b: Packing) -> float:
+    """Largest minimum-image distance between a particle's positions in ``a`` and ``b`` (diameters)."""
     if a.n != b.n:
         raise ValueError(f"packings differ in size ({a.n} and {b.n} particles)")
     return float(np.max(np.linalg.norm(a.box.minimum_image(b.positions - a.positions), axis=1)))
@@ -150,11 +154,11 @@ class ShearCrossCheck:
     controller: object  #: ShearPath
     deck: object  #: ShearDeckResult
     contacts_both: int  #: last step
-    contacts_only_controller: int
-    contacts_only_deck: int
+    contacts_only_controller: int  #: last step: contacts only in the controller's packing
+    contacts_only_deck: int  #: last step: contacts only in the deck's packing
     max_displacement: float  #: last step
     first_difference: tuple | None  #: (shear step, minimisation) where the histories first differ
-    tolerance: float
+    tolerance: float  #: the largest phi_J difference at any step that counts as agreement
 
     @property
     def phi_j_difference(self) -> np.ndarray:
@@ -166,11 +170,13 @@ class ShearCrossCheck:
 
     @property
     def agree(self) -> bool:
+        """phi_J within ``tolerance`` at every step and the same contacts at the last."""
         diff = self.phi_j_difference
         return bool(np.all(np.abs(diff) <= self.tolerance)) and self.contacts_only_controller == 0 \
             and self.contacts_only_deck == 0
 
     def report(self) -> str:
+        """The comparison as lines of text, as ``CrossCheck.report``."""
         c, d, diff = self.controller, self.deck, self.phi_j_difference
         history = ("identical (phi, V, iterations, stop reason) over all "
                    f"{sum(s.jam.minimizations for s in c.steps)} minimisations of {len(c.steps)} steps"
@@ -211,6 +217,7 @@ def crosscheck_shear(n: int = 10, dim: int = 2, sizes: str = "bi:1.4:0.5", seed:
 
 
 def compare_shear(controller, deck, tolerance: float = 1e-8) -> ShearCrossCheck:
+    """Compare a ``ShearPath`` run on LAMMPS with a ``ShearDeckResult`` from the same start."""
     last = controller.steps[-1].packing
     a, b = contact_set(last), contact_set(deck.packing)
     first = None

@@ -70,6 +70,7 @@ def deck_text(variables: dict | None = None) -> str:
 
 
 def write_deck(path, variables: dict | None = None) -> Path:
+    """Write the ellipsoid deck (``deck_text(variables)``) atomically to ``path``."""
     with atomic_path(path) as tmp:
         tmp.write_text(deck_text(variables))
     return Path(path)

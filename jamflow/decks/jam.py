@@ -181,17 +181,18 @@ def write_deck(path, variables: dict | None = None) -> Path:
 class DeckResult:
     """What one deck run produced (read back from its files)."""
 
-    packing: Packing
-    phi_j: float
-    energy_per_particle: float
-    pressure: float
-    max_force: float
+    packing: Packing  #: the jammed packing the deck wrote (PREFIX.data)
+    phi_j: float  #: its packing fraction
+    energy_per_particle: float  #: V, eps
+    pressure: float  #: P, eps / diameter^d
+    max_force: float  #: largest force component, eps / diameter
     history: dict  #: PROTOCOL_COLUMNS -> np.ndarray, one entry per minimisation
     seconds: float  #: wall time of the lmp process
     prefix: Path  #: PREFIX.data, PREFIX.protocol.txt, PREFIX.lammps.log
 
     @property
     def minimizations(self) -> int:
+        """Minimisations the deck ran."""
         return len(self.history["phi"])
 
 

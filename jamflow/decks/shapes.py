@@ -7,4 +7,4 @@ from __future__ import annotations
 from jamflow.decks.ellipsoids import emit_deck as emit_ellipsoid_deck
 from jamflow.decks.jam import emit_deck
 
-JAM_DECKS = {"sphere": emit_deck, "ellipsoid": emit_ellipsoid_deck}
+JAM_DECKS = {"sphere": emit_deck, "ellipsoid": emit_ellipsoid_deck}  #: shape kind -> its jam deck writer

@@ -60,6 +60,7 @@ def shear_deck_text(variables: dict | None = None) -> str:
 
 
 def write_shear_deck(path, variables: dict | None = None) -> Path:
+    """Write the shear deck (``shear_deck_text(variables)``) atomically to ``path``."""
     with atomic_path(path) as tmp:
         tmp.write_text(shear_deck_text(variables))
     return Path(path)
@@ -103,11 +104,11 @@ class ShearDeckResult:
     """What one shear deck run produced: ``static`` columns (STATIC_COLUMNS, one entry per
     shear step), the minimisation history of each step and the last packing."""
 
-    static: dict
+    static: dict  #: STATIC_COLUMNS -> np.ndarray, one entry per shear step
     histories: list  #: per step: PROTOCOL_COLUMNS -> np.ndarray
     packing: Packing  #: the last step, its box carrying the accumulated strain
-    seconds: float
-    prefix: Path
+    seconds: float  #: wall time of the lmp process
+    prefix: Path  #: PREFIX.data, PREFIX.protocol.txt, PREFIX.lammps.log
 
 
 def run_shear_deck(workdir, variables: dict, *, deck=None, lmp=None, ranks: int = 1,
@@ -119,6 +120,7 @@ def run_shear_deck(workdir, variables: dict, *, deck=None, lmp=None, ranks: int 
 
 
 def read_shear_deck_result(prefix, seconds: float = math.nan, proc=None) -> ShearDeckResult:
+    """The result a shear deck run left at ``prefix``; DeckFailed when it wrote no protocol log or did not finish."""
     prefix = Path(prefix)
     log = Path(f"{prefix}.protocol.txt")
     if not log.is_file():

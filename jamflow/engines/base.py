@@ -22,12 +22,12 @@ import numpy as np
 class Window(NamedTuple):
     """What one window of a minimiser returns (``Engine.minimizer_session``)."""
 
-    iterations: int
-    objective: float  # total energy, or the enthalpy U + P V at a target pressure (eps)
-    max_force: float  # largest force component (eps/diameter)
-    max_torque: float  # largest generalized torque tau_a / d_k or box force component; 0.0 if none
-    fluctuation: float | None = None  # damped MD of disks/spheres: relative rms fluctuation of V sampled in the window
-    kinetic: float = 0.0  # damped MD: total kinetic energy at the window's end (eps)
+    iterations: int  #: minimiser iterations in the window
+    objective: float  #: total energy, or the enthalpy U + P V at a target pressure (eps)
+    max_force: float  #: largest force component (eps/diameter)
+    max_torque: float  #: largest generalized torque tau_a / d_k or box force component; 0.0 if none
+    fluctuation: float | None = None  #: damped MD of disks/spheres: relative rms fluctuation of V sampled in the window
+    kinetic: float = 0.0  #: damped MD: total kinetic energy at the window's end (eps)
 
 
 @dataclass(frozen=True)
@@ -39,25 +39,29 @@ class State:
     P_ab = V^-1 sum_pairs r_ij,a f_ij,b (chapter eq. 2.34; for rigid bodies r_ij joins the
     centres), positive under compression."""
 
-    energy: float  # total, eps
-    forces: np.ndarray  # (N, d), eps/diameter, packing order
-    pressure_tensor: np.ndarray  # (d, d), eps/diameter^d
-    torques: np.ndarray | None = None  # eps
+    energy: float  #: total, eps
+    forces: np.ndarray  #: (N, d), eps/diameter, packing order
+    pressure_tensor: np.ndarray  #: (d, d), eps/diameter^d
+    torques: np.ndarray | None = None  #: eps; None for disks and spheres
 
     @property
     def energy_per_particle(self) -> float:
+        """V = energy / N, eps."""
         return self.energy / len(self.forces)
 
     @property
     def pressure(self) -> float:
+        """P = trace / d of the pressure tensor, eps / diameter^d."""
         return float(np.trace(self.pressure_tensor) / len(self.pressure_tensor))
 
     @property
     def max_force(self) -> float:
+        """Largest force component, eps / diameter (0 without particles)."""
         return float(np.max(np.abs(self.forces))) if self.forces.size else 0.0
 
     @property
     def max_torque(self) -> float:
+        """Largest world-frame torque component, eps (0 without torques)."""
         return float(np.max(np.abs(self.torques))) if self.torques is not None and self.torques.size else 0.0
 
 
@@ -65,15 +69,15 @@ class State:
 class Capabilities:
     """What an engine runs; ``reason`` says why it cannot run a scene (None if it can)."""
 
-    shapes: frozenset
-    potentials: frozenset
-    methods: frozenset
-    tilted_boxes: bool = True
-    mpi: bool = False
-    options: frozenset = field(default_factory=frozenset)  # keyword options its constructor takes
-    boundaries: frozenset = field(default_factory=frozenset)  # of "walls", "fixed", "gravity" (disks, spheres)
-    box_methods: frozenset = field(default_factory=frozenset)  # minimisers that relax the box at a target pressure
-    shape_methods: tuple = ()  # (shape kind, minimisers, why) where a shape runs fewer minimisers
+    shapes: frozenset  #: shape kinds it runs ("sphere", "ellipsoid", "rigid")
+    potentials: frozenset  #: pair laws it runs ("spring", "rlj")
+    methods: frozenset  #: minimisers it runs
+    tilted_boxes: bool = True  #: runs sheared (triclinic) boxes
+    mpi: bool = False  #: runs on an MPI communicator
+    options: frozenset = field(default_factory=frozenset)  #: keyword options its constructor takes
+    boundaries: frozenset = field(default_factory=frozenset)  #: of "walls", "fixed", "gravity" (disks, spheres)
+    box_methods: frozenset = field(default_factory=frozenset)  #: minimisers that relax the box at a target pressure
+    shape_methods: tuple = ()  #: (shape kind, minimisers, why) where a shape runs fewer minimisers
 
     def reason(self, packing, method: str | None = "fire", comm=None, pressure: bool = False) -> str | None:
         """Why the engine cannot run the scene, or None; ``method`` None: any of its minimisers."""
@@ -120,11 +124,11 @@ class Engine(Protocol):
     Everything the minimisers, protocols and commands call on an engine is here; both
     ``CompiledEngine`` and ``LammpsEngine`` implement all of it."""
 
-    name: str  # "numba" or "lammps": recorded with every result (the files' ``engine``)
-    kernels: str  # the code that ran: "ahead-of-time" or "numba" (compiled engine), "lammps"; summary lines only
-    template: object  # the Packing it was built from (shape, sizes, potential)
-    box: object  # the current Box
-    commands: list  # LAMMPS commands sent (empty for engines that send none)
+    name: str  #: "numba" or "lammps": recorded with every result (the files' ``engine``)
+    kernels: str  #: the code that ran: "ahead-of-time" or "numba" (compiled engine), "lammps"; summary lines only
+    template: object  #: the Packing it was built from (shape, sizes, potential)
+    box: object  #: the current Box
+    commands: list  #: LAMMPS commands sent (empty for engines that send none)
 
     def __enter__(self) -> "Engine":
         """The engine itself."""

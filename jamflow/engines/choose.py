@@ -6,11 +6,13 @@ ENGINES = ("auto", "lammps", "numba")
 
 
 def check_engine(engine: str) -> None:
+    """ValueError unless ``engine`` is one of ``ENGINES``."""
     if engine not in ENGINES:
         raise ValueError(f"unknown engine {engine!r}; use one of {', '.join(ENGINES)}")
 
 
 def engine_class(name: str):
+    """The class of engine ``name``: ``CompiledEngine`` for "numba", else ``LammpsEngine`` (imported on use)."""
     if name == "numba":
         from jamflow.engines.compiled.engine import CompiledEngine
 

@@ -28,27 +28,31 @@ from jamflow.protocols.pressure import DEFAULT_START_PRESSURE
 class SizeStats:
     """Onset statistics at one N (phi_J dimensionless, <z> contacts per non-floater)."""
 
-    n: int
+    n: int  #: N, particles per packing
     phi: np.ndarray  #: phi_J of every packing
     z: np.ndarray  #: <z> of every packing (non-floaters)
     isostatic: np.ndarray  #: bool per packing
-    failed: int
+    failed: int  #: recorded failures at this N (not in the statistics)
     width_err: float  #: bootstrap standard error of W
 
     @property
     def count(self) -> int:
+        """Packings at this N."""
         return len(self.phi)
 
     @property
     def mean_phi(self) -> float:
+        """<phi_J>."""
         return float(np.mean(self.phi))
 
     @property
     def mean_phi_err(self) -> float:
+        """Standard error of <phi_J>."""
         return float(np.std(self.phi, ddof=1) / np.sqrt(self.count))
 
     @property
     def width(self) -> float:
+        """W, the standard deviation of phi_J (chapter section 2.4)."""
         return float(np.std(self.phi, ddof=1))
 
 
@@ -56,19 +60,21 @@ class SizeStats:
 class Fit:
     """A fitted value with its bootstrap error (nan when too few sizes)."""
 
-    value: float
-    err: float
+    value: float  #: the fitted value
+    err: float  #: its bootstrap standard error
 
 
 @dataclass(frozen=True)
 class OnsetResult:
-    dim: int
+    """Onset statistics of a store at each N and the finite-size fits of W and <phi_J> (chapter section 2.4)."""
+
+    dim: int  #: d
     sizes: list  #: SizeStats, ascending N
     nu: Fit  #: W ~ N^-nu
     amplitude: float  #: W = amplitude * N^-nu
     phi_inf: Fit  #: <phi_J>(N -> infinity)
     shift: float  #: a in <phi_J>(N) = phi_inf - a N^-nu
-    n_bootstrap: int
+    n_bootstrap: int  #: bootstrap replicates behind the errors
 
     @property
     def width_chi2(self) -> float:
@@ -81,6 +87,7 @@ class OnsetResult:
                 f"phi_inf={self.phi_inf.value:.5f}+-{self.phi_inf.err:.5f}, n_bootstrap={self.n_bootstrap})")
 
     def table(self) -> list[dict]:
+        """One row per N: packings, failures, <phi_J> and W with errors, <z> and its spread, isostatic fraction."""
         return [dict(n=s.n, packings=s.count, failed=s.failed, mean_phi_j=s.mean_phi, mean_phi_j_err=s.mean_phi_err,
                      width=s.width, width_err=s.width_err, mean_z=float(np.mean(s.z)),
                      sd_z=float(np.std(s.z, ddof=1)), isostatic_fraction=float(np.mean(s.isostatic)))
@@ -258,12 +265,12 @@ def onsets_figure(result: OnsetResult, path, bins: int = 30, published: float | 
 class WidthCurve:
     """W(N) of one system from an onsets table (``jamflow onsets --table``), with its fit."""
 
-    label: str
-    n: np.ndarray
-    width: np.ndarray
-    width_err: np.ndarray
+    label: str  #: the system's name (the file's stem by default)
+    n: np.ndarray  #: N of each row
+    width: np.ndarray  #: W at each N
+    width_err: np.ndarray  #: its bootstrap error
     nu: Fit  #: as the table states it (its error is the table's bootstrap error)
-    amplitude: float
+    amplitude: float  #: W = amplitude * N^-nu
 
     @property
     def chi2(self) -> float:

@@ -33,17 +33,17 @@ CHUNK = 256  # tasks classified and submitted at a time (at least 4 per worker t
 class EnsembleReport:
     """What a run did; ``rows`` holds the summary row of every task of the run."""
 
-    directory: Path
-    requested: int
-    done_before: int = 0
-    made: int = 0
+    directory: Path  #: the store's directory
+    requested: int  #: tasks asked for: len(n) x len(seeds)
+    done_before: int = 0  #: tasks whose packing the store already held
+    made: int = 0  #: packings made by this run
     failed: int = 0  #: recorded failures (JammingFailed or a task that killed its workers), new and old
     errors: list = field(default_factory=list)  #: exceptions not recorded (the task is retried by a rerun)
     corrupt: list = field(default_factory=list)  #: unreadable files moved aside and redone
-    workers_lost: int = 0
-    interrupted: bool = False
+    workers_lost: int = 0  #: workers that left the scheduler during the run (died or restarted)
+    interrupted: bool = False  #: stopped by Ctrl-C (finished packings are kept; a rerun continues)
     stopped: str = ""  #: why the run stopped early (disk full, broken set-up)
-    rows: dict = field(default_factory=dict)
+    rows: dict = field(default_factory=dict)  #: {task: summary row} of every task of the run
 
 
 def jam_parameters(**options) -> dict:
@@ -89,6 +89,45 @@ def run_ensemble(out, seeds, n=(64,), *, workers=None, scheduler=None, client=No
     client)`` is called in this process after every finished task. A scheduler without a
     worker after ``wait_workers`` seconds stops the run with an error. ``mpi_ranks`` > 1 runs
     each packing with LAMMPS on that many MPI ranks (needs engine="lammps" and mpi4py).
+
+    Parameters
+    ----------
+    out : str or os.PathLike
+        The store's directory (made when missing; a store of other parameters is refused).
+    seeds : range or str
+        Consecutive seeds, ``range(A, B)`` or "A:B" (seeds A to B-1, 0 <= A < B < 2^63).
+    n : int or iterable of int, default (64,)
+        The particle numbers.
+    workers : int, optional
+        Processes of the local cluster (>= 1; default: all cores); not with ``scheduler`` or ``client``.
+    scheduler : str, optional
+        The address of a running Dask scheduler.
+    client : distributed.Client, optional
+        A Dask client to run the tasks on.
+    progress : bool, default True
+        Show a progress bar.
+    retry_failed : bool, default False
+        Run again the tasks recorded as failed.
+    on_result : callable, optional
+        ``on_result(task, row, client)``, called after every finished task.
+    wait_workers : float, default 60
+        Seconds to wait for a worker of the scheduler before stopping with an error (> 0).
+    mpi_ranks : int, default 1
+        MPI ranks per packing (> 1: LAMMPS with mpi4py).
+    **jam_options
+        ``JamSpec`` fields (``jamflow jam``'s options: dim, sizes, potential, shape, engine...),
+        the same for every task; not ``above`` or double-double precision.
+
+    Returns
+    -------
+    EnsembleReport
+        Counts of the packings made, found done, failed and redone, and the summary row of
+        every task.
+
+    Raises
+    ------
+    ValueError
+        Bad seeds, workers, wait time or jam options (all checked before any work).
     """
     refuse_spawned_reimport("jamflow.run_ensemble")  # before the store's lock, which the parent holds
     seeds = seed_range(seeds)

@@ -33,18 +33,21 @@ BOOKKEEPING = ("file", "reason", "file_size", "file_mtime_ns")
 class Task:
     """One packing to make: a grid point ((axis, value), ...) and a seed."""
 
-    point: tuple
-    seed: int
+    point: tuple  #: ((axis, value), ...), e.g. (("n", 64),)
+    seed: int  #: the packing's seed
 
     @property
     def stem(self) -> str:
+        """The file name without suffix, e.g. ``n64_seed000007``."""
         return "_".join([f"{axis}{_token(value)}" for axis, value in self.point] + [f"seed{self.seed:06d}"])
 
     @property
     def name(self) -> str:
+        """The packing file's name, ``stem`` + ".h5"."""
         return self.stem + ".h5"
 
     def options(self, fixed: dict) -> dict:
+        """The jam options of this task: the store's ``fixed`` parameters, the grid point and the seed."""
         return {**fixed, **dict(self.point), "seed": self.seed}
 
 
@@ -83,6 +86,7 @@ class Store:
         self.close()
 
     def close(self):
+        """Release the store's lock (``open`` takes it)."""
         if self._lock is not None:
             self._lock.close()
             self._lock = None
@@ -137,9 +141,11 @@ class Store:
 
     # -- paths -------------------------------------------------------------------------
     def packing_path(self, task: Task) -> Path:
+        """Where the packing of ``task`` is written."""
         return self.dir / task.name
 
     def failure_path(self, task: Task) -> Path:
+        """Where the failure record (JSON) of ``task`` is written."""
         return self.dir / FAILED / (task.stem + ".json")
 
     # -- what is done ------------------------------------------------------------------
@@ -198,6 +204,7 @@ class Store:
 
     # -- summary -----------------------------------------------------------------------
     def read_summary(self) -> list[dict]:
+        """The rows of summary.csv (empty when there is none yet)."""
         path = self.dir / SUMMARY
         if not path.exists():
             return []
@@ -245,11 +252,13 @@ def task_from_name(stem: str, axes: list[str]) -> Task:
 
 
 def failure_row(path: Path, task: Task, fixed: dict) -> dict:
+    """The summary row of a failed task, from its failure record at ``path``."""
     record = read_json(path, "failure record of a jamflow ensemble")
     return {**task.options(fixed), "status": "failed", "reason": record["reason"], "file": task.name,
             "seconds": record.get("seconds", ""), "jamflow_version": record.get("jamflow_version", "")}
 
 
 def write_failure(path, reason: str, seconds: float) -> None:
+    """Write a failure record (reason, seconds, jamflow version) atomically to ``path`` as JSON."""
     with atomic_path(path) as tmp:
         tmp.write_text(json.dumps({"reason": reason, "seconds": seconds, "jamflow_version": __version__}) + "\n")

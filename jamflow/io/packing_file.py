@@ -114,11 +114,45 @@ def save_packing(path, packing: Packing, *, energy_per_particle=None, pressure_t
                  dphi_above=None, tables=None, phi_j=None) -> Path:
     """Write ``packing`` (and optional results) atomically to the HDF5 file ``path``.
 
-    ``wall_forces`` (d, 2, d): the force on each face (``jamflow.model.walls.wall_loads``).
-    ``checks``: a ``jamflow.mechanics.checks.PackingChecks``, stored as the attributes of group
-    ``checks``; ``dphi_above``: the compression above onset (``jamflow.protocols.above``).
-    ``tables``: {group: {name: column}}, more groups of datasets (e.g. ``anneal``).
-    ``phi_j``: the onset the run reports (attribute ``phi_j``; NaN when None)."""
+    Every optional result left None is not written (a number is stored as NaN).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to write (replaced atomically when it exists).
+    packing : jamflow.Packing
+        Positions, diameters and box in diameters; wrapped into the cell once when outside it.
+    energy_per_particle : float, optional
+        V, in eps.
+    pressure_tensor : array_like, optional
+        (d, d), in eps / diameter^d; the attribute ``pressure`` is its trace / d.
+    protocol : dict, optional
+        Stored as the attributes of group ``protocol`` (settings, engine, seconds...).
+    history : dict, optional
+        {name: column}, stored as the datasets of group ``history``.
+    lammps_version : str, optional
+        The LAMMPS version that made the packing ("" when None).
+    wall_forces : array_like, optional
+        (d, 2, d), eps / diameter: the force on each face (``jamflow.model.walls.wall_loads``);
+        written only when the box has walls, with the pressure on each face.
+    target_pressure : float, optional
+        The pressure a constant-pressure run aimed at, eps / diameter^d.
+    stress : str, optional
+        The stress the target pressure applies (``iso`` ...).
+    checks : PackingChecks, optional
+        ``jamflow.mechanics.checks.PackingChecks``, stored as the attributes of group ``checks``.
+    dphi_above : float, optional
+        The compression above onset (``jamflow.protocols.above``), dimensionless.
+    tables : dict, optional
+        {group: {name: column}}, more groups of datasets (e.g. ``anneal``).
+    phi_j : float, optional
+        The onset packing fraction the run reports (attribute ``phi_j``).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     pot = packing.potential
     attrs = dict(
         schema=SCHEMA, schema_version=SCHEMA_VERSION, jamflow_version=__version__,
@@ -213,7 +247,31 @@ def save_result(result, path, checks=None, *, force: bool = False) -> Path:
     ``settings.v_tol``, none under gravity or at constant pressure); a result that fails its checks
     is refused (``JammingFailed``, nothing written), so no file holds an unchecked packing as if it
     were jammed. ``force``: replace a symlink, device node or read-only file. ``JamResult.save``
-    and ``PressureResult.save`` call this."""
+    and ``PressureResult.save`` call this.
+
+    Parameters
+    ----------
+    result : jamflow.JamResult or PressureResult
+        The run to write.
+    path : str or os.PathLike
+        The packing file to write.
+    checks : PackingChecks, optional
+        Checks already made (``jamflow.check_packing``); None: checked here.
+    force : bool, default False
+        Replace a symlink, device node or read-only file at ``path``.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Raises
+    ------
+    ValueError
+        ``path`` cannot be written (checked before any work: ``support.files.check_writable``).
+    jamflow.JammingFailed
+        The packing fails its checks (nothing is written).
+    """
     from jamflow.protocols.outcome import JammingFailed
     from jamflow.protocols.spec import checked
 
@@ -302,7 +360,28 @@ def _h5_reason(err) -> str:
 
 
 def load_packing(path) -> Packing:
-    """Read a jamflow HDF5 packing file (any schema version up to the current one)."""
+    """Read a jamflow HDF5 packing file (any schema version up to the current one).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file ``save_packing`` (``jamflow jam --out``) wrote.
+
+    Returns
+    -------
+    jamflow.Packing
+        Positions and box in diameters, with the potential, shape, orientations, fixed
+        particles and gravity the file holds, double-double low parts when it has them;
+        ``metadata`` has ``seed``, ``sizes`` and ``source`` (the path).
+
+    Raises
+    ------
+    FileNotFoundError
+        No file at ``path``.
+    ValueError
+        Not a jamflow packing file, a newer schema version, empty, truncated or damaged, or an
+        invalid packing (box, walls, low parts); one line naming the file.
+    """
     path = Path(path)
     with open_hdf5(path) as f:
         schema = f.attrs.get("schema")

@@ -104,11 +104,11 @@ class ContactChange:
     """The contact changes of one step of a shear path: ``removed`` and ``added`` are sorted
     lists of pairs (i, j); ``floaters`` is the number of floaters (before, after) the step."""
 
-    step: int
-    gamma: float
-    removed: list
-    added: list
-    floaters: tuple
+    step: int  #: the step's index on the path (step 0 is the start)
+    gamma: float  #: its strain
+    removed: list  #: pairs (i, j) of the previous step that are gone
+    added: list  #: pairs (i, j) that were not there
+    floaters: tuple  #: floaters (before, after) the step
 
     def line(self) -> str:
         """``step 7  gamma=0.014  removed 6-26  added 3-8 2-3`` (``-`` for none), with

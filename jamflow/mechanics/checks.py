@@ -39,24 +39,25 @@ BALANCE_RTOL = 1e-3  # max net force / mean contact force above this: not at an 
 class PackingChecks:
     """Outcome of ``check_packing``; None where a check could not be made (no V_tol known)."""
 
-    energy_per_particle: float
-    v_tol: float | None
-    in_window: bool | None
+    energy_per_particle: float  #: V, eps
+    v_tol: float | None  #: V_tol of the window, eps (None: unknown, the window is not checked)
+    in_window: bool | None  #: V_tol < V < 2 V_tol (None: not checked)
     max_force: float  #: largest net force component, eps/diameter (refine: largest norm |F|)
     force_tol: float | None  #: the minimiser's tolerance, for the record
     mean_contact_force: float  #: mean |dV/dr| over overlapping pairs (nan without any)
     force_ratio: float  #: max_force / mean_contact_force
-    force_balanced: bool
+    force_balanced: bool  #: force_ratio <= BALANCE_RTOL, or max_force below the packing's force floor
     n_contacts: int  #: N_c among non-floaters
     isostatic_count: int  #: N_c,iso
     excess_contacts: int  #: N_c - N_c,iso
-    n_floaters: int
-    n_kept: int
-    mean_z: float
+    n_floaters: int  #: N_f, the floaters
+    n_kept: int  #: N' = N - N_f
+    mean_z: float  #: <z> among non-floaters
     jammed: bool  #: N_c >= N_c,iso with at least one non-floater
 
     @property
     def passed(self) -> bool:
+        """In the window (or not checked), force balanced and jammed: the packing may be written as jammed."""
         return self.in_window is not False and self.force_balanced and self.jammed
 
     def __repr__(self) -> str:
@@ -104,6 +105,26 @@ def check_packing(packing: Packing, energy_per_particle: float | None = None, ma
 
     ``energy_per_particle`` and ``max_force`` (the engine's values) are recomputed from the
     packing when None; ``v_tol`` None skips the window check; ``ftol`` is recorded only.
+
+    Parameters
+    ----------
+    packing : jamflow.Packing
+        The packing to check (lengths in diameters).
+    energy_per_particle : float, optional
+        V in eps, as the engine reported it; None: recomputed from the packing.
+    max_force : float, optional
+        The largest force (and generalised torque) component, eps / diameter; None: recomputed.
+    v_tol : float, optional
+        The energy window's V_tol (eps): ``in_window`` is V_tol < V < 2 V_tol; None: not checked.
+    ftol : float, optional
+        The minimiser's force tolerance (eps / diameter), recorded in the result only.
+
+    Returns
+    -------
+    PackingChecks
+        The window, force balance (max force / mean contact force, or below the packing's force
+        floor), contact count against the isostatic count, floaters and mean contact number;
+        ``passed`` and ``problems()`` summarise them.
     """
     from jamflow.mechanics.reference import energy_forces_pressure
 
@@ -167,19 +188,21 @@ class Resolution:
     ``smallest_v_tol``: the V_tol at which both ratios reach their minimum.
     """
 
-    v_tol: float
-    window_overlap: float
-    overlap_roundoff: float
-    window_force: float
-    force_tol: float
-    smallest_v_tol: float
+    v_tol: float  #: the V_tol examined, eps
+    window_overlap: float  #: 1 - r/sigma of a contact in the window (dimensionless)
+    overlap_roundoff: float  #: float64 spacing at the longest box side, over sigma
+    window_force: float  #: |dV/dr| of such a contact, eps / diameter
+    force_tol: float  #: the minimiser's force tolerance, eps / diameter
+    smallest_v_tol: float  #: the smallest V_tol both ratios allow, eps
 
     @property
     def overlap_ratio(self) -> float:
+        """window_overlap / overlap_roundoff (contacts need >= MIN_OVERLAP_RATIO)."""
         return self.window_overlap / self.overlap_roundoff
 
     @property
     def force_ratio(self) -> float:
+        """window_force / force_tol (force balance needs >= MIN_FORCE_RATIO)."""
         return self.window_force / self.force_tol
 
     def problem(self) -> str | None:

@@ -63,11 +63,15 @@ class ContactsResult:
 
     i: np.ndarray  #: (N_c,) first particle of each contact
     j: np.ndarray  #: (N_c,) second particle
-    floater: np.ndarray  #: (N,) bool
+    floater: np.ndarray  #: (N,) bool: True for a floater (rattler), removed with its contacts
     z: np.ndarray  #: (N,) contacts per particle among non-floaters; 0 for floaters
-    dim: int
+    dim: int  #: d, 2 or 3
     n_overlapping: int  #: overlapping pairs before floater removal
-    n_near_contact: int  #: pairs with |r/sigma - 1| < near_tol (diagnostic)
+    #: pairs with |r/sigma - 1| < near_tol (default 1e-12) on either side of contact, from the float64
+    #: positions: a diagnostic, not part of N_c. In a double-double packing refined to a small pressure
+    #: every contact overlaps by less than near_tol, so the count includes the contacts themselves
+    #: (about N_c; the contacts are found from hi + lo).
+    n_near_contact: int
     dof: int | None = None  #: d_f, degrees of freedom per particle (None: d, disks and spheres)
     wall_contacts: np.ndarray | None = None  #: (N_w, 2): particle, face (2 a + side) of each smooth-wall contact
     fixed: np.ndarray | None = None  #: (N,) bool: fixed (wall) particles, never floaters, no degrees of freedom
@@ -99,6 +103,7 @@ class ContactsResult:
 
     @property
     def n_floaters(self) -> int:
+        """N_f, the floaters."""
         return int(self.floater.sum())
 
     @property
@@ -144,6 +149,7 @@ class ContactsResult:
 
     @property
     def is_isostatic(self) -> bool:
+        """N_c = N_c,iso, with non-floaters left."""
         return self.n_kept > 0 and self.excess_contacts == 0
 
     def z_distribution(self) -> tuple[np.ndarray, np.ndarray]:
@@ -159,13 +165,14 @@ class PooledContacts:
     and the floater fraction sum N_f / sum N (each packing weighted by its particles, not averaged
     per packing)."""
 
-    mean_z: float
-    n_floaters: int
-    n: int
-    n_packings: int
+    mean_z: float  #: pooled <z> over the non-floaters of every packing
+    n_floaters: int  #: floaters over all packings
+    n: int  #: particles over all packings
+    n_packings: int  #: packings pooled
 
     @property
     def floater_fraction(self) -> float:
+        """sum N_f / sum N (nan without particles)."""
         return self.n_floaters / self.n if self.n else float("nan")
 
     def summary(self) -> str:
@@ -193,6 +200,24 @@ class Contacts:
     (one per overlapping site pair).
     ``balanced_exception``: keep force-balanced particles that turn with d + 1 to d_f contacts
     (chapter Figure 2.19; only with the default ``min_contacts``, in periodic packings).
+
+    Parameters
+    ----------
+    min_contacts : int, optional
+        A particle with fewer contacts is a floater (>= 0); default d_f + 1.
+    half_space : bool, default True
+        Also remove disks/spheres whose contact directions do not positively span R^d.
+    near_tol : float, default 1e-12
+        Relative width of the near-contact count, |r/sigma - 1| < near_tol (>= 0).
+    count : {"bodies", "sites"}, default "bodies"
+        How contacts of rigid bodies are counted.
+    balanced_exception : bool, default True
+        Keep force-balanced turning particles with d + 1 to d_f contacts.
+
+    Raises
+    ------
+    ValueError
+        An unknown ``count``, or a bad ``min_contacts`` or ``near_tol``.
     """
 
     def __init__(self, min_contacts: int | None = None, half_space: bool = True, near_tol: float = 1e-12,
@@ -210,6 +235,20 @@ class Contacts:
         self.near_tol = float(near_tol)
 
     def compute(self, packing: Packing) -> ContactsResult:
+        """The contact network of ``packing`` after iterative floater removal.
+
+        Parameters
+        ----------
+        packing : jamflow.Packing
+            Any packing; a contact is an overlap r < sigma, strictly (double-double overlaps for
+            disks and spheres carrying low parts), walls and weights count as contacts.
+
+        Returns
+        -------
+        ContactsResult
+            The contacts among non-floaters, the floaters, z per particle and the counts (N_c,
+            N_c,iso, <z>) as properties.
+        """
         sites = overlapping_sites(packing) if packing.shape.made_of_sites else None
         i, j, dr = (site_contacts(packing, sites) if self.count == "sites" and sites is not None
                     else particle_contacts(packing))

@@ -30,14 +30,17 @@ class DynamicalMatrixResult:
 
     @property
     def dim(self) -> int:
+        """d."""
         return self.packing.dim
 
     @property
     def n_dof(self) -> int:
+        """d_f N', the matrix dimension."""
         return self.matrix.shape[0]
 
     @property
     def coordinates(self) -> Coordinates:
+        """The layout of the rows: centres, then rotations d_k theta."""
         return Coordinates.of(self.packing)
 
     @property
@@ -66,6 +69,13 @@ class DynamicalMatrix:
         self.contacts = contacts or Contacts(count="sites")
 
     def compute(self, packing: Packing) -> DynamicalMatrixResult:
+        """The matrix of ``packing`` (floaters removed first unless ``remove_floaters`` is False).
+
+        Raises
+        ------
+        ValueError
+            Walls, gravity or fixed particles, or every particle a floater.
+        """
         if not self.remove_floaters:
             return DynamicalMatrixResult(hessian(packing), np.arange(packing.n), packing, None, packing.n)
         found = self.contacts.compute(packing)

@@ -53,6 +53,7 @@ class StrainTerms:
 
     @classmethod
     def of(cls, packing: Packing) -> "StrainTerms":
+        """The terms of every contact of ``packing`` (``pair_terms``), indexed into its coordinates."""
         terms = pair_terms(packing)
         coords = Coordinates.of(packing)
         return cls(_local_index(coords, terms.i, terms.j), terms.gradient, terms.hessian,
@@ -91,17 +92,17 @@ def affine_terms(terms: StrainTerms, strain: Strain) -> tuple[float, np.ndarray]
 class HessianModuliResult:
     """G and B from the Hessian, with their affine parts and what the spectrum looked like."""
 
-    G: float  #: eps / diameter^d
-    B: float
+    G: float  #: shear modulus, eps / diameter^d
+    B: float  #: bulk modulus, eps / diameter^d
     G_affine: float  #: without the non-affine relaxation (upper bounds)
-    B_affine: float
+    B_affine: float  #: without the non-affine relaxation
     pressure_tensor: np.ndarray  #: (d, d) of the floater-free packing, from the same pair terms
     n_kept: int  #: particles after floater removal
-    n_contacts: int
+    n_contacts: int  #: contacts among the kept particles
     n_extra_zero: int  #: zero modes beyond the d translations
     n_negative: int  #: eigenvalues below -zero_tol max e
-    lowest_eigenvalue: float  #: smallest non-trivial eigenvalue
-    zero_tol: float
+    lowest_eigenvalue: float  #: smallest non-trivial eigenvalue, eps / diameter^2
+    zero_tol: float  #: the relative zero-mode threshold used
 
     def __repr__(self) -> str:
         """One line: G, B (and affine parts), kept particles, contacts, extra zero and negative modes."""
@@ -110,15 +111,30 @@ class HessianModuliResult:
                 f"n_extra_zero={self.n_extra_zero}, n_negative={self.n_negative})")
 
     def modulus(self, strain: Strain) -> float:
+        """G for ``SHEAR``, B for ``BULK``."""
         return self.G if strain.modulus == "G" else self.B
 
     def affine(self, strain: Strain) -> float:
+        """G_affine for ``SHEAR``, B_affine for ``BULK``."""
         return self.G_affine if strain.modulus == "G" else self.B_affine
 
 
 class HessianModuli:
     """``zero_tol``: relative threshold of the pseudo-inverse (``ZERO_TOL``); ``contacts``: the
-    floater search (a ``Contacts``; default that of ``DynamicalMatrix``)."""
+    floater search (a ``Contacts``; default that of ``DynamicalMatrix``).
+
+    Parameters
+    ----------
+    zero_tol : float, default 1e-10
+        Eigenvalues with |e| <= zero_tol max e are zero modes, left out of the pseudo-inverse (0 < zero_tol < 1).
+    contacts : Contacts, optional
+        The floater search.
+
+    Raises
+    ------
+    ValueError
+        ``zero_tol`` outside (0, 1).
+    """
 
     def __init__(self, zero_tol: float = ZERO_TOL, contacts=None):
         if not (np.isfinite(zero_tol) and 0 < zero_tol < 1):
@@ -127,6 +143,18 @@ class HessianModuli:
         self.matrix = DynamicalMatrix(contacts=contacts)
 
     def compute(self, packing: Packing) -> HessianModuliResult:
+        """G and B of ``packing`` (floaters removed): the affine curvature minus Xi^T H^+ Xi.
+
+        Parameters
+        ----------
+        packing : jamflow.Packing
+            A packing in a periodic box, without walls, gravity or fixed particles.
+
+        Returns
+        -------
+        HessianModuliResult
+            G and B (eps / diameter^d), their affine parts and the spectrum's counts.
+        """
         dyn = self.matrix.compute(packing)  # refuses walls, gravity and fixed particles
         kept = dyn.packing
         terms = StrainTerms.of(kept)
@@ -164,13 +192,13 @@ def _check_zero_modes(coeff, live, dim, strain) -> None:
 class ContactModuli:
     """G and B of disks/spheres by the Hessian route over a contact network the caller found."""
 
-    G: float  #: eps / diameter^d
-    B: float
-    G_affine: float
-    B_affine: float
+    G: float  #: shear modulus, eps / diameter^d
+    B: float  #: bulk modulus, eps / diameter^d
+    G_affine: float  #: without the non-affine relaxation
+    B_affine: float  #: without the non-affine relaxation
     pressure_tensor: np.ndarray  #: (d, d) from the same contacts
-    n_kept: int
-    n_contacts: int
+    n_kept: int  #: particles kept (non-floaters)
+    n_contacts: int  #: contacts given
 
 
 def contact_moduli(packing: Packing, i, j, dr, sigma, overlap, kept) -> ContactModuli:

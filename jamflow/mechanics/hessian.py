@@ -58,13 +58,14 @@ class Coordinates:
     rows [k d + a] are centre coordinate a of particle k, rows [N d + k r + b] the rotation
     d_k theta about rotational axis b of particle k (r axes per particle)."""
 
-    n: int
-    dim: int
+    n: int  #: N, particles
+    dim: int  #: d
     axes: tuple  #: body axes (0 = x, the director, ...) whose rotations are degrees of freedom
     lengths: np.ndarray  #: (N, r) d_k of those axes, diameters
 
     @classmethod
     def of(cls, packing: Packing) -> "Coordinates":
+        """The coordinates of ``packing``: its rotational axes and their lengths d_k."""
         axes = tuple(int(a) for a in np.flatnonzero(packing.shape.rotation_mask(packing.dim)))
         return cls(packing.n, packing.dim, axes, packing.rotational_lengths[:, list(axes)])
 
@@ -75,6 +76,7 @@ class Coordinates:
 
     @property
     def n_translational(self) -> int:
+        """d N, the centre coordinates (the first rows)."""
         return self.n * self.dim
 
     @property

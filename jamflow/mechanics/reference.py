@@ -57,6 +57,7 @@ class ReferenceResult:
 
     @property
     def pressure(self) -> float:
+        """P = trace / d of the pressure tensor, eps / diameter^d."""
         return float(np.trace(self.pressure_tensor) / len(self.pressure_tensor))
 
 

@@ -33,10 +33,10 @@ class Strain:
     """One homogeneous strain: ``kind`` "shear" or "bulk", the modulus it measures (``modulus``
     "G" or "B") and the name of its response (``response_name``)."""
 
-    kind: str
-    modulus: str
-    response_name: str
-    strain_name: str
+    kind: str  #: "shear" (simple shear, x += a y) or "bulk" (isotropic compression, phi = phi0 e^a)
+    modulus: str  #: "G" or "B"
+    response_name: str  #: "Sigma" (= -P_xy) or "P"
+    strain_name: str  #: "gamma" or "ln(phi/phi0)"
 
     def gradient(self, amplitude: float, dim: int) -> np.ndarray:
         """F(a), (d, d)."""

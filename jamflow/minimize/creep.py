@@ -26,14 +26,15 @@ from jamflow.minimize.settings import CREEP_FORCE
 class CreepTrigger:
     """When a creep step is due (forces in eps/diameter, iterations of the minimisation)."""
 
-    after: int  # iterations before the first attempt
-    every: int | None = None  # iterations between attempts; None: once per minimisation
-    creep_force: float = CREEP_FORCE  # max force below which a minimisation counts as creeping
-    aligned: bool = False  # attempts only at multiples of ``after`` (the polish's measured form)
-    attempts: int = 0
-    next_at: int = 0
+    after: int  #: iterations before the first attempt
+    every: int | None = None  #: iterations between attempts; None: once per minimisation
+    creep_force: float = CREEP_FORCE  #: max force below which a minimisation counts as creeping
+    aligned: bool = False  #: attempts only at multiples of ``after`` (the polish's measured form)
+    attempts: int = 0  #: attempts made so far
+    next_at: int = 0  #: the iteration from which the next attempt may run
 
     def due(self, done: int, max_force: float) -> bool:
+        """Whether an attempt is due after ``done`` iterations at this max force (eps / diameter)."""
         if max_force >= self.creep_force:
             return False
         if self.attempts:
@@ -55,6 +56,7 @@ class CreepTrigger:
         return max(self.next_at - done, 1)
 
     def fired(self, done: int) -> None:
+        """Record an attempt made after ``done`` iterations."""
         self.attempts += 1
         self.next_at = done + (self.every or 0)
 
@@ -68,11 +70,12 @@ class CreepStrategy(Protocol):
 class Creep:
     """The creep method of one minimisation: its trigger, its strategy, the steps kept."""
 
-    trigger: CreepTrigger
-    strategy: CreepStrategy
-    accepted: int = 0
+    trigger: CreepTrigger  #: when an attempt is due
+    strategy: CreepStrategy  #: what an attempt does to the configuration
+    accepted: int = 0  #: steps kept so far
 
     def due(self, done: int, max_force: float) -> bool:
+        """The trigger's ``due``."""
         return self.trigger.due(done, max_force)
 
     def step(self, engine, done: int) -> bool:

@@ -131,14 +131,14 @@ class MinimizeResult:
     """Outcome of one minimisation; ``converged`` is False for no-progress, linesearch
     and iteration-cap stops."""
 
-    converged: bool
-    reason: str
-    iterations: int
-    energy_per_particle: float
-    max_force: float
-    seconds: float
-    max_torque: float = 0.0  # largest generalized torque component tau_a / d_k (eps/diameter)
-    creep_steps: int = 0  # steps of the creep method kept (``MinimizerSettings.creep``)
+    converged: bool  #: stopped by "force" or "energy-below-vmin" (``CONVERGED_REASONS``)
+    reason: str  #: the stop: force, energy-below-vmin, energy-steady, no-progress, linesearch, iteration-cap, blown-up
+    iterations: int  #: minimiser iterations
+    energy_per_particle: float  #: V at the stop, eps
+    max_force: float  #: largest force component at the stop, eps / diameter
+    seconds: float  #: wall time
+    max_torque: float = 0.0  #: largest generalized torque component tau_a / d_k (eps/diameter)
+    creep_steps: int = 0  #: steps of the creep method kept (``MinimizerSettings.creep``)
 
 
 CONVERGED_REASONS = ("force", "energy-below-vmin")

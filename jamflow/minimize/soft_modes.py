@@ -63,9 +63,10 @@ class SoftModeSteps:
     """The "soft-modes" strategy of ``minimize.creep``: one Newton step along the softest modes
     per attempt (module docstring), kept only if it lowers the energy."""
 
-    stiffness: float = 1.0
+    stiffness: float = 1.0  #: the contact stiffness scale of the zero-mode threshold and the shift, eps / diameter^2
 
     def attempt(self, engine, attempt: int, done: int) -> int:
+        """One Newton step along the softest modes of the engine's packing; 1 if kept (it lowered the energy), else 0."""
         packing = engine.packing()
         try:
             dyn = DynamicalMatrix().compute(packing)

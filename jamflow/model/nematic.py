@@ -16,9 +16,9 @@ class NematicResult:
     """P2 = largest eigenvalue of the order tensor; ``director`` its unit eigenvector, signed by
     ``jamflow.model.frames.canonical_signs`` (n and -n are the same director)."""
 
-    p2: float
-    director: np.ndarray
-    tensor: np.ndarray
+    p2: float  #: P2, dimensionless: 0 for isotropic axes, 1 for aligned ones
+    director: np.ndarray  #: (d,) unit eigenvector of P2, the mean axis
+    tensor: np.ndarray  #: (d, d) the order tensor (d u u^T - 1) / (d - 1), averaged over particles
 
     def __repr__(self) -> str:
         """One line: P2 and the director."""
@@ -34,6 +34,25 @@ class Nematic:
     """
 
     def compute(self, orientations) -> NematicResult:
+        """P2 and the director of ``orientations``.
+
+        Parameters
+        ----------
+        orientations : array_like or jamflow.Packing
+            (N, d) axis vectors (normalised here; non-zero), (N,) 2D angles in radians, or a
+            packing of particles with an axis (its directors).
+
+        Returns
+        -------
+        NematicResult
+            P2 (the largest eigenvalue of the order tensor), the director and the tensor.
+
+        Raises
+        ------
+        ValueError
+            A packing of particles without an axis (disks, spheres), or axes that are empty,
+            of the wrong shape, not finite or zero.
+        """
         if isinstance(orientations, Packing):
             if not orientations.shape.oriented:
                 raise ValueError(f"nematic order needs particles with an axis; "

@@ -25,6 +25,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from jamflow.model.box import Box
+from jamflow.model.ordering import SPATIAL_ORDER_FROM, morton_order
 from jamflow.model.potentials import Potential, Spring
 from jamflow.model.shapes.rotations import check_orientations, directors, start_orientations
 from jamflow.model.shapes.shape import SPHERE
@@ -283,7 +284,9 @@ def random_packing(n: int, dim: int, sizes: SizeSpec, phi: float, seed: int,
     ``"nematic:S"`` (``rotations.start_orientations``). Diameters are
     drawn first, then positions, then orientations, from one generator. ``separated`` (rigid
     bodies): orientations first, then positions by random sequential addition, so that no two
-    bodies overlap (``separated_positions``)."""
+    bodies overlap (``separated_positions``). From ``SPATIAL_ORDER_FROM`` particles on, the
+    particles (with their sizes and orientations) are then numbered along a space-filling curve
+    (``ordering.morton_order``): the same start, labelled so that neighbours are near in memory."""
     rng = np.random.default_rng(seed)
     diameters = sizes.draw(n, rng)
     length = (shape.volumes(diameters, dim).sum() / phi) ** (1.0 / dim)
@@ -294,6 +297,10 @@ def random_packing(n: int, dim: int, sizes: SizeSpec, phi: float, seed: int,
     else:
         positions = rng.random((n, dim)) * length
         turns = start_orientations(orientations, n, dim, rng) if shape.oriented else None
+    if n >= SPATIAL_ORDER_FROM:  # labels along a space-filling curve: the same particles, cache-friendly arrays
+        order = morton_order(box.to_fractional(positions))
+        diameters, positions = diameters[order], positions[order]
+        turns = None if turns is None else turns[order]
     metadata = {"seed": seed, "sizes": sizes.spec, **({"orientations": orientations} if shape.oriented else {})}
     return Packing(positions, diameters, box, potential or Spring(), metadata=metadata, shape=shape,
                    orientations=turns)

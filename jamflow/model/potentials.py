@@ -31,8 +31,10 @@ import numpy as np
 
 # --- the laws: plain functions of s = r / sigma (s < 1) and a NamedTuple of parameters ---------
 class SpringParams(NamedTuple):
-    alpha: float
-    epsilon: float
+    """The numbers of the spring law, as the compiled kernels take them."""
+
+    alpha: float  #: exponent (2 the linear spring, 5/2 Hertzian)
+    epsilon: float  #: energy scale eps
 
 
 def spring_energy_force(s, p: SpringParams):
@@ -71,7 +73,9 @@ def overlap_law_params(potential) -> SpringParams:
 
 
 class RLJParams(NamedTuple):
-    epsilon: float
+    """The number of the repulsive Lennard-Jones law, as the compiled kernels take it."""
+
+    epsilon: float  #: energy scale eps
 
 
 def rlj_energy_force(s, p: RLJParams):
@@ -219,7 +223,24 @@ def potential_from_attrs(name: str, alpha: float, epsilon: float) -> Potential:
 
 
 def parse_potential(spec: str) -> Potential:
-    """``spring`` | ``hertz`` | ``spring:ALPHA`` | ``rlj`` -> a potential object."""
+    """``spring`` | ``hertz`` | ``spring:ALPHA`` | ``rlj`` -> a potential object.
+
+    Parameters
+    ----------
+    spec : str
+        ``spring`` (harmonic, alpha = 2), ``hertz`` (alpha = 5/2), ``spring:ALPHA`` (any
+        exponent) or ``rlj`` (repulsive Lennard-Jones); case and surrounding blanks are ignored.
+
+    Returns
+    -------
+    Spring or RepulsiveLJ
+        The pair law with energy scale eps = 1.
+
+    Raises
+    ------
+    ValueError
+        Not a string, an unknown name, or an ALPHA that is not a number.
+    """
     if not isinstance(spec, str):
         raise ValueError(f"potential must be a spec string such as 'spring' or a Spring/RepulsiveLJ object, "
                          f"got {spec!r}")

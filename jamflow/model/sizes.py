@@ -21,11 +21,14 @@ import numpy as np
 
 @dataclass(frozen=True)
 class SizeSpec:
+    """A size distribution (``parse_sizes``): its kind and parameters, diameters in units of the small one."""
+
     kind: str  #: mono | bi | poly-uniform | poly-normal | poly-lognormal
-    params: tuple[float, ...] = ()
+    params: tuple[float, ...] = ()  #: bi: (RATIO, FRACTION_SMALL); poly-uniform: (WIDTH,); poly-normal, poly-lognormal: (WIDTH, MEAN)
 
     @property
     def spec(self) -> str:
+        """The spec string, e.g. ``bi:1.4:0.5``."""
         return ":".join([self.kind, *(f"{p:g}" for p in self.params)])
 
     @property
@@ -54,7 +57,25 @@ class SizeSpec:
 
 
 def parse_sizes(spec: str) -> SizeSpec:
-    """Parse a ``--sizes`` spec (see module docstring); errors say what to write instead."""
+    """Parse a ``--sizes`` spec (see module docstring); errors say what to write instead.
+
+    Parameters
+    ----------
+    spec : str
+        ``mono``, ``bi:RATIO:FRACTION_SMALL`` (RATIO >= 1, the large / small diameter;
+        FRACTION_SMALL in [0, 1]), ``poly-uniform:WIDTH``, ``poly-normal:WIDTH[:MEAN]`` (WIDTH
+        <= MEAN / 2) or ``poly-lognormal:WIDTH[:MEAN]``; WIDTH >= 0 and MEAN > 0 in diameters.
+
+    Returns
+    -------
+    SizeSpec
+        The distribution; ``SizeSpec.draw`` gives N diameters (the small diameter = 1).
+
+    Raises
+    ------
+    ValueError
+        An unknown kind, the wrong number of parameters, or parameters out of range.
+    """
     text = str(spec).strip().lower()
     kind, *fields = text.split(":")
     usage = "use mono | bi:RATIO:FRACTION_SMALL | poly-uniform:WIDTH | poly-normal:WIDTH[:MEAN] | poly-lognormal:WIDTH[:MEAN]"

@@ -9,8 +9,9 @@ normalised to integral 1 over omega (Figure 2.16b; for shapes also its translati
 log-log), coloured by behaviour. One meaning per colour across the panels: red = zero/quartic
 (branch 1 in (a), quartic profiles in (d)), orange = rotational, green = translational, blue =
 quadratic, black = flat, light grey = data without a character (all modes, z_i). omega =
-sqrt(e / M) is in sqrt(eps / m) / diameter with M = N m unless ``Spectrum(mass=...)`` set
-another M (docs: reference/conventions)."""
+sqrt(e / M) is in sqrt(eps / m) / diameter with M = N m (the whole packing's mass, floaters
+included, m = 1) unless ``Spectrum(mass=...)`` set another M: the axes say which M, and a
+caption under each figure says what omega is (``omega_caption``; docs: reference/conventions)."""
 
 from __future__ import annotations
 
@@ -48,6 +49,8 @@ def modes_figure(path, spectra, dos=None, contacts=(), stabilities=(), colour: s
     _z_distribution(axes[1, 0], contacts)
     _energy_profiles(axes[1, 1], stabilities)
     fig.suptitle(f"{len(spectra)} packing(s), e_min = {spectra[0].e_min:g}" if spectra else "")
+    if spectra:
+        fig.supxlabel(omega_caption(spectra), fontsize=9)
     return save_figure(fig, path)
 
 
@@ -57,6 +60,19 @@ def omega_label(spectra, symbol=r"\omega") -> str:
     default = all(s.mass == s.dynamical.n_total for s in spectra)
     m = "M = N m" if default or not masses else f"M = {masses.pop():g} m" if len(masses) == 1 else "M per packing"
     return rf"${symbol}$, {m}  {OMEGA_UNITS}"
+
+
+def omega_caption(spectra) -> str:
+    """The figure's caption of the frequency axes: what omega is and which M divides it."""
+    masses = {s.mass for s in spectra}
+    if all(s.mass == s.dynamical.n_total for s in spectra):
+        m = r"$M = N m$: the mass of the whole packing ($N$ particles, floaters included; $m = 1$)"
+    elif len(masses) == 1:
+        m = rf"$M = {masses.pop():g}\,m$, set with --mass or Spectrum(mass=...) ($m = 1$)"
+    else:
+        m = r"$M$ per packing, set with --mass or Spectrum(mass=...)"
+    return (r"$\omega = \sqrt{e / M}$, $e$ the eigenvalues of the dynamical matrix ($\epsilon/\sigma^2$), "
+            r"in $\sqrt{\epsilon/(m\sigma^2)}$" "\n" + m)
 
 
 def sorted_modes_figure(path, spectra, title: str = "", colour: str = "branches") -> Path:
@@ -70,6 +86,8 @@ def sorted_modes_figure(path, spectra, title: str = "", colour: str = "branches"
     ax = fig.add_subplot()
     _sorted_frequencies(ax, spectra, colour)
     ax.set_title(title, fontsize=9)
+    if spectra:
+        fig.supxlabel(omega_caption(spectra), fontsize=7)
     return save_figure(fig, path)
 
 

@@ -20,7 +20,7 @@ MAX_LABELS = 12
 def shear_path_figure(path, columns: dict, title: str = "") -> Path:
     """Three panels against gamma: phi_J, Sigma = -P_xy, Sigma / P; steps where the contact
     network changed are marked (red), with the numbers of contacts removed/added when there
-    are at most MAX_LABELS of them."""
+    are at most MAX_LABELS of them (in rows along the top of the phi_J panel, ``_step_labels``)."""
     fig = Figure(figsize=(7, 8), layout="constrained")
     FigureCanvasAgg(fig)
     axes = fig.subplots(3, 1, sharex=True)
@@ -33,13 +33,44 @@ def shear_path_figure(path, columns: dict, title: str = "") -> Path:
         for x in g[changed]:
             ax.axvline(x, color="tab:red", lw=0.5, alpha=0.4)
         ax.set_ylabel(label)
-    for k in np.flatnonzero(changed) if changed.sum() <= MAX_LABELS else ():
-        axes[0].annotate(f"-{columns['n_removed'][k]}/+{columns['n_added'][k]}", (g[k], columns["phi_j"][k]),
-                         textcoords="offset points", xytext=(3, 4), fontsize=7, color="tab:red")
     axes[-1].set_xlabel(r"shear strain $\gamma$")
     axes[0].set_title(title or f"{len(g) - 1} steps, contact network changed at {int(changed.sum())} "
                                "(red: contacts removed/added)")
+    if 0 < changed.sum() <= MAX_LABELS:
+        steps = np.flatnonzero(changed)
+        _step_labels(fig, axes[0], g[steps], [f"-{columns['n_removed'][k]}/+{columns['n_added'][k]}" for k in steps])
     return save_figure(fig, path)
+
+
+def _step_labels(fig, ax, xs, texts, fontsize: float = 7, pad: float = 3.0) -> None:
+    """Write ``texts`` above the strains ``xs`` in rows along the top of ``ax``: each label is
+    centred on its step, moved inside the axes where it would leave them, and put in the first
+    row where it keeps ``pad`` pixels from its left neighbour, so no two overlap; the y range
+    grows to leave the rows above the data, and a thin line joins each label to its step."""
+    fig.canvas.draw()  # the layout: the axes' size in pixels and the labels' widths
+    renderer, frame = fig.canvas.get_renderer(), ax.get_window_extent()
+    ends, placed = [], []  # right edge (pixels) of the last label of each row; (x, text, left, row)
+    height = 0.0
+    for x, text in sorted(zip(xs, texts)):
+        probe = ax.text(0, 0, text, fontsize=fontsize, transform=None)
+        extent = probe.get_window_extent(renderer)
+        probe.remove()
+        height = max(height, extent.height)
+        centre = ax.transData.transform((x, 0.0))[0]
+        left = min(max(centre - extent.width / 2, frame.x0 + pad), frame.x1 - pad - extent.width)
+        row = next((r for r, end in enumerate(ends) if left >= end + pad), len(ends))
+        ends[row:row + 1] = [left + extent.width]
+        placed.append((x, text, left, row))
+    step = (height + pad) / frame.height  # one row, in axes fraction
+    band = len(ends) * step + pad / frame.height
+    low, high = ax.get_ylim()
+    ax.set_ylim(low, low + (high - low) / (1.0 - band))
+    for x, text, left, row in placed:
+        ax.annotate(text, xy=(x, 1.0 - band), xycoords=("data", "axes fraction"),
+                    xytext=((left - frame.x0) / frame.width, 1.0 - pad / frame.height - row * step),
+                    textcoords="axes fraction", ha="left", va="top", fontsize=fontsize, color="tab:red",
+                    bbox=dict(fc="white", ec="none", pad=0.3), zorder=3 + row,  # over the lines of the rows above
+                    arrowprops=dict(arrowstyle="-", color="tab:red", lw=0.4, alpha=0.5, shrinkA=0, shrinkB=0))
 
 
 def families_figure(path, families, mirror_of=None, convergence=(), richness=None, title: str = "",

@@ -32,14 +32,14 @@ from jamflow.minimize.rules import minimize
 class AboveResult:
     """A packing at phi_onset + dphi, minimised."""
 
-    packing: Packing
-    phi_onset: float
-    dphi: float
+    packing: Packing  #: the minimised packing at phi_onset + dphi (diameters)
+    phi_onset: float  #: the input packing's packing fraction
+    dphi: float  #: the compression step
     energy_per_particle: float  #: eps
     pressure_tensor: np.ndarray  #: (d, d), eps / diameter^d
-    minimization: MinimizeResult
-    engine: str
-    seconds: float
+    minimization: MinimizeResult  #: the minimisation at the compressed box (stop reason, iterations, max force)
+    engine: str  #: "numba" or "lammps"
+    seconds: float  #: wall time of the run
     kernels: str = ""  #: the engine's ``kernels`` (summary line only)
 
     def __repr__(self) -> str:
@@ -51,9 +51,11 @@ class AboveResult:
 
     @property
     def pressure(self) -> float:
+        """P = trace / d of the pressure tensor, eps / diameter^d."""
         return float(np.trace(self.pressure_tensor) / self.packing.dim)
 
     def summary(self) -> str:
+        """The line ``jamflow jam --above`` prints: phi, V, P, max|F|, the stop, the engine, seconds."""
         m = self.minimization
         return (f"above onset by {self.dphi:g}: phi = {self.packing.phi:.10f}  V = {self.energy_per_particle:.3e}  "
                 f"P = {self.pressure:.3e}  max|F| = {m.max_force:.1e}  stop: {m.reason}, {m.iterations} iterations "
@@ -79,7 +81,37 @@ def check_dphi(dphi, phi: float) -> float:
 def compress_above(packing: Packing, dphi: float, minimizer: MinimizerSettings | None = None,
                    engine: str = "auto", engine_options: dict | None = None) -> AboveResult:
     """``packing`` (an onset packing) compressed affinely to phi + ``dphi`` and minimised at that
-    box. Raises ValueError on a bad step or a packing under gravity (settled, not compressed)."""
+    box. Raises ValueError on a bad step or a packing under gravity (settled, not compressed).
+
+    Parameters
+    ----------
+    packing : jamflow.Packing
+        A packing at its onset phi_J (``jamflow.jam``, ``load_packing``), without gravity.
+    dphi : float
+        The compression step in packing fraction (dimensionless, > 0, phi_J + dphi < 1).
+    minimizer : jamflow.MinimizerSettings, optional
+        How the compressed packing is minimised (default ``MinimizerSettings()``); no target
+        pressure (the box is fixed).
+    engine : {"auto", "numba", "lammps"}, default "auto"
+        The engine (auto: the compiled engine when it runs the scene, else LAMMPS).
+    engine_options : dict, optional
+        Options for the engine's constructor (LAMMPS: skin, comm, args; compiled: skin).
+
+    Returns
+    -------
+    AboveResult
+        The minimised packing at phi_J + dphi with its V (eps), pressure tensor
+        (eps / diameter^d), the minimisation and the engine.
+
+    Raises
+    ------
+    ValueError
+        A bad ``dphi``, a packing under gravity or a minimiser with a target pressure.
+    RuntimeError
+        The minimisation diverged (blown up).
+    jamflow.JammingFailed
+        The packing relaxed below V_min: it is not jammed at phi_J + dphi.
+    """
     minimizer = minimizer or MinimizerSettings()
     phi = packing.phi
     check_dphi(dphi, phi)

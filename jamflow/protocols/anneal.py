@@ -36,9 +36,9 @@ class AnnealResult:
     """The last step's jam (``final``, packing and checks) and one row per step in ``steps``
     (columns ``STEP_COLUMNS``; row 0 is the input packing)."""
 
-    final: JamResult
-    checks: object
-    steps: dict
+    final: JamResult  #: the jam at the last aspect ratio
+    checks: object  #: its ``PackingChecks``
+    steps: dict  #: STEP_COLUMNS -> array, one row per step (row 0: the input packing)
 
     def __repr__(self) -> str:
         """One line: N, shape, the aspect ratios walked, phi_J, checks; ``steps`` holds the table."""
@@ -49,6 +49,7 @@ class AnnealResult:
 
     @property
     def packing(self) -> Packing:
+        """The annealed packing at the last aspect ratio."""
         return self.final.packing
 
 

@@ -44,15 +44,15 @@ POINT_FIELDS = ("start", "grid", "direction", "step", "segment", "strain_index",
 class FamilySampling:
     """The sampling plan; strains dimensionless."""
 
-    n: int = 10
-    sizes: str = "bi:1.4:0.5"
-    gamma_min: float = 0.0
-    gamma_max: float = 1.0
+    n: int = 10  #: particles per packing (2D disks)
+    sizes: str = "bi:1.4:0.5"  #: the size spec (``parse_sizes``)
+    gamma_min: float = 0.0  #: first grid strain
+    gamma_max: float = 1.0  #: last grid strain (spacing divides [gamma_min, gamma_max] into whole intervals)
     spacing: float = 0.01  #: Delta gamma between grid points (the chapter's example)
     substeps: int = 10  #: n shear steps between grid points: delta gamma = spacing / substeps
     starts: int = 20  #: random starts per grid point
-    seed: int = 0
-    engine: str = "auto"
+    seed: int = 0  #: offset of every start's seed (SEED_STRIDE * grid point + start + seed)
+    engine: str = "auto"  #: "auto", "numba" or "lammps"
 
     def __post_init__(self):
         for name in ("gamma_min", "gamma_max", "spacing"):
@@ -107,6 +107,7 @@ class FamilySampling:
 
     @property
     def grid(self) -> np.ndarray:
+        """The grid strains gamma_min, gamma_min + spacing, ..., gamma_max."""
         count = round((self.gamma_max - self.gamma_min) / self.spacing)
         return self.gamma_min + self.spacing * np.arange(count + 1)
 
@@ -120,6 +121,7 @@ class FamilySampling:
         return np.round((np.asarray(gamma) - self.gamma_min) / self.step).astype(np.int64)
 
     def as_dict(self) -> dict:
+        """The plan as a dict of its fields (the attributes of the families file)."""
         return asdict(self)
 
 
@@ -214,6 +216,7 @@ def sample(plan: FamilySampling, *, done: dict | None = None, failures=(), obser
 
 
 def columns(rows: list[dict]) -> dict:
+    """Sampled points (one dict each) as columns, one array per ``POINT_FIELDS`` name (the signature as bytes)."""
     out = {f: np.array([r[f] for r in rows]) for f in POINT_FIELDS}
     out["signature"] = out["signature"].astype("S") if len(rows) else np.array([], dtype="S1")
     return out

@@ -38,14 +38,14 @@ V_MIN = MinimizerSettings().v_min  # energy per particle below which a packing i
 class ModuliResult:
     """Both sweeps, the Hessian route and the base state."""
 
-    shear: SweepResult
-    bulk: SweepResult
-    hessian: HessianModuliResult
+    shear: SweepResult  #: the simple-shear sweep: Sigma against gamma, slope G
+    bulk: SweepResult  #: the compression sweep: P against the volume strain, slope B
+    hessian: HessianModuliResult  #: G and B from the dynamical matrix, on the sweeps' base state
     roundoff: dict  #: modulus name -> round-off amplitude of its sweep
-    phi: float
+    phi: float  #: packing fraction of the input packing
     energy_per_particle: float  #: eps, of the input packing
-    n_contacts: int
-    n_floaters: int
+    n_contacts: int  #: contacts among non-floaters of the input packing
+    n_floaters: int  #: floaters of the input packing
 
     def __repr__(self) -> str:
         """One line: N, phi, G and B by both routes, the yield strain, contacts, floaters."""
@@ -54,22 +54,27 @@ class ModuliResult:
                 f"N_c={self.n_contacts}, floaters={self.n_floaters})")
 
     def sweep(self, strain) -> SweepResult:
+        """The sweep of ``strain`` (``SHEAR`` or ``BULK``)."""
         return self.shear if strain.modulus == "G" else self.bulk
 
     @property
     def G(self) -> float:
+        """Shear modulus from the sweep, eps / diameter^d (NaN without a linear regime)."""
         return self.shear.modulus
 
     @property
     def B(self) -> float:
+        """Bulk modulus from the sweep, eps / diameter^d (NaN without a linear regime)."""
         return self.bulk.modulus
 
     @property
     def G_hessian(self) -> float:
+        """Shear modulus by the Hessian route, eps / diameter^d."""
         return self.hessian.G
 
     @property
     def B_hessian(self) -> float:
+        """Bulk modulus by the Hessian route, eps / diameter^d."""
         return self.hessian.B
 
     @property
@@ -79,10 +84,12 @@ class ModuliResult:
 
     @property
     def pressure(self) -> float:
+        """P of the base state (zero strain), eps / diameter^d."""
         return self.bulk.base_response
 
     @property
     def shear_stress(self) -> float:
+        """Sigma = -P_xy of the base state, eps / diameter^d."""
         return self.shear.base_response
 
     def agreement(self, strain) -> float:
@@ -93,7 +100,21 @@ class ModuliResult:
 class Moduli:
     """``sweeps``: amplitudes, tolerances, minimiser (``SweepSettings``); ``engine`` runs the
     relaxations (auto, lammps, numba; ``engine_options`` to its constructor); ``hessian``: the
-    ``HessianModuli`` of the second route."""
+    ``HessianModuli`` of the second route.
+
+    Parameters
+    ----------
+    sweeps : SweepSettings, optional
+        Strain amplitudes (dimensionless), tolerances and minimiser (default ``SweepSettings()``).
+    engine : {"auto", "numba", "lammps"}, default "auto"
+        The engine of the relaxations.
+    engine_options : dict, optional
+        Options for the engine's constructor.
+    hessian : HessianModuli, optional
+        The Hessian route (default ``HessianModuli()``).
+    contacts : Contacts, optional
+        The floater search of the input checks (default ``Contacts()``).
+    """
 
     def __init__(self, sweeps: SweepSettings | None = None, engine: str = "auto", engine_options=None,
                  hessian: HessianModuli | None = None, contacts: Contacts | None = None):
@@ -144,7 +165,28 @@ class Moduli:
 
     def compute(self, packing: Packing, observers=(), checked=None) -> ModuliResult:
         """Both sweeps and the Hessian route; ``checked``: what ``check`` returned for this
-        packing (else it is checked here)."""
+        packing (else it is checked here).
+
+        Parameters
+        ----------
+        packing : jamflow.Packing
+            A jammed packing above onset in a periodic box (no walls, fixed particles or gravity).
+        observers : iterable of callable, optional
+            Each called with a dict (strain, amplitude, point) after every relaxation.
+        checked : tuple, optional
+            What ``check(packing)`` returned.
+
+        Returns
+        -------
+        ModuliResult
+            G and B by the sweeps and by the Hessian (eps / diameter^d), with the sweeps.
+
+        Raises
+        ------
+        ValueError
+            Walls, fixed particles or gravity, a packing that is not jammed (V < V_min) or has
+            only floaters, no engine for the scene, or a smallest amplitude below round-off.
+        """
         hessian, roundoff, (energy, n_contacts, n_floaters) = checked or self.check(packing)
         sweep = StrainSweep(self.sweeps, self.engine, self.engine_options)
         shear = sweep.compute(packing, SHEAR, observers)

@@ -97,6 +97,7 @@ class JammingFailed(RuntimeError):
 
 
 def record_minimization(rows, phi, result: MinimizeResult, pressure, dphi):
+    """Append one minimisation to the history ``rows`` (HISTORY_COLUMNS and its stop reason)."""
     values = (phi, result.energy_per_particle, pressure, dphi, result.iterations, result.max_force, result.converged)
     for column, value in zip(HISTORY_COLUMNS, values):
         rows[column].append(value)

@@ -78,9 +78,9 @@ def _check_pressure(p) -> None:
 class PressureSettings:
     """A decreasing sequence of target pressures (eps / diameter^d) and how the box relaxes."""
 
-    pressures: tuple = (1e-4, 1e-5, 1e-6)
-    stress: str = "iso"
-    minimizer: MinimizerSettings = field(default_factory=MinimizerSettings)
+    pressures: tuple = (1e-4, 1e-5, 1e-6)  #: target pressures, eps / diameter^d, decreasing (each minimum starts the next)
+    stress: str = "iso"  #: how the box relaxes: "iso" (one scale), "aniso" (each length), "tri" (lengths and tilts)
+    minimizer: MinimizerSettings = field(default_factory=MinimizerSettings)  #: the minimiser at each target
 
     __repr__ = changed_fields_repr  # only the fields that differ from their defaults
 
@@ -97,6 +97,7 @@ class PressureSettings:
         object.__setattr__(self, "pressures", pressures)
 
     def as_dict(self) -> dict:
+        """The settings as flat attributes of a packing file's protocol group."""
         return {"pressures": ",".join(repr(p) for p in self.pressures), "stress": self.stress,
                 **self.minimizer.as_dict()}
 
@@ -171,13 +172,13 @@ def extrapolate_phi_j(pressures, phis, onset_exponent: float) -> float:
 class PressureResult:
     """The packing at the lowest pressure and one history row per target pressure."""
 
-    packing: Packing
-    pressure_tensor: np.ndarray  #: (d, d) at the last pressure
+    packing: Packing  #: the packing at the lowest target pressure
+    pressure_tensor: np.ndarray  #: (d, d) at the last pressure, eps / diameter^d
     history: dict  #: PRESSURE_COLUMNS (+ reason) -> array, one entry per target pressure
-    settings: PressureSettings
-    seconds: float
-    engine: str
-    lammps_version: int
+    settings: PressureSettings  #: the targets and the minimiser
+    seconds: float  #: wall time of the run
+    engine: str  #: "numba" or "lammps"
+    lammps_version: int  #: the installed LAMMPS version as an integer date (e.g. 20250722), whichever engine ran
     kernels: str = ""  #: the engine's ``kernels`` (summary line only)
 
     def __repr__(self) -> str:
@@ -205,21 +206,26 @@ class PressureResult:
 
     @property
     def pressure(self) -> float:
+        """P = trace / d of the pressure tensor at the last target, eps / diameter^d."""
         return float(np.trace(self.pressure_tensor) / self.packing.dim)
 
     @property
     def energy_per_particle(self) -> float:
+        """V at the last target, eps."""
         return float(self.history["energy_per_particle"][-1])
 
     @property
     def max_force(self) -> float:
+        """Largest force component at the last target, eps / diameter."""
         return float(self.history["max_force"][-1])
 
     @property
     def iterations(self) -> int:
+        """Minimiser iterations over all targets."""
         return int(np.sum(self.history["iterations"]))
 
     def summary(self) -> str:
+        """The line ``jamflow jam --pressure`` prints: target and reached P, phi, phi_J(P -> 0), shear stress, max|F|."""
         target = self.history["target_pressure"][-1]
         shear = shear_stress(self.pressure_tensor)
         return (f"P_target = {target:.3e}  P = {self.pressure:.6e} (rel. {self.pressure / target - 1:+.1e})  "

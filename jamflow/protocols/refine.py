@@ -227,12 +227,12 @@ class Network:
     """The double-double evaluation of a state and its contact network."""
 
     i: np.ndarray  #: (C,) contacts (overlap > 0 in double-double)
-    j: np.ndarray
+    j: np.ndarray  #: (C,) their partners, i < j
     overlap: np.ndarray  #: (C,) sigma - r (float64 value of the double-double overlap)
     floater: np.ndarray  #: (N,) bool
     forces: np.ndarray  #: (N, d) net forces, hi + lo rounded to float64
     energy: tuple  #: (hi, lo)
-    pressure: float
+    pressure: float  #: P, eps / diameter^d
     pressure_tensor: np.ndarray  #: (d, d)
 
     @property
@@ -242,6 +242,7 @@ class Network:
 
     @property
     def n_contacts(self) -> int:
+        """N_c, the backbone contacts."""
         return int(self.backbone.sum())
 
     def contact_forces(self, diameters, epsilon) -> np.ndarray:
@@ -259,6 +260,7 @@ class Network:
 
     @property
     def floater_overlaps(self) -> bool:
+        """True when a floater overlaps a particle (a contact outside the backbone)."""
         return bool(len(self.i) and (~self.backbone).any())
 
 
@@ -761,7 +763,36 @@ def refine(packing: Packing, pressure: float, *, settings: RefineSettings | None
     (eps / diameter^d) by affine dilation and Newton correction (module docstring).
     ``observers``: callables given {"target", "pressure", "contacts"} after each balanced state;
     ``onset``: the float64 result ``packing`` came from, kept for the record. Raises
-    ``JammingFailed`` where the refinement does not converge."""
+    ``JammingFailed`` where the refinement does not converge.
+
+    Parameters
+    ----------
+    packing : jamflow.Packing
+        A jammed packing of disks or spheres with the linear spring, in an orthogonal periodic
+        box without walls, gravity or fixed particles (lengths in diameters).
+    pressure : float
+        The target pressure, eps / diameter^d (> 0, above what double-double resolves at this N).
+    settings : RefineSettings, optional
+        Tolerances and step limits; default ``RefineSettings(pressure)``; its ``pressure`` is
+        replaced by ``pressure``.
+    observers : iterable of callable, optional
+        Each called with {"target", "pressure", "contacts"} after each balanced state.
+    onset : optional
+        The float64 result ``packing`` came from, kept in the result for the record.
+
+    Returns
+    -------
+    RefineResult
+        The balanced double-double packing at the target pressure, its contact network, and
+        the history of every balanced state (target and reached pressure, phi, contacts).
+
+    Raises
+    ------
+    ValueError
+        A scene the refinement is not written for, or a target below the double-double floor.
+    jamflow.JammingFailed
+        The refinement does not converge, or the packing carries no pressure.
+    """
     settings = settings or RefineSettings(pressure)
     if settings.pressure != pressure:
         settings = replace(settings, pressure=pressure)
@@ -805,7 +836,34 @@ def refine_to_vtol(packing: Packing, v_tol: float, *, force_tol: float = 1e-12, 
     lands in V_tol < V < 2 V_tol. The first target is p0 (1.5 V_tol / V0)^(1 / ENERGY_EXPONENT) from the
     packing's own double-double (p0, V0), V ~ p^2 at a fixed network of linear springs; while V is
     outside the window, a secant on (log p, log V) picks the next pressure, each refinement continuing
-    from the last refined state (at most ``MAX_VTOL_REFINES``). ``JammingFailed`` if V never lands."""
+    from the last refined state (at most ``MAX_VTOL_REFINES``). ``JammingFailed`` if V never lands.
+
+    Parameters
+    ----------
+    packing : jamflow.Packing
+        A jammed packing ``refine`` accepts (disks or spheres, linear spring, periodic box).
+    v_tol : float
+        V_tol of the energy window, eps (> 0, above what double-double resolves at this N).
+    force_tol : float, default 1e-12
+        The force tolerance of each refinement (``RefineSettings.force_tol``).
+    observers : iterable of callable, optional
+        As in ``refine``.
+    onset : optional
+        As in ``refine``.
+
+    Returns
+    -------
+    RefineResult
+        The refined packing with V in the window; ``refines`` counts the refinements it took.
+
+    Raises
+    ------
+    ValueError
+        A bad ``v_tol`` or a scene ``refine`` is not written for.
+    jamflow.JammingFailed
+        The packing carries no pressure, a refinement fails, or V is still outside the window
+        after ``MAX_VTOL_REFINES`` refinements.
+    """
     check_vtol(packing, v_tol, force_tol)
     t0 = time.perf_counter()
     first = evaluate(packing, _State.of(packing))

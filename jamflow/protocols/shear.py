@@ -47,10 +47,10 @@ def shear_protocol(**overrides) -> CompressionSettings:
 class Network:
     """Contacts among non-floaters: pairs i < j (sorted) and their separations r_i - r_j."""
 
-    i: np.ndarray
-    j: np.ndarray
-    dr: np.ndarray
-    n_floaters: int
+    i: np.ndarray  #: (C,) first particle of each contact
+    j: np.ndarray  #: (C,) second particle, i < j
+    dr: np.ndarray  #: (C, d) minimum-image separations r_i - r_j, diameters
+    n_floaters: int  #: floaters removed before the contacts were listed
 
     def __repr__(self) -> str:
         """One line: contacts and floaters (the arrays are the fields)."""
@@ -58,6 +58,7 @@ class Network:
 
     @classmethod
     def of(cls, packing: Packing) -> "Network":
+        """The network of ``packing`` (``Contacts`` with its defaults), pairs sorted."""
         c = Contacts().compute(packing)
         order = np.lexsort((c.j, c.i))
         i, j = c.i[order], c.j[order]
@@ -65,9 +66,11 @@ class Network:
 
     @property
     def n_contacts(self) -> int:
+        """N_c."""
         return len(self.i)
 
     def pairs(self) -> set:
+        """The contacts as a set of (i, j)."""
         return set(zip(self.i.tolist(), self.j.tolist()))
 
     def changes(self, before: "Network", sigma) -> tuple[list, list]:
@@ -86,9 +89,9 @@ class Network:
 class ShearStep:
     """One static packing on the path, at accumulated strain ``gamma``."""
 
-    gamma: float
+    gamma: float  #: accumulated shear strain (Lees-Edwards tilt / height)
     jam: JamResult  #: the bisection at this strain (packing, phi_J, V, pressure tensor, history)
-    network: Network
+    network: Network  #: the contacts among non-floaters at this step
     removed: list = field(default_factory=list)  #: contacts of the previous step that are gone
     added: list = field(default_factory=list)  #: contacts that were not there
 
@@ -100,14 +103,17 @@ class ShearStep:
 
     @property
     def packing(self) -> Packing:
+        """The jammed packing at this strain."""
         return self.jam.packing
 
     @property
     def phi_j(self) -> float:
+        """phi_J at this strain."""
         return self.jam.phi_j
 
     @property
     def changed(self) -> bool:
+        """True when the contact network differs from the previous step's."""
         return bool(self.removed or self.added)
 
     @property
@@ -120,11 +126,11 @@ class ShearStep:
 class ShearPath:
     """The static packings along a quasistatic shear path; step 0 is the start at gamma_0."""
 
-    steps: list
-    dgamma: float
-    settings: CompressionSettings
-    engine: str
-    seconds: float
+    steps: list  #: the ``ShearStep`` of each strain, step 0 the start
+    dgamma: float  #: the strain step (negative: shear backwards)
+    settings: CompressionSettings  #: the bisection that jams each step
+    engine: str  #: "numba" or "lammps"
+    seconds: float  #: wall time of the run
     kernels: str = ""  #: the engine's ``kernels`` (summary line only)
 
     def __repr__(self) -> str:
@@ -140,14 +146,17 @@ class ShearPath:
 
     @property
     def gamma(self) -> np.ndarray:
+        """The strain of every step."""
         return self.column("gamma")
 
     @property
     def phi_j(self) -> np.ndarray:
+        """phi_J at every step."""
         return self.column("phi_j")
 
     @property
     def changed(self) -> np.ndarray:
+        """(steps + 1,) bool: the contact network changed at that step."""
         return self.column("changed")
 
     @property
@@ -156,6 +165,7 @@ class ShearPath:
         return int(self.changed.sum())
 
     def summary(self) -> str:
+        """The line ``jamflow shear`` prints: strain range, steps, the phi_J range, contact changes, engine."""
         g, phi = self.gamma, self.phi_j
         return (f"gamma {g[0]:.6g} -> {g[-1]:.6g} in {len(g) - 1} steps of {self.dgamma:.3g}: phi_J "
                 f"{phi.min():.8f}..{phi.max():.8f}, contact network changed at {self.n_changes} steps "
@@ -189,7 +199,36 @@ def shear(packing: Packing, dgamma: float, to: float, settings: CompressionSetti
     ``dgamma`` (either sign). ``settings``: the bisection after each step (default
     ``shear_protocol()``); ``observers``: callables ``f(step: ShearStep, k: int, total: int)``
     called after every step (progress bars). The start is first brought into the window at its
-    own strain (one minimisation if it already is: a packing from ``jamflow jam``)."""
+    own strain (one minimisation if it already is: a packing from ``jamflow jam``).
+
+    Parameters
+    ----------
+    packing : jamflow.Packing
+        The start, in a periodic box (Lees-Edwards tilt = its strain gamma_0).
+    dgamma : float
+        The strain step (dimensionless, either sign, towards ``to``; ~1e-3 in the chapter).
+    to : float
+        The final strain, reached exactly (the last step may be shorter).
+    settings : jamflow.CompressionSettings, optional
+        The bisection to the energy window after each step (default ``shear_protocol()``).
+    engine : {"auto", "numba", "lammps"}, default "auto"
+        The engine.
+    engine_options : dict, optional
+        Options for the engine's constructor.
+    observers : iterable of callable, optional
+        ``f(step, k, total)`` after every step.
+
+    Returns
+    -------
+    ShearPath
+        One ``ShearStep`` per strain (phi_J, pressure tensor, contacts, contacts removed/added).
+
+    Raises
+    ------
+    ValueError
+        A bad ``dgamma`` or ``to`` (zero, away from ``to``, too many steps), a box with walls,
+        or a window the settings cannot resolve.
+    """
     strains = shear_strains(packing.box.shear_strain, dgamma, to)
     packing.box.with_shear_strain(strains[1])  # a box that cannot be sheared (walls) is refused here, before work
     settings = settings or shear_protocol()

@@ -295,7 +295,32 @@ def run_jam(spec: JamSpec, observers=(), engine_options=None, prepared=None, des
     ``protocols.above.compress_above`` on the result). ``JammingFailed`` if the protocol fails or
     the packing fails its checks, so nothing unchecked is written. ``prepared``: what
     ``prepare(spec)`` returned, if the caller already has it; ``destination``: the file the caller
-    would write, named in the failure message."""
+    would write, named in the failure message.
+
+    Parameters
+    ----------
+    spec : JamSpec
+        The run (``jamflow jam``'s options).
+    observers : iterable of callable, optional
+        Progress callbacks, passed to ``jamflow.jam`` (or the pressure and refinement protocols).
+    engine_options : dict, optional
+        Options for the engine's constructor (LAMMPS: skin, comm, args; compiled: skin).
+    prepared : tuple, optional
+        (settings, start packing) as ``prepare(spec)`` returns them; default: prepared here.
+    destination : str or os.PathLike, optional
+        The file the caller would write, named in a failure message.
+
+    Returns
+    -------
+    tuple
+        (result, checks): a ``JamResult`` (a ``PressureResult`` when ``spec.pressure`` is set
+        in double precision, a ``RefineResult`` in double-double) and its ``PackingChecks``.
+
+    Raises
+    ------
+    jamflow.JammingFailed
+        The protocol fails, or the packing fails its checks.
+    """
     settings, start = prepared or prepare(spec)
     if spec.precision == "double-double":
         from jamflow.protocols.refine import refine, refine_to_vtol

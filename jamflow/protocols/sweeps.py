@@ -69,10 +69,10 @@ def sweep_minimizer(packing: Packing) -> MinimizerSettings:
 class SweepSettings:
     """Amplitudes (dimensionless strains, ascending), tolerances and the minimiser of the sweeps."""
 
-    amplitudes: tuple = DEFAULT_AMPLITUDES
-    linear_tol: float = LINEAR_TOL
-    jump_tol: float = JUMP_TOL
-    past_yield: int = PAST_YIELD
+    amplitudes: tuple = DEFAULT_AMPLITUDES  #: strains, ascending, > 0 and < 0.5 (default 1e-9 .. 1e-3, two per decade)
+    linear_tol: float = LINEAR_TOL  #: relative deviation of a central slope from the modulus that still counts as linear
+    jump_tol: float = JUMP_TOL  #: relative jump of a one-sided slope that counts as a yield
+    past_yield: int = PAST_YIELD  #: amplitudes measured beyond the first yield, then the sweep stops
     minimizer: MinimizerSettings | None = None  #: None: ``sweep_minimizer`` (FIRE to the round-off floor)
 
     __repr__ = changed_fields_repr  # only the fields that differ from their defaults
@@ -100,7 +100,7 @@ class SweepSettings:
 class SweepResult:
     """One strain's sweep: every relaxed point and the fit."""
 
-    strain: Strain
+    strain: Strain  #: the deformation swept (``mechanics.strains.SHEAR`` or ``BULK``)
     strains: np.ndarray  #: (M,) signed amplitudes measured, ascending, with 0 (the base state)
     responses: np.ndarray  #: (M,) R: Sigma or P, eps / diameter^d
     energies: np.ndarray  #: (M,) energy per particle, eps
@@ -111,8 +111,8 @@ class SweepResult:
     removed: np.ndarray  #: (M,) backbone contacts of the base state that are gone
     rattler_changes: np.ndarray  #: (M,) contacts of base-state floaters that appeared or went
     amplitudes: np.ndarray  #: (K,) positive amplitudes measured
-    central_slopes: np.ndarray  #: (K,)
-    reference_slope: float
+    central_slopes: np.ndarray  #: (K,) (R(a) - R(-a)) / 2a of each amplitude, eps / diameter^d
+    reference_slope: float  #: median central slope of the first three amplitudes (the yield test's reference)
     linear: np.ndarray  #: (K,) bool: in the linear regime
     modulus: float  #: NaN without a linear regime
     error: float  #: standard error of the modulus (NaN with one amplitude)
@@ -129,6 +129,7 @@ class SweepResult:
 
     @property
     def base_response(self) -> float:
+        """R of the base state (zero strain): Sigma or P, eps / diameter^d."""
         return float(self.responses[self.strains == 0][0])
 
     @property
@@ -159,6 +160,23 @@ class StrainSweep:
         self.engine, self.engine_options = engine, dict(engine_options or {})
 
     def compute(self, packing: Packing, strain: Strain, observers=()) -> SweepResult:
+        """Relax ``packing`` at zero strain (the base state), then at +-a for each amplitude a
+        (from the base state), until ``past_yield`` amplitudes past a yield; fit the modulus.
+
+        Parameters
+        ----------
+        packing : jamflow.Packing
+            A jammed packing in a periodic box.
+        strain : Strain
+            ``SHEAR`` (R = Sigma, modulus G) or ``BULK`` (R = P, modulus B).
+        observers : iterable of callable, optional
+            Each called with {"strain", "amplitude", "point"} after every relaxation.
+
+        Returns
+        -------
+        SweepResult
+            Every relaxed point, the linear regime, the modulus (eps / diameter^d) and the yield.
+        """
         s = self.settings
         minimizer = s.minimizer or sweep_minimizer(packing)
         with open_engine(packing, minimizer.method, self.engine, **self.engine_options) as sim:

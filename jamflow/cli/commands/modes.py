@@ -146,6 +146,15 @@ def _draw(args, rows, density):
 
 
 def summary_line(path, spec, stab) -> str:
+    """The line printed for one packing: N' and floaters, N_c against the isostatic count, <z>,
+    near-contacts, zero and negative modes, the lowest nonzero e and the stability class.
+
+    near-contacts (``ContactsResult.n_near_contact``) counts the pairs within a relative 1e-12 of
+    touching, |r/sigma - 1| < 1e-12, on either side, from the float64 positions: a diagnostic of
+    pairs whose contact float64 barely resolves, not part of N_c. A double-double packing
+    refined to a small pressure (overlaps below 1e-12 sigma, e.g. P = 1e-14) has every contact
+    among them, so there it is about N_c: its contacts are found from hi + lo and are not
+    affected by the count."""
     c = spec.dynamical.contacts
     turning = spec.dynamical.packing.shape.oriented
     quartic = (f"  quartic modes {stab.n_quartic}, one-particle flat {stab.n_single_flat} (missing contacts "

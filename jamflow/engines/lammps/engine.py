@@ -121,6 +121,7 @@ class LammpsEngine:
         self.close()
 
     def close(self):
+        """Close the LAMMPS instance and remove its temporary files."""
         if self.lmp is not None:
             self.lmp.close()
             self.lmp = None
@@ -128,6 +129,7 @@ class LammpsEngine:
 
     # commands -----------------------------------------------------------------------------
     def run_commands(self, lines) -> None:
+        """Send each of ``lines`` to LAMMPS in turn (``command``)."""
         for line in lines:
             self.command(line)
 

@@ -546,6 +546,31 @@ def contact_distance(a_i, b_i, a_j, b_j, r_hat, u_i, u_j, method: str = "exact")
     vectors (..., 2) or (..., 3); all inputs broadcast over leading dimensions.
     method: "exact" (Perram & Wertheim 1985, eqs 2.7-2.25), "gaussian" (Berne & Pechukas
     1972, eq. 2.5), "cleaver" (Cleaver et al. 1996, eq. 2.6), "linear" / "quadratic" (eq. 2.26).
+
+    Parameters
+    ----------
+    a_i, b_i, a_j, b_j : array_like
+        Full axis lengths of particles i and j along / across their directors (> 0), in any
+        length unit (diameters in jamflow).
+    r_hat : array_like
+        (..., d) unit vector from i to j, d = 2 or 3.
+    u_i, u_j : array_like
+        (..., d) unit directors of i and j.
+    method : {"exact", "gaussian", "cleaver", "linear", "quadratic"}, default "exact"
+        The approximation (chapter eqs 2.5-2.26); "gaussian" needs identical particles, and so
+        do "linear" / "quadratic" in 3D.
+
+    Returns
+    -------
+    numpy.ndarray
+        sigma_ij, the centre distance at contact along ``r_hat``, in the unit of the axes, of the
+        broadcast shape of the inputs (without the vectors' last axis).
+
+    Raises
+    ------
+    ValueError
+        Unknown method, a method outside its domain, non-positive axes, vectors that are not
+        unit vectors, or shapes that do not broadcast.
     """
     _check_method(method)
     p = _validate(a_i, b_i, a_j, b_j, r_hat, u_i, u_j)

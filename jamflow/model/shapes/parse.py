@@ -11,7 +11,31 @@ SHAPE_USAGE = " | ".join(cls.spec_usage for cls in SHAPES.values())
 def parse_shape(spec, dim: int, contact: str = "exact"):
     """A ``--shape`` spec -> a shape object for dimension ``dim``. ALPHA = 1 gives the disk/sphere
     (the cheapest exact model of that scene). Rigid n-mers (``nmer``, ``dimer``, ``trimer``):
-    ``jamflow.model.shapes.nmers`` defines their parameters and ranges."""
+    ``jamflow.model.shapes.nmers`` defines their parameters and ranges.
+
+    Parameters
+    ----------
+    spec : str or Sphere, Ellipsoid, RigidBody
+        ``disk`` | ``sphere`` | ``ellipse:ALPHA`` (2D) | ``spheroid:ALPHA`` (3D) |
+        ``nmer:N:ALPHA`` | ``dimer:ALPHA:S`` | ``trimer:ALPHA:C``; ALPHA (> 0) is the aspect
+        ratio a / b. A shape object is checked for ``dim`` and returned as it is.
+    dim : int
+        2 or 3, the packing's dimension.
+    contact : str, default "exact"
+        The contact-distance approximation of ellipses and spheroids (``contact_distance``'s
+        ``method``).
+
+    Returns
+    -------
+    Sphere, Ellipsoid or RigidBody
+        The sphere shape (disk in 2D) for disks, spheres and ALPHA = 1, an ``Ellipsoid`` or a
+        rigid body.
+
+    Raises
+    ------
+    ValueError
+        An unknown or malformed spec, or a shape of the other dimension.
+    """
     if not isinstance(spec, str):
         if hasattr(spec, "kind"):
             spec.check(dim)

@@ -70,19 +70,19 @@ def _scale(scale) -> np.ndarray:
 class Sphere:
     """A disk (2D) or sphere (3D) of diameter = its scale."""
 
-    kind = "sphere"
-    oriented = False
-    round = True
-    elliptic = False
-    made_of_sites = False
-    sphere_contacts = True
-    bounded = True
-    double_double = True
-    aspect_ratio = 1.0
-    force_tol_base = FORCE_TOL_BASE  # default force tolerance before box scaling (mechanics.force_floor)
+    kind = "sphere"  #: the shape's kind in files and tables
+    oriented = False  #: particles have no orientation
+    round = True  #: a disk/sphere: sigma_ij = (a_i + a_j) / 2 along the centre line
+    elliptic = False  #: not an ellipse/spheroid
+    made_of_sites = False  #: not a body of spherical sites
+    sphere_contacts = True  #: every contact is between two spheres (the polish's least squares)
+    bounded = True  #: walls, gravity and fixed particles are written for it
+    double_double = True  #: double-double coordinates and refinement are written for it
+    aspect_ratio = 1.0  #: ALPHA of shape annealing
+    force_tol_base = FORCE_TOL_BASE  #: default force tolerance before box scaling (mechanics.force_floor)
 
-    spec_words = ("disk", "sphere")  # the first words of its --shape specs (model.shapes.parse)
-    spec_usage = "disk | sphere"
+    spec_words = ("disk", "sphere")  #: the first words of its --shape specs (``model.shapes.parse``)
+    spec_usage = "disk | sphere"  #: its specs in the --shape usage line
 
     @classmethod
     def from_spec(cls, spec: str, word: str, rest: str, dim: int, contact: str):
@@ -91,34 +91,44 @@ class Sphere:
 
     @classmethod
     def from_attrs(cls, attrs: dict):
+        """The disk/sphere of a packing file's ``shape`` attributes."""
         return SPHERE
 
     def name(self, dim: int) -> str:
+        """"disk" in 2D, "sphere" in 3D."""
         return "disk" if dim == 2 else "sphere"
 
     def spec(self, dim: int) -> str:
+        """The ``--shape`` spec: the name."""
         return self.name(dim)
 
     def check(self, dim: int) -> None:
+        """Every dimension: nothing to refuse."""
         pass
 
     def check_sizes(self, scale, dim: int) -> None:
+        """Any sizes: nothing to refuse."""
         pass
 
     def dof(self, dim: int) -> int:
+        """d_f = d: translations only."""
         return dim
 
     def rotation_mask(self, dim: int) -> tuple[bool, ...]:
+        """No rotational degrees of freedom: ()."""
         return ()
 
     def volumes(self, scale, dim: int) -> np.ndarray:
+        """pi s^2 / 4 (2D) or pi s^3 / 6 (3D) per particle of diameter s, diameters^d."""
         s = _scale(scale)
         return math.pi * s**2 / 4.0 if dim == 2 else math.pi * s**3 / 6.0
 
     def rotational_lengths(self, scale, dim: int) -> np.ndarray:
+        """(N, 0): no rotational axes."""
         return np.zeros((len(_scale(scale)), 0))
 
     def reach(self, scale) -> np.ndarray:
+        """Radii s / 2, diameters."""
         return 0.5 * _scale(scale)
 
     def smallest_contact(self, scale) -> float:
@@ -126,9 +136,11 @@ class Sphere:
         return float(np.min(_scale(scale)))
 
     def attrs(self) -> dict:
+        """The ``shape`` attribute of a packing file: {"kind": "sphere"}."""
         return {"kind": self.kind}
 
     def datasets(self, positions, orientations, scale) -> dict:
+        """No datasets of its own in packing files."""
         return {}
 
     def contact_distances(self, packing, i, j, dr=None) -> np.ndarray:
@@ -142,21 +154,21 @@ class Ellipsoid:
     the director (body x), b across; alpha > 1 prolate, alpha < 1 oblate (3D). The scale of a
     particle is its b. ``contact``: the contact-distance method (``shapes.contact_distance``)."""
 
-    alpha: float
-    contact: str = "exact"
+    alpha: float  #: aspect ratio a / b (> 0, not 1)
+    contact: str = "exact"  #: the contact-distance method (``METHODS``)
 
-    kind = "ellipsoid"
-    oriented = True
-    round = False
-    elliptic = True
-    made_of_sites = False
-    sphere_contacts = False
-    bounded = False
-    double_double = False
-    force_tol_base = ELLIPSOID_FORCE_TOL_BASE
+    kind = "ellipsoid"  #: the shape's kind in files and tables
+    oriented = True  #: particles carry orientations
+    round = False  #: not a disk/sphere
+    elliptic = True  #: an ellipse/spheroid: ``axes`` and a contact-distance method
+    made_of_sites = False  #: not a body of spherical sites
+    sphere_contacts = False  #: contacts are between ellipses/spheroids
+    bounded = False  #: walls, gravity and fixed particles are not written for it
+    double_double = False  #: float64 only
+    force_tol_base = ELLIPSOID_FORCE_TOL_BASE  #: default force tolerance before box scaling (mechanics.force_floor)
 
-    spec_words = ("ellipse", "spheroid")
-    spec_usage = "ellipse:ALPHA (2D) | spheroid:ALPHA (3D)"
+    spec_words = ("ellipse", "spheroid")  #: the first words of its --shape specs (``model.shapes.parse``)
+    spec_usage = "ellipse:ALPHA (2D) | spheroid:ALPHA (3D)"  #: its specs in the --shape usage line
 
     @classmethod
     def from_spec(cls, spec: str, word: str, rest: str, dim: int, contact: str):
@@ -179,10 +191,12 @@ class Ellipsoid:
 
     @classmethod
     def from_attrs(cls, attrs: dict):
+        """The ellipse/spheroid of a packing file's ``shape`` attributes (alpha, contact)."""
         return cls(float(attrs["alpha"]), str(attrs.get("contact", "exact")))
 
     @property
     def aspect_ratio(self) -> float:
+        """ALPHA of shape annealing: ``alpha``."""
         return float(self.alpha)
 
     def __post_init__(self):
@@ -196,12 +210,15 @@ class Ellipsoid:
             raise ValueError(f"unknown contact-distance method {self.contact!r}; use one of {', '.join(METHODS)}")
 
     def name(self, dim: int) -> str:
+        """"ellipse" in 2D, "spheroid" in 3D."""
         return "ellipse" if dim == 2 else "spheroid"
 
     def spec(self, dim: int) -> str:
+        """The ``--shape`` spec, e.g. ``ellipse:1.5``."""
         return f"{self.name(dim)}:{self.alpha:g}"
 
     def check(self, dim: int) -> None:
+        """Refuse a 2D ALPHA < 1 (the ellipse of 1 / ALPHA turned by 90 degrees)."""
         if dim == 2 and self.alpha < 1:
             raise ValueError(f"an ellipse with ALPHA = {self.alpha:g} < 1 is the ellipse with ALPHA = "
                              f"{1 / self.alpha:g} turned by 90 degrees; use ellipse:{1 / self.alpha:g}")
@@ -219,9 +236,11 @@ class Ellipsoid:
             raise ValueError(f"--contact {self.contact} on particles of different sizes: {err}; or use --sizes mono") from None
 
     def dof(self, dim: int) -> int:
+        """d_f: 3 in 2D, 5 in 3D (the rotation about the director is void)."""
         return 3 if dim == 2 else 5
 
     def rotation_mask(self, dim: int) -> tuple[bool, ...]:
+        """2D: (True,); 3D: (False, True, True), no rotation about the director."""
         return (True,) if dim == 2 else (False, True, True)
 
     def axes(self, scale) -> np.ndarray:
@@ -230,6 +249,7 @@ class Ellipsoid:
         return np.column_stack([self.alpha * s, s])
 
     def volumes(self, scale, dim: int) -> np.ndarray:
+        """pi a b / 4 (2D) or pi a b^2 / 6 (3D) per particle, diameters^d."""
         a, b = self.axes(scale).T
         return math.pi * a * b / 4.0 if dim == 2 else math.pi * a * b * b / 6.0
 
@@ -244,15 +264,19 @@ class Ellipsoid:
         return np.column_stack([np.ones_like(d), d, d])
 
     def reach(self, scale) -> np.ndarray:
+        """Half the longer axis, diameters."""
         return 0.5 * np.max(self.axes(scale), axis=1)
 
     def smallest_contact(self, scale) -> float:
+        """The shortest axis of any particle: the smallest contact distance, diameters."""
         return float(np.min(self.axes(scale)))
 
     def attrs(self) -> dict:
+        """The ``shape`` attribute of a packing file: kind, alpha and contact method."""
         return {"kind": self.kind, "alpha": float(self.alpha), "contact": self.contact}
 
     def datasets(self, positions, orientations, scale) -> dict:
+        """``axes`` (N, 2): full lengths along and across the director."""
         return {"axes": self.axes(scale)}
 
     def contact_distances(self, packing, i, j, dr) -> np.ndarray:
@@ -281,28 +305,30 @@ class RigidBody:
     messages.
     """
 
-    sites: np.ndarray
-    site_diameters: np.ndarray
-    label: str = "rigid"
-    fused: bool = True
-    body_frame: bool = False
+    sites: np.ndarray  #: (S, d) site centres in the body frame at scale 1
+    site_diameters: np.ndarray  #: (S,) site diameters at scale 1
+    label: str = "rigid"  #: the body's name, e.g. "dimer:1.5"
+    fused: bool = True  #: the sites must overlap or touch into one connected piece
+    body_frame: bool = False  #: the sites are given in the body frame already
     _mass: dict = field(default_factory=dict, repr=False, compare=False)
 
-    kind = "rigid"
-    oriented = True
-    round = False
-    elliptic = False
-    made_of_sites = True
-    sphere_contacts = True
-    bounded = False
-    double_double = False
-    aspect_ratio = None
-    force_tol_base = FORCE_TOL_BASE
-    spec_words = ()  # its specs name the body: nmer, dimer, trimer (model.shapes.nmers, parse.BODY_SPECS)
-    spec_usage = "nmer:N:ALPHA | dimer:ALPHA:S | trimer:ALPHA:C"
+    kind = "rigid"  #: the shape's kind in files and tables
+    oriented = True  #: particles carry orientations
+    round = False  #: not a disk/sphere
+    elliptic = False  #: not an ellipse/spheroid
+    made_of_sites = True  #: a body of spherical sites, which touches site by site
+    sphere_contacts = True  #: every contact is between two spherical sites (the polish's least squares)
+    bounded = False  #: walls, gravity and fixed particles are not written for it
+    double_double = False  #: float64 only
+    aspect_ratio = None  #: no ALPHA of shape annealing
+    force_tol_base = FORCE_TOL_BASE  #: default force tolerance before box scaling (mechanics.force_floor)
+    #: no spec words of its own: its specs name the body (nmer, dimer, trimer; ``shapes.nmers``, ``parse.SPECS``)
+    spec_words = ()
+    spec_usage = "nmer:N:ALPHA | dimer:ALPHA:S | trimer:ALPHA:C"  #: its specs in the --shape usage line
 
     @classmethod
     def from_attrs(cls, attrs: dict):
+        """The body a packing file's ``shape`` attributes describe (sites in the body frame)."""
         return cls(np.array(json.loads(attrs["sites"])), np.array(json.loads(attrs["site_diameters"])),
                    str(attrs.get("label", "rigid")), body_frame=True)
 
@@ -346,10 +372,12 @@ class RigidBody:
 
     @property
     def dim(self) -> int:
+        """d of the sites."""
         return self.sites.shape[1]
 
     @property
     def n_sites(self) -> int:
+        """S, sites per body."""
         return len(self.sites)
 
     @property
@@ -358,25 +386,32 @@ class RigidBody:
         return bool(np.all(self.sites[:, 1:] == 0.0))
 
     def name(self, dim: int) -> str:
+        """The body's label."""
         return self.label
 
     def spec(self, dim: int) -> str:
+        """The body's label (its ``--shape`` spec)."""
         return self.label
 
     def check(self, dim: int) -> None:
+        """Refuse a packing of the other dimension than the sites."""
         if dim != self.dim:
             raise ValueError(f"the body {self.label} has {self.dim}D sites; the packing is {dim}D")
 
     def check_sizes(self, scale, dim: int) -> None:
+        """Any sizes: nothing to refuse."""
         pass
 
     def dof(self, dim: int) -> int:
+        """d_f: 3 in 2D; 3D: 5 for a linear body, else 6."""
         return 3 if dim == 2 else (5 if self.linear else 6)
 
     def rotation_mask(self, dim: int) -> tuple[bool, ...]:
+        """2D: (True,); 3D: every body axis, but not the axis of a linear body."""
         return (True,) if dim == 2 else (not self.linear, True, True)
 
     def volumes(self, scale, dim: int) -> np.ndarray:
+        """The union's volume at scale 1 times scale^d, diameters^d."""
         return self._mass["volume"] * _scale(scale) ** dim
 
     def rotational_lengths(self, scale, dim: int) -> np.ndarray:
@@ -407,10 +442,12 @@ class RigidBody:
         return self._mass["sites"]
 
     def reach(self, scale) -> np.ndarray:
+        """Largest distance from the centre to a site's surface, times the scale (diameters)."""
         r = float(np.max(np.linalg.norm(self.sites, axis=1) + 0.5 * self.site_diameters))
         return r * _scale(scale)
 
     def smallest_contact(self, scale) -> float:
+        """The smallest site diameter of the smallest particle (diameters)."""
         return float(np.min(_scale(scale)) * self.site_diameters.min())
 
     def world_sites(self, positions, orientations, scale) -> np.ndarray:
@@ -421,6 +458,7 @@ class RigidBody:
         return positions[:, None, :] + _scale(scale)[:, None, None] * np.einsum("nab,sb->nsa", rot, self.sites)
 
     def attrs(self) -> dict:
+        """The ``shape`` attribute of a packing file: kind, label, sites and site diameters."""
         return {"kind": self.kind, "label": self.label, "sites": json.dumps(self.sites.tolist()),
                 "site_diameters": json.dumps(self.site_diameters.tolist())}
 
@@ -430,6 +468,7 @@ class RigidBody:
                 "site_diameters": _scale(scale)[:, None] * self.site_diameters[None, :]}
 
     def contact_distances(self, packing, i, j, dr=None) -> np.ndarray:
+        """Bodies touch site by site (``model.pairs.overlapping_sites``): ValueError."""
         raise ValueError(f"{self.name(packing.dim)} particles touch site by site; use overlapping_sites")
 
 
@@ -457,8 +496,8 @@ def _check_fused(sites: np.ndarray, diam: np.ndarray) -> None:
 SPHERE = Sphere()
 
 
-SHAPES = {cls.kind: cls for cls in (Sphere, Ellipsoid, RigidBody)}  # every shape class by its kind
-# what every shape class declares (True or False; module docstring)
+SHAPES = {cls.kind: cls for cls in (Sphere, Ellipsoid, RigidBody)}  #: every shape class by its kind
+#: what every shape class declares, True or False (module docstring)
 CAPABILITIES = ("oriented", "round", "elliptic", "made_of_sites", "sphere_contacts", "bounded", "double_double")
 
 
