@@ -96,14 +96,6 @@ BENCHMARKS: dict[str, Benchmark] = {
     "dd_read": Benchmark(
         "accuracy", "a double-double file read back: contacts, zero modes, G, P from hi + lo against float64 (docs/guide/precision.md)",
         ["--n", "64", "--seeds", "2", "2"]),
-    "jammed_side": Benchmark(
-        "speed", "jammed-side protocol (overshoot, pressure ladder, Newton on the contact network) against `fast` (docs/notes/speed-3.md)",
-        ["--n", "64", "--seeds", "1", "1", "--top", "0", "--gauss-newton", "--out", "{tmp}/jammed-side.csv"]),
-    "newton_landing": Benchmark(
-        "speed", "float64 bisection to a loose window, then the double-double Newton landing to V_tol, against `fast` (docs/notes/speed-3.md)",
-        ["--n", "64", "--seeds", "1", "--loose", "1e-12", "--out", "{tmp}/newton-landing.csv"]),
-    "ldl_reuse": Benchmark(
-        "speed", "the polish's SuperLU factorisations against an LDL^T keeping its symbolic analysis (qdldl; docs/notes/speed-3.md)"),
     "pressure_ladder": Benchmark(
         "study", "pressure ladder 1e-2 .. 1e-14 in double-double: Delta z and G against p N^2, phi_J (docs/guide/precision.md)",
         ["--quick", "--out", "{tmp}/pressure-ladder.csv"]),

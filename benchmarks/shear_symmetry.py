@@ -19,10 +19,10 @@ import numpy as np
 from jamflow.mechanics.contacts import Contacts
 from jamflow.protocols.shear import Network
 from jamflow.protocols.compression import at_shear_strain, compress, initial_packing
-from jamflow.protocols.settings import fast_protocol, seed_protocol
+from jamflow.protocols.settings import chapter_protocol, fast_protocol
 from common import scratch, merge_rows  # (benchmarks/ is the script's directory)
 
-PROTOCOLS = {"fast": fast_protocol, "seed": seed_protocol}
+PROTOCOLS = {"fast": fast_protocol, "chapter": chapter_protocol}
 
 
 def jammed(n, seed, gamma, protocol, mirror=False):

@@ -53,10 +53,10 @@ GROUPS = {"dphi0": ["dphi0=1e-3", "dphi0=3e-4", "seed", "dphi0=3e-5", "dphi0=1e-
 
 def settings_for(variant: str):
     from jamflow.minimize.settings import MinimizerSettings
-    from jamflow.protocols.settings import seed_protocol
+    from jamflow.protocols.settings import chapter_protocol
 
     protocol, minimizer = VARIANTS[variant]
-    return seed_protocol(**protocol, minimizer=replace(MinimizerSettings(), **minimizer))
+    return chapter_protocol(**protocol, minimizer=replace(MinimizerSettings(), **minimizer))
 
 
 # --- this benchmark ---------------------------------------------------------------------------------

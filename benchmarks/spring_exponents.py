@@ -3,7 +3,7 @@ disks (seed 0) with spring:ALPHA at the smallest V_tol that jamflow.mechanics.ch
 (x 1.5, at least 1e-16) and check the packing. Basis of compression.SPRING_ALPHA_RANGE.
 
     python benchmarks/spring_exponents.py fast 1.5 2 2.5 3 4 6 8 --out docs/notes/spring-exponents.csv
-    python benchmarks/spring_exponents.py seed 10                   (about 20 minutes; rows to the scratch directory)
+    python benchmarks/spring_exponents.py chapter 10                   (about 20 minutes; rows to the scratch directory)
 
 The refusal in compress() is switched off here, since this measures what it refuses.
 """
@@ -16,7 +16,6 @@ import sys
 from pathlib import Path
 
 import jamflow.protocols.compression as compression
-from jamflow.protocols.settings import protocol_name
 from jamflow.mechanics.checks import check_packing, resolution
 from jamflow.minimize.settings import MinimizerSettings
 from common import DOCS, jam_quietly, scratch  # (benchmarks/ is the script's directory)
@@ -27,7 +26,7 @@ COLUMNS = ["alpha", "protocol", "vtol", "status", "phi_j", "final_reason", "forc
 
 
 def one(alpha: float, protocol: str) -> dict:
-    make = compression.PROTOCOLS[protocol_name(protocol)]
+    make = compression.PROTOCOLS[protocol]
     start = compression.initial_packing(32, 2, "bi:1.4:0.5", f"spring:{alpha}", 0, make().start_phi(2))
     ftol = make().minimizer.resolved_force_tol(start.box, start.potential.contact_stiffness)
     vtol = max(resolution(start, 1e-16, ftol).smallest_v_tol, 1e-16) * 1.5

@@ -9,7 +9,6 @@ that ``import jamflow`` starts neither LAMMPS nor numba.
 
 from importlib import import_module
 
-from jamflow import _moved
 from jamflow.support import hooks
 
 __version__ = "0.1.0"
@@ -48,8 +47,6 @@ __all__ = sorted(_EXPORTS)
 # the layer packages (docs/architecture.md): ``jamflow.analysis`` etc. import on first use
 LAYERS = ("support", "model", "mechanics", "engines", "minimize", "protocols", "analysis", "io", "decks", "plots",
           "ensemble", "cli")
-
-_moved.install()
 
 
 def _save_result(result, path, checks=None, force=False):

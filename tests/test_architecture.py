@@ -46,7 +46,7 @@ def layer_levels(layers: list[str]) -> dict[str, tuple[int, int]]:
 
 def upward_imports(graph, layers: list[str]) -> list[tuple[str, str]]:
     """(importer, imported) pairs where a module imports from a layer above its own or from an
-    independent sibling; modules outside the layers (``jamflow``, ``jamflow._moved``) are not counted."""
+    independent sibling; the package's own ``__init__`` (outside the layers) is not counted."""
     levels = layer_levels(layers)
 
     def level(module):

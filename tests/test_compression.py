@@ -5,7 +5,7 @@ import pytest
 
 from jamflow import CompressionSettings, MinimizerSettings, jam
 from jamflow.mechanics.reference import energy_forces_pressure
-from jamflow.protocols.settings import fast_protocol, seed_protocol
+from jamflow.protocols.settings import chapter_protocol, fast_protocol
 
 
 def assert_jammed(res, v_tol=1e-16, max_force=1e-13):
@@ -19,7 +19,7 @@ def assert_jammed(res, v_tol=1e-16, max_force=1e-13):
 
 @pytest.fixture(scope="module")
 def jammed_2d():
-    return jam(n=64, dim=2, sizes="bi:1.4:0.5", seed=11, settings=seed_protocol())
+    return jam(n=64, dim=2, sizes="bi:1.4:0.5", seed=11, settings=chapter_protocol())
 
 
 def test_2d_bidisperse_reaches_window_with_force_balance(jammed_2d):
@@ -48,7 +48,7 @@ def test_default_protocol_is_fast_and_reproducible():
 
 
 def test_same_seed_same_phi_j(jammed_2d):
-    again = jam(n=64, dim=2, sizes="bi:1.4:0.5", seed=11, settings=seed_protocol())
+    again = jam(n=64, dim=2, sizes="bi:1.4:0.5", seed=11, settings=chapter_protocol())
     assert abs(again.phi_j - jammed_2d.phi_j) < 1e-10
 
 

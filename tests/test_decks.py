@@ -129,7 +129,7 @@ def test_crosscheck_command_reports_the_difference(tmp_path, capsys):
 
 
 def test_emitted_deck_reproduces_the_python_run(tmp_path, capsys):
-    assert main(["jam", "--n", "16", "--seed", "5", "--protocol", "seed", "--out", str(tmp_path / "p.h5"),
+    assert main(["jam", "--n", "16", "--seed", "5", "--protocol", "chapter", "--out", str(tmp_path / "p.h5"),
                  "--emit-deck", str(tmp_path / "run.lmp")]) == 0
     assert "lmp -in run.lmp" in capsys.readouterr().out
     assert not (tmp_path / "p.h5").exists()  # the deck is written instead of running

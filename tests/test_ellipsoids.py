@@ -362,11 +362,11 @@ def test_ellipse_deck_jams_in_lmp_alone(tmp_path):
     independent brute-force check."""
     from jamflow.decks.jam import run_deck
     from jamflow.decks.ellipsoids import emit_deck, read_ellipsoid_data
-    from jamflow.protocols.settings import seed_protocol
+    from jamflow.protocols.settings import chapter_protocol
 
     near = jam(n=12, sizes="bi:1.4:0.6667", shape="ellipse:1.3", seed=3)
     start = near.packing.scaled_to_phi(near.phi_j + 2e-5)
-    deck, _ = emit_deck(tmp_path / "deck.lmp", start, seed_protocol(dphi0=1e-5))
+    deck, _ = emit_deck(tmp_path / "deck.lmp", start, chapter_protocol(dphi0=1e-5))
     res = run_deck(tmp_path, {}, deck=deck, reader=read_ellipsoid_data, timeout=1200)
     assert 1e-16 < res.energy_per_particle < 2e-16 and res.packing.n == 12
     assert res.packing.shape == Ellipsoid(1.3) and res.history["reason"][-1] == "force"

@@ -24,7 +24,7 @@ from jamflow.plots.shear import richness_figure
 from jamflow.protocols import families as families_protocol
 from jamflow.protocols.compression import at_shear_strain, compress, initial_packing
 from jamflow.protocols.families import FamilySampling, sample, sample_start, signature
-from jamflow.protocols.settings import seed_protocol
+from jamflow.protocols.settings import chapter_protocol
 from jamflow.protocols.shear import Network
 
 
@@ -182,7 +182,7 @@ def test_a_start_denser_than_its_cell_is_a_failure_not_an_abort(monkeypatch):
 
 def test_signature_ignores_labels():
     start = initial_packing(10, 2, "bi:1.4:0.5", "spring", 3, 0.8)
-    p = compress(at_shear_strain(start, 0.1), seed_protocol()).packing
+    p = compress(at_shear_strain(start, 0.1), chapter_protocol()).packing
     order = np.random.default_rng(0).permutation(10)
     relabelled = p.subset(order)
     assert signature(Network.of(p), p.diameters) == signature(Network.of(relabelled), relabelled.diameters)
@@ -250,7 +250,7 @@ def test_mirrored_start_lands_on_the_mirror_family():
         start = initial_packing(10, 2, "bi:1.4:0.5", "spring", 1, 0.8)
         if mirror:
             start = start.with_positions(start.positions * [-1.0, 1.0])
-        res = compress(at_shear_strain(start, gamma), seed_protocol())
+        res = compress(at_shear_strain(start, gamma), chapter_protocol())
         net = Network.of(res.packing)
         rows.append((int(mirror), int(mirror), int(plan.strain_index(gamma)), res.phi_j,
                      -res.pressure_tensor[0, 1] / res.pressure, signature(net, res.packing.diameters), 0))

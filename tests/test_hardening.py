@@ -1013,7 +1013,7 @@ def test_an_emitted_deck_with_a_space_in_its_name_runs(tmp_path, capsys):
 
     deck = tmp_path / "dir" / "jam deck.lmp"
     deck.parent.mkdir()
-    assert main(["jam", "--n", "16", "--protocol", "seed", "--emit-deck", str(deck),
+    assert main(["jam", "--n", "16", "--protocol", "chapter", "--emit-deck", str(deck),
                  "--out", str(tmp_path / "jammed.h5")]) == 0
     assert "run: cd " in capsys.readouterr().out
     result = run_deck(deck.parent, deck=deck, timeout=300)
@@ -1021,7 +1021,7 @@ def test_an_emitted_deck_with_a_space_in_its_name_runs(tmp_path, capsys):
 
 
 def test_an_emitted_deck_refuses_an_out_that_lammps_cannot_write(tmp_path, capsys):
-    code = main(["jam", "--n", "16", "--protocol", "seed", "--emit-deck", str(tmp_path / "d.lmp"),
+    code = main(["jam", "--n", "16", "--protocol", "chapter", "--emit-deck", str(tmp_path / "d.lmp"),
                  "--out", str(tmp_path / "my run.h5")])
     err = capsys.readouterr().err
     assert code == 2 and "choose an --out without them" in err and list(tmp_path.iterdir()) == []

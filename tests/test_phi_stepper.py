@@ -7,7 +7,7 @@ which is what the Newton jumps invert.
 
 import pytest
 
-from jamflow.protocols.settings import CompressionSettings, fast_protocol, seed_protocol
+from jamflow.protocols.settings import CompressionSettings, chapter_protocol, fast_protocol
 from jamflow.protocols.compression import PhiStepper
 
 PHI_J, A, VBAR = 0.8412345678, 0.3, 1.16
@@ -32,7 +32,7 @@ def drive(settings, alpha, phi0=0.80, max_steps=2000):
 
 @pytest.mark.parametrize("alpha", [2.0, 2.5])
 def test_seed_rule_and_fast_rule_reach_the_same_window(alpha):
-    phi_seed, steps_seed = drive(seed_protocol(), alpha)
+    phi_seed, steps_seed = drive(chapter_protocol(), alpha)
     phi_fast, steps_fast = drive(fast_protocol(), alpha)
     for phi in (phi_seed, phi_fast):
         assert 1e-16 < landscape(phi, alpha)[0] < 2e-16
@@ -42,7 +42,7 @@ def test_seed_rule_and_fast_rule_reach_the_same_window(alpha):
 
 
 def test_seed_rule_halves_on_every_crossing():
-    stepper = PhiStepper(seed_protocol(dphi0=1e-3), 2.0, VBAR)
+    stepper = PhiStepper(chapter_protocol(dphi0=1e-3), 2.0, VBAR)
     assert stepper.next_phi(0.84, 0.0, 0.0, unjammed=True) == pytest.approx(0.841)
     assert stepper.next_phi(0.841, 1e-9, 1e-5) == pytest.approx(0.841 - 5e-4)
     assert stepper.next_phi(0.8405, 1e-9, 1e-5) == pytest.approx(0.8405 - 5e-4)  # same side: no halving
@@ -62,7 +62,7 @@ def test_newton_jump_stays_above_jamming_until_close():
 def test_resolution_failure_is_reported():
     from jamflow.protocols.outcome import JammingFailed
 
-    stepper = PhiStepper(seed_protocol(dphi0=1e-17), 2.0, VBAR)
+    stepper = PhiStepper(chapter_protocol(dphi0=1e-17), 2.0, VBAR)
     with pytest.raises(JammingFailed, match="float64 resolution"):
         stepper.next_phi(0.8, 0.0, 0.0, unjammed=True)
 

@@ -13,7 +13,7 @@ from jamflow.cli.app import main
 from jamflow.mechanics.reference import energy_forces_pressure
 from jamflow.io.packing_file import load_packing, read_attrs
 from jamflow.protocols.compression import at_shear_strain, compress, initial_packing, jam
-from jamflow.protocols.settings import seed_protocol
+from jamflow.protocols.settings import chapter_protocol
 from jamflow.protocols.shear import Network, shear, shear_strains
 from jamflow.io.shear_file import ShearFile, save_shear_path
 
@@ -42,8 +42,8 @@ def rigid(packing):
 def test_strains_one_period_apart_jam_to_the_same_packing_bit_for_bit(engine):
     """0.25 and 1.25 are exactly one apart as doubles: the protocol runs in the reduced cell,
     so both jams execute the same operations (positions, phi_J, V and history identical)."""
-    a = compress(start_at(0.25), seed_protocol(), engine=engine)
-    b = compress(start_at(1.25), seed_protocol(), engine=engine)
+    a = compress(start_at(0.25), chapter_protocol(), engine=engine)
+    b = compress(start_at(1.25), chapter_protocol(), engine=engine)
     assert np.array_equal(a.packing.positions, b.packing.positions)
     assert a.phi_j == b.phi_j and a.energy_per_particle == b.energy_per_particle
     assert all(np.array_equal(a.history[k], b.history[k]) for k in a.history)
@@ -68,8 +68,8 @@ def test_gamma_and_one_minus_gamma_are_related_by_the_inversion():
     """Figure 2.4(c): a start mirrored x -> -x jams at 1 - gamma to the mirror image of the
     packing jammed at gamma (chapter protocol: identical decisions). Exact strains (0.25, 0.75 ->
     reduced -0.25) make the two cells exact mirror images."""
-    a = compress(start_at(0.25), seed_protocol())
-    m = compress(start_at(0.75, mirror=True), seed_protocol())
+    a = compress(start_at(0.25), chapter_protocol())
+    m = compress(start_at(0.75, mirror=True), chapter_protocol())
     assert np.array_equal(a.history["phi"], m.history["phi"]) and a.phi_j == m.phi_j
     back = m.packing.with_positions(m.packing.positions * [-1.0, 1.0], box=a.packing.box)
     assert displacement_without_translation(a.packing, back, rigid(a.packing)) < 1e-12

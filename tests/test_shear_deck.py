@@ -10,12 +10,12 @@ from jamflow.decks.jam import DeckFailed
 from jamflow.engines.lammps.data_file import write_lammps_data
 from jamflow.mechanics.reference import energy_forces_pressure
 from jamflow.protocols.compression import jam
-from jamflow.protocols.settings import seed_protocol
+from jamflow.protocols.settings import chapter_protocol
 from jamflow.protocols.shear import shear
 from jamflow.decks.shear import (default_shear_deck_path, run_shear_deck, shear_deck_text, shear_deck_variables,
                                  start_variables)
 
-QUICK = seed_protocol(dphi0=1e-5)
+QUICK = chapter_protocol(dphi0=1e-5)
 
 
 def test_checked_in_shear_deck_is_the_generated_one():
@@ -42,7 +42,7 @@ def test_shear_deck_and_controller_agree_bit_for_bit(across_the_flip):
 
 
 def test_shear_crosscheck_detects_another_path(across_the_flip):
-    other = shear(jam(n=10, seed=2, gamma=0.49, settings=seed_protocol(), engine="lammps").packing, 0.005, 0.51,
+    other = shear(jam(n=10, seed=2, gamma=0.49, settings=chapter_protocol(), engine="lammps").packing, 0.005, 0.51,
                   QUICK, engine="lammps")
     bad = compare_shear(other, across_the_flip.deck)
     assert not bad.agree and bad.first_difference == (0, 0)
@@ -71,7 +71,7 @@ def test_emitted_shear_deck_runs_in_lmp_alone(tmp_path, capsys):
 
 @pytest.fixture(scope="module")
 def start_02():
-    return jam(n=10, seed=1, gamma=0.2, settings=seed_protocol(), engine="lammps").packing
+    return jam(n=10, seed=1, gamma=0.2, settings=chapter_protocol(), engine="lammps").packing
 
 
 @pytest.mark.parametrize("change,message", [
@@ -89,7 +89,7 @@ def test_shear_deck_rejects_bad_parameters(tmp_path, start_02, change, message):
 
 def test_shear_deck_refuses_what_it_cannot_run():
     with pytest.raises(ValueError, match="chapter's bisection"):
-        shear_deck_variables(seed_protocol(newton=True))
+        shear_deck_variables(chapter_protocol(newton=True))
     with pytest.raises(ValueError, match="linear spring"):
         shear_deck_variables(potential="hertz")
     with pytest.raises(ValueError, match="finite"):
@@ -105,6 +105,6 @@ def test_jam_deck_at_fixed_strain_matches_the_controller(tmp_path, capsys):
     assert main(["jam", "--n", "10", "--seed", "2", "--gamma", "0.3", "--emit-deck", str(deck), "--out",
                  str(tmp_path / "jj.h5")]) == 0
     res = read_deck_result(*run_lmp(tmp_path, deck, {}, "jj"))
-    ctrl = jam(n=10, seed=2, gamma=0.3, settings=seed_protocol(), engine="lammps")
+    ctrl = jam(n=10, seed=2, gamma=0.3, settings=chapter_protocol(), engine="lammps")
     assert res.phi_j == ctrl.phi_j and res.minimizations == ctrl.minimizations
     assert res.packing.box.shear_strain == pytest.approx(0.3, abs=1e-15)

@@ -71,39 +71,25 @@ def test_library_and_command_line_make_the_same_packing(tmp_path):
     assert np.array_equal(written.positions, result.packing.positions)  # files hold the packing, bit for bit
 
 
-def test_the_chapter_protocol_is_named_chapter_and_seed_stays_its_alias(tmp_path, capsys):
-    """"seed" named both the chapter's protocol and the random seed; the protocol is "chapter" now, and
-    "seed" (old command lines, specs, ensemble stores) still means it. Files record the settings,
-    not the name, so both names write the same file."""
+def test_the_protocols_are_chapter_and_fast_and_another_name_is_refused_before_work(capsys):
+    """The chapter's protocol is "chapter" ("seed" named both it and the random seed, and is no
+    longer a protocol name): an unknown name is refused with the names to use, before any work."""
     from jamflow.cli.app import main
-    from jamflow.io.packing_file import read_protocol
-    from jamflow.protocols.settings import PROTOCOLS, chapter_protocol, protocol_settings, seed_protocol
-    from jamflow.protocols.spec import compression_settings
+    from jamflow.protocols.settings import PROTOCOLS, protocol_settings
 
-    assert sorted(PROTOCOLS) == ["chapter", "fast"] and seed_protocol is chapter_protocol
-    assert JamSpec(protocol="seed").protocol_name == JamSpec(protocol="chapter").protocol_name == "chapter"
-    assert JamSpec(protocol="seed").protocol == "seed"  # kept as given: a stored ensemble spec reopens unchanged
-    assert compression_settings(JamSpec(protocol="seed")) == compression_settings(JamSpec(protocol="chapter"))
-    assert protocol_settings("seed", dphi0=1e-3) == chapter_protocol(dphi0=1e-3)
-    with pytest.raises(ValueError, match="unknown protocol 'slow'; use one of chapter, fast, seed"):
-        protocol_settings("slow")
-    with pytest.raises(ValueError, match="--protocol 'slow' is not one of chapter, fast"):
-        prepare(JamSpec(protocol="slow"))
+    assert sorted(PROTOCOLS) == ["chapter", "fast"]
+    for name in ("slow", "seed"):
+        with pytest.raises(ValueError, match=f"unknown protocol '{name}'; use one of chapter, fast"):
+            protocol_settings(name)
+        with pytest.raises(ValueError, match=f"--protocol '{name}' is not one of chapter, fast"):
+            prepare(JamSpec(protocol=name))
     with pytest.raises(SystemExit):
         main(["jam", "--help"])
-    jam_help = capsys.readouterr().out
-    assert "--protocol {chapter,fast}" in jam_help and "'seed' is accepted as the old name of chapter" in " ".join(
-        jam_help.split())
-    assert "seed: the chapter's" not in jam_help
-    for name in ("chapter", "seed"):
-        assert main(["jam", "--n", "16", "--seed", "2", "--protocol", name, "--quiet",
-                     "--out", str(tmp_path / f"{name}.h5")]) == 0
-    assert read_protocol(tmp_path / "chapter.h5") == read_protocol(tmp_path / "seed.h5")
-    assert np.array_equal(load_packing(tmp_path / "chapter.h5").positions, load_packing(tmp_path / "seed.h5").positions)
+    jam_help = " ".join(capsys.readouterr().out.split())
+    assert "--protocol {chapter,fast}" in jam_help and "old name" not in jam_help
     with pytest.raises(SystemExit):
-        build_parser("jam").parse_args(["jam", "--protocol", "slow"])
-    assert re.search(r"choose from '?chapter'?, '?fast'?, '?seed'?", capsys.readouterr().err)
-
+        build_parser("jam").parse_args(["jam", "--protocol", "seed"])
+    assert re.search(r"choose from '?chapter'?, '?fast'?", capsys.readouterr().err)
 
 
 @pytest.mark.parametrize("dim,shape", [(2, "ellipse:3"), (3, "spheroid:2"), (2, "nmer:2:2"), (3, "nmer:3:2")])

@@ -1,4 +1,4 @@
-"""Settings of the compression protocol: the chapter's (``chapter``; old name ``seed``) and the fast one."""
+"""Settings of the compression protocol: the chapter's (``chapter``) and the fast one."""
 
 from __future__ import annotations
 
@@ -109,9 +109,6 @@ def chapter_protocol(**overrides) -> CompressionSettings:
     return CompressionSettings(**overrides)
 
 
-seed_protocol = chapter_protocol  # its old name, kept as an alias of ``--protocol chapter``
-
-
 def fast_protocol(**overrides) -> CompressionSettings:
     """Same stopping rule, fewer and cheaper minimisations (docs/notes/speed.md measures its bias).
     The coarse stage (``coarse_v_min``, above 2 V_tol) is left out for a ``v_tol`` that is not below
@@ -125,28 +122,20 @@ def fast_protocol(**overrides) -> CompressionSettings:
 
 PROTOCOLS = {"chapter": chapter_protocol, "fast": fast_protocol}
 
-# old names still accepted (``--protocol seed``, ``JamSpec(protocol="seed")``, ensemble stores that
-# recorded it): "seed" meant the chapter, and also the random seed, so the protocol is "chapter" now
-PROTOCOL_ALIASES = {"seed": "chapter"}
-PROTOCOL_NAMES = tuple(sorted(PROTOCOLS)) + tuple(sorted(PROTOCOL_ALIASES))  # what --protocol accepts
-
-
-def protocol_name(name: str) -> str:
-    """The protocol ``name`` means: an old name (``PROTOCOL_ALIASES``) is the protocol's name now."""
-    return PROTOCOL_ALIASES.get(name, name)
+PROTOCOL_NAMES = tuple(sorted(PROTOCOLS))  # what --protocol accepts
 
 
 def protocol_settings(name: str, **overrides) -> CompressionSettings:
-    """The settings of the protocol ``name`` (``chapter``, ``fast``, or the old ``seed``)."""
+    """The settings of the protocol ``name`` (``chapter`` or ``fast``)."""
     try:
-        make = PROTOCOLS[protocol_name(name)]
+        make = PROTOCOLS[name]
     except KeyError:
         raise ValueError(f"unknown protocol {name!r}; use one of {', '.join(PROTOCOL_NAMES)}") from None
     return make(**overrides)
 
 
 # "fast" is the default since 20 seeds at N = 256 gave mean phi_J 0.83820 +- 0.00063 against
-# 0.83784 +- 0.00064 for "chapter" (then "seed"; paired difference +0.00036 +- 0.00074), 4x faster in the median,
+# 0.83784 +- 0.00064 for "chapter" (paired difference +0.00036 +- 0.00074), 4x faster in the median,
 # and at N = 1024 0.84018 +- 0.00027 against 0.83980 +- 0.00039 (paired +0.00039 +- 0.00042),
 # 3.5x fewer iterations: docs/notes/protocol-bias-n256.csv, -n1024.csv, made by benchmarks/protocol_bias.py.
 DEFAULT_PROTOCOL = "fast"

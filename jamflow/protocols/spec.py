@@ -32,7 +32,7 @@ from jamflow.protocols.compression import (
     with_accumulated_strain,
 )
 from jamflow.protocols.outcome import JammingFailed
-from jamflow.protocols.settings import DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings, protocol_name
+from jamflow.protocols.settings import DEFAULT_PROTOCOL, PROTOCOLS, CompressionSettings
 from jamflow.support.reprs import changed_fields_repr
 
 
@@ -112,8 +112,8 @@ class JamSpec:
 
     @property
     def protocol_name(self) -> str:
-        """The protocol run: ``protocol`` (the old name "seed" is "chapter"), or the default."""
-        return protocol_name(self.protocol or DEFAULT_PROTOCOL)
+        """The protocol run: ``protocol``, or the default."""
+        return self.protocol or DEFAULT_PROTOCOL
 
     @property
     def dd_vtol(self) -> bool:

@@ -38,8 +38,7 @@ def add_arguments(p) -> None:
                         "P2 = S in (0, 1])")
     p.add_argument("--protocol", choices=PROTOCOL_NAMES, default=DEFAULT_PROTOCOL,
                    metavar="{" + ",".join(sorted(PROTOCOLS)) + "}",
-                   help="compression protocol of each re-jam (jamflow jam --protocol; 'seed' is accepted as the old "
-                        "name of chapter)")
+                   help="compression protocol of each re-jam (jamflow jam --protocol)")
     add_vtol_argument(p)
     add_engine_argument(p, help="engine of each re-jam (FIRE: the compiled one)")
     p.add_argument("--out", required=True, help="output HDF5 file (the last packing and the per-step table)")

@@ -19,7 +19,7 @@ from jamflow.io.names import derived_path
 from jamflow.io.packing_file import load_packing
 from jamflow.minimize.settings import MinimizerSettings
 from jamflow.cli.progress import ShearProgress
-from jamflow.protocols.settings import PROTOCOL_NAMES, PROTOCOLS, protocol_name
+from jamflow.protocols.settings import PROTOCOL_NAMES, PROTOCOLS
 from jamflow.protocols.shear import shear, shear_protocol, shear_strains
 from jamflow.io.shear_file import ShearFile, path_columns, save_shear_path
 
@@ -34,8 +34,7 @@ def add_arguments(p) -> None:
     add_engine_argument(p, help="auto: the compiled engine where it runs the scene")
     p.add_argument("--protocol", choices=PROTOCOL_NAMES, default=None, metavar="{" + ",".join(sorted(PROTOCOLS)) + "}",
                    help="bisection after each step: fast (growing increments, Newton jumps; the default) or chapter "
-                        "(the chapter's; the default with --emit-deck, which runs it only). 'seed' is accepted as "
-                        "the old name of chapter")
+                        "(the chapter's; the default with --emit-deck, which runs it only)")
     p.add_argument("--dphi0", type=float, default=1e-6, help="initial packing-fraction increment after each step")
     add_vtol_argument(p)
     add_ftol_argument(p)
@@ -56,7 +55,7 @@ def settings_from_args(args):
         if not (math.isfinite(value) and value > 0):
             raise ValueError(f"--{name} must be a finite positive number, got {value}")
     minimizer = MinimizerSettings(force_tol=args.ftol, v_min=args.vtol)
-    if protocol_name(args.protocol or ("chapter" if args.emit_deck else "fast")) == "chapter":
+    if (args.protocol or ("chapter" if args.emit_deck else "fast")) == "chapter":
         return PROTOCOLS["chapter"](dphi0=args.dphi0, v_tol=args.vtol, minimizer=minimizer)
     return shear_protocol(dphi0=args.dphi0, v_tol=args.vtol, minimizer=minimizer)
 
