@@ -181,3 +181,17 @@ def test_ellipses_jammed_from_an_aligned_start_stay_roughly_aligned(tmp_path):
         assert packing.metadata["orientations"] == start
         p2[start] = Nematic().compute(packing).p2
     assert p2["aligned"] > 0.6 and p2["random"] < 0.45, p2
+
+
+@pytest.mark.parametrize("shape, contact", [("ellipse:1.5", "exact"), ("dimer:1.5:1", "exact"),
+                                            ("ellipse:1.5", "cleaver")])
+def test_prepare_parses_the_shape_spec_once(monkeypatch, shape, contact):
+    from jamflow.model.shapes import parse
+
+    word = shape.partition(":")[0]
+    calls = []
+    parser = parse.SPECS[word]
+    monkeypatch.setitem(parse.SPECS, word, lambda *args: calls.append(args) or parser(*args))
+    spec = JamSpec(n=16, shape=shape, contact=contact)
+    settings, start = prepare(spec)
+    assert len(calls) == 1 and start.shape is spec.particle and spec.particle.kind == start.shape.kind

@@ -40,7 +40,7 @@ def free_rotation_vectors(packing: Packing, coords: Coordinates | None = None) -
     """(d_f N, k) generalized displacements (columns normalised) of the free rotations of the
     one-site bodies of ``packing`` (floaters already removed), in ``Coordinates`` layout."""
     coords = coords or Coordinates.of(packing)
-    pivots = pivot_sites(packing) if packing.shape.kind == "rigid" and coords.n_rot else {}
+    pivots = pivot_sites(packing) if packing.shape.made_of_sites and coords.n_rot else {}
     if not pivots:
         return np.zeros((coords.size, 0))
     world = packing.shape.world_sites(packing.positions, packing.orientations, packing.diameters)

@@ -126,7 +126,7 @@ def independent_check(packing: Packing) -> IndependentCheck:
     """Brute-force energy, forces and torques of a packing of ellipses or spheroids (any sizes;
     every contact-distance method is checked against the exact sigma it approximates only if it
     is 'exact': this is the exact model)."""
-    if packing.shape.kind != "ellipsoid":
+    if not packing.shape.elliptic:
         raise ValueError(f"independent_check is for ellipses/spheroids, not {packing.shape.name(packing.dim)} "
                          "particles")
     n, d = packing.n, packing.dim

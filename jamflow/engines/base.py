@@ -82,7 +82,7 @@ class Capabilities:
     def reason(self, packing, method: str | None = "fire", comm=None, pressure: bool = False) -> str | None:
         """Why the engine cannot run the scene, or None; ``method`` None: any of its minimisers."""
         needs = scene_boundaries(packing)
-        if needs and packing.shape.kind != "sphere":
+        if needs and not packing.shape.bounded:
             return f"{' and '.join(sorted(needs))} with {packing.shape.name(packing.dim)} particles (written for disks and spheres)"
         if needs - self.boundaries:
             return f"{' and '.join(sorted(needs - self.boundaries))} (it runs {', '.join(sorted(self.boundaries)) or 'none'})"
@@ -95,10 +95,10 @@ class Capabilities:
             return f"potential {packing.potential.spec} (it runs {', '.join(sorted(self.potentials))})"
         if method is not None and method not in self.methods:
             return f"minimizer {method} (it runs {', '.join(sorted(self.methods))})"
-        for kind, methods, why in self.shape_methods:
-            if method is not None and packing.shape.kind == kind and method not in methods:
-                return (f"minimizer {method} on {packing.shape.name(packing.dim)} particles: {why} (it runs "
-                        f"{', '.join(sorted(methods))} there)")
+        methods, why = {kind: (m, w) for kind, m, w in self.shape_methods}.get(packing.shape.kind, (None, ""))
+        if method is not None and methods is not None and method not in methods:
+            return (f"minimizer {method} on {packing.shape.name(packing.dim)} particles: {why} (it runs "
+                    f"{', '.join(sorted(methods))} there)")
         if packing.box.is_triclinic and not self.tilted_boxes:
             return "a tilted (sheared) box"
         if comm is not None and not self.mpi:

@@ -84,23 +84,39 @@ def _rows(packing: Packing) -> tuple[np.ndarray, np.ndarray, list[_Column]]:
     sites placed about the wrapped body centre and wrapped into the box themselves, with image flags
     that put the body back together. Last, every row's image flags (``_in_box``).
     """
-    types, kind = _types(packing), packing.shape.kind
-    if kind == "rigid":
-        centres = packing.box.images(packing.positions)[0]
-        sites = packing.shape.world_sites(centres, packing.orientations, packing.diameters)
-        pos, image = _in_box(packing, sites.reshape(-1, packing.dim))
-        n_sites = sites.shape[1]
-        radius = 0.5 * packing.diameters[:, None] * packing.shape.site_diameters[None, :]
-        body = np.repeat(np.arange(1, packing.n + 1), n_sites)
-        return pos, np.repeat(types, n_sites), [_Column(("radius",), "radius", radius.reshape(-1, 1)),
-                                                _Column(("mol",), "molecule", body[:, None], "I"), _images(image)]
+    return _ROWS[packing.shape.kind](packing, _types(packing))
+
+
+def _particle_rows(packing: Packing, types: np.ndarray):
+    """Disks/spheres: one row per particle with its radius."""
     pos, image = _in_box(packing, packing.positions)
-    columns = [_Column(("radius",), "radius", (0.5 * packing.diameters)[:, None])]
-    if kind == "ellipsoid":
-        a, b = packing.shape.axes(packing.diameters).T
-        columns += [_Column(("shapex", "shapey", "shapez"), "aspherical_shape", np.column_stack([a, b, b])),
-                    _Column(("quatw", "quati", "quatj", "quatk"), "orientation", _quaternions(packing))]
+    return pos, types, [_Column(("radius",), "radius", (0.5 * packing.diameters)[:, None]), _images(image)]
+
+
+def _ellipsoid_rows(packing: Packing, types: np.ndarray):
+    """Ellipses/spheroids: radius, full axes and quaternion."""
+    pos, image = _in_box(packing, packing.positions)
+    a, b = packing.shape.axes(packing.diameters).T
+    columns = [_Column(("radius",), "radius", (0.5 * packing.diameters)[:, None]),
+               _Column(("shapex", "shapey", "shapez"), "aspherical_shape", np.column_stack([a, b, b])),
+               _Column(("quatw", "quati", "quatj", "quatk"), "orientation", _quaternions(packing))]
     return pos, types, [*columns, _images(image)]
+
+
+def _site_rows(packing: Packing, types: np.ndarray):
+    """Rigid bodies: one row per site (radius, ``mol`` = body) about the wrapped body centre."""
+    centres = packing.box.images(packing.positions)[0]
+    sites = packing.shape.world_sites(centres, packing.orientations, packing.diameters)
+    pos, image = _in_box(packing, sites.reshape(-1, packing.dim))
+    n_sites = sites.shape[1]
+    radius = 0.5 * packing.diameters[:, None] * packing.shape.site_diameters[None, :]
+    body = np.repeat(np.arange(1, packing.n + 1), n_sites)
+    return pos, np.repeat(types, n_sites), [_Column(("radius",), "radius", radius.reshape(-1, 1)),
+                                            _Column(("mol",), "molecule", body[:, None], "I"), _images(image)]
+
+
+# shape kind -> (packing, types) -> (positions, types, columns) of the rows it exports
+_ROWS = {"sphere": _particle_rows, "ellipsoid": _ellipsoid_rows, "rigid": _site_rows}
 
 
 def _images(image: np.ndarray) -> _Column:

@@ -90,28 +90,49 @@ def gsd_frame(packing: Packing):
     types, typeid = _types(packing)
     (position, image), orientation = hoomd_positions(packing), quaternions(packing)
     diameter, body = packing.diameters.astype(float), np.full(packing.n, -1)
-    shapes = None
-    if packing.shape.kind == "ellipsoid":
-        a, b = packing.shape.axes(packing.diameters).T
-        first = [int(np.flatnonzero(typeid == t)[0]) for t in range(len(types))]
-        shapes = [{"type": "Ellipsoid", "a": 0.5 * a[k], "b": 0.5 * b[k], "c": 0.5 * b[k]} for k in first]
-    if packing.shape.kind == "rigid":
-        centres = packing.box.images(packing.positions)[0]
-        sites = packing.shape.world_sites(centres, packing.orientations, packing.diameters)  # about the wrapped centre
-        site_position, site_image = hoomd_positions(packing, sites.reshape(-1, packing.dim))
-        site_d = (packing.diameters[:, None] * packing.shape.site_diameters[None, :]).reshape(-1)
-        position, image = np.concatenate([position, site_position]), np.concatenate([image, site_image])
-        orientation = np.concatenate([orientation, np.tile([1.0, 0.0, 0.0, 0.0], (len(site_d), 1))])
-        typeid = np.concatenate([typeid, np.full(len(site_d), len(types))])
-        types = [*types, "site"]
-        diameter = np.concatenate([np.zeros(packing.n), site_d])
-        body = np.concatenate([np.arange(packing.n), np.repeat(np.arange(packing.n), sites.shape[1])])
+    rows = _ROWS[packing.shape.kind](packing, dict(types=types, typeid=typeid, position=position, image=image,
+                                                   orientation=orientation, diameter=diameter, body=body))
+    types, typeid, position, image = rows["types"], rows["typeid"], rows["position"], rows["image"]
+    orientation, diameter, body, shapes = rows["orientation"], rows["diameter"], rows["body"], rows.get("shapes")
     p = frame.particles
     p.N, p.types, p.typeid = len(position), types, typeid
     p.position, p.image, p.orientation, p.diameter, p.body = position, image, orientation, diameter, body
     if shapes is not None:
         p.type_shapes = shapes
     return frame
+
+
+def _particle_rows(packing: Packing, rows: dict) -> dict:
+    """Disks/spheres: one particle each, as they are."""
+    return rows
+
+
+def _ellipsoid_rows(packing: Packing, rows: dict) -> dict:
+    """Ellipses/spheroids: an ``Ellipsoid`` type shape (semi-axes) per type."""
+    a, b = packing.shape.axes(packing.diameters).T
+    first = [int(np.flatnonzero(rows["typeid"] == t)[0]) for t in range(len(rows["types"]))]
+    shapes = [{"type": "Ellipsoid", "a": 0.5 * a[k], "b": 0.5 * b[k], "c": 0.5 * b[k]} for k in first]
+    return {**rows, "shapes": shapes}
+
+
+def _body_rows(packing: Packing, rows: dict) -> dict:
+    """Rigid bodies: the centres (diameter 0) then one ``site`` particle per site, ``body`` = its body."""
+    centres = packing.box.images(packing.positions)[0]
+    sites = packing.shape.world_sites(centres, packing.orientations, packing.diameters)  # about the wrapped centre
+    site_position, site_image = hoomd_positions(packing, sites.reshape(-1, packing.dim))
+    site_d = (packing.diameters[:, None] * packing.shape.site_diameters[None, :]).reshape(-1)
+    types = rows["types"]
+    return dict(position=np.concatenate([rows["position"], site_position]),
+                image=np.concatenate([rows["image"], site_image]),
+                orientation=np.concatenate([rows["orientation"], np.tile([1.0, 0.0, 0.0, 0.0], (len(site_d), 1))]),
+                typeid=np.concatenate([rows["typeid"], np.full(len(site_d), len(types))]),
+                types=[*types, "site"],
+                diameter=np.concatenate([np.zeros(packing.n), site_d]),
+                body=np.concatenate([np.arange(packing.n), np.repeat(np.arange(packing.n), sites.shape[1])]))
+
+
+# shape kind -> (packing, the particle rows) -> the rows of its frame (``shapes``: HOOMD type shapes)
+_ROWS = {"sphere": _particle_rows, "ellipsoid": _ellipsoid_rows, "rigid": _body_rows}
 
 
 def write_gsd(path, packing: Packing) -> Path:

@@ -479,12 +479,7 @@ def shape_datasets(packing: Packing) -> dict:
     if packing.orientations is not None:
         out["orientations"] = packing.orientations
         out["directors"] = packing.directors
-    kind = packing.shape.kind
-    if kind == "ellipsoid":
-        out["axes"] = packing.shape.axes(packing.diameters)
-    elif kind == "rigid":
-        out["sites"] = packing.shape.world_sites(packing.positions, packing.orientations, packing.diameters)
-        out["site_diameters"] = packing.diameters[:, None] * packing.shape.site_diameters[None, :]
+    out.update(packing.shape.datasets(packing.positions, packing.orientations, packing.diameters))
     return out
 
 

@@ -249,7 +249,7 @@ class Contacts:
             The contacts among non-floaters, the floaters, z per particle and the counts (N_c,
             N_c,iso, <z>) as properties.
         """
-        sites = overlapping_sites(packing) if packing.shape.kind == "rigid" else None
+        sites = overlapping_sites(packing) if packing.shape.made_of_sites else None
         i, j, dr = (site_contacts(packing, sites) if self.count == "sites" and sites is not None
                     else particle_contacts(packing))
         n = packing.n
@@ -259,7 +259,7 @@ class Contacts:
         d_f = packing.dof_per_particle
         need = d_f + 1 if self.min_contacts is None else int(self.min_contacts)
         unit = dr / np.linalg.norm(dr, axis=1)[:, None]  # points from j to i
-        half_space = self.half_space and packing.shape.kind == "sphere"
+        half_space = self.half_space and packing.shape.round
         wall_i, wall_face, wall_unit = wall_contacts(packing)
         load_i, load_unit = weight_contacts(packing)
         virtual = n + 2 * packing.dim  # the faces, then the weight
@@ -502,7 +502,7 @@ def near_contact_count(packing: Packing, near_tol: float) -> int:
     """Pairs with |r_ij / sigma_ij - 1| < near_tol, on either side of contact (pairs of sites
     of different bodies for rigid bodies)."""
     body = None
-    if packing.shape.kind == "rigid":
+    if packing.shape.made_of_sites:
         packing, body = site_packing(packing)
     i, j = candidate_pairs(packing, 2.0 * float(packing.shape.reach(packing.diameters).max()) * (1.0 + near_tol))
     if body is not None:

@@ -68,7 +68,7 @@ class StrainTerms:
 def centre_separations(packing: Packing) -> np.ndarray:
     """(P, d) r_i - r_j between the centres of every contact of ``hessian.pair_terms`` (same
     order; for rigid bodies one row per overlapping site pair, the image the sites touch in)."""
-    if packing.shape.kind != "rigid":
+    if not packing.shape.made_of_sites:
         return overlapping_pairs(packing)[2]
     _, _, s, t, dr, _, _ = overlapping_sites(packing)
     shape, d = packing.shape, packing.dim

@@ -163,7 +163,7 @@ def energy_forces_pressure(packing: Packing, pairs: str = "all") -> ReferenceRes
     if pairs not in ("all", "near"):
         raise ValueError(f"pairs must be 'all' or 'near', got {pairs!r}")
     bounded = bool(packing.box.walls) or packing.gravity > 0 or packing.fixed is not None
-    if bounded and packing.shape.kind != "sphere":
+    if bounded and not packing.shape.bounded:
         raise ValueError(f"walls, gravity and fixed particles are written for disks and spheres, not "
                          f"{packing.shape.name(packing.dim)} particles")
     i, j, dr, fpair, energy, torques = _SHAPES[packing.shape.kind](packing, pairs == "near")

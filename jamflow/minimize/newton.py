@@ -63,7 +63,7 @@ START_RATIO = 1e-3  # Newton starts once the max force is below this fraction of
 def newton_reason(packing) -> str:
     """'' if ``relax`` applies to this packing, else why not (one phrase)."""
     pot = packing.potential
-    if packing.shape.kind != "sphere":
+    if not packing.shape.round:
         return f"the Newton minimiser needs disks or spheres, not {packing.shape.kind} particles"
     if getattr(pot, "name", "") != "spring" or float(pot.alpha) != 2.0:
         return "the Newton minimiser needs the linear spring (alpha = 2)"

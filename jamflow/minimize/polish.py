@@ -82,7 +82,7 @@ class PolishResult:
 def polish_reason(packing) -> str:
     """'' if ``polish`` applies to this packing, else why not (one phrase)."""
     pot = packing.potential
-    if packing.shape.kind not in ("sphere", "rigid"):
+    if not packing.shape.sphere_contacts:
         return (f"the Gauss-Newton polish needs disks, spheres or rigid bodies of fused sites, not "
                 f"{packing.shape.kind} particles")
     if getattr(pot, "name", "") != "spring" or float(pot.alpha) != 2.0:
@@ -117,7 +117,7 @@ def model(packing):
     """(delta, J) of the pairs within sigma + ``SKIN`` at ``packing``:
     disks/spheres by ``overlaps`` on the compiled builder's pair list, rigid bodies over site pairs
     in generalized coordinates (``hessian.distance_jacobian``)."""
-    if packing.shape.kind == "sphere":
+    if packing.shape.round:
         from jamflow.engines.compiled.spheres import build  # the disk/sphere pair list (i, j, shift, sigma)
 
         return overlaps(packing.positions, build(packing, packing.positions, SKIN))
@@ -295,6 +295,6 @@ def polish_trigger(packing, after: int) -> CreepTrigger:
     """The polish's measured trigger: rigid bodies every ``after`` iterations from
     ``RIGID_CREEP_FORCE`` (docs/notes/nmers.md, "The creep of rigid bodies"); disks and spheres once,
     below ``CREEP_FORCE`` (docs/notes/speed-2.md sections 8 and 11); at multiples of ``after``."""
-    if packing.shape.kind == "rigid":
+    if packing.shape.made_of_sites:
         return CreepTrigger(after, every=after, creep_force=RIGID_CREEP_FORCE, aligned=True)
     return CreepTrigger(after, aligned=True)

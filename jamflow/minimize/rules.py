@@ -138,7 +138,7 @@ def _auto_creep(engine, settings: MinimizerSettings) -> str:
     template = engine.template
     if settings.method != "fire" or getattr(engine, "name", "") != "numba":
         return "off"
-    if template.shape.kind == "rigid" and not polish_reason(template):
+    if template.shape.made_of_sites and not polish_reason(template):
         return "polish"
     if template.shape.oriented:
         return "soft-modes"

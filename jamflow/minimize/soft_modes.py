@@ -41,6 +41,7 @@ from jamflow.minimize.creep import CreepTrigger
 # one seed of five took 2.6x more iterations with 10 000)
 AFTER = 50_000
 ELLIPSOID_AFTER = 10_000
+AFTER_BY_SHAPE = {"ellipsoid": ELLIPSOID_AFTER}  # shape kinds whose measured trigger is not AFTER
 MODES = 12  # lowest eigenpairs computed (beyond the d translations)
 ZERO_MODE = 1e-10  # |lambda| below this x stiffness: a zero mode (no restoring force), left alone
 SHIFT = 1e-8  # shift-invert about -SHIFT x stiffness (the matrix is positive semi-definite at a minimum)
@@ -53,7 +54,7 @@ def trigger(packing, after: int | None = None) -> CreepTrigger:
     """When the soft-mode steps run: every ``after`` iterations (None: the measured default,
     ``ELLIPSOID_AFTER`` for ellipses and spheroids, ``AFTER`` otherwise) while the max force is
     below ``CREEP_FORCE``."""
-    after = after or (ELLIPSOID_AFTER if packing.shape.kind == "ellipsoid" else AFTER)
+    after = after or AFTER_BY_SHAPE.get(packing.shape.kind, AFTER)
     return CreepTrigger(after, every=after)
 
 

@@ -142,18 +142,10 @@ def contact_distances(packing: Packing, i: np.ndarray, j: np.ndarray, dr: np.nda
     method (``jamflow.model.shapes.contact_distance``, exact by default) for ellipses/spheroids along
     the separations ``dr`` (computed if not given). Rigid bodies touch site by site: see
     ``overlapping_sites``."""
-    kind = packing.shape.kind
-    if kind == "sphere":
-        return 0.5 * (packing.diameters[i] + packing.diameters[j])
-    if kind == "ellipsoid":
-        from jamflow.model.shapes.contact_distance import contact_distance
-
-        dr = separations(packing, i, j) if dr is None else dr
-        axes, u = packing.shape.axes(packing.diameters), packing.directors
-        r_hat = dr / np.linalg.norm(dr, axis=1)[:, None]
-        return contact_distance(axes[i, 0], axes[i, 1], axes[j, 0], axes[j, 1], r_hat, u[i], u[j],
-                                method=packing.shape.contact)
-    raise ValueError(f"{packing.shape.name(packing.dim)} particles touch site by site; use overlapping_sites")
+    shape = packing.shape
+    if dr is None and shape.oriented:
+        dr = separations(packing, i, j)
+    return shape.contact_distances(packing, i, j, dr)
 
 
 class PairGeometry(NamedTuple):
@@ -178,7 +170,7 @@ def pair_geometry(packing: Packing, skin: float = 0.0) -> PairGeometry:
         return PairGeometry(np.empty(0, int), np.empty(0, int), np.empty((0, packing.dim)), np.empty(0), np.empty(0),
                             None)
     rmax = 2.0 * float(packing.shape.reach(packing.diameters).max()) + skin
-    extended = packing.extended is not None and packing.shape.kind == "sphere"
+    extended = packing.extended is not None and packing.shape.double_double
     if packing.extended is not None and not extended:
         warn_float64_only(packing, f"the pair geometry of {packing.shape.name(packing.dim)} particles")
     i, j = candidate_pairs(packing, rmax * (1.0 + 1e-9) if extended else rmax)  # hi parts: pad by their round-off
@@ -251,7 +243,7 @@ def overlapping_sites(packing: Packing, skin: float = 0.0):
 def particle_contacts(packing: Packing):
     """(i, j, dr) for every pair of particles in contact, i < j, dr = r_i - r_j the centre
     separation (minimum image); rigid bodies in contact through any pair of their sites."""
-    if packing.shape.kind != "rigid":
+    if not packing.shape.made_of_sites:
         i, j, dr, _, _ = overlapping_pairs(packing)
         return i, j, dr
     bi, bj, *_ = overlapping_sites(packing)

@@ -166,7 +166,7 @@ def with_walls(packing, axes, wall_type: str = "smooth"):
     packing = replace(packing, box=box, positions=x)
     if wall_type == "smooth":
         return packing
-    if packing.shape.kind != "sphere" or packing.fixed is not None:
+    if not packing.shape.round or packing.fixed is not None:
         raise ValueError("rough walls are made of fixed disks/spheres next to mobile disks/spheres")
     small = float(packing.diameters.min())
     shrink = (packing.phi / DENSEST_PHI[packing.dim]) ** (1.0 / packing.dim)

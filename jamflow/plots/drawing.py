@@ -18,14 +18,16 @@ Ellipses are drawn with their full axes a, b along and across the director; 3D s
 no slice picture (their cross-sections are ellipses of varying size): export them to OVITO
 (``jamflow export``).
 
-A new particle shape adds one function to ``DRAWERS`` that gives the outline of every drawn
-particle image as ellipse widths, heights and angles (see ``_round``, ``_elliptic``).
+A new particle shape adds one ``Drawer`` to ``DRAWERS``: the function that gives the outline of
+every drawn particle image as ellipse widths, heights and angles (see ``_round``, ``_elliptic``)
+and the dimensions it draws.
 """
 
 from __future__ import annotations
 
 from itertools import product
 from pathlib import Path
+from typing import Callable, NamedTuple
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -58,9 +60,16 @@ def _elliptic(view, owner):
     return a, b, np.degrees(np.arctan2(u[:, 1], u[:, 0]))
 
 
-# shape kind (Packing.shape.kind) -> function(view, owner) -> (widths, heights, angles) of the drawn
-# images, owner indexing view.index; rigid bodies are their site disks
-DRAWERS = {"sphere": _round, "rigid": _round, "ellipsoid": _elliptic}
+class Drawer(NamedTuple):
+    """How a shape is drawn: ``outline(view, owner) -> (widths, heights, angles)`` of the drawn
+    images (owner indexing view.index), and the dimensions it draws (3D: a slice)."""
+
+    outline: Callable
+    dims: tuple = (2, 3)
+
+
+# shape kind (Packing.shape.kind) -> its Drawer; rigid bodies are their site disks
+DRAWERS = {"sphere": Drawer(_round), "rigid": Drawer(_round), "ellipsoid": Drawer(_elliptic, dims=(2,))}
 
 
 def _outlines(centres, outline, ax, **style):
@@ -98,11 +107,12 @@ def check_options(packing: Packing, color_by: str, slice_at: float) -> None:
                          f"these are {packing.shape.name(packing.dim)}: use z or q6")
     if not 0.0 <= slice_at < 1.0:
         raise SettingError("slice_at", f"must lie in [0, 1) (a fraction of the cell height), got {slice_at}")
-    if packing.shape.kind not in DRAWERS:
+    drawer = DRAWERS.get(packing.shape.kind)
+    if drawer is None:
         raise ValueError(f"jamflow draw cannot draw {packing.shape.kind} particles yet; it draws {', '.join(DRAWERS)}")
-    if packing.shape.kind == "ellipsoid" and packing.dim == 3:
-        raise ValueError("jamflow draw has no slice picture of 3D spheroids; view them in OVITO: "
-                         "jamflow export IN.h5 --format xyz")
+    if packing.dim not in drawer.dims:
+        raise ValueError(f"jamflow draw has no slice picture of {packing.dim}D {packing.shape.name(packing.dim)}s; "
+                         "view them in OVITO: jamflow export IN.h5 --format xyz")
 
 
 def draw_into(ax, packing: Packing, *, color_by: str = "z", slice_at: float = 0.5, q6_r_min: float | None = None,
@@ -117,7 +127,7 @@ def draw_into(ax, packing: Packing, *, color_by: str = "z", slice_at: float = 0.
     cell = Polygon(view.corners, closed=True, fill=False, lw=0.8, color="k")
     ax.add_patch(cell)
     centres, _, owner = view.images()
-    outline = DRAWERS[packing.shape.kind](view, owner)
+    outline = DRAWERS[packing.shape.kind].outline(view, owner)
     particle = view.owner[view.index][owner]  # the particle of every drawn image
     kept, floaters = ~found.floater[particle], found.floater[particle]
     cmap = "twilight" if color_by == "orientation" else "viridis"
@@ -170,8 +180,7 @@ class _View:
 
     def __init__(self, packing: Packing, slice_at: float):
         self.packing, self.slice_at = packing, slice_at
-        rigid = packing.shape.kind == "rigid"
-        disks, self.owner = site_packing(packing) if rigid else (packing, np.arange(packing.n))
+        disks, self.owner = site_packing(packing) if packing.shape.made_of_sites else (packing, np.arange(packing.n))
         h = packing.box.h
         pos = packing.box.wrap(disks.positions)
         if packing.dim == 2:  # sizes: what a particle image reaches (an ellipse's major axis)
@@ -191,7 +200,7 @@ class _View:
     def pairs(self):
         """(i, j, dr, r, sigma) of every overlapping pair of drawn disks (sites of different
         bodies for rigid bodies), dr = r_i - r_j."""
-        if self.packing.shape.kind == "rigid":
+        if self.packing.shape.made_of_sites:
             _, _, s, t, dr, r, sigma = overlapping_sites(self.packing)
             return s, t, dr, r, sigma
         return overlapping_pairs(self.packing)
@@ -251,7 +260,7 @@ class _View:
         ends; in 3D only sites cut by the slice), so that the picture shows which disks form a
         body. Empty for other shapes."""
         p = self.packing
-        if p.shape.kind != "rigid" or p.shape.n_sites < 2:
+        if not p.shape.made_of_sites or p.shape.n_sites < 2:
             return np.zeros((0, 2, 2))
         offsets = p.shape.world_sites(p.positions, p.orientations, p.diameters) - p.positions[:, None, :]
         n_sites = p.shape.n_sites

@@ -77,14 +77,14 @@ def check_anneal(start: Packing, target: float, dalpha: float, contact: str | No
     for name, value in (("--to", target), ("--dalpha", dalpha)):
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
             raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
-    kind = start.shape.kind
-    if kind not in ("sphere", "ellipsoid"):
+    alpha0 = start.shape.aspect_ratio
+    if alpha0 is None:
         raise ValueError(f"shape annealing starts from disks/spheres (or ellipses/spheroids), not "
                          f"{start.shape.name(start.dim)} particles")
     if start.box.walls or start.fixed is not None or start.gravity:
         raise ValueError("shape annealing runs in a periodic box: the input has walls, fixed particles or gravity")
-    alpha0 = 1.0 if kind == "sphere" else float(start.shape.alpha)
-    if check_start(orientations) is not None and kind != "sphere":
+    alpha0 = float(alpha0)
+    if check_start(orientations) is not None and start.shape.oriented:
         raise ValueError(f"--orientations {orientations} sets the first step's directions of a round start; the input "
                          f"{start.shape.name(start.dim)}s keep their own: leave --orientations out")
     if target == alpha0:

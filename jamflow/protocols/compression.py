@@ -218,7 +218,7 @@ def initial_packing(n, dim, sizes, potential, seed, phi0, shape="disk", walls=No
     axes = parse_walls(walls, int(dim))
     try:
         start = random_packing(int(n), int(dim), size_spec, phi0, int(seed), pot, particle,
-                               separated=particle.kind == "rigid", orientations=orientations)  # bodies: no overlaps (separated_positions)
+                               separated=particle.made_of_sites, orientations=orientations)  # bodies: no overlaps (separated_positions)
     except SeparationFailed:
         raise
     except ValueError as err:
@@ -337,7 +337,7 @@ CONTACT_RANGE = 1e-6  # ellipsoids: r / (smallest possible sigma) below this lea
 def _check_start(packing: Packing) -> None:
     """Refuse before any work a start the engines cannot evaluate: ellipses/spheroids with centres so
     close that the contact distance is undefined or imprecise, repulsive LJ with deep overlaps."""
-    if packing.shape.kind == "ellipsoid":
+    if packing.shape.elliptic:
         _check_contact_range(packing)
     if not packing.potential.soft_start:
         return
@@ -355,7 +355,7 @@ def deepest_overlap(packing: Packing) -> float:
         overlapping_sites,
     )
 
-    r, sigma = (overlapping_sites(packing) if packing.shape.kind == "rigid" else overlapping_pairs(packing))[-2:]
+    r, sigma = (overlapping_sites(packing) if packing.shape.made_of_sites else overlapping_pairs(packing))[-2:]
     return float((r / sigma).min()) if len(r) else 1.0
 
 
@@ -554,7 +554,7 @@ def close_gaps(engine, result: MinimizeResult, settings: CompressionSettings) ->
     from jamflow.minimize.polish import polish, polish_reason
 
     packing = engine.packing()
-    if packing.shape.kind != "sphere" or polish_reason(packing):
+    if not packing.shape.round or polish_reason(packing):
         return None
     if check_packing(packing, result.energy_per_particle, result.max_force).jammed:
         return None

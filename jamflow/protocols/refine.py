@@ -165,7 +165,7 @@ def check_vtol(packing: Packing, v_tol: float, force_tol: float = 1e-12) -> None
 
 def _check_scene(packing: Packing) -> None:
     """Refuse particles, potentials and boxes the refinement is not written for."""
-    if packing.shape.kind != "sphere":
+    if not packing.shape.double_double:
         raise ValueError(f"double-double refinement is written for disks and spheres, not "
                          f"{packing.shape.name(packing.dim)} particles")
     pot = packing.potential

@@ -91,7 +91,7 @@ class CompressionSettings:
             return self.phi0
         if gravity:
             return GRAVITY_PHI0.get(dim, math.nan)
-        rigid = shape is not None and dim in (2, 3) and parse_shape(shape, dim).kind == "rigid"
+        rigid = shape is not None and dim in (2, 3) and parse_shape(shape, dim).made_of_sites
         return (BODY_PHI0 if rigid else DEFAULT_PHI0).get(dim, math.nan)
 
     def as_dict(self) -> dict:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, fields
+from functools import cached_property
 
 from jamflow.engines.choose import ENGINES, engine_name
 from jamflow.mechanics.checks import check_packing
@@ -102,6 +103,12 @@ class JamSpec:
     def as_dict(self) -> dict:
         """The fields as plain values (JSON-serialisable)."""
         return asdict(self)
+
+    @cached_property
+    def particle(self):
+        """The shape object of ``shape`` (with ``contact``), parsed once: what ``prepare`` starts
+        from and what every check of the spec asks about the particles."""
+        return parse_shape(self.shape, self.dim, self.contact)
 
     @property
     def protocol_name(self) -> str:
@@ -216,8 +223,8 @@ def check_contact(spec: JamSpec) -> None:
     packing's checks after the whole jam (``HESSIAN_CONTACTS``)."""
     if spec.contact == "exact":
         return
-    shape = parse_shape(spec.shape, spec.dim)
-    if shape.kind != "ellipsoid":
+    shape = spec.particle  # the method is one of CONTACT_METHODS (check_boundaries)
+    if not shape.elliptic:
         raise ValueError(f"--contact {spec.contact} applies to ellipses/spheroids (--shape ellipse:ALPHA or "
                          f"spheroid:ALPHA, ALPHA != 1), not to {shape.name(spec.dim)} particles: leave --contact out")
     if spec.contact not in HESSIAN_CONTACTS:  # the checks of every jammed packing would fail after the whole jam
@@ -233,8 +240,9 @@ def prepare(spec: JamSpec):
     check_boundaries(spec)
     check_contact(spec)
     settings = compression_settings(spec)
+    particle = spec.particle if spec.dim in (2, 3) else spec.shape  # initial_packing refuses other dimensions first
     start = initial_packing(spec.n, spec.dim, spec.sizes, spec.potential, spec.seed,
-                            settings.start_phi(spec.dim, spec.gravity, spec.shape), spec.shape, spec.walls,
+                            settings.start_phi(spec.dim, spec.gravity, particle), particle, spec.walls,
                             spec.wall_type, spec.gravity, spec.contact, spec.orientations)
     if spec.gamma is not None:
         start = at_shear_strain(start, spec.gamma)  # refuses a strain that is not finite, or walls with a shear
@@ -260,7 +268,7 @@ def prepare(spec: JamSpec):
         engine_name(start, spec.minimizer, spec.engine, pressure=True)
         return psettings, start
     engine_name(start, spec.minimizer, spec.engine)  # refuse an engine that cannot run the scene, before work
-    if start.shape.kind == "rigid" and settings.minimizer.md_damping != "viscous":
+    if start.shape.made_of_sites and settings.minimizer.md_damping != "viscous":
         raise ValueError(f"--md-damping {settings.minimizer.md_damping} is for disks and spheres: rigid bodies are "
                          "damped by fix rigid langevin (set its rate with --damping)")
     check_float64_resolution(start, settings)
@@ -274,7 +282,7 @@ def check_float64_resolution(start, settings) -> None:
         check_resolution(start, settings)
     except ValueError as err:
         pot = start.potential
-        refinable = (start.shape.kind == "sphere" and pot.name == "spring" and getattr(pot, "alpha", None) == 2.0
+        refinable = (start.shape.double_double and pot.name == "spring" and getattr(pot, "alpha", None) == 2.0
                      and not start.box.walls and not start.gravity)
         if not refinable or "vtol" not in str(err):
             raise

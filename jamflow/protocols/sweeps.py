@@ -228,7 +228,7 @@ def _relax(sim, base: Packing, strain: Strain, amplitude: float, minimizer, base
 def touching(packing: Packing):
     """(i, j, r, sigma) of every overlapping pair (of sites of different bodies for rigid bodies,
     reported by body)."""
-    if packing.shape.kind == "rigid":
+    if packing.shape.made_of_sites:
         i, j, _, _, _, r, sigma = overlapping_sites(packing)
     else:
         i, j, _, r, sigma = overlapping_pairs(packing)

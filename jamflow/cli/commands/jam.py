@@ -123,16 +123,14 @@ def emit(args, start, settings) -> int:
     import shlex
     from pathlib import Path
 
-    from jamflow.decks.ellipsoids import emit_deck as emit_ellipsoid_deck
-    from jamflow.decks.jam import emit_deck
+    from jamflow.decks.shapes import JAM_DECKS
 
-    kind = start.shape.kind
-    if kind not in ("sphere", "ellipsoid"):
+    writer = JAM_DECKS.get(start.shape.kind)
+    if writer is None:
         raise ValueError(f"--emit-deck writes decks for disks/spheres and ellipses/spheroids, not {start.shape.name(start.dim)}")
     outputs = [args.emit_deck, Path(args.emit_deck).with_name(Path(args.emit_deck).stem + ".start.data")]
     for out in outputs:
         check_writable(out, args.force, "--emit-deck")
-    writer = emit_ellipsoid_deck if kind == "ellipsoid" else emit_deck
     with replacing(outputs if args.force else []):
         deck, data = writer(args.emit_deck, start, settings, out=Path(args.out).stem)
     print(f"wrote {deck} and {data}; run: cd {shlex.quote(str(deck.parent))} && lmp -in {shlex.quote(deck.name)}  "

@@ -93,7 +93,7 @@ class CompiledEngine:
         if self.kernels == "numba" and key not in self._looked_up:
             self._looked_up.add(key)
             shape, dim = self.template.shape, self.template.dim
-            what = shape.name(dim) if shape.kind != "rigid" else "rigid-body"
+            what = "rigid-body" if shape.made_of_sites else shape.name(dim)
             announce_compile(what, COMPILE_SECONDS.get(shape.kind, 10), kernel, args)
 
     # lifecycle ---------------------------------------------------------------------------------

@@ -26,49 +26,65 @@ def write_lammps_data(path, packing: Packing) -> Path:
       rigid-body centre) is the union's centre of mass; image flags keep each body whole.
     Densities use LAMMPS's 3D volumes (also in 2D), so the masses come out as stated."""
     warn_float64_only(packing, "a LAMMPS data file")
-    values, types = packing.species()
-    if packing.shape.kind == "rigid":
-        site_d = packing.diameters[:, None] * packing.shape.site_diameters[None, :]
-        values, types = np.unique(site_d, return_inverse=True)
-        types = types.reshape(site_d.shape)
+    values, n_atoms, counts, atoms = ATOM_STYLES[packing.shape.kind](packing)
     box = packing.box.to_lammps()
-    pos = _xyz(packing.box.wrap(packing.positions))
-    n, kind = packing.n, packing.shape.kind
-    atoms = n * (packing.shape.n_sites if kind == "rigid" else 1)
     lines = [f"jamflow {__version__} packing, phi = {packing.phi:.17g}, shape {packing.shape.spec(packing.dim)}", "",
-             f"{atoms} atoms", f"{len(values)} atom types"]
-    if kind == "ellipsoid":
-        lines.append(f"{n} ellipsoids")
+             f"{n_atoms} atoms", f"{len(values)} atom types", *counts]
     lines += ["", f"{box['xlo']:.17g} {box['xhi']:.17g} xlo xhi", f"{box['ylo']:.17g} {box['yhi']:.17g} ylo yhi",
               f"{box['zlo']:.17g} {box['zhi']:.17g} zlo zhi"]
     if packing.box.is_triclinic:
         lines.append(f"{box['xy']:.17g} {box['xz']:.17g} {box['yz']:.17g} xy xz yz")
-    if kind == "sphere":
-        vol = np.pi * packing.diameters**3 / 6.0  # LAMMPS sphere mass = density * 4/3 pi r^3, also in 2D
-        lines += ["", "Atoms # sphere", ""]
-        lines += [f"{k + 1} {types[k] + 1} {packing.diameters[k]:.17g} {1.0 / vol[k]:.17g} "
-                  f"{_row(pos[k])}" for k in range(n)]
-    elif kind == "ellipsoid":
-        a, b = packing.shape.axes(packing.diameters).T
-        quat = lammps_quaternions(packing)
-        lines += ["", "Atoms # ellipsoid", ""]
-        lines += [f"{k + 1} {types[k] + 1} 1 {6.0 / (np.pi * a[k] * b[k] * b[k]):.17g} {_row(pos[k])}" for k in range(n)]
-        lines += ["", "Ellipsoids", ""]
-        lines += [f"{k + 1} {a[k]:.17g} {b[k]:.17g} {b[k]:.17g} {_row(quat[k])}" for k in range(n)]
-    else:
-        shape, cell = packing.shape, packing.box.reduced()  # image flags count cells of the box LAMMPS holds
-        sites = shape.world_sites(packing.box.wrap(packing.positions), packing.orientations, packing.diameters)
-        inside, image = cell.images(sites.reshape(-1, packing.dim))
-        inside = _xyz(inside)
-        image = image if packing.dim == 3 else np.column_stack([image, np.zeros(len(image), int)])
-        mass = np.tile(shape.site_masses, n)
-        density = mass / (np.pi * site_d.ravel() ** 3 / 6.0)
-        lines += ["", "Atoms # hybrid", ""]
-        lines += [f"{a + 1} {types.flat[a] + 1} {_row(inside[a])} {site_d.flat[a]:.17g} {density[a]:.17g} "
-                  f"{a // shape.n_sites + 1} {image[a, 0]} {image[a, 1]} {image[a, 2]}" for a in range(atoms)]
+    lines += atoms
     with atomic_path(path) as tmp:
         tmp.write_text("\n".join(lines) + "\n")
     return Path(path)
+
+
+def _sphere_atoms(packing: Packing):
+    """(type sizes, atom count, extra count lines, the Atoms section) of disks/spheres."""
+    values, types = packing.species()
+    n, pos = packing.n, _xyz(packing.box.wrap(packing.positions))
+    vol = np.pi * packing.diameters**3 / 6.0  # LAMMPS sphere mass = density * 4/3 pi r^3, also in 2D
+    lines = ["", "Atoms # sphere", ""]
+    lines += [f"{k + 1} {types[k] + 1} {packing.diameters[k]:.17g} {1.0 / vol[k]:.17g} "
+              f"{_row(pos[k])}" for k in range(n)]
+    return values, n, [], lines
+
+
+def _ellipsoid_atoms(packing: Packing):
+    """Ellipses/spheroids: the Atoms and Ellipsoids sections."""
+    values, types = packing.species()
+    n, pos = packing.n, _xyz(packing.box.wrap(packing.positions))
+    a, b = packing.shape.axes(packing.diameters).T
+    quat = lammps_quaternions(packing)
+    lines = ["", "Atoms # ellipsoid", ""]
+    lines += [f"{k + 1} {types[k] + 1} 1 {6.0 / (np.pi * a[k] * b[k] * b[k]):.17g} {_row(pos[k])}" for k in range(n)]
+    lines += ["", "Ellipsoids", ""]
+    lines += [f"{k + 1} {a[k]:.17g} {b[k]:.17g} {b[k]:.17g} {_row(quat[k])}" for k in range(n)]
+    return values, n, [f"{n} ellipsoids"], lines
+
+
+def _body_atoms(packing: Packing):
+    """Rigid bodies: one atom per site, types by site diameter, molecule = body, image flags."""
+    n, shape, cell = packing.n, packing.shape, packing.box.reduced()  # image flags count cells of the box LAMMPS holds
+    site_d = packing.diameters[:, None] * shape.site_diameters[None, :]
+    values, types = np.unique(site_d, return_inverse=True)
+    types = types.reshape(site_d.shape)
+    atoms = n * shape.n_sites
+    sites = shape.world_sites(packing.box.wrap(packing.positions), packing.orientations, packing.diameters)
+    inside, image = cell.images(sites.reshape(-1, packing.dim))
+    inside = _xyz(inside)
+    image = image if packing.dim == 3 else np.column_stack([image, np.zeros(len(image), int)])
+    mass = np.tile(shape.site_masses, n)
+    density = mass / (np.pi * site_d.ravel() ** 3 / 6.0)
+    lines = ["", "Atoms # hybrid", ""]
+    lines += [f"{a + 1} {types.flat[a] + 1} {_row(inside[a])} {site_d.flat[a]:.17g} {density[a]:.17g} "
+              f"{a // shape.n_sites + 1} {image[a, 0]} {image[a, 1]} {image[a, 2]}" for a in range(atoms)]
+    return values, atoms, [], lines
+
+
+# shape kind -> its atom style: packing -> (type sizes, atom count, extra count lines, sections)
+ATOM_STYLES = {"sphere": _sphere_atoms, "ellipsoid": _ellipsoid_atoms, "rigid": _body_atoms}
 
 
 def lammps_quaternions(packing: Packing) -> np.ndarray:

@@ -7,7 +7,7 @@ potential (``jamflow.engines.lammps.pair_styles``). Every command is recorded in
 ``LammpsError`` naming the command and LAMMPS's message.
 
 Atoms have ids 1..N in packing order; everything extracted is returned in that order.
-Rigid bodies (``shape.kind == "rigid"``) are one atom per site, one molecule per body, relaxed
+Rigid bodies (``shape.made_of_sites``) are one atom per site, one molecule per body, relaxed
 by damped rigid-body dynamics only (``jamflow.engines.lammps.bodies``: LAMMPS's minimisers
 ignore ``fix rigid``); positions, forces and torques are then those of the bodies.
 
@@ -95,10 +95,10 @@ class LammpsEngine:
             raise ValueError(f"LAMMPS walls are fix wall/harmonic, the exact wall law only for the linear spring "
                              f"with at most a few discrete sizes, not potential {packing.potential.spec} with "
                              f"{len(packing.species()[0])} sizes; use engine numba")
-        if packing.shape.kind == "rigid" and comm is not None:
+        if packing.shape.made_of_sites and comm is not None:
             raise ValueError("the LAMMPS engine runs rigid bodies on one process only (not tested under MPI); "
                              "drop the communicator")
-        self.bodies = BodySites(packing) if packing.shape.kind == "rigid" else None
+        self.bodies = BodySites(packing) if packing.shape.made_of_sites else None
         self.template = packing
         self.commands: list[str] = []
         self._turned = False  # orientations set since the last run (compute property/atom is stale)
@@ -135,7 +135,7 @@ class LammpsEngine:
 
     @property
     def _ellipsoids(self) -> bool:
-        return self.template.shape.kind == "ellipsoid"
+        return self.template.shape.elliptic
 
     def _setup(self, packing: Packing, skin: float) -> None:
         data = Path(self._tmp.name) / "start.data"

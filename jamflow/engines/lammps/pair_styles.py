@@ -24,7 +24,7 @@ def uses_harmonic_cut(packing: Packing) -> bool:
 
 def pair_setup(packing: Packing, lmp=None) -> list[str]:
     """LAMMPS commands that define the pair interaction for ``packing``."""
-    if packing.shape.kind == "ellipsoid":
+    if packing.shape.elliptic:
         return ellipsoid_commands(packing, lmp)
     if uses_harmonic_cut(packing):
         return harmonic_cut_commands(packing)

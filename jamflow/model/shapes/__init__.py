@@ -4,13 +4,14 @@ contact distance, rigid bodies of fused spherical sites; orientations; contact d
 from jamflow.model.shapes.contact_distance import (APART, METHODS, OVERLAPPING, TOUCHING, contact_distance,
                                                    contact_distance_gradient, contact_function, contact_lambda,
                                                    lambda_polynomial, overlap_state, truncation_fallbacks)
-from jamflow.model.shapes.shape import SPHERE, Ellipsoid, RigidBody, Sphere, shape_from_attrs
+from jamflow.model.shapes.shape import SHAPES, SPHERE, Ellipsoid, RigidBody, Sphere, shape_from_attrs
 from jamflow.model.shapes.parse import parse_shape
 
 __all__ = [
     "APART",
     "METHODS",
     "OVERLAPPING",
+    "SHAPES",
     "SPHERE",
     "TOUCHING",
     "Ellipsoid",

@@ -113,8 +113,7 @@ def parse_body(spec: str, kind: str, fields: list[str], dim: int):
     if len(fields) != 2:
         raise ValueError(f"shape {spec!r}: {kind} takes two parameters; use {usage}")
     first, second = _numbers(spec, fields, usage)
-    if kind == "nmer":
-        return linear_nmer(first, second, dim, spec)
-    if kind == "dimer":
-        return asymmetric_dimer(first, second, dim, spec)
-    return bent_trimer(first, second, dim, spec)
+    return BODIES[kind](first, second, dim, spec)
+
+
+BODIES = {"nmer": linear_nmer, "dimer": asymmetric_dimer, "trimer": bent_trimer}  # spec word -> its body

@@ -2,12 +2,10 @@
 
 from __future__ import annotations
 
-import math
+from jamflow.model.shapes.nmers import BODIES, parse_body
+from jamflow.model.shapes.shape import SHAPES
 
-from jamflow.model.shapes.shape import SPHERE, Ellipsoid
-
-SHAPE_USAGE = ("disk | sphere | ellipse:ALPHA (2D) | spheroid:ALPHA (3D) | nmer:N:ALPHA | dimer:ALPHA:S | "
-               "trimer:ALPHA:C")
+SHAPE_USAGE = " | ".join(cls.spec_usage for cls in SHAPES.values())
 
 
 def parse_shape(spec, dim: int, contact: str = "exact"):
@@ -44,27 +42,18 @@ def parse_shape(spec, dim: int, contact: str = "exact"):
             return spec
         raise ValueError(f"shape must be a spec string ({SHAPE_USAGE}) or a shape object, got {spec!r}")
     text = spec.strip().lower()
-    kind, _, rest = text.partition(":")
-    if kind in ("disk", "sphere") and not rest:
-        return SPHERE
-    if kind in ("ellipse", "spheroid"):
-        wanted = 2 if kind == "ellipse" else 3
-        if dim != wanted:
-            raise ValueError(f"shape {spec!r}: '{kind}' is {wanted}D, the packing is {dim}D; use "
-                             f"{'spheroid' if dim == 3 else 'ellipse'}:ALPHA")
-        try:
-            alpha = float(rest)
-        except ValueError:
-            raise ValueError(f"shape {spec!r}: ALPHA in {kind}:ALPHA must be a number, e.g. {kind}:1.5") from None
-        if not (math.isfinite(alpha) and alpha > 0):
-            raise ValueError(f"shape {spec!r}: ALPHA must be a finite number > 0")
-        if alpha == 1.0:
-            return SPHERE
-        shape = Ellipsoid(alpha, contact)
-        shape.check(dim)
-        return shape
-    if kind in ("nmer", "dimer", "trimer"):
-        from jamflow.model.shapes.nmers import parse_body
+    word, _, rest = text.partition(":")
+    shape = SPECS[word](spec, word, rest, dim, contact) if word in SPECS else None
+    if shape is None:
+        raise ValueError(f"unknown shape {spec!r}; use {SHAPE_USAGE}")
+    return shape
 
-        return parse_body(spec, kind, rest.split(":") if rest else [], dim)
-    raise ValueError(f"unknown shape {spec!r}; use {SHAPE_USAGE}")
+
+def _body(spec, word, rest, dim, contact):
+    return parse_body(spec, word, rest.split(":") if rest else [], dim)
+
+
+# the first word of a --shape spec -> its parser (spec, word, the rest after ':', dim, contact), None if not its spec:
+# each shape class's ``spec_words``, and the rigid bodies of ``shapes.nmers``
+SPECS = {**{word: cls.from_spec for cls in SHAPES.values() for word in cls.spec_words},
+         **{word: _body for word in BODIES}}

@@ -15,7 +15,27 @@ round, an orientation (``jamflow.model.shapes.rotations``). A shape provides:
   turns rotations into lengths (d_k theta) and torques into forces (tau / d_k);
 - ``reach(scale)``: the radius of the smallest centred sphere that holds the particle (pair
   search and neighbour-list skin); ``smallest_contact(scale)``: the smallest contact distance;
-- ``attrs()`` / ``shape_from_attrs``: the ``shape`` attribute of packing files.
+- ``spec_words``, ``spec_usage`` and ``from_spec``: its ``--shape`` specs (``shapes.parse``);
+- ``attrs()`` / ``from_attrs`` (``shape_from_attrs``): the ``shape`` attribute of packing files;
+  ``datasets(positions, orientations, scale)``: the shape's datasets in packing files;
+- ``contact_distances(packing, i, j, dr)``: sigma_ij of particle pairs (not for bodies of sites).
+
+What a shape can do is declared once, on its class, and read by every layer (no layer tests
+the ``kind`` string; per-kind code in a higher layer sits in one table per layer keyed by
+``kind``, as ``engines.compiled.kernels.MODULES``):
+
+- ``oriented``: particles carry an orientation;
+- ``round``: a disk/sphere, the contact distance (a_i + a_j)/2 along the centre line (the
+  Newton minimiser, the polish's disk/sphere pair list, gap closing, rough walls, half-space floaters);
+- ``elliptic``: an ellipse/spheroid with ``axes`` and a contact-distance method (``contact``);
+- ``made_of_sites``: a rigid body of spherical sites (``world_sites``, ``n_sites``), which
+  touches site by site (``model.pairs.overlapping_sites``) and starts without overlaps;
+- ``sphere_contacts``: every contact is between two spheres (particles or sites), the
+  least-squares model of the Gauss-Newton polish;
+- ``bounded``: walls, gravity and fixed particles are written for it;
+- ``double_double``: double-double coordinates (``Packing.extended``, refinement) are written for it;
+- ``aspect_ratio``: the ALPHA of shape annealing (1 for disks/spheres, None where it has none).
+``SHAPES`` registers every class by its ``kind``.
 The trivial zero modes of a periodic packing of any shape are the d uniform translations.
 
 Contact laws (how two particles of a shape overlap) live in the engines and the numpy
@@ -52,7 +72,27 @@ class Sphere:
 
     kind = "sphere"  #: the shape's kind in files and tables
     oriented = False  #: particles have no orientation
+    round = True  #: a disk/sphere: sigma_ij = (a_i + a_j) / 2 along the centre line
+    elliptic = False  #: not an ellipse/spheroid
+    made_of_sites = False  #: not a body of spherical sites
+    sphere_contacts = True  #: every contact is between two spheres (the polish's least squares)
+    bounded = True  #: walls, gravity and fixed particles are written for it
+    double_double = True  #: double-double coordinates and refinement are written for it
+    aspect_ratio = 1.0  #: ALPHA of shape annealing
     force_tol_base = FORCE_TOL_BASE  #: default force tolerance before box scaling (mechanics.force_floor)
+
+    spec_words = ("disk", "sphere")  #: the first words of its --shape specs (``model.shapes.parse``)
+    spec_usage = "disk | sphere"  #: its specs in the --shape usage line
+
+    @classmethod
+    def from_spec(cls, spec: str, word: str, rest: str, dim: int, contact: str):
+        """The shape of a --shape spec ``word[:rest]`` (None: not a spec of this shape)."""
+        return None if rest else SPHERE
+
+    @classmethod
+    def from_attrs(cls, attrs: dict):
+        """The disk/sphere of a packing file's ``shape`` attributes."""
+        return SPHERE
 
     def name(self, dim: int) -> str:
         """"disk" in 2D, "sphere" in 3D."""
@@ -99,6 +139,14 @@ class Sphere:
         """The ``shape`` attribute of a packing file: {"kind": "sphere"}."""
         return {"kind": self.kind}
 
+    def datasets(self, positions, orientations, scale) -> dict:
+        """No datasets of its own in packing files."""
+        return {}
+
+    def contact_distances(self, packing, i, j, dr=None) -> np.ndarray:
+        """(a_i + a_j) / 2 (``dr`` is not needed)."""
+        return 0.5 * (packing.diameters[i] + packing.diameters[j])
+
 
 @dataclass(frozen=True)
 class Ellipsoid:
@@ -111,7 +159,45 @@ class Ellipsoid:
 
     kind = "ellipsoid"  #: the shape's kind in files and tables
     oriented = True  #: particles carry orientations
+    round = False  #: not a disk/sphere
+    elliptic = True  #: an ellipse/spheroid: ``axes`` and a contact-distance method
+    made_of_sites = False  #: not a body of spherical sites
+    sphere_contacts = False  #: contacts are between ellipses/spheroids
+    bounded = False  #: walls, gravity and fixed particles are not written for it
+    double_double = False  #: float64 only
     force_tol_base = ELLIPSOID_FORCE_TOL_BASE  #: default force tolerance before box scaling (mechanics.force_floor)
+
+    spec_words = ("ellipse", "spheroid")  #: the first words of its --shape specs (``model.shapes.parse``)
+    spec_usage = "ellipse:ALPHA (2D) | spheroid:ALPHA (3D)"  #: its specs in the --shape usage line
+
+    @classmethod
+    def from_spec(cls, spec: str, word: str, rest: str, dim: int, contact: str):
+        """``ellipse:ALPHA`` (2D) or ``spheroid:ALPHA`` (3D); ALPHA = 1 gives the disk/sphere."""
+        wanted = {"ellipse": 2, "spheroid": 3}[word]
+        if dim != wanted:
+            raise ValueError(f"shape {spec!r}: '{word}' is {wanted}D, the packing is {dim}D; use "
+                             f"{'spheroid' if dim == 3 else 'ellipse'}:ALPHA")
+        try:
+            alpha = float(rest)
+        except ValueError:
+            raise ValueError(f"shape {spec!r}: ALPHA in {word}:ALPHA must be a number, e.g. {word}:1.5") from None
+        if not (math.isfinite(alpha) and alpha > 0):
+            raise ValueError(f"shape {spec!r}: ALPHA must be a finite number > 0")
+        if alpha == 1.0:
+            return SPHERE
+        shape = cls(alpha, contact)
+        shape.check(dim)
+        return shape
+
+    @classmethod
+    def from_attrs(cls, attrs: dict):
+        """The ellipse/spheroid of a packing file's ``shape`` attributes (alpha, contact)."""
+        return cls(float(attrs["alpha"]), str(attrs.get("contact", "exact")))
+
+    @property
+    def aspect_ratio(self) -> float:
+        """ALPHA of shape annealing: ``alpha``."""
+        return float(self.alpha)
 
     def __post_init__(self):
         from jamflow.model.shapes.contact_distance import METHODS
@@ -189,6 +275,20 @@ class Ellipsoid:
         """The ``shape`` attribute of a packing file: kind, alpha and contact method."""
         return {"kind": self.kind, "alpha": float(self.alpha), "contact": self.contact}
 
+    def datasets(self, positions, orientations, scale) -> dict:
+        """``axes`` (N, 2): full lengths along and across the director."""
+        return {"axes": self.axes(scale)}
+
+    def contact_distances(self, packing, i, j, dr) -> np.ndarray:
+        """The contact distance of the shape's method (``shapes.contact_distance``) along the
+        separations ``dr`` (P, d) = r_i - r_j."""
+        from jamflow.model.shapes.contact_distance import contact_distance
+
+        axes, u = self.axes(packing.diameters), packing.directors
+        r_hat = dr / np.linalg.norm(dr, axis=1)[:, None]
+        return contact_distance(axes[i, 0], axes[i, 1], axes[j, 0], axes[j, 1], r_hat, u[i], u[j],
+                                method=self.contact)
+
 
 @dataclass(frozen=True, eq=False)
 class RigidBody:
@@ -214,7 +314,23 @@ class RigidBody:
 
     kind = "rigid"  #: the shape's kind in files and tables
     oriented = True  #: particles carry orientations
+    round = False  #: not a disk/sphere
+    elliptic = False  #: not an ellipse/spheroid
+    made_of_sites = True  #: a body of spherical sites, which touches site by site
+    sphere_contacts = True  #: every contact is between two spherical sites (the polish's least squares)
+    bounded = False  #: walls, gravity and fixed particles are not written for it
+    double_double = False  #: float64 only
+    aspect_ratio = None  #: no ALPHA of shape annealing
     force_tol_base = FORCE_TOL_BASE  #: default force tolerance before box scaling (mechanics.force_floor)
+    #: no spec words of its own: its specs name the body (nmer, dimer, trimer; ``shapes.nmers``, ``parse.SPECS``)
+    spec_words = ()
+    spec_usage = "nmer:N:ALPHA | dimer:ALPHA:S | trimer:ALPHA:C"  #: its specs in the --shape usage line
+
+    @classmethod
+    def from_attrs(cls, attrs: dict):
+        """The body a packing file's ``shape`` attributes describe (sites in the body frame)."""
+        return cls(np.array(json.loads(attrs["sites"])), np.array(json.loads(attrs["site_diameters"])),
+                   str(attrs.get("label", "rigid")), body_frame=True)
 
     def __post_init__(self):
         sites = np.array(self.sites, dtype=float)
@@ -346,6 +462,15 @@ class RigidBody:
         return {"kind": self.kind, "label": self.label, "sites": json.dumps(self.sites.tolist()),
                 "site_diameters": json.dumps(self.site_diameters.tolist())}
 
+    def datasets(self, positions, orientations, scale) -> dict:
+        """World sites (N, S, d) and site diameters (N, S)."""
+        return {"sites": self.world_sites(positions, orientations, scale),
+                "site_diameters": _scale(scale)[:, None] * self.site_diameters[None, :]}
+
+    def contact_distances(self, packing, i, j, dr=None) -> np.ndarray:
+        """Bodies touch site by site (``model.pairs.overlapping_sites``): ValueError."""
+        raise ValueError(f"{self.name(packing.dim)} particles touch site by site; use overlapping_sites")
+
 
 def _check_fused(sites: np.ndarray, diam: np.ndarray) -> None:
     """Sites of a fused body must overlap (or touch) into one connected piece and must not
@@ -371,18 +496,15 @@ def _check_fused(sites: np.ndarray, diam: np.ndarray) -> None:
 SPHERE = Sphere()
 
 
+SHAPES = {cls.kind: cls for cls in (Sphere, Ellipsoid, RigidBody)}  #: every shape class by its kind
+#: what every shape class declares, True or False (module docstring)
+CAPABILITIES = ("oriented", "round", "elliptic", "made_of_sites", "sphere_contacts", "bounded", "double_double")
+
+
 def shape_from_attrs(attrs: dict):
     """The shape a packing file's ``shape`` attributes describe."""
     kind = attrs.get("kind", "sphere")
-    if kind == "sphere":
-        return SPHERE
-    if kind == "ellipsoid":
-        return Ellipsoid(float(attrs["alpha"]), str(attrs.get("contact", "exact")))
-    if kind == "rigid":
-        return RigidBody(np.array(json.loads(attrs["sites"])), np.array(json.loads(attrs["site_diameters"])),
-                         str(attrs.get("label", "rigid")), body_frame=True)
-    raise ValueError(f"unknown particle shape kind {kind!r} in packing file")
-
-
-
-
+    cls = SHAPES.get(kind)
+    if cls is None:
+        raise ValueError(f"unknown particle shape kind {kind!r} in packing file")
+    return cls.from_attrs(attrs)
