@@ -157,3 +157,36 @@ def test_a_target_pressure_runs_serial_with_one_warning():
     result, line = _one_warning(lambda: jam_at_pressure(start, PressureSettings((1e-3,)),
                                                         engine_options={"threads": 2}))
     assert "target pressure" in line and result.packing.n == 64
+
+
+def test_jam_threads_runs_and_writes_a_checked_packing(tmp_path, capsys):
+    from jamflow.cli.app import main
+    from jamflow.io.packing_file import load_packing
+
+    out = tmp_path / "p.h5"
+    assert main(["jam", "--quiet", "--n", "64", "--seed", "2", "--threads", "2", "--out", str(out)]) == 0
+    assert "numba, 2 threads" in capsys.readouterr().out
+    assert load_packing(out).n == 64
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--threads", "0"], "--threads must be an integer >= 1"),
+    (["--threads", "2", "--engine", "lammps"], "--threads runs the compiled engine's FIRE; this jam runs in LAMMPS"),
+    (["--threads", "2", "--emit-deck", "x.lmp"], "--emit-deck writes a LAMMPS deck"),
+])
+def test_jam_refuses_a_bad_threads_option_before_any_work(tmp_path, capsys, args, message):
+    from jamflow.cli.app import main
+
+    out = tmp_path / "x.h5"
+    assert main(["jam", "--quiet", "--n", "64", *args, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err
+    assert not out.exists()
+
+
+def test_jam_refuses_a_threads_option_that_is_not_an_integer(capsys):
+    from jamflow.cli.app import main
+
+    with pytest.raises(SystemExit) as stop:
+        main(["jam", "--quiet", "--n", "64", "--threads", "two"])
+    assert stop.value.code == 2 and "--threads: invalid int value" in capsys.readouterr().err
