@@ -43,7 +43,8 @@ BENCHMARKS: dict[str, Benchmark] = {
         ["--sizes", "256", "--skins", "0.3", "--repeats", "1", "--out", "{tmp}/kernel.csv"]),
     "threads": Benchmark(
         "speed", "the compiled engine's threaded FIRE against its serial kernels per iteration, side by side (2D, 3D)",
-        ["--sizes", "512", "--sizes-3d", "256", "--iterations", "50", "--repeats", "1", "--out", "{tmp}/threads.csv"]),
+        ["--sizes", "512", "--sizes-3d", "256", "--iterations", "50", "--repeats", "1", "--relax", "100",
+         "--out", "{tmp}/threads.csv"]),
     "engines": Benchmark(
         "speed", "LAMMPS FIRE against the compiled FIRE: cost per iteration and whole packings",
         ["--sizes", "256", "--iterations", "200", "--reps", "1", "--jam-n", "64", "--jam-seeds", "1",

@@ -5,13 +5,15 @@ in one process on the same state (docs/notes/threads.md).
     python benchmarks/threads.py --out docs/notes/threads.csv
 
 The state: a random start just above a typical onset (2D 'bi:1.4:0.5' at phi = 0.845, 3D 'mono' at
-phi = 0.645, seed 1). From that same start each kernel runs ``--iterations`` FIRE iterations (one
+phi = 0.645, seed 1), relaxed by ``--relax`` serial FIRE iterations (untimed). From that same state each kernel runs ``--iterations`` FIRE iterations (one
 window, force tolerance 1e-300: no early stop; pair-list rebuilds included, as in a jam), the
 kernels alternating ``--repeats`` times. Wall time (time.perf_counter: what threads are for) and
 CPU time of the process (time.process_time: all threads) per iteration; ``load`` is the 1-minute
 load average as the row starts (the machine's other jobs share its cores). The threaded path's
 first use compiles its kernels (numba, ~15 s once per cache): a warm-up window of each kernel runs
-before the timings. Run under ``flock /tmp/jamflow-bench.lock``.
+before the timings. The engine sets OMP_WAIT_POLICY=PASSIVE where neither it nor GOMP_SPINCOUNT is
+set (``compiled.threads.passive_waits``); run with OMP_WAIT_POLICY=ACTIVE or GOMP_SPINCOUNT=N to
+time the others. Run under ``flock /tmp/jamflow-bench.lock``.
 """
 
 from __future__ import annotations
@@ -31,13 +33,19 @@ from jamflow.minimize.settings import MinimizerSettings
 from jamflow.protocols.compression import initial_packing
 
 COLUMNS = ["dim", "n", "kernels", "threads", "repeat", "iterations", "wall_ms_per_iteration",
-           "cpu_ms_per_iteration", "energy", "load", "numba_threads", "threading_layer", "omp_wait_policy"]
+           "cpu_ms_per_iteration", "energy", "load", "numba_threads", "threading_layer", "omp_wait_policy", "gomp_spincount"]
 START = {2: ("bi:1.4:0.5", 0.845), 3: ("mono", 0.645)}
 
 
-def start_state(n: int, dim: int, seed: int = 1):
+def start_state(n: int, dim: int, relax: int, seed: int = 1):
+    """The random start, relaxed by ``relax`` serial FIRE iterations (past the first, rebuild-heavy
+    iterations of a raw random start: the state a jam's minimisations near onset start from)."""
     sizes, phi = START[dim]
-    return initial_packing(n, dim, sizes, "spring", seed, phi)
+    start = initial_packing(n, dim, sizes, "spring", seed, phi)
+    with CompiledEngine(start) as engine:
+        with engine.minimizer_session(MinimizerSettings(), 1e-300) as window:
+            window(relax)
+        return engine.packing()
 
 
 def timed_window(engine: CompiledEngine, start, iterations: int):
@@ -49,8 +57,8 @@ def timed_window(engine: CompiledEngine, start, iterations: int):
         return time.perf_counter() - t0, time.process_time() - c0, done.iterations, done.objective
 
 
-def run_size(dim: int, n: int, threads: int, iterations: int, repeats: int, out: Path) -> dict:
-    start = start_state(n, dim)
+def run_size(dim: int, n: int, threads: int, iterations: int, repeats: int, relax: int, out: Path) -> dict:
+    start = start_state(n, dim, relax)
     engines = {"serial": CompiledEngine(start), "threaded": CompiledEngine(start, threads=threads)}
     for engine in engines.values():  # warm-up: compiles (threaded, first use) and loads the kernels
         timed_window(engine, start, 20)
@@ -64,7 +72,8 @@ def run_size(dim: int, n: int, threads: int, iterations: int, repeats: int, out:
                    "iterations": done, "wall_ms_per_iteration": round(wall / done * 1e3, 4),
                    "cpu_ms_per_iteration": round(cpu / done * 1e3, 4), "energy": f"{energy:.12g}",
                    "load": round(load, 2), "numba_threads": numba.get_num_threads(),
-                   "threading_layer": _layer(), "omp_wait_policy": os.environ.get("OMP_WAIT_POLICY", "")}
+                   "threading_layer": _layer(), "omp_wait_policy": os.environ.get("OMP_WAIT_POLICY", ""),
+                   "gomp_spincount": os.environ.get("GOMP_SPINCOUNT", "")}
             append_row(out, COLUMNS, row)
             walls[name].append(wall / done)
             cpus[name].append(cpu / done)
@@ -91,6 +100,7 @@ def main(argv=None):
     ap.add_argument("--sizes-3d", type=int, nargs="*", default=[4096], help="3D N")
     ap.add_argument("--iterations", type=int, default=2000)
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--relax", type=int, default=2000, help="serial FIRE iterations from the random start, untimed")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--out", default=str(scratch("threads.csv")))
     args = ap.parse_args(argv)
@@ -98,7 +108,7 @@ def main(argv=None):
           f"{numba.__version__} at most {numba.config.NUMBA_NUM_THREADS} threads", flush=True)
     for dim, sizes in ((2, args.sizes), (3, args.sizes_3d)):
         for n in sizes:
-            run_size(dim, n, args.threads, args.iterations, args.repeats, Path(args.out))
+            run_size(dim, n, args.threads, args.iterations, args.repeats, args.relax, Path(args.out))
     print(f"load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}", flush=True)
 
 

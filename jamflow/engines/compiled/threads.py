@@ -32,6 +32,7 @@ serial kernels: docs/notes/threads.md (benchmarks/threads.py).
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 
@@ -346,6 +347,17 @@ def fire(m, inc, x, v, f, virial, state, x_built, half_skin_sq, max_steps, ftol,
     return max_steps, CAP, energy
 
 
+def passive_waits() -> None:
+    """OMP_WAIT_POLICY=PASSIVE unless OMP_WAIT_POLICY or GOMP_SPINCOUNT is set, before numba's OpenMP
+    thread pool starts (libgomp reads it once, at load; later it changes nothing). A thread that
+    reaches a barrier first then sleeps instead of spinning (GNU OpenMP's default: up to ~300 000
+    spins). On cores shared with other jobs a spinning thread takes the time slice the other one
+    needs: 2D N = 16384 ran 5-7x slower than serial per iteration with spinning and 1.3x slower with
+    passive waits, at a load of 4-6 on 2 cores (docs/notes/threads.md)."""
+    if "OMP_WAIT_POLICY" not in os.environ and "GOMP_SPINCOUNT" not in os.environ:
+        os.environ["OMP_WAIT_POLICY"] = "PASSIVE"
+
+
 class ThreadedKernels:
     """``fire.fire`` and ``fire.forces`` (the engine's arguments) on ``threads`` numba threads, for the
     scenes ``uncovered`` passes; the pair list's ``incidence`` is made when a new list arrives."""
@@ -353,6 +365,7 @@ class ThreadedKernels:
     def __init__(self, threads: int, what: str):
         self.threads = threads
         self.what = what  # the compile notice's name, e.g. "threaded disk"
+        passive_waits()
         self._model = None
         self._inc = None
 
