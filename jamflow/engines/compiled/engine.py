@@ -109,8 +109,8 @@ class CompiledEngine:
         if self._warned:
             return
         self._warned = True
-        warnings.warn(f"jamflow: threads={threads} runs disks and spheres with a spring law in a periodic box; this "
-                      f"scene has {why}: running the serial kernels", RuntimeWarning, stacklevel=3)
+        warnings.warn(f"jamflow: threads={threads} covers disks and spheres with a spring law in a periodic box, not "
+                      f"{why}: the serial kernels run this scene", RuntimeWarning, stacklevel=3)
 
     def _announce(self, kernel, args) -> None:
         """One line on stderr before numba compiles this shape's kernels (``compiled.announce_compile``);
@@ -242,6 +242,8 @@ class CompiledEngine:
                 self._kernels, self.kernels = self._serial
 
         def window(steps: int):
+            if self._threaded is not None:  # which kernels ran (summary lines)
+                self.kernels = self._threaded[1] if self._kernels is self._threaded[0] else self._serial[1]
             state = fire.fire_state(settings.timestep * self._time_unit)
             v, w, u = np.zeros_like(self._x), np.zeros_like(self._g), np.zeros_like(self._gb)
             done = 0
@@ -274,8 +276,8 @@ class CompiledEngine:
             if pressure is not None:  # back to a fixed box
                 self._field = make_field(self.packing())
                 self._gb = np.zeros(0)
-                if self._threaded is not None:
-                    self._kernels, self.kernels = self._threaded
+                if self._threaded is not None:  # the label stays the serial one until a threaded window runs
+                    self._kernels = self._threaded[0]
 
     def _cell_valid(self) -> bool:
         """The field's cell matrix is finite, with positive side lengths and a volume below

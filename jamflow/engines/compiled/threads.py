@@ -87,16 +87,16 @@ def check_threads(threads) -> int:
 
 
 def uncovered(packing, pressure: bool = False) -> str | None:
-    """Why the threaded kernels do not run this scene (the engine then runs its serial ones), or None."""
+    """What in this scene the threaded kernels do not run (the engine then runs its serial ones), or None."""
     if packing.shape.kind != "sphere":
-        return f"{packing.shape.name(packing.dim)} particles (they run disks and spheres)"
+        return f"{packing.shape.name(packing.dim)} particles"
     needs = scene_boundaries(packing)
     if needs:
-        return f"{' and '.join(sorted(needs))} (they run periodic boxes without an external field)"
+        return " and ".join(sorted(needs))
     if type(packing.potential.params) is not SpringParams:
-        return f"potential {packing.potential.spec} (they run the spring laws: spring, hertz, spring:ALPHA)"
+        return f"the potential {packing.potential.spec}"
     if pressure:
-        return "a target pressure (they do not move the box)"
+        return "a target pressure (box coordinates)"
     return None
 
 
