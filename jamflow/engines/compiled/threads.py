@@ -61,7 +61,7 @@ from jamflow.engines.compiled.fire import (
 from jamflow.engines.compiled.laws import energy_force
 from jamflow.model.potentials import SpringParams
 
-CHUNKS = 16  # fixed pieces of the pair list and of the particles (never the thread count)
+CHUNKS = 16  # fixed index ranges of the particles (never the thread count)
 COMPILE_SECONDS = 15  # cold compile of these kernels (announced)
 # per-chunk partial sums of the force gather: v.f, v.v, f.f, max |v|, max |f_i|^2, max |x_i - x_built_i|^2
 VF, VV, FF, VMAX, FMAX2, MOVED2 = range(6)
@@ -371,6 +371,7 @@ class ThreadedKernels:
 
     def _incidence(self, model, n):
         if model is not self._model:
+            announce_compile(self.what, COMPILE_SECONDS, incidence, (model.i, model.j, n))  # the first kernel run
             self._inc = incidence(model.i, model.j, n)
             self._model = model
         return self._inc
