@@ -54,6 +54,7 @@ def _contacts(packing, positions):
 
 
 @two_threads
+@pytest.mark.filterwarnings("ignore:jamflow. threads=2, but numba runs at most 1")  # on purpose: 1 thread
 @pytest.mark.parametrize("dim, potential", [(2, "spring"), (3, "spring"), (2, "hertz")])
 def test_a_minimisation_gives_the_same_bits_on_one_and_on_two_threads(dim, potential):
     start = _start(n=256 if dim == 2 else 128, dim=dim, potential=potential)
@@ -128,11 +129,11 @@ def test_the_lammps_engine_takes_no_threads():
         open_engine(_start(n=64), engine="lammps", threads=2)
 
 
-def _one_warning(make):
+def _one_warning(make, about="threads=2"):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         value = make()
-    lines = [str(w.message) for w in caught if "threads=2" in str(w.message)]
+    lines = [str(w.message) for w in caught if about in str(w.message)]
     assert len(lines) == 1, lines
     return value, lines[0]
 
@@ -191,3 +192,11 @@ def test_jam_refuses_a_threads_option_that_is_not_an_integer(capsys):
     with pytest.raises(SystemExit) as stop:
         main(["jam", "--quiet", "--n", "64", "--threads", "two"])
     assert stop.value.code == 2 and "--threads: invalid int value" in capsys.readouterr().err
+
+
+def test_more_threads_than_numba_runs_are_capped_with_one_warning():
+    start = _start(n=64)
+    ask = numba.config.NUMBA_NUM_THREADS + 1
+    engine, line = _one_warning(lambda: CompiledEngine(start, threads=ask), f"threads={ask}")
+    assert f"numba runs at most {numba.get_num_threads()}" in line
+    assert engine.threads == numba.get_num_threads() and engine.kernels.startswith("numba, ")

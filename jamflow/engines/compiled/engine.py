@@ -100,10 +100,14 @@ class CompiledEngine:
             if why:
                 self._warn_serial(threads, why)
             else:
-                self._threaded = (ThreadedKernels(threads, f"threaded {packing.shape.name(packing.dim)}"),
-                                  f"numba, {threads} threads")
+                kernels = ThreadedKernels(threads, f"threaded {packing.shape.name(packing.dim)}")
+                if kernels.available < threads:
+                    warnings.warn(f"jamflow: threads={threads}, but numba runs at most {kernels.available} here "
+                                  "(NUMBA_NUM_THREADS, by default the number of cores, or numba.set_num_threads): "
+                                  f"running {kernels.available}", RuntimeWarning, stacklevel=2)
+                self.threads = min(threads, kernels.available)
+                self._threaded = (kernels, f"numba, {self.threads} thread{'s' if self.threads > 1 else ''}")
                 self._kernels, self.kernels = self._threaded
-                self.threads = threads
 
     def _warn_serial(self, threads: int, why: str) -> None:
         if self._warned:

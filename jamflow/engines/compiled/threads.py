@@ -366,6 +366,9 @@ class ThreadedKernels:
         self.threads = threads
         self.what = what  # the compile notice's name, e.g. "threaded disk"
         passive_waits()
+        import numba
+
+        self.available = numba.get_num_threads()  # numba's limit as the engine opens (it also caps each run)
         self._model = None
         self._inc = None
 
