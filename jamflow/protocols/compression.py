@@ -64,7 +64,8 @@ def jam(n: int = 64, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | P
     carries gamma as its accumulated strain (periodic cells only).
     ``observers`` are callables ``f(step: dict)`` called after every minimisation
     (progress bars, writers). ``engine``: "auto" (the compiled engine wherever it runs the
-    scene, else LAMMPS), "lammps" or "numba" (``jamflow.engines.base``).
+    scene, else LAMMPS), "lammps" or "numba" (``jamflow.engines.base``); ``engine_options`` go to
+    its constructor (compiled: ``skin``, ``threads``; LAMMPS: ``skin``, ``comm``, ``args``).
     """
     if settings is None:
         settings = PROTOCOLS[DEFAULT_PROTOCOL]()
