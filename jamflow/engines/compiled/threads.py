@@ -5,20 +5,22 @@ with a spring law (linear, Hertz, ``spring:ALPHA``) in a periodic box (orthogona
 walls, fixed particles, gravity or box coordinates; ``CompiledEngine`` runs its serial kernels
 for every other scene (``uncovered`` says why, and the engine warns once).
 
-Results do not depend on the number of threads: the work is cut into ``CHUNKS`` fixed pieces of
-the particles (0..N-1 in equal index ranges), never by the thread count; no two pieces write one
-place, and the pieces' partial sums are added in piece order.
+Results do not depend on the number of threads: the work is cut into ``CHUNKS`` fixed ranges of
+the particles (0..N-1 in equal index ranges), never by the thread count; no two ranges write one
+place, and the ranges' partial sums are added in range order.
 
-- Pair loop (``pair_forces``): piece c runs the pairs whose i lies in its range (the pair list is
-  sorted by i): the forces on i are summed in registers and stored in f[i], as the serial kernel
-  does; the force on j of pair k goes into its own row of a j-side buffer (0 outside contact),
-  at a slot that groups the rows by j in increasing k (``incidence``: a counting sort made once per
-  pair list); energy and virial are the piece's partial sums.
-- Gather (``gather``): f[p] minus the rows of its slots, read in order; in the same pass, per
-  piece, v.f, v.v, f.f and max |v| (FIRE's next step), the largest |f_p| and the largest move
-  since the pair list was built (its stops).
+- Pair loop (``pair_forces``): range c runs the pairs whose i lies in it (the pair list is sorted
+  by i) as the serial kernel does: the force on i summed in registers from f[i], the force on j
+  subtracted from f[j] when j lies in the range too. The force on a j in another range goes into
+  its own row of a j-side buffer, at a slot that groups the rows by j in increasing k
+  (``incidence``: a counting sort made once per pair list); energy and virial are the range's
+  partial sums. Random starts of 8192 particles and more are numbered along the Morton curve
+  (``jamflow.model.ordering``), so most pairs stay within a range.
+- Gather (``gather``): f[p] minus the rows of its slots (pairs from other ranges), read in order;
+  in the same pass, per range, v.f, v.v, f.f and max |v| (FIRE's next step), the largest |f_p|
+  and the largest move since the pair list was built (its stops).
 - FIRE's vector steps (the half step back, the velocity and position update) run over the same
-  pieces. Three parallel loops per iteration, each ended by numba's barrier.
+  ranges. Three parallel loops per iteration, each ended by numba's barrier.
 
 Against the serial kernels only the order of the sums differs (energy, virial, the force on a
 particle, the dot products): the results differ in round-off, and a minimisation can follow
@@ -103,37 +105,50 @@ def uncovered(packing, pressure: bool = False) -> str | None:
 @jit
 def incidence(pi, pj, n):
     """(istart, jstart, slot) of a pair list sorted by i: the pairs with i_k = p are k in
-    istart[p]:istart[p + 1]; those with j_k = p, in increasing k, have the slots jstart[p]:jstart[p + 1]
-    of the j-side rows, pair k the slot slot[k] (a counting sort). Raises ValueError if the pairs
-    are not sorted by i (the engine's lists are)."""
+    istart[p]:istart[p + 1]. A pair whose j lies outside the range (``CHUNKS``) of its i has a slot
+    slot[k] >= 0 in the j-side rows, grouped by j in increasing k: those of particle p are
+    jstart[p]:jstart[p + 1] (a counting sort); a pair within one range has slot -1. Raises
+    ValueError if the pairs are not sorted by i (the engine's lists are)."""
     count = pi.shape[0]
     istart, jstart = np.zeros(n + 1, np.int64), np.zeros(n + 1, np.int64)
+    slot = np.full(count, -1, np.int64)
+    c = 0
     for k in range(count):
         if k > 0 and pi[k] < pi[k - 1]:
             raise ValueError("the pair list is not sorted by i")
         istart[pi[k] + 1] += 1
-        jstart[pj[k] + 1] += 1
+        while pi[k] >= n * (c + 1) // CHUNKS:
+            c += 1
+        if pj[k] < n * c // CHUNKS or pj[k] >= n * (c + 1) // CHUNKS:
+            jstart[pj[k] + 1] += 1
+            slot[k] = 0  # across ranges: numbered below
     for p in range(n):
         istart[p + 1] += istart[p]
         jstart[p + 1] += jstart[p]
-    slot = np.empty(count, np.int64)
     following = jstart[:-1].copy()
     for k in range(count):
-        slot[k] = following[pj[k]]
-        following[pj[k]] += 1
+        if slot[k] >= 0:
+            slot[k] = following[pj[k]]
+            following[pj[k]] += 1
     return istart, jstart, slot
 
 
 @jit
 def _pair_chunk(istart, pj, slot, shift, sigma, law, x, f, fj, partial, c):
-    """Chunk c of the particles: the force of each particle p's pairs (i = p) summed on p into f[p],
-    each pair's force on its j into its slot of fj (0 outside contact); the chunk's energy and
-    virial (row-major d x d) into partial[c]."""
+    """Range c of the particles, as the serial kernel over the pairs whose i lies in it: the force on
+    i summed in registers from f[i], the force on j subtracted from f[j] when j lies in the range too,
+    else stored in j's slot of fj (0 outside contact); the range's energy and virial (row-major
+    d x d) into partial[c]."""
     n, d = x.shape
+    lo, hi = n * c // CHUNKS, n * (c + 1) // CHUNKS
+    for p in range(lo, hi):
+        for a in range(d):
+            f[p, a] = 0.0
     energy = 0.0
     w00 = w01 = w10 = w11 = w02 = w12 = w20 = w21 = w22 = 0.0
-    for i in range(n * c // CHUNKS, n * (c + 1) // CHUNKS):
-        fi0, fi1, fi2 = 0.0, 0.0, 0.0
+    for i in range(lo, hi):
+        fi0, fi1 = f[i, 0], f[i, 1]
+        fi2 = f[i, 2] if d == 3 else 0.0
         xi0, xi1 = x[i, 0], x[i, 1]
         xi2 = x[i, 2] if d == 3 else 0.0
         for k in range(istart[i], istart[i + 1]):
@@ -143,22 +158,30 @@ def _pair_chunk(istart, pj, slot, shift, sigma, law, x, f, fj, partial, c):
             dr2 = xi2 - x[j, 2] + shift[k, 2] if d == 3 else 0.0
             r2 = dr0 * dr0 + dr1 * dr1 + dr2 * dr2
             if r2 >= s * s:
-                fj[q, 0] = 0.0
-                fj[q, 1] = 0.0
-                if d == 3:
-                    fj[q, 2] = 0.0
+                if q >= 0:
+                    fj[q, 0] = 0.0
+                    fj[q, 1] = 0.0
+                    if d == 3:
+                        fj[q, 2] = 0.0
                 continue
             r = math.sqrt(r2)
             v, dv = energy_force(law, r / s)
             energy += v
             fr = -dv / (s * r)
             fi0 += fr * dr0
-            fj[q, 0] = fr * dr0
             fi1 += fr * dr1
-            fj[q, 1] = fr * dr1
             if d == 3:
                 fi2 += fr * dr2
-                fj[q, 2] = fr * dr2
+            if q >= 0:
+                fj[q, 0] = fr * dr0
+                fj[q, 1] = fr * dr1
+                if d == 3:
+                    fj[q, 2] = fr * dr2
+            else:
+                f[j, 0] -= fr * dr0
+                f[j, 1] -= fr * dr1
+                if d == 3:
+                    f[j, 2] -= fr * dr2
             w00 += fr * dr0 * dr0
             w01 += fr * dr0 * dr1
             w10 += fr * dr1 * dr0
@@ -289,8 +312,7 @@ def fire(m, inc, x, v, f, virial, state, x_built, half_skin_sq, max_steps, ftol,
     """``fire.fire`` for disks and spheres without rotations, field or box coordinates, on threads:
     up to ``max_steps`` FIRE 2.0 iterations in place; return (iterations, reason, energy)."""
     n, d = x.shape
-    count = m.i.shape[0]
-    fj = np.empty((count, d))
+    fj = np.empty((inc[1][n], d))  # the pairs across ranges
     partial = np.empty((CHUNKS, 1 + d * d))
     sums = np.empty((CHUNKS, 6))
     largest = np.empty(CHUNKS)
@@ -399,5 +421,5 @@ class ThreadedKernels:
     def forces(self, model, fld, x, f, o, tau, g, dk, mask, virial, gb):
         inc = self._incidence(model, x.shape[0])
         n, d = x.shape
-        fj, partial, sums = np.empty((model.i.shape[0], d)), np.empty((CHUNKS, 1 + d * d)), np.empty((CHUNKS, 6))
+        fj, partial, sums = np.empty((inc[1][n], d)), np.empty((CHUNKS, 1 + d * d)), np.empty((CHUNKS, 6))
         return self._run(forces, (model, inc, x, f, np.zeros((n, d)), x, virial, fj, partial, sums))
