@@ -165,12 +165,15 @@ def test_a_target_pressure_runs_serial_with_one_warning():
 
 def test_jam_threads_runs_and_writes_a_checked_packing(tmp_path, capsys):
     from jamflow.cli.app import main
-    from jamflow.io.packing_file import load_packing
+    from jamflow.io.packing_file import load_packing, read_protocol
 
     out = tmp_path / "p.h5"
     assert main(["jam", "--quiet", "--n", "64", "--seed", "2", "--threads", "2", "--out", str(out)]) == 0
     assert "numba, 2 threads" in capsys.readouterr().out
-    assert load_packing(out).n == 64
+    assert load_packing(out).n == 64 and read_protocol(out)["threads"] == 2
+    serial = tmp_path / "s.h5"
+    assert main(["jam", "--quiet", "--n", "64", "--seed", "2", "--out", str(serial)]) == 0
+    assert "threads" not in read_protocol(serial)  # the serial file as before
 
 
 @pytest.mark.parametrize("args, message", [

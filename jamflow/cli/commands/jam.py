@@ -85,7 +85,8 @@ def run(args) -> int:
         return 0
     from jamflow.io.packing_file import save_jam_result  # h5py: not loaded for --help
 
-    save_jam_result(args.out, result, checks, target_pressure=spec.pressure, stress=spec.stress, force=args.force)
+    save_jam_result(args.out, result, checks, target_pressure=spec.pressure, stress=spec.stress, force=args.force,
+                    **threads_record(result))
     print(f"{result.summary()}  -> {args.out} ({time.perf_counter() - t0:.2f} s)")
     return 0
 
@@ -116,6 +117,15 @@ def threads_option(spec: JamSpec, start, args) -> dict | None:
     return {"threads": threads}
 
 
+def threads_record(result) -> dict:
+    """The protocol attribute of a jam whose FIRE ran on threads (``threads``: how many), else none:
+    its packing differs in round-off from the serial kernels'."""
+    kernels = getattr(result, "kernels", "")
+    if kernels.startswith("numba, ") and kernels.endswith("threads"):
+        return {"threads": int(kernels.split()[1])}
+    return {}
+
+
 def build_kernels_first(spec: JamSpec, start) -> None:
     """Build the ahead-of-time disk kernels, if this jam runs them and they are not built yet (once per
     machine, ~20 s, announced by one line on stderr), before the progress bar starts: the bar then
@@ -138,7 +148,8 @@ def save_above(args, result, t0, engine_options=None) -> int:
     except JammingFailed as err:
         raise ValueError(f"{err} (onset phi_J = {result.phi_j:.10f}; nothing written)") from None
     protocol = {**settings.as_dict(), "engine": above.engine, "phi_onset": result.phi_j, "above_dphi": above.dphi,
-                "above_reason": above.minimization.reason, "above_iterations": above.minimization.iterations}
+                "above_reason": above.minimization.reason, "above_iterations": above.minimization.iterations,
+                **threads_record(result)}
     wall_forces = wall_loads(above.packing) if above.packing.box.walls else None
     from jamflow.io.packing_file import save_packing  # h5py: not loaded for --help
 
