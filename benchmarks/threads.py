@@ -9,7 +9,9 @@ phi = 0.645, seed 1), relaxed by ``--relax`` serial FIRE iterations (untimed). F
 window, force tolerance 1e-300: no early stop; pair-list rebuilds included, as in a jam), the
 kernels alternating ``--repeats`` times. Wall time (time.perf_counter: what threads are for) and
 CPU time of the process (time.process_time: all threads) per iteration; ``load`` is the 1-minute
-load average as the row starts (the machine's other jobs share its cores). The threaded path's
+load average as the row starts (the machine's other jobs share its cores) and ``capacity`` how
+many cores the process got just before it (``capacity``: independent work on 1 thread against
+``--threads``; 2 on two free cores). The threaded path's
 first use compiles its kernels (numba, ~15 s once per cache): a warm-up window of each kernel runs
 before the timings. The engine sets OMP_WAIT_POLICY=PASSIVE where neither it nor GOMP_SPINCOUNT is
 set (``compiled.threads.passive_waits``); run with OMP_WAIT_POLICY=ACTIVE or GOMP_SPINCOUNT=N to
@@ -27,14 +29,46 @@ from pathlib import Path
 from common import append_row, scratch  # (benchmarks/ is the script's directory)
 
 import numba
+import numpy as np
 
 from jamflow.engines.compiled.engine import CompiledEngine
 from jamflow.minimize.settings import MinimizerSettings
 from jamflow.protocols.compression import initial_packing
 
 COLUMNS = ["dim", "n", "kernels", "threads", "repeat", "iterations", "wall_ms_per_iteration",
-           "cpu_ms_per_iteration", "energy", "load", "numba_threads", "threading_layer", "omp_wait_policy", "gomp_spincount"]
+           "cpu_ms_per_iteration", "energy", "load", "capacity", "numba_threads", "threading_layer", "omp_wait_policy", "gomp_spincount"]
 START = {2: ("bi:1.4:0.5", 0.845), 3: ("mono", 0.645)}
+
+
+@numba.njit(parallel=True)
+def _independent_work(a, out):
+    for c in numba.prange(16):
+        s = 0.0
+        for k in range(c * a.size // 16, (c + 1) * a.size // 16):
+            s += np.sqrt(a[k])
+        out[c] = s
+
+
+def capacity(threads: int) -> float:
+    """How many cores the machine gives this process now: the wall time of a loop of independent
+    work (16 chunks of square roots, no shared writes) on 1 thread over that on ``threads`` (best of
+    5 each); ``threads`` on free cores, ~1 when other jobs take them."""
+    a, out = np.random.default_rng(0).random(1_000_000), np.zeros(16)
+    before = numba.get_num_threads()
+    best = {}
+    try:
+        for count in (1, min(threads, before)):
+            numba.set_num_threads(count)
+            _independent_work(a, out)
+            times = []
+            for _ in range(5):
+                t0 = time.perf_counter()
+                _independent_work(a, out)
+                times.append(time.perf_counter() - t0)
+            best[count] = min(times)
+    finally:
+        numba.set_num_threads(before)
+    return best[1] / best[min(threads, before)]
 
 
 def start_state(n: int, dim: int, relax: int, seed: int = 1):
@@ -66,12 +100,12 @@ def run_size(dim: int, n: int, threads: int, iterations: int, repeats: int, rela
     cpus = {name: [] for name in engines}
     for repeat in range(repeats):
         for name, engine in engines.items():  # alternating, the same start each time
-            load = os.getloadavg()[0]
+            load, free = os.getloadavg()[0], capacity(threads)
             wall, cpu, done, energy = timed_window(engine, start, iterations)
             row = {"dim": dim, "n": n, "kernels": engine.kernels, "threads": engine.threads, "repeat": repeat,
                    "iterations": done, "wall_ms_per_iteration": round(wall / done * 1e3, 4),
                    "cpu_ms_per_iteration": round(cpu / done * 1e3, 4), "energy": f"{energy:.12g}",
-                   "load": round(load, 2), "numba_threads": numba.get_num_threads(),
+                   "load": round(load, 2), "capacity": round(free, 2), "numba_threads": numba.get_num_threads(),
                    "threading_layer": _layer(), "omp_wait_policy": os.environ.get("OMP_WAIT_POLICY", ""),
                    "gomp_spincount": os.environ.get("GOMP_SPINCOUNT", "")}
             append_row(out, COLUMNS, row)
