@@ -41,6 +41,10 @@ BENCHMARKS: dict[str, Benchmark] = {
     "kernel": Benchmark(
         "speed", "compiled FIRE iteration against its bare force-loop floor; Morton order; skins",
         ["--sizes", "256", "--skins", "0.3", "--repeats", "1", "--out", "{tmp}/kernel.csv"]),
+    "threads": Benchmark(
+        "speed", "the compiled engine's threaded FIRE against its serial kernels per iteration, side by side (2D, 3D)",
+        ["--sizes", "512", "--sizes-3d", "256", "--iterations", "50", "--repeats", "1", "--relax", "100",
+         "--out", "{tmp}/threads.csv"]),
     "engines": Benchmark(
         "speed", "LAMMPS FIRE against the compiled FIRE: cost per iteration and whole packings",
         ["--sizes", "256", "--iterations", "200", "--reps", "1", "--jam-n", "64", "--jam-seeds", "1",

@@ -16,7 +16,7 @@ from jamflow.cli.options import add_spec_arguments
 from jamflow.io.packing_file import load_packing
 from jamflow.protocols.spec import JamSpec, prepare, run_jam
 
-CLI_ONLY = {"out", "force", "quiet", "emit_deck", "command", "run"}
+CLI_ONLY = {"out", "force", "quiet", "emit_deck", "threads", "command", "run"}
 
 
 def test_the_spec_has_every_jam_option_with_its_default():

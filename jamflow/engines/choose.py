@@ -42,7 +42,7 @@ def engine_name(packing, method: str = "fire", engine: str = "auto", comm=None, 
 
 def open_engine(packing, method: str = "fire", engine: str = "auto", pressure: bool = False, **options):
     """A new engine holding ``packing``. ``options`` go to the engine's constructor
-    (LAMMPS: skin, comm, args; compiled: skin); an option the chosen engine does not take is
+    (LAMMPS: skin, comm, args; compiled: skin, threads); an option the chosen engine does not take is
     an error, not silently dropped. ``pressure``: the engine must relax the box with ``method``."""
     name = engine_name(packing, method, engine, options.get("comm"), pressure)
     cls = engine_class(name)

@@ -89,8 +89,8 @@ def jam(n: int = 64, dim: int = 2, sizes: str = "bi:1.4:0.5", potential: str | P
     engine : str
         ``auto``, ``lammps`` or ``numba``.
     engine_options : dict, optional
-        Options of the engine's constructor (e.g. ``skin``); an option the engine does not take
-        is refused.
+        Options of the engine's constructor (compiled: ``skin``, ``threads``; LAMMPS: ``skin``,
+        ``comm``, ``args``); an option the engine does not take is refused.
     shape : str or shape object
         ``disk`` (disks/spheres), ``ellipse:ALPHA``, ``spheroid:ALPHA``, ``nmer:N:ALPHA``, ...
     walls : str, optional

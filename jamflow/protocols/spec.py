@@ -43,7 +43,8 @@ ONSET_VTOL = 1e-16  # the float64 onset of --precision double-double --vtol V be
 @dataclass(frozen=True)
 class JamSpec:
     """One packing to jam: the options of ``jamflow jam`` (same names, same defaults), without
-    the command's own (``--out``, ``--force``, ``--quiet``, ``--emit-deck``)."""
+    the command's own (``--out``, ``--force``, ``--quiet``, ``--emit-deck``, ``--threads``: how the
+    jam runs in this process, given to ``run_jam`` as ``engine_options``)."""
 
     dim: int = 2  #: dimension: 2 or 3
     n: int = 64  #: number of particles N

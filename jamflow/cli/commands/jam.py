@@ -30,6 +30,11 @@ def add_arguments(p) -> None:
     p.add_argument("--force", action="store_true",
                    help="replace an --out (or --emit-deck files) that is a symlink, device node or read-only file")
     add_quiet_argument(p)
+    p.add_argument("--threads", type=int, default=1, metavar="T",
+                   help="run FIRE and the forces on T threads (compiled engine; disks/spheres with a spring law in a "
+                        "periodic box, other scenes run serial with a warning). Meant for N >= 16384 on free cores; "
+                        "the result does not depend on T > 1 but differs from T = 1 (serial, the default) in "
+                        "round-off (docs/notes/threads.md)")
     p.add_argument("--emit-deck", default=None, metavar="DECK.lmp",
                    help="write the LAMMPS deck that runs this jam in lmp alone (and its start, DECK.start.data) "
                         "instead of running it; then: cd DIR && lmp -in DECK.lmp")
@@ -60,15 +65,18 @@ def run(args) -> int:
     check_writable(args.out, args.force, "--out")
     spec = spec_from_args(args)
     check_deck_args(spec, args)
+    check_threads_value(args)
     prepared = settings, start = prepare(spec)
     if args.emit_deck:
         return emit(args, start, settings)
+    engine_options = threads_option(spec, start, args)
     t0 = time.perf_counter()
     build_kernels_first(spec, start)
     with CompressionProgress(disable=args.quiet) as progress:
-        result, checks = run_jam(spec, observers=[progress], prepared=prepared, destination=args.out)
+        result, checks = run_jam(spec, observers=[progress], engine_options=engine_options, prepared=prepared,
+                                 destination=args.out)
     if spec.above is not None:
-        return save_above(args, result, t0)
+        return save_above(args, result, t0, engine_options)
     if spec.precision == "double-double":
         from jamflow.io.packing_file import save_refined  # h5py: not loaded for --help
 
@@ -77,9 +85,45 @@ def run(args) -> int:
         return 0
     from jamflow.io.packing_file import save_jam_result  # h5py: not loaded for --help
 
-    save_jam_result(args.out, result, checks, target_pressure=spec.pressure, stress=spec.stress, force=args.force)
+    save_jam_result(args.out, result, checks, target_pressure=spec.pressure, stress=spec.stress, force=args.force,
+                    **threads_record(result))
     print(f"{result.summary()}  -> {args.out} ({time.perf_counter() - t0:.2f} s)")
     return 0
+
+
+def check_threads_value(args) -> None:
+    """Refuse a --threads below 1, or with --emit-deck (the deck runs in LAMMPS), before any work."""
+    threads = getattr(args, "threads", 1)
+    if threads < 1:
+        raise ValueError(f"--threads must be an integer >= 1 (1: serial, the default; 2 or more: the compiled "
+                         f"engine's FIRE on that many threads), got {threads}")
+    if threads > 1 and getattr(args, "emit_deck", None):
+        raise ValueError("--threads runs the compiled engine's FIRE in this process; --emit-deck writes a LAMMPS deck "
+                         "instead: leave --threads out")
+
+
+def threads_option(spec: JamSpec, start, args) -> dict | None:
+    """The engine options of --threads (None for 1: the serial kernels); refused, before any work, when
+    the scene runs in LAMMPS."""
+    threads = getattr(args, "threads", 1)
+    if threads == 1:
+        return None
+    from jamflow.engines.choose import engine_name
+
+    if engine_name(start, spec.minimizer, spec.engine, pressure=spec.pressure is not None) != "numba":
+        raise ValueError(f"--threads runs the compiled engine's FIRE; this jam runs in LAMMPS (--engine {spec.engine}, "
+                         f"--minimizer {spec.minimizer}): leave --threads out, or use --engine numba with "
+                         "--minimizer fire")
+    return {"threads": threads}
+
+
+def threads_record(result) -> dict:
+    """The protocol attribute of a jam whose FIRE ran on threads (``threads``: how many), else none:
+    its packing differs in round-off from the serial kernels'."""
+    kernels = getattr(result, "kernels", "")
+    if kernels.startswith("numba, ") and kernels.endswith("threads"):
+        return {"threads": int(kernels.split()[1])}
+    return {}
 
 
 def build_kernels_first(spec: JamSpec, start) -> None:
@@ -94,16 +138,18 @@ def build_kernels_first(spec: JamSpec, start) -> None:
         kernels_for(start)
 
 
-def save_above(args, result, t0) -> int:
+def save_above(args, result, t0, engine_options=None) -> int:
     """--above: compress the checked onset packing by DPHI, minimise, write that packing; the
     onset's phi_J and the minimisation's stop are in the protocol group, its history is the onset's."""
     settings = result.settings
     try:
-        above = compress_above(result.packing, args.above, settings.minimizer, engine=args.engine)
+        above = compress_above(result.packing, args.above, settings.minimizer, engine=args.engine,
+                               engine_options=engine_options)
     except JammingFailed as err:
         raise ValueError(f"{err} (onset phi_J = {result.phi_j:.10f}; nothing written)") from None
     protocol = {**settings.as_dict(), "engine": above.engine, "phi_onset": result.phi_j, "above_dphi": above.dphi,
-                "above_reason": above.minimization.reason, "above_iterations": above.minimization.iterations}
+                "above_reason": above.minimization.reason, "above_iterations": above.minimization.iterations,
+                **threads_record(result)}
     wall_forces = wall_loads(above.packing) if above.packing.box.walls else None
     from jamflow.io.packing_file import save_packing  # h5py: not loaded for --help
 

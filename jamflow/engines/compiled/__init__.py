@@ -4,8 +4,9 @@ with one force/torque kernel per particle shape and the potentials' own laws.
 Layout: ``laws`` (the potentials of ``jamflow.model.potentials`` compiled from their own source),
 ``rotation`` (2D angles, 3D quaternions), ``fire`` (the integrator, written once), one module
 per shape kernel (``spheres``, ``bodies``, ``ellipsoids``), ``kernels`` (the dispatch from a pair-list type to
-its kernel), ``cells`` (a cell-list pair search), ``engine`` (``CompiledEngine``, the Python side) and
-``aot`` / ``aot_build`` (the disk/sphere kernels compiled ahead of time). A new shape adds a kernel
+its kernel), ``cells`` (a cell-list pair search), ``engine`` (``CompiledEngine``, the Python side),
+``aot`` / ``aot_build`` (the disk/sphere kernels compiled ahead of time) and ``threads`` (the disk/sphere
+FIRE and forces on several threads, opt-in: ``jit_parallel``). A new shape adds a kernel
 module and registers it in ``kernels.MODULES``; the integrator does not change.
 
 numba is imported on first use, not at import: ``jit`` returns a ``Deferred`` function, and the
@@ -74,11 +75,11 @@ def _cache_location():
         numba.config.CACHE_DIR = old
 
 
-def _njit(fn):
+def _njit(fn, parallel=False):
     import numba
 
     with _cache_location():
-        dispatcher = numba.njit(cache=True)(fn)
+        dispatcher = numba.njit(cache=True, parallel=True)(fn) if parallel else numba.njit(cache=True)(fn)
     _guard_cache_writes(dispatcher)
     return dispatcher
 
@@ -116,9 +117,10 @@ class Deferred:
     """A kernel that numba compiles once numba has started; calling it from Python starts numba.
     ``py_func`` is the Python function (as on a numba dispatcher)."""
 
-    def __init__(self, fn):
+    def __init__(self, fn, parallel=False):
         functools.update_wrapper(self, fn)
         self.py_func = fn
+        self.parallel = parallel
         self.dispatcher = None
 
     def __call__(self, *args, **kwargs):
@@ -132,6 +134,16 @@ def jit(fn):
     if _started:
         return _njit(fn)
     deferred = Deferred(fn)
+    _DEFERRED.append(deferred)
+    return deferred
+
+
+def jit_parallel(fn):
+    """``jit`` with ``parallel=True``: numba runs its ``prange`` loops on its thread pool (the
+    threaded kernels of ``threads``; numba.pycc cannot compile these ahead of time)."""
+    if _started:
+        return _njit(fn, parallel=True)
+    deferred = Deferred(fn, parallel=True)
     _DEFERRED.append(deferred)
     return deferred
 
@@ -151,7 +163,7 @@ def start_numba() -> None:
     if _started:
         return
     for deferred in _DEFERRED:
-        deferred.dispatcher = _njit(deferred.py_func)
+        deferred.dispatcher = _njit(deferred.py_func, deferred.parallel)
     _started = True
     for name, module in list(sys.modules.items()):
         if name == "jamflow" or name.startswith("jamflow."):

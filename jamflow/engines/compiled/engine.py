@@ -2,7 +2,8 @@
 packing's shape, in process, no LAMMPS.
 
 It runs every box (orthogonal or tilted: pairs carry their periodic image offsets, box changes
-are affine, x -> h' h^-1 x) on one core, minimises with FIRE only, and is measured against
+are affine, x -> h' h^-1 x) on one core (disks and spheres with a spring law in a periodic box on
+several with the option ``threads``, ``compiled.threads``), minimises with FIRE only, and is measured against
 LAMMPS and the numpy reference in tests/test_engines.py and benchmarks/engines.py. Walls,
 gravity and fixed particles (disks and spheres) are the external field of ``compiled.field``;
 at a target pressure (``MinimizerSettings.pressure``) the box joins FIRE's coordinates. Disks and
@@ -13,7 +14,7 @@ numba start-up). The interface is ``jamflow.engines.base.Engine``.
 from __future__ import annotations
 
 import math
-
+import warnings
 from contextlib import contextmanager
 
 import numpy as np
@@ -25,6 +26,7 @@ from jamflow.engines.compiled import announce_compile, fire
 from jamflow.engines.compiled.aot import kernels_for
 from jamflow.engines.compiled.field import make_field
 from jamflow.engines.compiled.kernels import BUILDERS, COUNTERS, TURNING_MOVES_SITES
+from jamflow.engines.compiled.threads import ThreadedKernels, check_threads, uncovered
 
 # cold compile of a shape's kernels (FIRE and forces; jam --n 64 cold minus warm, CPU s on the
 # development machine: ellipses 9.9, dimers 7.6, disks with rlj 6.2), said in the notice printed
@@ -44,15 +46,19 @@ CELL_GROWTH_LIMIT = 1e6  # a cell that grew by more than this within a minimisat
 
 
 class CompiledEngine:
-    """Serial in-process engine; ``skin`` is the pair-list skin in diameters."""
+    """In-process engine; ``skin`` is the pair-list skin in diameters; ``threads`` > 1 runs FIRE and the
+    forces of disks and spheres with a spring law in a periodic box on that many threads
+    (``compiled.threads``; any other scene runs serial, with one warning saying why); 1 (the default):
+    the serial kernels."""
 
     name = "numba"
     CAPABILITIES = Capabilities(shapes=frozenset(BUILDERS), potentials=frozenset({"spring", "rlj"}),
                                 methods=frozenset({"fire"}), tilted_boxes=True, mpi=False,
-                                options=frozenset({"skin"}), boundaries=frozenset({"walls", "fixed", "gravity"}),
+                                options=frozenset({"skin", "threads"}), boundaries=frozenset({"walls", "fixed", "gravity"}),
                                 box_methods=frozenset({"fire"}))
 
-    def __init__(self, packing: Packing, *, skin: float = 0.3):
+    def __init__(self, packing: Packing, *, skin: float = 0.3, threads: int = 1):
+        threads = check_threads(threads)
         reason = self.CAPABILITIES.reason(packing)
         if reason:
             raise ValueError(f"the compiled engine cannot run {reason}; use engine lammps")
@@ -85,6 +91,30 @@ class CompiledEngine:
         self._kernels = aot or fire  # fire.fire / fire.forces, ahead of time where they exist
         self.kernels = "ahead-of-time" if aot is not None else "numba"  # which ran (summary lines; name stays "numba")
         self._looked_up: set = set()  # (kernel, field type) whose compile notice was considered
+        self.threads = 1  # threads FIRE runs on (> 1: ``compiled.threads``)
+        self._serial = (self._kernels, self.kernels)
+        self._threaded = None
+        self._warned = False  # the one warning of a scene the threaded kernels do not run
+        if threads > 1:
+            why = uncovered(packing)
+            if why:
+                self._warn_serial(threads, why)
+            else:
+                kernels = ThreadedKernels(threads, f"threaded {packing.shape.name(packing.dim)}")
+                if kernels.available < threads:
+                    warnings.warn(f"jamflow: threads={threads}, but numba runs at most {kernels.available} here "
+                                  "(NUMBA_NUM_THREADS, by default the number of cores, or numba.set_num_threads): "
+                                  f"running {kernels.available}", RuntimeWarning, stacklevel=2)
+                self.threads = min(threads, kernels.available)
+                self._threaded = (kernels, f"numba, {self.threads} thread{'s' if self.threads > 1 else ''}")
+                self._kernels, self.kernels = self._threaded
+
+    def _warn_serial(self, threads: int, why: str) -> None:
+        if self._warned:
+            return
+        self._warned = True
+        warnings.warn(f"jamflow: threads={threads} covers disks and spheres with a spring law in a periodic box, not "
+                      f"{why}: the serial kernels run this scene", RuntimeWarning, stacklevel=3)
 
     def _announce(self, kernel, args) -> None:
         """One line on stderr before numba compiles this shape's kernels (``compiled.announce_compile``);
@@ -211,8 +241,13 @@ class CompiledEngine:
             self._field = make_field(self.packing(), pressure, settings.stress)
             self._gb = np.zeros(len(self._field.basis))
             self._energy = None
+            if self._threaded is not None:  # box coordinates: the serial kernels, for this minimisation
+                self._warn_serial(self.threads, uncovered(self.template, pressure=True))
+                self._kernels, self.kernels = self._serial
 
         def window(steps: int):
+            if self._threaded is not None:  # which kernels ran (summary lines)
+                self.kernels = self._threaded[1] if self._kernels is self._threaded[0] else self._serial[1]
             state = fire.fire_state(settings.timestep * self._time_unit)
             v, w, u = np.zeros_like(self._x), np.zeros_like(self._g), np.zeros_like(self._gb)
             done = 0
@@ -245,6 +280,8 @@ class CompiledEngine:
             if pressure is not None:  # back to a fixed box
                 self._field = make_field(self.packing())
                 self._gb = np.zeros(0)
+                if self._threaded is not None:  # the label stays the serial one until a threaded window runs
+                    self._kernels = self._threaded[0]
 
     def _cell_valid(self) -> bool:
         """The field's cell matrix is finite, with positive side lengths and a volume below
