@@ -206,7 +206,7 @@ class AotKernels:
 
 def kernels_for(packing) -> AotKernels | None:
     """The ahead-of-time kernels if they serve ``packing`` (disks/spheres, the spring law) and can be had."""
-    if packing.shape.kind != "sphere" or type(packing.potential.params) is not SpringParams:
+    if not packing.shape.round or type(packing.potential.params) is not SpringParams:
         return None
     found = module()
     return AotKernels(found) if found is not None else None

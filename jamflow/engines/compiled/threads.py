@@ -90,7 +90,7 @@ def check_threads(threads) -> int:
 
 def uncovered(packing, pressure: bool = False) -> str | None:
     """What in this scene the threaded kernels do not run (the engine then runs its serial ones), or None."""
-    if packing.shape.kind != "sphere":
+    if not packing.shape.round:
         return f"{packing.shape.name(packing.dim)} particles"
     needs = scene_boundaries(packing)
     if needs:
