@@ -11,7 +11,7 @@ import pytest
 import jamflow
 from jamflow.engines.compiled.engine import CompiledEngine
 from jamflow.mechanics.checks import check_packing
-from jamflow.minimize import newton
+from jamflow.minimize import cholesky, newton
 from jamflow.minimize.rules import minimize
 from jamflow.minimize.settings import MinimizerSettings
 from jamflow.model.box import Box
@@ -122,7 +122,7 @@ def test_without_cholespy_it_warns_once_and_factorises_with_superlu(monkeypatch)
     import sys
 
     monkeypatch.setitem(sys.modules, "cholespy", None)  # import cholespy raises ImportError
-    newton._cholmod.cache_clear()
+    cholesky._cholmod.cache_clear()
     try:
         with pytest.warns(UserWarning, match="cholespy cannot be imported"):
             eng = _engine([[5.0, 5.0], [5.9, 5.0]], [1.0, 1.0])
@@ -130,4 +130,25 @@ def test_without_cholespy_it_warns_once_and_factorises_with_superlu(monkeypatch)
         assert res.converged
         assert np.linalg.norm(np.diff(eng.positions(), axis=0)) == pytest.approx(1.0, abs=1e-12)
     finally:
-        newton._cholmod.cache_clear()
+        cholesky._cholmod.cache_clear()
+
+
+def test_the_polish_of_a_large_packing_factorises_with_cholmod_and_solves_the_same_system(monkeypatch):
+    """From ``CHOLMOD_FROM_DOF`` coordinates on the polish's factorisation is CHOLMOD's, below it
+    SuperLU's; both solve J_a^T J_a + mu I x = b."""
+    import scipy.sparse as sp
+
+    from jamflow.minimize import polish
+
+    rng = np.random.default_rng(3)
+    for dof in (cholesky.CHOLMOD_FROM_DOF - 2, cholesky.CHOLMOD_FROM_DOF):
+        # the rows of a chain of springs (x_k - x_k+1) and of springs to fixed points: banded, quick to factorise
+        ja = sp.vstack([sp.eye(dof - 1, dof, format="csr") - sp.eye(dof - 1, dof, k=1, format="csr"),
+                        sp.eye(dof, format="csr")]).tocsr()
+        calls = []
+        monkeypatch.setattr(cholesky, "factorise", lambda m, calls=calls, f=cholesky.factorise: calls.append(1) or f(m))
+        b = rng.standard_normal(dof)
+        x = polish.superlu(ja, None, 1e-12).solve(b)
+        matrix = ja.T @ ja + 1e-12 * sp.identity(dof)
+        assert np.linalg.norm(matrix @ x - b) < 1e-8 * np.linalg.norm(b)
+        assert bool(calls) == (dof >= cholesky.CHOLMOD_FROM_DOF)

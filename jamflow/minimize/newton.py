@@ -35,12 +35,11 @@ from __future__ import annotations
 
 import logging
 import time
-import warnings
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 
+from jamflow.minimize.cholesky import factorise
 from jamflow.minimize.creep import CreepTrigger
 from jamflow.minimize.polish import pair_geometry
 
@@ -143,40 +142,6 @@ class Preconditioner:
         if len(active) != len(self.active):
             return True
         return np.count_nonzero(active != self.active) > REFACTOR_FRACTION * max(1, np.count_nonzero(active))
-
-
-def factorise(matrix):
-    """solve(b) of the symmetric positive definite ``matrix``: CHOLMOD (``cholespy``, a jamflow
-    dependency), or SciPy's SuperLU where it cannot be imported (one warning per process)."""
-    cholmod = _cholmod()
-    if cholmod is None:
-        import scipy.sparse.linalg as spla
-
-        return spla.splu(matrix.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                         options=dict(SymmetricMode=True)).solve
-    solver_class, matrix_type = cholmod
-    m = matrix.tocsr()
-    solver = solver_class(m.shape[0], m.indptr.astype(np.int32), m.indices.astype(np.int32),
-                          np.ascontiguousarray(m.data), matrix_type.CSR)
-
-    def solve(b):
-        out = np.empty_like(b)
-        solver.solve(np.ascontiguousarray(b), out)
-        return out
-
-    return solve
-
-
-@lru_cache(maxsize=1)
-def _cholmod():
-    """(CholeskySolverD, MatrixType) of ``cholespy``, or None with one warning."""
-    try:
-        from cholespy import CholeskySolverD, MatrixType
-    except ImportError as err:
-        warnings.warn(f"cholespy cannot be imported ({err}): the Newton minimiser factorises with SciPy's SuperLU "
-                      "instead (about 20 % slower); reinstall jamflow to get it", stacklevel=4)
-        return None
-    return CholeskySolverD, MatrixType
 
 
 def pcg(hess, grad: np.ndarray, precond: Preconditioner, eta: float):

@@ -46,6 +46,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from jamflow.minimize import cholesky
+from jamflow.minimize.cholesky import CHOLMOD_FROM_DOF
 from jamflow.minimize.creep import CreepTrigger
 
 RIGID_CREEP_FORCE = 1e-6  # rigid bodies: their minimisations also creep at 1e-9 - 5e-9 (docs/notes/nmers.md)
@@ -175,14 +177,21 @@ def shift(jac: sp.csr_matrix) -> float:
 
 
 def superlu(ja: sp.csr_matrix, active: np.ndarray, mu: float):
-    """SuperLU of J_a^T J_a + mu I (``ja`` the active rows of J; ``active`` unused here, given to
-    every factorisation ``model_step`` may be passed)."""
-    import scipy.sparse as sp
-    import scipy.sparse.linalg as spla  # loaded only when a polish runs
+    """A factorisation of J_a^T J_a + mu I with ``solve(b)`` (``ja`` the active rows of J;
+    ``active`` unused here, given to every factorisation ``model_step`` may be passed): SciPy's
+    SuperLU, and from ``cholesky.CHOLMOD_FROM_DOF`` coordinates on CHOLMOD, whose ordering does
+    not slow down on particles numbered along a space-filling curve (``jamflow.minimize.cholesky``)."""
+    import scipy.sparse as sp  # loaded only when a polish runs
 
-    eye = sp.identity(ja.shape[1], format="csc")
-    return spla.splu((ja.T @ ja + mu * eye).tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                     options=dict(SymmetricMode=True))
+    matrix = ja.T @ ja + mu * sp.identity(ja.shape[1], format="csc")
+    if ja.shape[1] < CHOLMOD_FROM_DOF:
+        return cholesky.superlu(matrix)
+    return _Solver(cholesky.factorise(matrix))
+
+
+@dataclass(frozen=True)
+class _Solver:
+    solve: object  # b -> x
 
 
 def model_step(delta: np.ndarray, jac: sp.csr_matrix, mu: float, factorise=superlu) -> tuple[np.ndarray, int, int]:
