@@ -41,6 +41,9 @@ BENCHMARKS: dict[str, Benchmark] = {
     "kernel": Benchmark(
         "speed", "compiled FIRE iteration against its bare force-loop floor; Morton order; skins",
         ["--sizes", "256", "--skins", "0.3", "--repeats", "1", "--out", "{tmp}/kernel.csv"]),
+    "polish_factor": Benchmark(
+        "speed", "the polish's factorisation (SuperLU, CHOLMOD) with particles in random and Morton order",
+        ["--n", "512", "--repeats", "1", "--relax", "2000", "--out", "{tmp}/polish-factor.csv"]),
     "threads": Benchmark(
         "speed", "the compiled engine's threaded FIRE against its serial kernels per iteration, side by side (2D, 3D)",
         ["--sizes", "512", "--sizes-3d", "256", "--iterations", "50", "--repeats", "1", "--relax", "100",
