@@ -148,7 +148,7 @@ def test_the_polish_of_a_large_packing_factorises_with_cholmod_and_solves_the_sa
         calls = []
         monkeypatch.setattr(cholesky, "factorise", lambda m, calls=calls, f=cholesky.factorise: calls.append(1) or f(m))
         b = rng.standard_normal(dof)
-        x = polish.superlu(ja, None, 1e-12).solve(b)
+        x = polish.factorisation(ja, None, 1e-12).solve(b)
         matrix = ja.T @ ja + 1e-12 * sp.identity(dof)
         assert np.linalg.norm(matrix @ x - b) < 1e-8 * np.linalg.norm(b)
         assert bool(calls) == (dof >= cholesky.CHOLMOD_FROM_DOF)

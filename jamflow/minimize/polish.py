@@ -47,7 +47,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from jamflow.minimize import cholesky
-from jamflow.minimize.cholesky import CHOLMOD_FROM_DOF
 from jamflow.minimize.creep import CreepTrigger
 
 RIGID_CREEP_FORCE = 1e-6  # rigid bodies: their minimisations also creep at 1e-9 - 5e-9 (docs/notes/nmers.md)
@@ -176,7 +175,7 @@ def shift(jac: sp.csr_matrix) -> float:
     return SHIFT * max(float(np.asarray(jac.multiply(jac).sum(axis=0)).max(initial=0.0)), 1.0)
 
 
-def superlu(ja: sp.csr_matrix, active: np.ndarray, mu: float):
+def factorisation(ja: sp.csr_matrix, active: np.ndarray, mu: float):
     """A factorisation of J_a^T J_a + mu I with ``solve(b)`` (``ja`` the active rows of J;
     ``active`` unused here, given to every factorisation ``model_step`` may be passed): SciPy's
     SuperLU, and from ``cholesky.CHOLMOD_FROM_DOF`` coordinates on CHOLMOD, whose ordering does
@@ -184,7 +183,7 @@ def superlu(ja: sp.csr_matrix, active: np.ndarray, mu: float):
     import scipy.sparse as sp  # loaded only when a polish runs
 
     matrix = ja.T @ ja + mu * sp.identity(ja.shape[1], format="csc")
-    if ja.shape[1] < CHOLMOD_FROM_DOF:
+    if ja.shape[1] < cholesky.CHOLMOD_FROM_DOF:
         return cholesky.superlu(matrix)
     return _Solver(cholesky.factorise(matrix))
 
@@ -194,7 +193,7 @@ class _Solver:
     solve: object  # b -> x
 
 
-def model_step(delta: np.ndarray, jac: sp.csr_matrix, mu: float, factorise=superlu) -> tuple[np.ndarray, int, int]:
+def model_step(delta: np.ndarray, jac: sp.csr_matrix, mu: float, factorise=factorisation) -> tuple[np.ndarray, int, int]:
     """Minimise m(dx) by semismooth Newton with exact line searches on m; ends when a full step
     keeps the active set. ``factorise(ja, active, mu)`` returns an object whose ``solve(b)`` solves
     (J_a^T J_a + mu I) x = b. Returns (dx, pairs in the last active set, active-set iterations)."""
